@@ -1,0 +1,37 @@
+// semrec: RGB-D frames with poses -> semantically labelled, instance-tracked 3D scenes.
+#include <cstdio>
+#include <exception>
+
+#include <CLI/CLI.hpp>
+
+#include "commands.h"
+#include "semrec/core/error.h"
+#include "semrec/core/logging.h"
+
+int main(int argc, char** argv) {
+  CLI::App app{
+      "semrec - semantic 3D reconstruction from RGB-D sequences.\n"
+      "Sequences: a folder in one of the layouts semrec detects (Redwood/Open3D, 7-Scenes/3DMatch, "
+      "TUM RGB-D, or semrec's own sequence.yaml); see README.md.",
+      "semrec"};
+  app.set_version_flag("--version", "semrec 0.1.0");
+  std::string log_level = "info";
+  app.add_option("--log-level", log_level, "trace, debug, info, warn, error or off")
+      ->capture_default_str();
+  app.require_subcommand(1);
+  semrec::cli::RegisterInfo(app);
+  semrec::cli::RegisterTsdf(app);
+  app.parse_complete_callback([&] { semrec::InitLogging(log_level); });
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e);
+  } catch (const semrec::Error& e) {
+    std::fprintf(stderr, "error: %s\n", e.what());
+    return 1;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "internal error: %s\n", e.what());
+    return 3;
+  }
+  return 0;
+}

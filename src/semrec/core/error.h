@@ -1,0 +1,50 @@
+// Typed errors. Every message names the offending file (when there is one) and says what is wrong,
+// so that a user can fix the input without reading the source.
+#pragma once
+
+#include <filesystem>
+#include <stdexcept>
+#include <string>
+
+namespace semrec {
+
+/// Base of all semrec errors.
+class Error : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+/// A file or folder is missing or cannot be read / written.
+class IoError : public Error {
+ public:
+  IoError(const std::filesystem::path& path, const std::string& problem)
+      : Error(path.string() + ": " + problem), path_(path) {}
+  const std::filesystem::path& path() const { return path_; }
+
+ private:
+  std::filesystem::path path_;
+};
+
+/// A file exists but its content is wrong (corrupt image, malformed pose, bad manifest, ...).
+class FormatError : public Error {
+ public:
+  FormatError(const std::filesystem::path& path, const std::string& problem)
+      : Error(path.string() + ": " + problem), path_(path) {}
+  const std::filesystem::path& path() const { return path_; }
+
+ private:
+  std::filesystem::path path_;
+};
+
+/// An option or argument has an invalid value.
+class InvalidArgument : public Error {
+ public:
+  using Error::Error;
+};
+
+/// Throws InvalidArgument(message) unless `condition` holds. For Options::Check().
+inline void CheckArgument(bool condition, const std::string& message) {
+  if (!condition) throw InvalidArgument(message);
+}
+
+}  // namespace semrec

@@ -1,0 +1,56 @@
+// Per-pixel label maps (semantic classes or instance ids) and class tables.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "semrec/core/image.h"
+
+namespace semrec {
+
+/// One label per pixel; 0 conventionally means "unlabelled / background".
+using LabelMap = Image<uint16_t>;
+
+/// One class of a label set.
+struct LabelClass {
+  uint16_t id = 0;
+  std::string name;
+  std::array<uint8_t, 3> color = {0, 0, 0};
+};
+
+/// A class table (ADE20K-150, VOC-21, ...). Label sets are data: build them from files, not code.
+class LabelSet {
+ public:
+  LabelSet() = default;
+  explicit LabelSet(std::string name) : name_(std::move(name)) {}
+
+  /// Adds a class. Throws InvalidArgument on a duplicate id or name, or an empty name.
+  void Add(const LabelClass& label_class);
+
+  const std::string& name() const { return name_; }
+  size_t size() const { return classes_.size(); }
+  bool Contains(uint16_t id) const { return by_id_.count(id) != 0; }
+  /// Throws InvalidArgument for an unknown id.
+  const LabelClass& Get(uint16_t id) const;
+  std::optional<uint16_t> FindByName(const std::string& name) const;
+  /// Classes sorted by id.
+  std::vector<LabelClass> Classes() const;
+
+ private:
+  std::string name_;
+  std::vector<LabelClass> classes_;
+  std::map<uint16_t, size_t> by_id_;
+  std::map<std::string, uint16_t> by_name_;
+};
+
+/// Sorted distinct labels of a map, with their pixel counts.
+std::map<uint16_t, size_t> LabelHistogram(const LabelMap& labels);
+
+/// A deterministic, well-spread colour for label `id` (golden-ratio hue walk); id 0 is black.
+std::array<uint8_t, 3> LabelColor(uint32_t id);
+
+}  // namespace semrec

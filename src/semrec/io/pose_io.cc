@@ -1,0 +1,172 @@
+#include "semrec/io/pose_io.h"
+
+#include <algorithm>
+#include <sstream>
+#include <string>
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include "semrec/core/error.h"
+#include "semrec/core/file_util.h"
+
+namespace fs = std::filesystem;
+
+namespace semrec::io {
+namespace {
+
+// Numbers of a whitespace-separated text; throws FormatError naming the line of a bad token.
+std::vector<std::vector<double>> ReadNumberRows(const fs::path& path) {
+  std::istringstream in(ReadTextFile(path));
+  std::vector<std::vector<double>> rows;
+  std::string line;
+  int line_number = 0;
+  while (std::getline(in, line)) {
+    ++line_number;
+    const auto hash = line.find('#');
+    if (hash != std::string::npos) line.resize(hash);
+    std::istringstream tokens(line);
+    std::vector<double> row;
+    std::string token;
+    while (tokens >> token) {
+      try {
+        size_t used = 0;
+        row.push_back(std::stod(token, &used));
+        if (used != token.size()) throw std::invalid_argument(token);
+      } catch (const std::exception&) {
+        throw FormatError(path, fmt::format("line {}: '{}' is not a number", line_number, token));
+      }
+    }
+    if (!row.empty()) rows.push_back(std::move(row));
+  }
+  return rows;
+}
+
+Transform MatrixFromRows(const fs::path& path, const std::vector<std::vector<double>>& rows,
+                         size_t first, const std::string& what) {
+  Eigen::Matrix4d m;
+  for (int r = 0; r < 4; ++r) {
+    const auto& row = rows.at(first + r);
+    if (row.size() != 4) {
+      throw FormatError(path, fmt::format("{}: matrix row {} has {} numbers, expected 4", what,
+                                          r + 1, row.size()));
+    }
+    for (int c = 0; c < 4; ++c) m(r, c) = row[c];
+  }
+  try {
+    return Transform::FromMatrix(m, what);
+  } catch (const InvalidArgument& e) {
+    throw FormatError(path, e.what());
+  }
+}
+
+}  // namespace
+
+std::vector<Transform> ReadRedwoodLog(const fs::path& path) {
+  const auto rows = ReadNumberRows(path);
+  if (rows.empty()) throw FormatError(path, "trajectory file is empty");
+  if (rows.size() % 5 != 0) {
+    throw FormatError(path, fmt::format("expected blocks of 5 lines (\"i j n\" + 4 matrix rows), "
+                                        "got {} non-empty lines: a pose has too few rows",
+                                        rows.size()));
+  }
+  std::vector<Transform> poses;
+  for (size_t i = 0; i < rows.size(); i += 5) {
+    if (rows[i].size() != 3) {
+      throw FormatError(path, fmt::format("pose {}: header must be 3 numbers \"i j n\", got {}",
+                                          i / 5, rows[i].size()));
+    }
+    poses.push_back(MatrixFromRows(path, rows, i + 1, fmt::format("pose {}", i / 5)));
+  }
+  return poses;
+}
+
+Transform ReadPoseMatrixFile(const fs::path& path) {
+  const auto rows = ReadNumberRows(path);
+  if (rows.size() != 4) {
+    throw FormatError(path, fmt::format("pose file must have 4 rows of 4 numbers, got {} rows",
+                                        rows.size()));
+  }
+  return MatrixFromRows(path, rows, 0, "pose");
+}
+
+std::vector<StampedPose> ReadTumTrajectory(const fs::path& path) {
+  const auto rows = ReadNumberRows(path);
+  std::vector<StampedPose> out;
+  for (size_t i = 0; i < rows.size(); ++i) {
+    const auto& r = rows[i];
+    if (r.size() != 8) {
+      throw FormatError(path, fmt::format("entry {}: expected 8 numbers \"timestamp tx ty tz qx qy "
+                                          "qz qw\", got {}",
+                                          i + 1, r.size()));
+    }
+    try {
+      out.push_back({r[0], Transform::FromQuaternion(Eigen::Quaterniond(r[7], r[4], r[5], r[6]),
+                                                     Eigen::Vector3d(r[1], r[2], r[3]))});
+    } catch (const InvalidArgument& e) {
+      throw FormatError(path, fmt::format("entry {}: {}", i + 1, e.what()));
+    }
+  }
+  if (out.empty()) throw FormatError(path, "trajectory file has no poses");
+  std::stable_sort(out.begin(), out.end(),
+                   [](const StampedPose& a, const StampedPose& b) {
+                     return a.timestamp_s < b.timestamp_s;
+                   });
+  return out;
+}
+
+CameraIntrinsics ReadOpen3dIntrinsics(const fs::path& path) {
+  nlohmann::json j;
+  try {
+    j = nlohmann::json::parse(ReadTextFile(path));
+  } catch (const nlohmann::json::exception& e) {
+    throw FormatError(path, std::string("invalid JSON: ") + e.what());
+  }
+  try {
+    CameraIntrinsics k;
+    k.width = j.at("width").get<int>();
+    k.height = j.at("height").get<int>();
+    const auto m = j.at("intrinsic_matrix").get<std::vector<double>>();
+    if (m.size() != 9) throw FormatError(path, "intrinsic_matrix must have 9 numbers");
+    // Column-major 3x3.
+    k.fx = m[0];
+    k.fy = m[4];
+    k.cx = m[6];
+    k.cy = m[7];
+    k.Check();
+    return k;
+  } catch (const nlohmann::json::exception& e) {
+    throw FormatError(path, std::string("expected {\"width\", \"height\", \"intrinsic_matrix\"}: ") +
+                                e.what());
+  } catch (const InvalidArgument& e) {
+    throw FormatError(path, e.what());
+  }
+}
+
+CameraIntrinsics ReadIntrinsicsMatrixFile(const fs::path& path, int width, int height) {
+  const auto rows = ReadNumberRows(path);
+  if (rows.size() != 3 || rows[0].size() != 3 || rows[1].size() != 3 || rows[2].size() != 3) {
+    throw FormatError(path, "expected a 3x3 matrix (3 rows of 3 numbers)");
+  }
+  CameraIntrinsics k{width, height, rows[0][0], rows[1][1], rows[0][2], rows[1][2]};
+  try {
+    k.Check();
+  } catch (const InvalidArgument& e) {
+    throw FormatError(path, e.what());
+  }
+  return k;
+}
+
+void WriteRedwoodLog(const fs::path& path, const std::vector<Transform>& poses) {
+  std::string text;
+  for (size_t i = 0; i < poses.size(); ++i) {
+    text += fmt::format("{} {} {}\n", i, i, i + 1);
+    const Eigen::Matrix4d m = poses[i].Matrix();
+    for (int r = 0; r < 4; ++r) {
+      text += fmt::format("{:.17g} {:.17g} {:.17g} {:.17g}\n", m(r, 0), m(r, 1), m(r, 2), m(r, 3));
+    }
+  }
+  WriteTextFileAtomic(path, text);
+}
+
+}  // namespace semrec::io

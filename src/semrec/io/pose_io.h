@@ -1,0 +1,39 @@
+// Camera trajectories and intrinsics in the formats of public RGB-D datasets.
+#pragma once
+
+#include <filesystem>
+#include <vector>
+
+#include "semrec/core/camera.h"
+#include "semrec/core/transform.h"
+
+namespace semrec::io {
+
+/// Redwood / Open3D `.log` trajectory: per frame a line "i j n" and 4 rows of a 4x4
+/// camera-to-world matrix. Returns T_world_camera per entry, in file order.
+std::vector<Transform> ReadRedwoodLog(const std::filesystem::path& path);
+
+/// A 4x4 camera-to-world matrix as 4 rows of 4 numbers (7-Scenes / 3DMatch `frame-*.pose.txt`).
+Transform ReadPoseMatrixFile(const std::filesystem::path& path);
+
+/// One TUM trajectory sample: "timestamp tx ty tz qx qy qz qw" (camera-to-world).
+struct StampedPose {
+  double timestamp_s = 0.0;
+  Transform T_world_camera;
+};
+/// TUM `groundtruth.txt` (comments with '#'), sorted by time.
+std::vector<StampedPose> ReadTumTrajectory(const std::filesystem::path& path);
+
+/// Open3D PinholeCameraIntrinsic JSON ({"width", "height", "intrinsic_matrix": 9 numbers,
+/// column-major}).
+CameraIntrinsics ReadOpen3dIntrinsics(const std::filesystem::path& path);
+
+/// A 3x3 K matrix as text (7-Scenes / 3DMatch `camera-intrinsics.txt`); the image size is not in
+/// the file and is given by the caller.
+CameraIntrinsics ReadIntrinsicsMatrixFile(const std::filesystem::path& path, int width,
+                                          int height);
+
+/// Writes a Redwood `.log` trajectory atomically.
+void WriteRedwoodLog(const std::filesystem::path& path, const std::vector<Transform>& poses);
+
+}  // namespace semrec::io

@@ -1,0 +1,49 @@
+#include "semrec/io/pose_io.h"
+
+#include <gtest/gtest.h>
+
+#include "semrec/core/error.h"
+#include "semrec/testing/test_util.h"
+
+namespace semrec::io {
+namespace {
+
+TEST(PoseIo, RedwoodLogRoundTrip) {
+  semrec::testing::TempDir dir;
+  std::vector<Transform> poses = {
+      Transform(),
+      Transform(Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitY()).toRotationMatrix(), {1, 2, 3})};
+  WriteRedwoodLog(dir / "t.log", poses);
+  const auto read = ReadRedwoodLog(dir / "t.log");
+  ASSERT_EQ(read.size(), 2u);
+  EXPECT_TRUE(read[1].IsApprox(poses[1], 1e-12));
+}
+
+TEST(PoseIo, TumTrajectoryQuaternionOrderIsXyzw) {
+  semrec::testing::TempDir dir;
+  // 90 degrees about z: q = (x, y, z, w) = (0, 0, sin 45, cos 45).
+  semrec::testing::WriteText(dir / "gt.txt",
+                             "# timestamp tx ty tz qx qy qz qw\n"
+                             "2.0 0 0 0 0 0 0 1\n"
+                             "1.0 1 2 3 0 0 0.70710678118 0.70710678118\n");
+  const auto poses = ReadTumTrajectory(dir / "gt.txt");
+  ASSERT_EQ(poses.size(), 2u);
+  EXPECT_DOUBLE_EQ(poses[0].timestamp_s, 1.0);  // sorted by time
+  const Eigen::Vector3d x_rotated = poses[0].T_world_camera.rotation() * Eigen::Vector3d::UnitX();
+  EXPECT_TRUE(x_rotated.isApprox(Eigen::Vector3d::UnitY(), 1e-9));
+  EXPECT_TRUE(poses[0].T_world_camera.translation().isApprox(Eigen::Vector3d(1, 2, 3)));
+}
+
+TEST(PoseIo, IntrinsicsFiles) {
+  semrec::testing::TempDir dir;
+  semrec::testing::WriteText(dir / "k.json",
+                             R"({"width": 640, "height": 480, "intrinsic_matrix": [525.0, 0, 0, 0, 520.0, 0, 319.5, 239.5, 1]})");
+  const CameraIntrinsics a = ReadOpen3dIntrinsics(dir / "k.json");
+  EXPECT_EQ(a, (CameraIntrinsics{640, 480, 525.0, 520.0, 319.5, 239.5}));
+  semrec::testing::WriteText(dir / "k.txt", "585 0 320\n0 586 240\n0 0 1\n");
+  const CameraIntrinsics b = ReadIntrinsicsMatrixFile(dir / "k.txt", 640, 480);
+  EXPECT_EQ(b, (CameraIntrinsics{640, 480, 585.0, 586.0, 320.0, 240.0}));
+}
+
+}  // namespace
+}  // namespace semrec::io

@@ -1,0 +1,99 @@
+// RGB-D sequences on disk. `SequenceReader::Open(path)` detects the layout (semrec manifest,
+// TUM RGB-D, Redwood/Open3D, 7-Scenes/3DMatch), validates the index (files, poses, counts) up
+// front, and reads frames on demand with full checks (decodable images, 16-bit depth, sizes).
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <filesystem>
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "semrec/core/camera.h"
+#include "semrec/core/frame.h"
+#include "semrec/core/transform.h"
+
+namespace semrec::io {
+
+struct SequenceReaderOptions {
+  /// Use every `stride`-th frame of the dataset.
+  int stride = 1;
+  /// Use at most this many frames (after the stride); 0 = all.
+  size_t max_frames = 0;
+  /// Depths at or beyond this are marked invalid; 0 = keep all.
+  double max_depth_m = 0.0;
+  /// Overrides the layout's intrinsics: an Open3D JSON (`*.json`) or a 3x3 K matrix text file.
+  std::filesystem::path intrinsics_path;
+  /// TUM: maximum time difference (s) when associating colour, depth and poses.
+  double max_time_diff_s = 0.02;
+  /// Redwood: trajectory file name inside the folder; empty = odometry.log, then trajectory.log.
+  std::string pose_file;
+
+  /// Throws InvalidArgument for out-of-range values.
+  void Check() const;
+};
+
+/// One frame's files and pose, as listed by the layout.
+struct FrameRecord {
+  std::filesystem::path color_path;
+  std::filesystem::path depth_path;
+  Transform T_world_camera;
+  double timestamp_s = 0.0;
+  /// Extra per-frame images by name (e.g. "semantic", "instance", "person"), generic layout only.
+  std::map<std::string, std::filesystem::path> layers;
+};
+
+/// What a layout detector found: everything needed to read frames.
+struct SequenceIndex {
+  /// "semrec", "tum", "redwood" or "7scenes".
+  std::string layout;
+  std::filesystem::path root;
+  CameraIntrinsics intrinsics;
+  /// Raw depth units per metre (1000 for millimetres, 5000 for TUM).
+  double depth_scale = 1000.0;
+  /// A raw depth value that means "no measurement" besides 0 (7-Scenes uses 65535); 0 = none.
+  uint16_t depth_invalid = 0;
+  /// Where the poses came from (file name), for reports.
+  std::string pose_source;
+  /// Where the intrinsics came from (file name or "default ..."), for reports.
+  std::string intrinsics_source;
+  std::vector<FrameRecord> frames;
+};
+
+class SequenceReader {
+ public:
+  /// Opens `path` (a folder, or a semrec manifest file), auto-detecting the layout. Throws IoError
+  /// for a missing path or an unknown layout, FormatError for a broken one (names the file).
+  static SequenceReader Open(const std::filesystem::path& path,
+                             const SequenceReaderOptions& options = {});
+
+  /// Wraps an index built elsewhere (validated here: non-empty, consistent).
+  SequenceReader(SequenceIndex index, const SequenceReaderOptions& options);
+
+  const std::string& layout() const { return index_.layout; }
+  const std::filesystem::path& root() const { return index_.root; }
+  size_t size() const { return index_.frames.size(); }
+  const CameraIntrinsics& intrinsics() const { return index_.intrinsics; }
+  const SequenceIndex& index() const { return index_; }
+  const Transform& T_world_camera(size_t i) const { return index_.frames.at(i).T_world_camera; }
+
+  /// Reads frame `i`: colour (RGB8), metric depth, pose, intrinsics. Throws FormatError naming
+  /// the file for corrupt images, non-16-bit depth, or sizes that disagree with each other or
+  /// with the intrinsics.
+  Frame Read(size_t i) const;
+
+  /// Total camera path length in metres (sum of distances between consecutive positions).
+  double TrajectoryLengthM() const;
+
+ private:
+  SequenceIndex index_;
+  SequenceReaderOptions options_;
+};
+
+/// Writes a generic-layout manifest (`sequence.yaml`) atomically; paths are stored relative to
+/// the manifest's folder when they lie inside it. See README.md "Generic sequence layout".
+void WriteSequenceManifest(const std::filesystem::path& manifest_path, const SequenceIndex& index);
+
+}  // namespace semrec::io

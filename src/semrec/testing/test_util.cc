@@ -1,0 +1,54 @@
+#include "semrec/testing/test_util.h"
+
+#include <unistd.h>
+
+#include <atomic>
+#include <cstdlib>
+#include <fstream>
+#include <random>
+
+namespace fs = std::filesystem;
+
+namespace semrec::testing {
+
+TempDir::TempDir() {
+  static std::atomic<int> counter{0};
+  std::random_device rd;
+  path_ = fs::temp_directory_path() /
+          ("semrec_test_" + std::to_string(getpid()) + "_" + std::to_string(counter++) + "_" +
+           std::to_string(rd()));
+  fs::create_directories(path_);
+}
+
+TempDir::~TempDir() {
+  std::error_code ec;
+  fs::remove_all(path_, ec);
+}
+
+fs::path SourceDir() {
+  const char* env = std::getenv("SEMREC_SOURCE_DIR");
+  return env != nullptr ? fs::path(env) : fs::current_path();
+}
+
+std::optional<fs::path> SampleDataDir() {
+  if (const char* env = std::getenv("SEMREC_DATA"); env != nullptr && *env != '\0') {
+    if (fs::is_directory(env)) return fs::path(env);
+    return std::nullopt;
+  }
+  const fs::path beside = SourceDir() / ".." / "shared" / "data";
+  if (fs::is_directory(beside)) return fs::canonical(beside);
+  return std::nullopt;
+}
+
+fs::path ModelDir() {
+  if (const char* env = std::getenv("SEMREC_MODELS"); env != nullptr && *env != '\0') return env;
+  return SourceDir() / ".deps" / "models";
+}
+
+void WriteText(const fs::path& path, const std::string& text) {
+  fs::create_directories(path.parent_path());
+  std::ofstream out(path, std::ios::binary);
+  out << text;
+}
+
+}  // namespace semrec::testing
