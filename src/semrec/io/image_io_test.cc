@@ -33,8 +33,10 @@ TEST(ImageIo, ColorPngRoundTripAndRgbOrder) {
   EXPECT_EQ(ReadColorImage(dir / "c.png"), color);
   const cv::Mat bgr = cv::imread((dir / "c.png").string(), cv::IMREAD_COLOR);
   EXPECT_EQ(bgr.at<cv::Vec3b>(0, 0)[2], 255);  // OpenCV stores BGR
-  // Through OpenCV's JPEG path the channel order must stay RGB.
-  cv::imwrite((dir / "c.jpg").string(), bgr, {cv::IMWRITE_JPEG_QUALITY, 100});
+  // Through OpenCV's JPEG path the channel order must stay RGB (a uniform red block, so that
+  // chroma subsampling cannot blend colours).
+  const cv::Mat red_bgr(16, 16, CV_8UC3, cv::Scalar(0, 0, 255));
+  cv::imwrite((dir / "c.jpg").string(), red_bgr, {cv::IMWRITE_JPEG_QUALITY, 100});
   const ColorImage jpg = ReadColorImage(dir / "c.jpg");
   EXPECT_GT(jpg(0, 0, 0), 200);
   EXPECT_LT(jpg(0, 0, 2), 60);
