@@ -23,11 +23,15 @@ struct InfoArgs {
 void RunInfo(const InfoArgs& args) {
   io::SequenceReaderOptions options;
   options.intrinsics_path = args.intrinsics;
-  const io::SequenceReader reader = io::SequenceReader::Open(args.sequence, options);
+  const io::SequenceReader reader =
+      io::SequenceReader::Open(args.sequence, options);
   const CameraIntrinsics& k = reader.intrinsics();
 
-  // Depth range over the frames (all, or an evenly spaced subset): reads every scanned frame.
-  const size_t scan = args.scan_frames == 0 ? reader.size() : std::min(args.scan_frames, reader.size());
+  // Depth range over the frames (all, or an evenly spaced subset): reads every
+  // scanned frame.
+  const size_t scan = args.scan_frames == 0
+                          ? reader.size()
+                          : std::min(args.scan_frames, reader.size());
   double min_depth = 1e30, max_depth = 0.0, valid_sum = 0.0;
   {
     Progress progress("scanning depth", scan);
@@ -47,7 +51,8 @@ void RunInfo(const InfoArgs& args) {
   }
   if (max_depth == 0.0) min_depth = 0.0;
   const auto& frames = reader.index().frames;
-  const double duration = frames.back().timestamp_s - frames.front().timestamp_s;
+  const double duration =
+      frames.back().timestamp_s - frames.front().timestamp_s;
 
   if (args.json) {
     nlohmann::json j = {
@@ -56,7 +61,8 @@ void RunInfo(const InfoArgs& args) {
         {"frames", reader.size()},
         {"width", k.width},
         {"height", k.height},
-        {"intrinsics", {{"fx", k.fx}, {"fy", k.fy}, {"cx", k.cx}, {"cy", k.cy}}},
+        {"intrinsics",
+         {{"fx", k.fx}, {"fy", k.fy}, {"cx", k.cx}, {"cy", k.cy}}},
         {"intrinsics_source", reader.index().intrinsics_source},
         {"depth_scale", reader.index().depth_scale},
         {"pose_source", reader.index().pose_source},
@@ -69,31 +75,39 @@ void RunInfo(const InfoArgs& args) {
     std::printf("%s\n", j.dump(2).c_str());
     return;
   }
-  std::printf("%s", fmt::format("path:              {}\n"
-                                "layout:            {}\n"
-                                "frames:            {}\n"
-                                "resolution:        {}x{}\n"
-                                "intrinsics:        fx={:.3f} fy={:.3f} cx={:.3f} cy={:.3f} ({})\n"
-                                "depth scale:       {} units/m\n"
-                                "poses:             {}\n"
-                                "depth range:       {:.3f} - {:.3f} m ({:.0f}% valid, {} frames scanned)\n"
-                                "trajectory length: {:.3f} m over {:.2f} s\n",
-                                reader.root().string(), reader.layout(), reader.size(), k.width,
-                                k.height, k.fx, k.fy, k.cx, k.cy, reader.index().intrinsics_source,
-                                reader.index().depth_scale, reader.index().pose_source, min_depth,
-                                max_depth, scan > 0 ? 100.0 * valid_sum / scan : 0.0, scan,
-                                reader.TrajectoryLengthM(), duration)
-                        .c_str());
+  std::printf(
+      "%s",
+      fmt::format(
+          "path:              {}\n"
+          "layout:            {}\n"
+          "frames:            {}\n"
+          "resolution:        {}x{}\n"
+          "intrinsics:        fx={:.3f} fy={:.3f} cx={:.3f} cy={:.3f} ({})\n"
+          "depth scale:       {} units/m\n"
+          "poses:             {}\n"
+          "depth range:       {:.3f} - {:.3f} m ({:.0f}% valid, {} frames "
+          "scanned)\n"
+          "trajectory length: {:.3f} m over {:.2f} s\n",
+          reader.root().string(), reader.layout(), reader.size(), k.width,
+          k.height, k.fx, k.fy, k.cx, k.cy, reader.index().intrinsics_source,
+          reader.index().depth_scale, reader.index().pose_source, min_depth,
+          max_depth, scan > 0 ? 100.0 * valid_sum / scan : 0.0, scan,
+          reader.TrajectoryLengthM(), duration)
+          .c_str());
 }
 
 }  // namespace
 
 void RegisterInfo(CLI::App& app) {
   auto args = std::make_shared<InfoArgs>();
-  CLI::App* cmd = app.add_subcommand(
-      "info", "Print a sequence's detected layout, frame count, resolution, intrinsics, depth "
-              "range and trajectory length.");
-  cmd->add_option("sequence", args->sequence, "Sequence folder (or sequence.yaml)")->required();
+  CLI::App* cmd =
+      app.add_subcommand("info",
+                         "Print a sequence's detected layout, frame count, "
+                         "resolution, intrinsics, depth "
+                         "range and trajectory length.");
+  cmd->add_option("sequence", args->sequence,
+                  "Sequence folder (or sequence.yaml)")
+      ->required();
   cmd->add_flag("--json", args->json, "Print JSON instead of text");
   cmd->add_option("--scan-frames", args->scan_frames,
                   "Frames read for the depth range, evenly spaced (0 = all)")

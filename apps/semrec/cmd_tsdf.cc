@@ -1,4 +1,5 @@
-// `semrec tsdf <sequence> --out mesh.ply`: whole-scene TSDF fusion into one mesh.
+// `semrec tsdf <sequence> --out mesh.ply`: whole-scene TSDF fusion into one
+// mesh.
 #include <chrono>
 #include <cstdio>
 
@@ -28,7 +29,8 @@ void RunTsdf(const TsdfArgs& args) {
   options.stride = args.stride;
   options.max_frames = args.max_frames;
   options.intrinsics_path = args.intrinsics;
-  const io::SequenceReader reader = io::SequenceReader::Open(args.sequence, options);
+  const io::SequenceReader reader =
+      io::SequenceReader::Open(args.sequence, options);
   mesh::TsdfIntegrator tsdf(args.tsdf);
   {
     Progress progress("integrating", reader.size());
@@ -40,31 +42,46 @@ void RunTsdf(const TsdfArgs& args) {
   const auto mesh = tsdf.ExtractMesh();
   mesh::WriteMeshPly(args.out, *mesh);
   const double seconds =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  std::printf("%s", fmt::format("{}: {} frames ({} layout) -> {} vertices, {} triangles in {:.2f} s; "
-                                "wrote {}\n",
-                                reader.root().string(), reader.size(), reader.layout(),
-                                mesh->vertices_.size(), mesh->triangles_.size(), seconds, args.out)
-                        .c_str());
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start)
+          .count();
+  std::printf(
+      "%s",
+      fmt::format(
+          "{}: {} frames ({} layout) -> {} vertices, {} triangles in {:.2f} s; "
+          "wrote {}\n",
+          reader.root().string(), reader.size(), reader.layout(),
+          mesh->vertices_.size(), mesh->triangles_.size(), seconds, args.out)
+          .c_str());
 }
 
 }  // namespace
 
 void RegisterTsdf(CLI::App& app) {
   auto args = std::make_shared<TsdfArgs>();
-  CLI::App* cmd = app.add_subcommand(
-      "tsdf", "Integrate all frames of a sequence into one Open3D ScalableTSDFVolume and write "
-              "the triangle mesh (binary PLY with vertex colours).");
-  cmd->add_option("sequence", args->sequence, "Sequence folder (or sequence.yaml)")->required();
-  cmd->add_option("--out,-o", args->out, "Output mesh (.ply), written atomically")->required();
-  cmd->add_option("--voxel-size-m", args->tsdf.voxel_size_m, "TSDF voxel edge length (m)")
+  CLI::App* cmd =
+      app.add_subcommand("tsdf",
+                         "Integrate all frames of a sequence into one Open3D "
+                         "ScalableTSDFVolume and write "
+                         "the triangle mesh (binary PLY with vertex colours).");
+  cmd->add_option("sequence", args->sequence,
+                  "Sequence folder (or sequence.yaml)")
+      ->required();
+  cmd->add_option("--out,-o", args->out,
+                  "Output mesh (.ply), written atomically")
+      ->required();
+  cmd->add_option("--voxel-size-m", args->tsdf.voxel_size_m,
+                  "TSDF voxel edge length (m)")
       ->capture_default_str();
-  cmd->add_option("--sdf-trunc-m", args->tsdf.sdf_trunc_m, "SDF truncation distance (m)")
+  cmd->add_option("--sdf-trunc-m", args->tsdf.sdf_trunc_m,
+                  "SDF truncation distance (m)")
       ->capture_default_str();
-  cmd->add_option("--max-depth-m", args->tsdf.max_depth_m, "Ignore depth beyond this (m)")
+  cmd->add_option("--max-depth-m", args->tsdf.max_depth_m,
+                  "Ignore depth beyond this (m)")
       ->capture_default_str();
-  cmd->add_option("--stride", args->stride, "Use every n-th frame")->capture_default_str();
-  cmd->add_option("--max-frames", args->max_frames, "Use at most this many frames (0 = all)")
+  cmd->add_option("--stride", args->stride, "Use every n-th frame")
+      ->capture_default_str();
+  cmd->add_option("--max-frames", args->max_frames,
+                  "Use at most this many frames (0 = all)")
       ->capture_default_str();
   cmd->add_option("--intrinsics", args->intrinsics,
                   "Override intrinsics: Open3D JSON or 3x3 K matrix text file");

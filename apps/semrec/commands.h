@@ -1,5 +1,6 @@
-// Subcommands of the `semrec` CLI. Each Register* adds its CLI11 subcommand and the callback that
-// runs it; callbacks throw semrec::Error on bad input, which main() turns into "error: ..." + exit 1.
+// Subcommands of the `semrec` CLI. Each Register* adds its CLI11 subcommand and
+// the callback that runs it; callbacks throw semrec::Error on bad input, which
+// main() turns into "error: ..." + exit 1.
 #pragma once
 
 #include <CLI/CLI.hpp>

@@ -1,4 +1,5 @@
-// semrec: RGB-D frames with poses -> semantically labelled, instance-tracked 3D scenes.
+// semrec: RGB-D frames with poses -> semantically labelled, instance-tracked 3D
+// scenes.
 #include <cstdio>
 #include <exception>
 
@@ -11,12 +12,14 @@
 int main(int argc, char** argv) {
   CLI::App app{
       "semrec - semantic 3D reconstruction from RGB-D sequences.\n"
-      "Sequences: a folder in one of the layouts semrec detects (Redwood/Open3D, 7-Scenes/3DMatch, "
+      "Sequences: a folder in one of the layouts semrec detects "
+      "(Redwood/Open3D, 7-Scenes/3DMatch, "
       "TUM RGB-D, or semrec's own sequence.yaml); see README.md.",
       "semrec"};
   app.set_version_flag("--version", "semrec 0.1.0");
   std::string log_level = "info";
-  app.add_option("--log-level", log_level, "trace, debug, info, warn, error or off")
+  app.add_option("--log-level", log_level,
+                 "trace, debug, info, warn, error or off")
       ->capture_default_str();
   app.require_subcommand(1);
   semrec::cli::RegisterInfo(app);

@@ -9,12 +9,15 @@
 namespace semrec {
 
 void CameraIntrinsics::Check() const {
-  CheckArgument(width > 0 && height > 0,
-                fmt::format("camera intrinsics: image size must be positive, got {}x{}", width,
-                            height));
-  CheckArgument(std::isfinite(fx) && std::isfinite(fy) && fx > 0.0 && fy > 0.0,
-                fmt::format("camera intrinsics: focal lengths must be positive, got fx={} fy={}",
-                            fx, fy));
+  CheckArgument(
+      width > 0 && height > 0,
+      fmt::format("camera intrinsics: image size must be positive, got {}x{}",
+                  width, height));
+  CheckArgument(
+      std::isfinite(fx) && std::isfinite(fy) && fx > 0.0 && fy > 0.0,
+      fmt::format(
+          "camera intrinsics: focal lengths must be positive, got fx={} fy={}",
+          fx, fy));
   CheckArgument(std::isfinite(cx) && std::isfinite(cy),
                 "camera intrinsics: principal point must be finite");
 }
@@ -39,8 +42,8 @@ CameraIntrinsics CameraIntrinsics::Scaled(double scale) const {
 }
 
 std::string CameraIntrinsics::ToString() const {
-  return fmt::format("{}x{} fx={:.3f} fy={:.3f} cx={:.3f} cy={:.3f}", width, height, fx, fy, cx,
-                     cy);
+  return fmt::format("{}x{} fx={:.3f} fy={:.3f} cx={:.3f} cy={:.3f}", width,
+                     height, fx, fy, cx, cy);
 }
 
 }  // namespace semrec

@@ -19,14 +19,18 @@ TEST(CameraIntrinsics, ProjectInvertsBackProject) {
     }
   }
   // The principal point looks straight ahead.
-  EXPECT_TRUE(k.BackProject(319.5, 239.5, 1.0).isApprox(Eigen::Vector3d(0, 0, 1)));
+  EXPECT_TRUE(
+      k.BackProject(319.5, 239.5, 1.0).isApprox(Eigen::Vector3d(0, 0, 1)));
 }
 
 TEST(CameraIntrinsics, CheckRejectsBadValues) {
   EXPECT_NO_THROW((CameraIntrinsics{640, 480, 525, 525, 320, 240}.Check()));
-  EXPECT_THROW((CameraIntrinsics{0, 480, 525, 525, 320, 240}.Check()), InvalidArgument);
-  EXPECT_THROW((CameraIntrinsics{640, 480, -1, 525, 320, 240}.Check()), InvalidArgument);
-  EXPECT_THROW((CameraIntrinsics{640, 480, 525, 525, NAN, 240}.Check()), InvalidArgument);
+  EXPECT_THROW((CameraIntrinsics{0, 480, 525, 525, 320, 240}.Check()),
+               InvalidArgument);
+  EXPECT_THROW((CameraIntrinsics{640, 480, -1, 525, 320, 240}.Check()),
+               InvalidArgument);
+  EXPECT_THROW((CameraIntrinsics{640, 480, 525, 525, NAN, 240}.Check()),
+               InvalidArgument);
 }
 
 TEST(CameraIntrinsics, ScaledKeepsRaysThroughPixelCorners) {
@@ -34,7 +38,8 @@ TEST(CameraIntrinsics, ScaledKeepsRaysThroughPixelCorners) {
   const CameraIntrinsics half = k.Scaled(0.5);
   EXPECT_EQ(half.width, 320);
   EXPECT_EQ(half.height, 240);
-  // The image corner (-0.5, -0.5) in full resolution is (-0.5, -0.5) at half resolution too.
+  // The image corner (-0.5, -0.5) in full resolution is (-0.5, -0.5) at half
+  // resolution too.
   const Eigen::Vector3d ray_full = k.BackProject(-0.5, -0.5, 1.0);
   const Eigen::Vector3d ray_half = half.BackProject(-0.5, -0.5, 1.0);
   EXPECT_TRUE(ray_full.isApprox(ray_half, 1e-12));

@@ -1,5 +1,6 @@
-// Typed errors. Every message names the offending file (when there is one) and says what is wrong,
-// so that a user can fix the input without reading the source.
+// Typed errors. Every message names the offending file (when there is one) and
+// says what is wrong, so that a user can fix the input without reading the
+// source.
 #pragma once
 
 #include <filesystem>
@@ -25,7 +26,8 @@ class IoError : public Error {
   std::filesystem::path path_;
 };
 
-/// A file exists but its content is wrong (corrupt image, malformed pose, bad manifest, ...).
+/// A file exists but its content is wrong (corrupt image, malformed pose, bad
+/// manifest, ...).
 class FormatError : public Error {
  public:
   FormatError(const std::filesystem::path& path, const std::string& problem)
@@ -42,7 +44,8 @@ class InvalidArgument : public Error {
   using Error::Error;
 };
 
-/// Throws InvalidArgument(message) unless `condition` holds. For Options::Check().
+/// Throws InvalidArgument(message) unless `condition` holds. For
+/// Options::Check().
 inline void CheckArgument(bool condition, const std::string& message) {
   if (!condition) throw InvalidArgument(message);
 }

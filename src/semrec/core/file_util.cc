@@ -13,22 +13,28 @@ namespace fs = std::filesystem;
 
 namespace semrec {
 
-void WriteFileAtomic(const fs::path& path, const std::function<void(const fs::path&)>& write) {
+void WriteFileAtomic(const fs::path& path,
+                     const std::function<void(const fs::path&)>& write) {
   std::error_code ec;
   if (path.has_parent_path()) {
     fs::create_directories(path.parent_path(), ec);
-    if (ec) throw IoError(path.parent_path(), "cannot create folder: " + ec.message());
+    if (ec)
+      throw IoError(path.parent_path(),
+                    "cannot create folder: " + ec.message());
   }
   static std::atomic<unsigned> counter{0};
   // Keep the extension: writers such as Open3D pick the format from it.
-  const fs::path tmp = path.parent_path() / (path.stem().string() + ".tmp" +
-                                             std::to_string(getpid()) + "_" +
-                                             std::to_string(counter++) + path.extension().string());
+  const fs::path tmp =
+      path.parent_path() /
+      (path.stem().string() + ".tmp" + std::to_string(getpid()) + "_" +
+       std::to_string(counter++) + path.extension().string());
   try {
     write(tmp);
     if (!fs::exists(tmp)) throw IoError(path, "writer produced no file");
     fs::rename(tmp, path, ec);
-    if (ec) throw IoError(path, "cannot rename temporary file into place: " + ec.message());
+    if (ec)
+      throw IoError(path,
+                    "cannot rename temporary file into place: " + ec.message());
   } catch (...) {
     fs::remove(tmp, ec);
     throw;
@@ -66,13 +72,15 @@ std::string ReadTextFile(const fs::path& path) {
 void RequireFile(const fs::path& path, const std::string& what) {
   std::error_code ec;
   if (!fs::exists(path, ec)) throw IoError(path, what + " does not exist");
-  if (!fs::is_regular_file(path, ec)) throw IoError(path, what + " is not a regular file");
+  if (!fs::is_regular_file(path, ec))
+    throw IoError(path, what + " is not a regular file");
 }
 
 void RequireDirectory(const fs::path& path, const std::string& what) {
   std::error_code ec;
   if (!fs::exists(path, ec)) throw IoError(path, what + " does not exist");
-  if (!fs::is_directory(path, ec)) throw IoError(path, what + " is not a folder");
+  if (!fs::is_directory(path, ec))
+    throw IoError(path, what + " is not a folder");
 }
 
 }  // namespace semrec

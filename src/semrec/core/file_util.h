@@ -1,4 +1,5 @@
-// File helpers: atomic writes (a crash never leaves a half-written output) and checked reads.
+// File helpers: atomic writes (a crash never leaves a half-written output) and
+// checked reads.
 #pragma once
 
 #include <filesystem>
@@ -8,22 +9,29 @@
 
 namespace semrec {
 
-/// Writes `path` atomically: `write(tmp_path)` fills a temporary file in the same folder, which is
-/// then renamed over `path`. Creates missing parent folders. On any exception the temporary file
-/// is removed and `path` is left untouched.
-void WriteFileAtomic(const std::filesystem::path& path,
-                     const std::function<void(const std::filesystem::path& tmp_path)>& write);
+/// Writes `path` atomically: `write(tmp_path)` fills a temporary file in the
+/// same folder, which is then renamed over `path`. Creates missing parent
+/// folders. On any exception the temporary file is removed and `path` is left
+/// untouched.
+void WriteFileAtomic(
+    const std::filesystem::path& path,
+    const std::function<void(const std::filesystem::path& tmp_path)>& write);
 
 /// Atomically writes `content` to `path`.
-void WriteTextFileAtomic(const std::filesystem::path& path, const std::string& content);
+void WriteTextFileAtomic(const std::filesystem::path& path,
+                         const std::string& content);
 
-/// Whole file as bytes. Throws IoError naming the file when it is missing or unreadable.
+/// Whole file as bytes. Throws IoError naming the file when it is missing or
+/// unreadable.
 std::vector<unsigned char> ReadFileBytes(const std::filesystem::path& path);
 std::string ReadTextFile(const std::filesystem::path& path);
 
-/// Throws IoError unless `path` is an existing regular file (`what` describes it in the message).
-void RequireFile(const std::filesystem::path& path, const std::string& what = "file");
+/// Throws IoError unless `path` is an existing regular file (`what` describes
+/// it in the message).
+void RequireFile(const std::filesystem::path& path,
+                 const std::string& what = "file");
 /// Throws IoError unless `path` is an existing folder.
-void RequireDirectory(const std::filesystem::path& path, const std::string& what = "folder");
+void RequireDirectory(const std::filesystem::path& path,
+                      const std::string& what = "folder");
 
 }  // namespace semrec

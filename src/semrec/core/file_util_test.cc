@@ -24,7 +24,9 @@ TEST(WriteFileAtomic, ReplacesOnlyOnSuccess) {
                IoError);
   EXPECT_EQ(ReadTextFile(target), "first");
   size_t files = 0;
-  for ([[maybe_unused]] const auto& e : fs::directory_iterator(target.parent_path())) ++files;
+  for ([[maybe_unused]] const auto& e :
+       fs::directory_iterator(target.parent_path()))
+    ++files;
   EXPECT_EQ(files, 1u);
 }
 
@@ -43,7 +45,8 @@ TEST(RequireFile, NamesTheFile) {
     RequireFile("/nonexistent/depth.png", "depth image");
     FAIL();
   } catch (const IoError& e) {
-    EXPECT_EQ(std::string(e.what()), "/nonexistent/depth.png: depth image does not exist");
+    EXPECT_EQ(std::string(e.what()),
+              "/nonexistent/depth.png: depth image does not exist");
   }
 }
 

@@ -13,7 +13,8 @@ namespace semrec {
 struct Frame {
   /// Position in the sequence (0-based, after any stride / selection).
   size_t index = 0;
-  /// Capture time in seconds (the dataset's clock; frame index / nominal rate when unknown).
+  /// Capture time in seconds (the dataset's clock; frame index / nominal rate
+  /// when unknown).
   double timestamp_s = 0.0;
   /// RGB, 3 channels, same size as depth.
   ColorImage color;

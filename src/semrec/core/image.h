@@ -9,7 +9,8 @@
 
 namespace semrec {
 
-/// A width x height image with `channels` interleaved values of type T per pixel.
+/// A width x height image with `channels` interleaved values of type T per
+/// pixel.
 template <typename T>
 class Image {
  public:
@@ -30,14 +31,18 @@ class Image {
   size_t NumPixels() const { return static_cast<size_t>(width_) * height_; }
 
   T& operator()(int x, int y, int c = 0) { return data_[Index(x, y, c)]; }
-  const T& operator()(int x, int y, int c = 0) const { return data_[Index(x, y, c)]; }
+  const T& operator()(int x, int y, int c = 0) const {
+    return data_[Index(x, y, c)];
+  }
 
   T* data() { return data_.data(); }
   const T* data() const { return data_.data(); }
   std::vector<T>& values() { return data_; }
   const std::vector<T>& values() const { return data_; }
 
-  bool SameSize(int width, int height) const { return width_ == width && height_ == height; }
+  bool SameSize(int width, int height) const {
+    return width_ == width && height_ == height;
+  }
   template <typename U>
   bool SameSize(const Image<U>& other) const {
     return SameSize(other.width(), other.height());
@@ -63,9 +68,10 @@ using DepthImage16 = Image<uint16_t>;
 /// Metric depth in metres; 0 marks an invalid pixel.
 using DepthImage = Image<float>;
 
-/// Converts raw 16-bit depth to metres: d_m = raw / depth_scale. Raw values equal to 0 or to
-/// `invalid_value` become 0 (invalid), as do depths >= max_depth_m (when max_depth_m > 0).
-DepthImage DepthToMeters(const DepthImage16& raw, double depth_scale, uint16_t invalid_value = 0,
-                         double max_depth_m = 0.0);
+/// Converts raw 16-bit depth to metres: d_m = raw / depth_scale. Raw values
+/// equal to 0 or to `invalid_value` become 0 (invalid), as do depths >=
+/// max_depth_m (when max_depth_m > 0).
+DepthImage DepthToMeters(const DepthImage16& raw, double depth_scale,
+                         uint16_t invalid_value = 0, double max_depth_m = 0.0);
 
 }  // namespace semrec

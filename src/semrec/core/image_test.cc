@@ -16,7 +16,8 @@ TEST(Image, IndexingIsRowMajorInterleaved) {
 TEST(Image, DepthToMetersHandlesScaleInvalidAndCutoff) {
   DepthImage16 raw(4, 1, 1);
   raw.values() = {0, 1000, 65535, 5000};
-  const DepthImage m = DepthToMeters(raw, 1000.0, /*invalid_value=*/65535, /*max_depth_m=*/4.0);
+  const DepthImage m =
+      DepthToMeters(raw, 1000.0, /*invalid_value=*/65535, /*max_depth_m=*/4.0);
   EXPECT_FLOAT_EQ(m(0, 0), 0.0f);  // 0 is invalid
   EXPECT_FLOAT_EQ(m(1, 0), 1.0f);
   EXPECT_FLOAT_EQ(m(2, 0), 0.0f);  // the sensor's invalid marker

@@ -8,11 +8,14 @@ namespace semrec {
 
 void LabelSet::Add(const LabelClass& label_class) {
   CheckArgument(!label_class.name.empty(),
-                fmt::format("label set '{}': class {} has an empty name", name_, label_class.id));
+                fmt::format("label set '{}': class {} has an empty name", name_,
+                            label_class.id));
   CheckArgument(!Contains(label_class.id),
-                fmt::format("label set '{}': duplicate class id {}", name_, label_class.id));
+                fmt::format("label set '{}': duplicate class id {}", name_,
+                            label_class.id));
   CheckArgument(by_name_.count(label_class.name) == 0,
-                fmt::format("label set '{}': duplicate class name '{}'", name_, label_class.name));
+                fmt::format("label set '{}': duplicate class name '{}'", name_,
+                            label_class.name));
   by_id_[label_class.id] = classes_.size();
   by_name_[label_class.name] = label_class.id;
   classes_.push_back(label_class);
@@ -20,7 +23,8 @@ void LabelSet::Add(const LabelClass& label_class) {
 
 const LabelClass& LabelSet::Get(uint16_t id) const {
   auto it = by_id_.find(id);
-  CheckArgument(it != by_id_.end(), fmt::format("label set '{}': unknown class id {}", name_, id));
+  CheckArgument(it != by_id_.end(),
+                fmt::format("label set '{}': unknown class id {}", name_, id));
   return classes_[it->second];
 }
 
@@ -49,7 +53,8 @@ std::map<uint16_t, size_t> LabelHistogram(const LabelMap& labels) {
 
 std::array<uint8_t, 3> LabelColor(uint32_t id) {
   if (id == 0) return {0, 0, 0};
-  // HSV with a golden-ratio hue walk: neighbouring ids get clearly different colours.
+  // HSV with a golden-ratio hue walk: neighbouring ids get clearly different
+  // colours.
   const double h = std::fmod(id * 0.618033988749895, 1.0) * 6.0;
   const double s = 0.65 + 0.35 * ((id / 7) % 2);
   const double v = 0.95 - 0.25 * ((id / 3) % 2);
@@ -58,14 +63,28 @@ std::array<uint8_t, 3> LabelColor(uint32_t id) {
   const double p = v * (1 - s), q = v * (1 - s * f), t = v * (1 - s * (1 - f));
   double r = 0, g = 0, b = 0;
   switch (sector % 6) {
-    case 0: r = v, g = t, b = p; break;
-    case 1: r = q, g = v, b = p; break;
-    case 2: r = p, g = v, b = t; break;
-    case 3: r = p, g = q, b = v; break;
-    case 4: r = t, g = p, b = v; break;
-    default: r = v, g = p, b = q; break;
+    case 0:
+      r = v, g = t, b = p;
+      break;
+    case 1:
+      r = q, g = v, b = p;
+      break;
+    case 2:
+      r = p, g = v, b = t;
+      break;
+    case 3:
+      r = p, g = q, b = v;
+      break;
+    case 4:
+      r = t, g = p, b = v;
+      break;
+    default:
+      r = v, g = p, b = q;
+      break;
   }
-  auto to8 = [](double x) { return static_cast<uint8_t>(std::lround(x * 255.0)); };
+  auto to8 = [](double x) {
+    return static_cast<uint8_t>(std::lround(x * 255.0));
+  };
   return {to8(r), to8(g), to8(b)};
 }
 

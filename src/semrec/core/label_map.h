@@ -22,13 +22,15 @@ struct LabelClass {
   std::array<uint8_t, 3> color = {0, 0, 0};
 };
 
-/// A class table (ADE20K-150, VOC-21, ...). Label sets are data: build them from files, not code.
+/// A class table (ADE20K-150, VOC-21, ...). Label sets are data: build them
+/// from files, not code.
 class LabelSet {
  public:
   LabelSet() = default;
   explicit LabelSet(std::string name) : name_(std::move(name)) {}
 
-  /// Adds a class. Throws InvalidArgument on a duplicate id or name, or an empty name.
+  /// Adds a class. Throws InvalidArgument on a duplicate id or name, or an
+  /// empty name.
   void Add(const LabelClass& label_class);
 
   const std::string& name() const { return name_; }
@@ -50,7 +52,8 @@ class LabelSet {
 /// Sorted distinct labels of a map, with their pixel counts.
 std::map<uint16_t, size_t> LabelHistogram(const LabelMap& labels);
 
-/// A deterministic, well-spread colour for label `id` (golden-ratio hue walk); id 0 is black.
+/// A deterministic, well-spread colour for label `id` (golden-ratio hue walk);
+/// id 0 is black.
 std::array<uint8_t, 3> LabelColor(uint32_t id);
 
 }  // namespace semrec

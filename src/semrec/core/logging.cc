@@ -9,7 +9,8 @@ namespace semrec {
 
 void InitLogging(const std::string& level) {
   const spdlog::level::level_enum parsed = spdlog::level::from_str(level);
-  // from_str maps unknown names to "off"; only accept that for the literal "off".
+  // from_str maps unknown names to "off"; only accept that for the literal
+  // "off".
   if (parsed == spdlog::level::off && level != "off") {
     throw InvalidArgument("unknown log level '" + level +
                           "' (use trace, debug, info, warn, error or off)");

@@ -13,8 +13,10 @@ namespace semrec {
 
 void ProgressOptions::Check() const {
   CheckArgument(min_interval_s >= 0.0, "progress: min_interval_s must be >= 0");
-  CheckArgument(line_interval_s >= 0.0, "progress: line_interval_s must be >= 0");
-  CheckArgument(bar_width > 0 && bar_width <= 200, "progress: bar_width must be in (0, 200]");
+  CheckArgument(line_interval_s >= 0.0,
+                "progress: line_interval_s must be >= 0");
+  CheckArgument(bar_width > 0 && bar_width <= 200,
+                "progress: bar_width must be in (0, 200]");
 }
 
 std::string FormatDuration(double seconds) {
@@ -25,8 +27,8 @@ std::string FormatDuration(double seconds) {
   return fmt::format("{}h{:02}m", s / 3600, (s % 3600) / 60);
 }
 
-Progress::Progress(std::string label, size_t total, const ProgressOptions& options,
-                   std::FILE* stream)
+Progress::Progress(std::string label, size_t total,
+                   const ProgressOptions& options, std::FILE* stream)
     : label_(std::move(label)),
       total_(total),
       options_(options),
@@ -51,7 +53,9 @@ Progress::Progress(std::string label, size_t total, const ProgressOptions& optio
 Progress::~Progress() { Finish(); }
 
 double Progress::ElapsedS() const {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() -
+                                       start_)
+      .count();
 }
 
 std::string Progress::Render(bool bar) const {
@@ -69,7 +73,8 @@ std::string Progress::Render(bool bar) const {
   } else {
     text += fmt::format(" {}", done_);
   }
-  text += rate >= 10 ? fmt::format(" {:.0f} it/s", rate) : fmt::format(" {:.2f} it/s", rate);
+  text += rate >= 10 ? fmt::format(" {:.0f} it/s", rate)
+                     : fmt::format(" {:.2f} it/s", rate);
   if (finished_ || (total_ > 0 && done_ >= total_)) {
     text += " in " + FormatDuration(elapsed);
   } else if (total_ > 0 && rate > 0) {
@@ -81,12 +86,14 @@ std::string Progress::Render(bool bar) const {
 void Progress::Emit(bool final) {
   if (stream_ == nullptr) return;
   const double now = ElapsedS();
-  const double interval = bar_ ? options_.min_interval_s : options_.line_interval_s;
+  const double interval =
+      bar_ ? options_.min_interval_s : options_.line_interval_s;
   if (!final && now - last_emit_s_ < interval) return;
   last_emit_s_ = now;
   if (bar_) {
     // \r + erase-line redraws in place.
-    std::fprintf(stream_, "\r\033[K%s%s", Render(true).c_str(), final ? "\n" : "");
+    std::fprintf(stream_, "\r\033[K%s%s", Render(true).c_str(),
+                 final ? "\n" : "");
   } else {
     std::fprintf(stream_, "%s\n", Render(false).c_str());
   }

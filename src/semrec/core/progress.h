@@ -1,5 +1,5 @@
-// Progress reporting for long loops: a bar with rate and ETA on a terminal, plain periodic lines
-// otherwise (CI logs, pipes), nothing when disabled.
+// Progress reporting for long loops: a bar with rate and ETA on a terminal,
+// plain periodic lines otherwise (CI logs, pipes), nothing when disabled.
 #pragma once
 
 #include <chrono>
@@ -22,8 +22,8 @@ struct ProgressOptions {
   void Check() const;
 };
 
-/// Usage: `Progress progress("integrate", n); for (...) { ...; progress.Tick(); }`
-/// The destructor prints the final line if Finish() was not called.
+/// Usage: `Progress progress("integrate", n); for (...) { ...; progress.Tick();
+/// }` The destructor prints the final line if Finish() was not called.
 class Progress {
  public:
   /// `stream` defaults to stderr so that stdout stays clean for results.
@@ -40,7 +40,8 @@ class Progress {
 
   size_t done() const { return done_; }
   size_t total() const { return total_; }
-  /// The text of the current state, e.g. "integrate [#####-----] 5/10 50% 2.0 it/s ETA 3s".
+  /// The text of the current state, e.g. "integrate [#####-----] 5/10 50% 2.0
+  /// it/s ETA 3s".
   std::string Render(bool bar) const;
 
  private:

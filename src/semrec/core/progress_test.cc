@@ -60,7 +60,10 @@ TEST(Progress, OffPrintsNothingAndOptionsAreChecked) {
   std::FILE* f = std::tmpfile();
   ProgressOptions off;
   off.mode = ProgressOptions::Mode::kOff;
-  { Progress progress("quiet", 3, off, f); progress.Tick(3); }
+  {
+    Progress progress("quiet", 3, off, f);
+    progress.Tick(3);
+  }
   EXPECT_TRUE(ReadAll(f).empty());
   std::fclose(f);
   ProgressOptions bad;

@@ -1,6 +1,7 @@
-// Rigid transforms. Name variables after the frames they connect: `T_world_camera` maps points
-// from the camera frame into the world frame (p_world = T_world_camera * p_camera), so frames
-// chain visibly: T_a_c = T_a_b * T_b_c.
+// Rigid transforms. Name variables after the frames they connect:
+// `T_world_camera` maps points from the camera frame into the world frame
+// (p_world = T_world_camera * p_camera), so frames chain visibly: T_a_c = T_a_b
+// * T_b_c.
 #pragma once
 
 #include <string>
@@ -15,31 +16,41 @@ class Transform {
  public:
   /// Identity.
   Transform() = default;
-  Transform(const Eigen::Matrix3d& rotation, const Eigen::Vector3d& translation);
+  Transform(const Eigen::Matrix3d& rotation,
+            const Eigen::Vector3d& translation);
 
-  /// From a 4x4 homogeneous matrix. Throws InvalidArgument (with `what` in the message) when the
-  /// matrix has non-finite entries, a last row other than (0 0 0 1), or a rotation block that is
-  /// not orthonormal with determinant +1 within `tolerance`. The rotation is re-orthonormalised.
-  static Transform FromMatrix(const Eigen::Matrix4d& matrix, const std::string& what = "pose",
+  /// From a 4x4 homogeneous matrix. Throws InvalidArgument (with `what` in the
+  /// message) when the matrix has non-finite entries, a last row other than (0
+  /// 0 0 1), or a rotation block that is not orthonormal with determinant +1
+  /// within `tolerance`. The rotation is re-orthonormalised.
+  static Transform FromMatrix(const Eigen::Matrix4d& matrix,
+                              const std::string& what = "pose",
                               double tolerance = 1e-3);
 
-  /// From a unit quaternion (any norm is accepted and normalised) and a translation.
-  static Transform FromQuaternion(const Eigen::Quaterniond& q, const Eigen::Vector3d& t);
+  /// From a unit quaternion (any norm is accepted and normalised) and a
+  /// translation.
+  static Transform FromQuaternion(const Eigen::Quaterniond& q,
+                                  const Eigen::Vector3d& t);
 
   const Eigen::Matrix3d& rotation() const { return rotation_; }
   const Eigen::Vector3d& translation() const { return translation_; }
   Eigen::Matrix4d Matrix() const;
-  Eigen::Quaterniond Quaternion() const { return Eigen::Quaterniond(rotation_); }
+  Eigen::Quaterniond Quaternion() const {
+    return Eigen::Quaterniond(rotation_);
+  }
 
   Transform Inverse() const;
   Transform operator*(const Transform& other) const;
-  Eigen::Vector3d operator*(const Eigen::Vector3d& p) const { return rotation_ * p + translation_; }
+  Eigen::Vector3d operator*(const Eigen::Vector3d& p) const {
+    return rotation_ * p + translation_;
+  }
 
   /// Rotation angle (radians) of this transform.
   double AngleRad() const;
 
   /// Linear interpolation of translation and slerp of rotation; t in [0, 1].
-  static Transform Interpolate(const Transform& a, const Transform& b, double t);
+  static Transform Interpolate(const Transform& a, const Transform& b,
+                               double t);
 
   bool IsApprox(const Transform& other, double tolerance = 1e-9) const;
 

@@ -8,7 +8,8 @@ namespace semrec {
 namespace {
 
 Transform Example() {
-  return Transform(Eigen::AngleAxisd(0.7, Eigen::Vector3d(1, 2, 3).normalized()).toRotationMatrix(),
+  return Transform(Eigen::AngleAxisd(0.7, Eigen::Vector3d(1, 2, 3).normalized())
+                       .toRotationMatrix(),
                    Eigen::Vector3d(0.5, -1.0, 2.0));
 }
 
@@ -17,7 +18,8 @@ TEST(Transform, ComposeAndInverse) {
   const Eigen::Vector3d p_camera(0.1, 0.2, 1.5);
   const Eigen::Vector3d p_world = T_world_camera * p_camera;
   EXPECT_TRUE((T_world_camera.Inverse() * p_world).isApprox(p_camera, 1e-12));
-  EXPECT_TRUE((T_world_camera * T_world_camera.Inverse()).IsApprox(Transform(), 1e-12));
+  EXPECT_TRUE(
+      (T_world_camera * T_world_camera.Inverse()).IsApprox(Transform(), 1e-12));
   // Matrix form agrees with the point form.
   const Eigen::Vector4d h = T_world_camera.Matrix() * p_camera.homogeneous();
   EXPECT_TRUE(h.head<3>().isApprox(p_world, 1e-12));
@@ -66,8 +68,9 @@ TEST(Transform, SmallRoundingIsAcceptedAndCleaned) {
 
 TEST(Transform, InterpolateEndsAndMiddle) {
   const Transform a;
-  const Transform b(Eigen::AngleAxisd(1.0, Eigen::Vector3d::UnitZ()).toRotationMatrix(),
-                    Eigen::Vector3d(2, 0, 0));
+  const Transform b(
+      Eigen::AngleAxisd(1.0, Eigen::Vector3d::UnitZ()).toRotationMatrix(),
+      Eigen::Vector3d(2, 0, 0));
   EXPECT_TRUE(Transform::Interpolate(a, b, 0.0).IsApprox(a, 1e-12));
   EXPECT_TRUE(Transform::Interpolate(a, b, 1.0).IsApprox(b, 1e-12));
   const Transform mid = Transform::Interpolate(a, b, 0.5);
@@ -76,10 +79,11 @@ TEST(Transform, InterpolateEndsAndMiddle) {
 }
 
 TEST(Transform, QuaternionIsNormalised) {
-  const Transform t =
-      Transform::FromQuaternion(Eigen::Quaterniond(2.0, 0.0, 0.0, 0.0), Eigen::Vector3d(1, 2, 3));
+  const Transform t = Transform::FromQuaternion(
+      Eigen::Quaterniond(2.0, 0.0, 0.0, 0.0), Eigen::Vector3d(1, 2, 3));
   EXPECT_TRUE(t.rotation().isApprox(Eigen::Matrix3d::Identity()));
-  EXPECT_THROW(Transform::FromQuaternion(Eigen::Quaterniond(0, 0, 0, 0), Eigen::Vector3d::Zero()),
+  EXPECT_THROW(Transform::FromQuaternion(Eigen::Quaterniond(0, 0, 0, 0),
+                                         Eigen::Vector3d::Zero()),
                InvalidArgument);
 }
 

@@ -13,7 +13,8 @@
 namespace semrec::infer {
 
 void OnnxSessionOptions::Check() const {
-  CheckArgument(intra_op_threads >= 0, "onnx session: intra_op_threads must be >= 0");
+  CheckArgument(intra_op_threads >= 0,
+                "onnx session: intra_op_threads must be >= 0");
 }
 
 size_t Tensor::NumElements(const std::vector<int64_t>& shape) {
@@ -23,14 +24,16 @@ size_t Tensor::NumElements(const std::vector<int64_t>& shape) {
 }
 
 Tensor Tensor::Zeros(const std::vector<int64_t>& shape) {
-  for (int64_t d : shape) CheckArgument(d >= 0, "Tensor::Zeros: negative dimension");
+  for (int64_t d : shape)
+    CheckArgument(d >= 0, "Tensor::Zeros: negative dimension");
   return {shape, std::vector<float>(NumElements(shape), 0.0f)};
 }
 
 struct OnnxSession::Impl {
   Ort::Env env{ORT_LOGGING_LEVEL_WARNING, "semrec"};
   Ort::Session session{nullptr};
-  Ort::MemoryInfo memory = Ort::MemoryInfo::CreateCpu(OrtArenaAllocator, OrtMemTypeDefault);
+  Ort::MemoryInfo memory =
+      Ort::MemoryInfo::CreateCpu(OrtArenaAllocator, OrtMemTypeDefault);
 };
 
 namespace {
@@ -44,7 +47,8 @@ TensorInfo Describe(const std::string& name, const Ort::TypeInfo& type) {
   }
   const auto tensor = type.GetTensorTypeAndShapeInfo();
   info.shape = tensor.GetShape();
-  info.is_float = tensor.GetElementType() == ONNX_TENSOR_ELEMENT_DATA_TYPE_FLOAT;
+  info.is_float =
+      tensor.GetElementType() == ONNX_TENSOR_ELEMENT_DATA_TYPE_FLOAT;
   return info;
 }
 
@@ -57,62 +61,79 @@ OnnxSession::OnnxSession(const std::filesystem::path& model_path,
   RequireFile(model_path, "ONNX model");
   Ort::SessionOptions session_options;
   session_options.SetIntraOpNumThreads(options.intra_op_threads);
-  session_options.SetGraphOptimizationLevel(options.optimize ? GraphOptimizationLevel::ORT_ENABLE_ALL
-                                                             : GraphOptimizationLevel::ORT_DISABLE_ALL);
+  session_options.SetGraphOptimizationLevel(
+      options.optimize ? GraphOptimizationLevel::ORT_ENABLE_ALL
+                       : GraphOptimizationLevel::ORT_DISABLE_ALL);
   try {
-    impl_->session = Ort::Session(impl_->env, model_path.c_str(), session_options);
+    impl_->session =
+        Ort::Session(impl_->env, model_path.c_str(), session_options);
   } catch (const Ort::Exception& e) {
-    throw FormatError(model_path, std::string("ONNX Runtime cannot load the model: ") + e.what());
+    throw FormatError(
+        model_path,
+        std::string("ONNX Runtime cannot load the model: ") + e.what());
   }
   Ort::AllocatorWithDefaultOptions allocator;
   for (size_t i = 0; i < impl_->session.GetInputCount(); ++i) {
-    inputs_.push_back(Describe(impl_->session.GetInputNameAllocated(i, allocator).get(),
-                               impl_->session.GetInputTypeInfo(i)));
+    inputs_.push_back(
+        Describe(impl_->session.GetInputNameAllocated(i, allocator).get(),
+                 impl_->session.GetInputTypeInfo(i)));
   }
   for (size_t i = 0; i < impl_->session.GetOutputCount(); ++i) {
-    outputs_.push_back(Describe(impl_->session.GetOutputNameAllocated(i, allocator).get(),
-                                impl_->session.GetOutputTypeInfo(i)));
+    outputs_.push_back(
+        Describe(impl_->session.GetOutputNameAllocated(i, allocator).get(),
+                 impl_->session.GetOutputTypeInfo(i)));
   }
 }
 
 OnnxSession::~OnnxSession() = default;
 
-std::map<std::string, Tensor> OnnxSession::Run(const std::map<std::string, Tensor>& inputs) const {
+std::map<std::string, Tensor> OnnxSession::Run(
+    const std::map<std::string, Tensor>& inputs) const {
   const std::string model = model_path_.filename().string();
   for (const auto& [name, tensor] : inputs) {
-    const bool known = std::any_of(inputs_.begin(), inputs_.end(),
-                                   [&](const TensorInfo& i) { return i.name == name; });
-    CheckArgument(known, fmt::format("{}: the model has no input named '{}'", model, name));
+    const bool known =
+        std::any_of(inputs_.begin(), inputs_.end(),
+                    [&](const TensorInfo& i) { return i.name == name; });
+    CheckArgument(known, fmt::format("{}: the model has no input named '{}'",
+                                     model, name));
   }
   std::vector<const char*> input_names;
   std::vector<Ort::Value> input_values;
   for (const TensorInfo& info : inputs_) {
     auto it = inputs.find(info.name);
-    CheckArgument(it != inputs.end(), fmt::format("{}: input '{}' is missing", model, info.name));
+    CheckArgument(it != inputs.end(),
+                  fmt::format("{}: input '{}' is missing", model, info.name));
     CheckArgument(info.is_float,
-                  fmt::format("{}: input '{}' is not float32 (unsupported)", model, info.name));
+                  fmt::format("{}: input '{}' is not float32 (unsupported)",
+                              model, info.name));
     const Tensor& t = it->second;
     bool shape_ok = t.shape.size() == info.shape.size();
     for (size_t d = 0; shape_ok && d < t.shape.size(); ++d) {
-      shape_ok = t.shape[d] >= 0 && (info.shape[d] < 0 || info.shape[d] == t.shape[d]);
+      shape_ok =
+          t.shape[d] >= 0 && (info.shape[d] < 0 || info.shape[d] == t.shape[d]);
     }
-    CheckArgument(shape_ok, fmt::format("{}: input '{}' has shape [{}], the model expects [{}]",
-                                        model, info.name, fmt::join(t.shape, ","),
-                                        fmt::join(info.shape, ",")));
-    CheckArgument(t.data.size() == Tensor::NumElements(t.shape),
-                  fmt::format("{}: input '{}' has {} values for shape [{}]", model, info.name,
-                              t.data.size(), fmt::join(t.shape, ",")));
+    CheckArgument(
+        shape_ok,
+        fmt::format("{}: input '{}' has shape [{}], the model expects [{}]",
+                    model, info.name, fmt::join(t.shape, ","),
+                    fmt::join(info.shape, ",")));
+    CheckArgument(
+        t.data.size() == Tensor::NumElements(t.shape),
+        fmt::format("{}: input '{}' has {} values for shape [{}]", model,
+                    info.name, t.data.size(), fmt::join(t.shape, ",")));
     input_names.push_back(info.name.c_str());
     input_values.push_back(Ort::Value::CreateTensor<float>(
-        impl_->memory, const_cast<float*>(t.data.data()), t.data.size(), t.shape.data(),
-        t.shape.size()));
+        impl_->memory, const_cast<float*>(t.data.data()), t.data.size(),
+        t.shape.data(), t.shape.size()));
   }
   std::vector<const char*> output_names;
-  for (const TensorInfo& info : outputs_) output_names.push_back(info.name.c_str());
+  for (const TensorInfo& info : outputs_)
+    output_names.push_back(info.name.c_str());
   std::vector<Ort::Value> results;
   try {
-    results = impl_->session.Run(Ort::RunOptions{nullptr}, input_names.data(), input_values.data(),
-                                 input_values.size(), output_names.data(), output_names.size());
+    results = impl_->session.Run(Ort::RunOptions{nullptr}, input_names.data(),
+                                 input_values.data(), input_values.size(),
+                                 output_names.data(), output_names.size());
   } catch (const Ort::Exception& e) {
     throw Error(fmt::format("{}: inference failed: {}", model, e.what()));
   }
@@ -120,8 +141,8 @@ std::map<std::string, Tensor> OnnxSession::Run(const std::map<std::string, Tenso
   for (size_t i = 0; i < results.size(); ++i) {
     const auto info = results[i].GetTensorTypeAndShapeInfo();
     if (info.GetElementType() != ONNX_TENSOR_ELEMENT_DATA_TYPE_FLOAT) {
-      throw Error(fmt::format("{}: output '{}' is not float32 (unsupported)", model,
-                              outputs_[i].name));
+      throw Error(fmt::format("{}: output '{}' is not float32 (unsupported)",
+                              model, outputs_[i].name));
     }
     Tensor t;
     t.shape = info.GetShape();

@@ -1,6 +1,7 @@
-// A thin, checked wrapper over an ONNX Runtime session (CPU). Inputs and outputs are named float
-// tensors; shapes are checked against the model before running, so a wrong input gives a message
-// naming the model, the input and both shapes instead of an ONNX Runtime stack trace.
+// A thin, checked wrapper over an ONNX Runtime session (CPU). Inputs and
+// outputs are named float tensors; shapes are checked against the model before
+// running, so a wrong input gives a message naming the model, the input and
+// both shapes instead of an ONNX Runtime stack trace.
 #pragma once
 
 #include <cstdint>
@@ -39,7 +40,8 @@ struct TensorInfo {
 
 class OnnxSession {
  public:
-  /// Loads `model_path`. Throws IoError when missing, FormatError when ONNX Runtime rejects it.
+  /// Loads `model_path`. Throws IoError when missing, FormatError when ONNX
+  /// Runtime rejects it.
   explicit OnnxSession(const std::filesystem::path& model_path,
                        const OnnxSessionOptions& options = {});
   ~OnnxSession();
@@ -50,9 +52,11 @@ class OnnxSession {
   const std::vector<TensorInfo>& outputs() const { return outputs_; }
   const std::filesystem::path& model_path() const { return model_path_; }
 
-  /// Runs the model. Every model input must be given, with a matching rank and fixed dims.
-  /// Returns all outputs by name. Throws InvalidArgument for missing/extra/misshapen inputs.
-  std::map<std::string, Tensor> Run(const std::map<std::string, Tensor>& inputs) const;
+  /// Runs the model. Every model input must be given, with a matching rank and
+  /// fixed dims. Returns all outputs by name. Throws InvalidArgument for
+  /// missing/extra/misshapen inputs.
+  std::map<std::string, Tensor> Run(
+      const std::map<std::string, Tensor>& inputs) const;
 
   /// Version string of the loaded ONNX Runtime library (e.g. "1.30.0").
   static std::string RuntimeVersion();

@@ -12,7 +12,8 @@ namespace fs = std::filesystem;
 namespace semrec::infer {
 namespace {
 
-// Builds Y = Relu(X + B) with X: [N, 3] (N dynamic), B = (1, -2, 0.5), using Debian's python3-onnx.
+// Builds Y = Relu(X + B) with X: [N, 3] (N dynamic), B = (1, -2, 0.5), using
+// Debian's python3-onnx.
 fs::path BuildTinyModel(const fs::path& dir) {
   const fs::path script = dir / "make.py";
   const fs::path model = dir / "tiny.onnx";
@@ -29,7 +30,8 @@ m.ir_version = 8
 onnx.checker.check_model(m)
 onnx.save(m, sys.argv[1])
 )");
-  const std::string cmd = "/usr/bin/python3 " + script.string() + " " + model.string();
+  const std::string cmd =
+      "/usr/bin/python3 " + script.string() + " " + model.string();
   if (std::system(cmd.c_str()) != 0) return {};
   return model;
 }
@@ -57,13 +59,15 @@ TEST(OnnxSession, ClearErrorsForBadInputs) {
     session.Run({{"X", Tensor{{2, 4}, std::vector<float>(8)}}});
     FAIL();
   } catch (const InvalidArgument& e) {
-    EXPECT_NE(std::string(e.what()).find("tiny.onnx: input 'X' has shape [2,4], the model "
-                                         "expects [-1,3]"),
+    EXPECT_NE(std::string(e.what()).find(
+                  "tiny.onnx: input 'X' has shape [2,4], the model "
+                  "expects [-1,3]"),
               std::string::npos)
         << e.what();
   }
   EXPECT_THROW(session.Run({}), InvalidArgument);
-  EXPECT_THROW(session.Run({{"X", Tensor{{1, 3}, {1, 2, 3}}}, {"Z", Tensor::Zeros({1})}}),
+  EXPECT_THROW(session.Run({{"X", Tensor{{1, 3}, {1, 2, 3}}},
+                            {"Z", Tensor::Zeros({1})}}),
                InvalidArgument);
   EXPECT_THROW(session.Run({{"X", Tensor{{1, 3}, {1, 2}}}}), InvalidArgument);
 }

@@ -1,4 +1,5 @@
-// Every kind of broken input gets a typed error whose message names the file and the problem.
+// Every kind of broken input gets a typed error whose message names the file
+// and the problem.
 #include <fstream>
 
 #include <fmt/format.h>
@@ -16,7 +17,8 @@ namespace fs = std::filesystem;
 namespace semrec::io {
 namespace {
 
-// Runs `fn`, expects exception E, and checks that its message contains every one of `parts`.
+// Runs `fn`, expects exception E, and checks that its message contains every
+// one of `parts`.
 template <typename E, typename Fn>
 void ExpectError(Fn fn, const std::vector<std::string>& parts) {
   try {
@@ -57,17 +59,20 @@ TEST_F(BadInput, UnknownLayout) {
 
 TEST_F(BadInput, CorruptPng) {
   testing::WriteSevenScenes(Dir(), 2);
-  semrec::testing::WriteText(Dir() / "frame-000001.depth.png", "\x89PNG\r\n\x1a\nthis is not a png");
+  semrec::testing::WriteText(Dir() / "frame-000001.depth.png",
+                             "\x89PNG\r\n\x1a\nthis is not a png");
   // The header check at Open only reads frame 0; frame 1 fails when read.
   const SequenceReader reader = SequenceReader::Open(Dir());
-  ExpectError<FormatError>([&] { reader.Read(1); }, {"frame-000001.depth.png", "corrupt PNG"});
+  ExpectError<FormatError>([&] { reader.Read(1); },
+                           {"frame-000001.depth.png", "corrupt PNG"});
 }
 
 TEST_F(BadInput, TruncatedPng) {
   testing::WriteSevenScenes(Dir(), 2);
   const fs::path png = Dir() / "frame-000001.color.png";
   fs::resize_file(png, fs::file_size(png) / 2);
-  ExpectError<FormatError>([&] { ReadAll(Dir()); }, {"frame-000001.color.png", "corrupt PNG"});
+  ExpectError<FormatError>([&] { ReadAll(Dir()); },
+                           {"frame-000001.color.png", "corrupt PNG"});
 }
 
 TEST_F(BadInput, NotAPngAtAll) {
@@ -79,13 +84,16 @@ TEST_F(BadInput, NotAPngAtAll) {
 TEST_F(BadInput, CorruptJpeg) {
   testing::WriteSevenScenes(Dir(), 1);
   fs::remove(Dir() / "frame-000000.color.png");
-  semrec::testing::WriteText(Dir() / "frame-000000.color.jpg", "\xff\xd8\xff\xe0 garbage");
-  ExpectError<FormatError>([&] { ReadAll(Dir()); }, {"frame-000000.color.jpg", "cannot decode"});
+  semrec::testing::WriteText(Dir() / "frame-000000.color.jpg",
+                             "\xff\xd8\xff\xe0 garbage");
+  ExpectError<FormatError>([&] { ReadAll(Dir()); },
+                           {"frame-000000.color.jpg", "cannot decode"});
 }
 
 TEST_F(BadInput, EightBitDepth) {
   testing::WriteSevenScenes(Dir(), 2);
-  WritePng(Dir() / "frame-000001.depth.png", Image<uint8_t>(testing::kWidth, testing::kHeight, 1));
+  WritePng(Dir() / "frame-000001.depth.png",
+           Image<uint8_t>(testing::kWidth, testing::kHeight, 1));
   ExpectError<FormatError>([&] { ReadAll(Dir()); },
                            {"frame-000001.depth.png", "16-bit", "8 bits"});
 }
@@ -106,15 +114,17 @@ TEST_F(BadInput, ColorDepthSizeMismatch) {
 
 TEST_F(BadInput, PoseFileWithTooFewRows) {
   testing::WriteSevenScenes(Dir(), 2);
-  semrec::testing::WriteText(Dir() / "frame-000001.pose.txt", "1 0 0 0\n0 1 0 0\n0 0 1 0\n");
+  semrec::testing::WriteText(Dir() / "frame-000001.pose.txt",
+                             "1 0 0 0\n0 1 0 0\n0 0 1 0\n");
   ExpectError<FormatError>([&] { SequenceReader::Open(Dir()); },
                            {"frame-000001.pose.txt", "4 rows", "got 3"});
 }
 
 TEST_F(BadInput, RedwoodLogWithTooFewRows) {
   testing::WriteRedwood(Dir(), 2);
-  semrec::testing::WriteText(Dir() / "odometry.log",
-                             "0 0 1\n1 0 0 0\n0 1 0 0\n0 0 1 0\n0 0 0 1\n1 1 2\n1 0 0 0\n");
+  semrec::testing::WriteText(
+      Dir() / "odometry.log",
+      "0 0 1\n1 0 0 0\n0 1 0 0\n0 0 1 0\n0 0 0 1\n1 1 2\n1 0 0 0\n");
   ExpectError<FormatError>([&] { SequenceReader::Open(Dir()); },
                            {"odometry.log", "too few rows"});
 }
@@ -139,13 +149,15 @@ TEST_F(BadInput, NonNumericPose) {
   testing::WriteSevenScenes(Dir(), 1);
   semrec::testing::WriteText(Dir() / "frame-000000.pose.txt",
                              "1 0 0 0\n0 1 x 0\n0 0 1 0\n0 0 0 1\n");
-  ExpectError<FormatError>([&] { SequenceReader::Open(Dir()); },
-                           {"frame-000000.pose.txt", "line 2", "'x' is not a number"});
+  ExpectError<FormatError>(
+      [&] { SequenceReader::Open(Dir()); },
+      {"frame-000000.pose.txt", "line 2", "'x' is not a number"});
 }
 
 TEST_F(BadInput, FewerPosesThanFrames) {
   testing::WriteRedwood(Dir(), 3);
-  WriteRedwoodLog(Dir() / "odometry.log", {testing::TestPose(0), testing::TestPose(1)});
+  WriteRedwoodLog(Dir() / "odometry.log",
+                  {testing::TestPose(0), testing::TestPose(1)});
   ExpectError<FormatError>([&] { SequenceReader::Open(Dir()); },
                            {"odometry.log", "2 poses for 3 frames"});
 }
@@ -171,9 +183,10 @@ TEST_F(BadInput, EmptySequence) {
                            {(Dir() / "depth").string(), "no depth images"});
   // An empty manifest is an empty sequence too.
   semrec::testing::TempDir other;
-  semrec::testing::WriteText(other / "sequence.yaml",
-                             "format: semrec-sequence\nversion: 1\nintrinsics: {width: 8, height: "
-                             "6, fx: 10, fy: 10, cx: 3.5, cy: 2.5}\nframes: []\n");
+  semrec::testing::WriteText(
+      other / "sequence.yaml",
+      "format: semrec-sequence\nversion: 1\nintrinsics: {width: 8, height: "
+      "6, fx: 10, fy: 10, cx: 3.5, cy: 2.5}\nframes: []\n");
   ExpectError<FormatError>([&] { SequenceReader::Open(other.path()); },
                            {other.path().string(), "no frames"});
 }
@@ -191,23 +204,28 @@ TEST_F(BadInput, ManifestErrorsNameKeyAndFrame) {
   ExpectError<FormatError>([&] { SequenceReader::Open(Dir()); },
                            {"sequence.yaml", "frame 1", "T_world_camera"});
   semrec::testing::WriteText(manifest, "format: [unclosed\n");
-  ExpectError<FormatError>([&] { SequenceReader::Open(Dir()); }, {"sequence.yaml", "invalid YAML"});
+  ExpectError<FormatError>([&] { SequenceReader::Open(Dir()); },
+                           {"sequence.yaml", "invalid YAML"});
 }
 
 TEST_F(BadInput, TumWithoutAssociations) {
   testing::WriteTum(Dir(), 2);
-  semrec::testing::WriteText(Dir() / "groundtruth.txt", "500.0 0 0 0 0 0 0 1\n");
-  ExpectError<FormatError>([&] { SequenceReader::Open(Dir()); },
-                           {Dir().string(), "no depth image could be associated"});
+  semrec::testing::WriteText(Dir() / "groundtruth.txt",
+                             "500.0 0 0 0 0 0 0 1\n");
+  ExpectError<FormatError>(
+      [&] { SequenceReader::Open(Dir()); },
+      {Dir().string(), "no depth image could be associated"});
 }
 
 TEST_F(BadInput, BadOptions) {
   testing::WriteSevenScenes(Dir(), 1);
   SequenceReaderOptions options;
   options.stride = 0;
-  ExpectError<InvalidArgument>([&] { SequenceReader::Open(Dir(), options); }, {"stride"});
+  ExpectError<InvalidArgument>([&] { SequenceReader::Open(Dir(), options); },
+                               {"stride"});
   const SequenceReader reader = SequenceReader::Open(Dir());
-  ExpectError<InvalidArgument>([&] { reader.Read(5); }, {"frame 5 out of range"});
+  ExpectError<InvalidArgument>([&] { reader.Read(5); },
+                               {"frame 5 out of range"});
 }
 
 }  // namespace

@@ -1,5 +1,6 @@
-// Reading and writing images. PNG goes through libpng (8- and 16-bit, exact errors); JPEG and the
-// netpbm formats (PPM/PGM) through OpenCV. Errors name the file and the problem.
+// Reading and writing images. PNG goes through libpng (8- and 16-bit, exact
+// errors); JPEG and the netpbm formats (PPM/PGM) through OpenCV. Errors name
+// the file and the problem.
 #pragma once
 
 #include <filesystem>
@@ -9,18 +10,21 @@
 
 namespace semrec::io {
 
-/// Reads a colour image (PNG, JPEG, PPM, ...) as 8-bit RGB. Grey images are expanded to RGB and
-/// alpha is dropped. 16-bit colour PNGs are reduced to 8 bits.
+/// Reads a colour image (PNG, JPEG, PPM, ...) as 8-bit RGB. Grey images are
+/// expanded to RGB and alpha is dropped. 16-bit colour PNGs are reduced to 8
+/// bits.
 ColorImage ReadColorImage(const std::filesystem::path& path);
 
-/// Reads a single-channel 16-bit depth image (PNG or PGM). Throws FormatError for 8-bit or
-/// multi-channel files: those are not depth maps and silently scaling them would be wrong.
+/// Reads a single-channel 16-bit depth image (PNG or PGM). Throws FormatError
+/// for 8-bit or multi-channel files: those are not depth maps and silently
+/// scaling them would be wrong.
 DepthImage16 ReadDepthImage(const std::filesystem::path& path);
 
 /// Reads a single-channel 8- or 16-bit PNG as labels.
 LabelMap ReadLabelImage(const std::filesystem::path& path);
 
-/// Writes PNG atomically. Colour: 1, 3 or 4 channels of 8 bits. 16-bit: 1 channel.
+/// Writes PNG atomically. Colour: 1, 3 or 4 channels of 8 bits. 16-bit: 1
+/// channel.
 void WritePng(const std::filesystem::path& path, const Image<uint8_t>& image);
 void WritePng(const std::filesystem::path& path, const Image<uint16_t>& image);
 

@@ -14,7 +14,8 @@ namespace {
 TEST(ImageIo, Png16RoundTripKeepsEveryBit) {
   semrec::testing::TempDir dir;
   DepthImage16 depth(5, 3, 1);
-  for (size_t i = 0; i < depth.values().size(); ++i) depth.values()[i] = static_cast<uint16_t>(i * 4099 + 1);
+  for (size_t i = 0; i < depth.values().size(); ++i)
+    depth.values()[i] = static_cast<uint16_t>(i * 4099 + 1);
   depth(4, 2) = 65535;
   WritePng(dir / "d.png", depth);
   EXPECT_EQ(ReadDepthImage(dir / "d.png"), depth);
@@ -33,10 +34,11 @@ TEST(ImageIo, ColorPngRoundTripAndRgbOrder) {
   EXPECT_EQ(ReadColorImage(dir / "c.png"), color);
   const cv::Mat bgr = cv::imread((dir / "c.png").string(), cv::IMREAD_COLOR);
   EXPECT_EQ(bgr.at<cv::Vec3b>(0, 0)[2], 255);  // OpenCV stores BGR
-  // Through OpenCV's JPEG path the channel order must stay RGB (a uniform red block, so that
-  // chroma subsampling cannot blend colours).
+  // Through OpenCV's JPEG path the channel order must stay RGB (a uniform red
+  // block, so that chroma subsampling cannot blend colours).
   const cv::Mat red_bgr(16, 16, CV_8UC3, cv::Scalar(0, 0, 255));
-  cv::imwrite((dir / "c.jpg").string(), red_bgr, {cv::IMWRITE_JPEG_QUALITY, 100});
+  cv::imwrite((dir / "c.jpg").string(), red_bgr,
+              {cv::IMWRITE_JPEG_QUALITY, 100});
   const ColorImage jpg = ReadColorImage(dir / "c.jpg");
   EXPECT_GT(jpg(0, 0, 0), 200);
   EXPECT_LT(jpg(0, 0, 2), 60);

@@ -1,5 +1,6 @@
-// Folder-of-files layouts: Redwood/Open3D (color/, depth/, *.log) and 7-Scenes / 3DMatch /
-// tsdf-fusion (frame-XXXXXX.{color.jpg|color.png, depth.png, pose.txt}).
+// Folder-of-files layouts: Redwood/Open3D (color/, depth/, *.log) and 7-Scenes
+// / 3DMatch / tsdf-fusion (frame-XXXXXX.{color.jpg|color.png, depth.png,
+// pose.txt}).
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
@@ -22,7 +23,8 @@ namespace {
 constexpr double kNominalRateHz = 30.0;
 
 // Redwood's optional rgbd.match: "depth/xxx.png color/xxx.jpg" per line.
-std::vector<std::pair<fs::path, fs::path>> ReadRgbdMatch(const fs::path& match) {
+std::vector<std::pair<fs::path, fs::path>> ReadRgbdMatch(
+    const fs::path& match) {
   std::istringstream in(ReadTextFile(match));
   std::vector<std::pair<fs::path, fs::path>> pairs;
   std::string line;
@@ -33,20 +35,24 @@ std::vector<std::pair<fs::path, fs::path>> ReadRgbdMatch(const fs::path& match) 
     std::string depth, color;
     if (!(tokens >> depth)) continue;
     if (!(tokens >> color)) {
-      throw FormatError(match, fmt::format("line {}: expected \"depth_file color_file\"", line_number));
+      throw FormatError(
+          match, fmt::format("line {}: expected \"depth_file color_file\"",
+                             line_number));
     }
-    pairs.emplace_back(match.parent_path() / depth, match.parent_path() / color);
+    pairs.emplace_back(match.parent_path() / depth,
+                       match.parent_path() / color);
   }
   return pairs;
 }
 
 }  // namespace
 
-std::optional<SequenceIndex> IndexRedwood(const fs::path& folder,
-                                          const SequenceReaderOptions& options) {
+std::optional<SequenceIndex> IndexRedwood(
+    const fs::path& folder, const SequenceReaderOptions& options) {
   const fs::path color_dir = folder / "color";
   const fs::path depth_dir = folder / "depth";
-  if (!fs::is_directory(color_dir) || !fs::is_directory(depth_dir)) return std::nullopt;
+  if (!fs::is_directory(color_dir) || !fs::is_directory(depth_dir))
+    return std::nullopt;
 
   SequenceIndex index;
   index.layout = "redwood";
@@ -61,10 +67,13 @@ std::optional<SequenceIndex> IndexRedwood(const fs::path& folder,
     colors = ListFiles(color_dir, {".jpg", ".jpeg", ".png"});
     depths = ListFiles(depth_dir, {".png"});
   }
-  if (depths.empty()) throw FormatError(depth_dir, "no depth images (*.png) in folder");
+  if (depths.empty())
+    throw FormatError(depth_dir, "no depth images (*.png) in folder");
   if (colors.size() != depths.size()) {
-    throw FormatError(folder, fmt::format("{} colour images in color/ but {} depth images in depth/",
-                                          colors.size(), depths.size()));
+    throw FormatError(
+        folder,
+        fmt::format("{} colour images in color/ but {} depth images in depth/",
+                    colors.size(), depths.size()));
   }
 
   fs::path pose_path;
@@ -82,27 +91,31 @@ std::optional<SequenceIndex> IndexRedwood(const fs::path& folder,
       const auto logs = ListFiles(folder, {".log"});
       if (logs.empty()) {
         throw IoError(folder / "odometry.log",
-                      "no trajectory file (odometry.log, trajectory.log or *.log) in the folder");
+                      "no trajectory file (odometry.log, trajectory.log or "
+                      "*.log) in the folder");
       }
       pose_path = logs.front();
     }
   }
   const std::vector<Transform> poses = ReadRedwoodLog(pose_path);
   if (poses.size() != depths.size()) {
-    throw FormatError(pose_path, fmt::format("{} poses for {} frames: counts of frames and poses "
-                                             "must match",
-                                             poses.size(), depths.size()));
+    throw FormatError(
+        pose_path,
+        fmt::format("{} poses for {} frames: counts of frames and poses "
+                    "must match",
+                    poses.size(), depths.size()));
   }
   index.pose_source = pose_path.filename().string();
 
   const ImageInfo first = ReadImageInfo(depths.front());
   if (!options.intrinsics_path.empty()) {
-    index.intrinsics = ReadIntrinsicsFile(options.intrinsics_path, first.width, first.height);
+    index.intrinsics =
+        ReadIntrinsicsFile(options.intrinsics_path, first.width, first.height);
     index.intrinsics_source = options.intrinsics_path.string();
   } else {
     fs::path json;
-    for (const char* name : {"camera_primesense.json", "camera_intrinsic.json", "intrinsic.json",
-                             "intrinsics.json"}) {
+    for (const char* name : {"camera_primesense.json", "camera_intrinsic.json",
+                             "intrinsic.json", "intrinsics.json"}) {
       if (fs::is_regular_file(folder / name)) {
         json = folder / name;
         break;
@@ -113,9 +126,11 @@ std::optional<SequenceIndex> IndexRedwood(const fs::path& folder,
       index.intrinsics_source = json.filename().string();
     } else {
       // Open3D's PrimeSenseDefault, the camera of the Redwood datasets.
-      index.intrinsics = {first.width, first.height, 525.0, 525.0, 319.5, 239.5};
+      index.intrinsics = {first.width, first.height, 525.0,
+                          525.0,       319.5,        239.5};
       index.intrinsics_source = "default PrimeSense (525)";
-      spdlog::warn("{}: no intrinsics JSON, using {}", folder.string(), index.intrinsics_source);
+      spdlog::warn("{}: no intrinsics JSON, using {}", folder.string(),
+                   index.intrinsics_source);
     }
   }
   for (size_t i = 0; i < depths.size(); ++i) {
@@ -129,21 +144,24 @@ std::optional<SequenceIndex> IndexRedwood(const fs::path& folder,
   return index;
 }
 
-std::optional<SequenceIndex> IndexSevenScenes(const fs::path& folder,
-                                              const SequenceReaderOptions& options) {
-  // Frames in the folder itself, or (3DMatch) in its seq-XX subfolders, taken in order.
+std::optional<SequenceIndex> IndexSevenScenes(
+    const fs::path& folder, const SequenceReaderOptions& options) {
+  // Frames in the folder itself, or (3DMatch) in its seq-XX subfolders, taken
+  // in order.
   std::vector<fs::path> depths = ListFiles(folder, {".depth.png"});
   if (depths.empty()) {
     std::vector<fs::path> seqs;
     std::error_code ec;
     for (const auto& entry : fs::directory_iterator(folder, ec)) {
-      if (entry.is_directory() && entry.path().filename().string().rfind("seq-", 0) == 0) {
+      if (entry.is_directory() &&
+          entry.path().filename().string().rfind("seq-", 0) == 0) {
         seqs.push_back(entry.path());
       }
     }
     std::sort(seqs.begin(), seqs.end());
     for (const fs::path& seq : seqs) {
-      for (fs::path& d : ListFiles(seq, {".depth.png"})) depths.push_back(std::move(d));
+      for (fs::path& d : ListFiles(seq, {".depth.png"}))
+        depths.push_back(std::move(d));
     }
   }
   if (depths.empty()) return std::nullopt;
@@ -157,7 +175,8 @@ std::optional<SequenceIndex> IndexSevenScenes(const fs::path& folder,
   fs::path k_path = options.intrinsics_path;
   if (k_path.empty()) {
     for (const fs::path& candidate :
-         {folder / "camera-intrinsics.txt", depths.front().parent_path() / "camera-intrinsics.txt"}) {
+         {folder / "camera-intrinsics.txt",
+          depths.front().parent_path() / "camera-intrinsics.txt"}) {
       if (fs::is_regular_file(candidate)) {
         k_path = candidate;
         break;
@@ -176,7 +195,8 @@ std::optional<SequenceIndex> IndexSevenScenes(const fs::path& folder,
   }
   for (size_t i = 0; i < depths.size(); ++i) {
     const std::string name = depths[i].filename().string();
-    const std::string stem = name.substr(0, name.size() - std::string(".depth.png").size());
+    const std::string stem =
+        name.substr(0, name.size() - std::string(".depth.png").size());
     const fs::path dir = depths[i].parent_path();
     FrameRecord record;
     record.depth_path = depths[i];
@@ -187,14 +207,17 @@ std::optional<SequenceIndex> IndexSevenScenes(const fs::path& folder,
       }
     }
     if (record.color_path.empty()) {
-      throw IoError(dir / (stem + ".color.png"), "colour image missing for " + name +
-                                                    " (expected .color.png or .color.jpg)");
+      throw IoError(dir / (stem + ".color.png"),
+                    "colour image missing for " + name +
+                        " (expected .color.png or .color.jpg)");
     }
     const fs::path pose = dir / (stem + ".pose.txt");
     if (!fs::is_regular_file(pose)) {
-      throw FormatError(pose, fmt::format("pose file missing for {}: {} depth images but fewer "
-                                          "poses (counts of frames and poses must match)",
-                                          name, depths.size()));
+      throw FormatError(
+          pose,
+          fmt::format("pose file missing for {}: {} depth images but fewer "
+                      "poses (counts of frames and poses must match)",
+                      name, depths.size()));
     }
     record.T_world_camera = ReadPoseMatrixFile(pose);
     record.timestamp_s = static_cast<double>(i) / kNominalRateHz;

@@ -1,4 +1,5 @@
-// The generic semrec layout: a YAML (or JSON, which YAML reads too) manifest listing frames.
+// The generic semrec layout: a YAML (or JSON, which YAML reads too) manifest
+// listing frames.
 #include <fmt/format.h>
 #include <yaml-cpp/yaml.h>
 
@@ -12,13 +13,16 @@ namespace semrec::io::internal {
 namespace {
 
 template <typename T>
-T Get(const YAML::Node& node, const char* key, const fs::path& path, const std::string& where) {
+T Get(const YAML::Node& node, const char* key, const fs::path& path,
+      const std::string& where) {
   const YAML::Node value = node[key];
-  if (!value) throw FormatError(path, fmt::format("{}: missing key '{}'", where, key));
+  if (!value)
+    throw FormatError(path, fmt::format("{}: missing key '{}'", where, key));
   try {
     return value.as<T>();
   } catch (const YAML::Exception&) {
-    throw FormatError(path, fmt::format("{}: key '{}' has the wrong type", where, key));
+    throw FormatError(
+        path, fmt::format("{}: key '{}' has the wrong type", where, key));
   }
 }
 
@@ -29,13 +33,14 @@ fs::path Resolve(const fs::path& base, const std::string& p) {
 
 }  // namespace
 
-std::optional<SequenceIndex> IndexManifest(const fs::path& path,
-                                           const SequenceReaderOptions& options) {
+std::optional<SequenceIndex> IndexManifest(
+    const fs::path& path, const SequenceReaderOptions& options) {
   fs::path manifest;
   if (fs::is_regular_file(path)) {
     manifest = path;
   } else {
-    for (const char* name : {"sequence.yaml", "sequence.yml", "sequence.json"}) {
+    for (const char* name :
+         {"sequence.yaml", "sequence.yml", "sequence.json"}) {
       if (fs::is_regular_file(path / name)) {
         manifest = path / name;
         break;
@@ -50,13 +55,18 @@ std::optional<SequenceIndex> IndexManifest(const fs::path& path,
   } catch (const YAML::Exception& e) {
     throw FormatError(manifest, std::string("invalid YAML/JSON: ") + e.what());
   }
-  if (!root.IsMap() || Get<std::string>(root, "format", manifest, "manifest") != "semrec-sequence") {
-    throw FormatError(manifest, "not a semrec sequence manifest (expected 'format: semrec-sequence')");
+  if (!root.IsMap() || Get<std::string>(root, "format", manifest, "manifest") !=
+                           "semrec-sequence") {
+    throw FormatError(
+        manifest,
+        "not a semrec sequence manifest (expected 'format: semrec-sequence')");
   }
   const int version = Get<int>(root, "version", manifest, "manifest");
   if (version != 1) {
-    throw FormatError(manifest, fmt::format("unsupported manifest version {} (this build reads 1)",
-                                            version));
+    throw FormatError(
+        manifest,
+        fmt::format("unsupported manifest version {} (this build reads 1)",
+                    version));
   }
   const fs::path base = manifest.parent_path();
   SequenceIndex index;
@@ -73,47 +83,64 @@ std::optional<SequenceIndex> IndexManifest(const fs::path& path,
                       Get<double>(k, "cy", manifest, "intrinsics")};
   index.intrinsics_source = manifest.filename().string();
   if (!options.intrinsics_path.empty()) {
-    index.intrinsics = ReadIntrinsicsFile(options.intrinsics_path, index.intrinsics.width,
-                                          index.intrinsics.height);
+    index.intrinsics =
+        ReadIntrinsicsFile(options.intrinsics_path, index.intrinsics.width,
+                           index.intrinsics.height);
     index.intrinsics_source = options.intrinsics_path.string();
   }
-  if (root["depth_scale"]) index.depth_scale = Get<double>(root, "depth_scale", manifest, "manifest");
+  if (root["depth_scale"])
+    index.depth_scale = Get<double>(root, "depth_scale", manifest, "manifest");
   if (root["depth_invalid"]) {
-    index.depth_invalid = Get<uint16_t>(root, "depth_invalid", manifest, "manifest");
+    index.depth_invalid =
+        Get<uint16_t>(root, "depth_invalid", manifest, "manifest");
   }
-  if (!(index.depth_scale > 0.0)) throw FormatError(manifest, "depth_scale must be > 0");
+  if (!(index.depth_scale > 0.0))
+    throw FormatError(manifest, "depth_scale must be > 0");
 
   const YAML::Node frames = root["frames"];
-  if (!frames || !frames.IsSequence()) throw FormatError(manifest, "missing list 'frames'");
+  if (!frames || !frames.IsSequence())
+    throw FormatError(manifest, "missing list 'frames'");
   for (size_t i = 0; i < frames.size(); ++i) {
     const YAML::Node f = frames[i];
     const std::string where = fmt::format("frame {}", i);
     FrameRecord record;
-    record.color_path = Resolve(base, Get<std::string>(f, "color", manifest, where));
-    record.depth_path = Resolve(base, Get<std::string>(f, "depth", manifest, where));
-    record.timestamp_s = f["timestamp_s"] ? Get<double>(f, "timestamp_s", manifest, where)
-                                          : static_cast<double>(i) / 30.0;
-    const auto m = Get<std::vector<double>>(f, "T_world_camera", manifest, where);
+    record.color_path =
+        Resolve(base, Get<std::string>(f, "color", manifest, where));
+    record.depth_path =
+        Resolve(base, Get<std::string>(f, "depth", manifest, where));
+    record.timestamp_s = f["timestamp_s"]
+                             ? Get<double>(f, "timestamp_s", manifest, where)
+                             : static_cast<double>(i) / 30.0;
+    const auto m =
+        Get<std::vector<double>>(f, "T_world_camera", manifest, where);
     if (m.size() != 16) {
-      throw FormatError(manifest, fmt::format("{}: T_world_camera must have 16 numbers (row-major "
-                                              "4x4), got {}",
-                                              where, m.size()));
+      throw FormatError(
+          manifest,
+          fmt::format("{}: T_world_camera must have 16 numbers (row-major "
+                      "4x4), got {}",
+                      where, m.size()));
     }
-    const Eigen::Matrix4d matrix = Eigen::Map<const Eigen::Matrix<double, 4, 4, Eigen::RowMajor>>(m.data());
+    const Eigen::Matrix4d matrix =
+        Eigen::Map<const Eigen::Matrix<double, 4, 4, Eigen::RowMajor>>(
+            m.data());
     try {
-      record.T_world_camera = Transform::FromMatrix(matrix, where + " T_world_camera");
+      record.T_world_camera =
+          Transform::FromMatrix(matrix, where + " T_world_camera");
     } catch (const InvalidArgument& e) {
       throw FormatError(manifest, e.what());
     }
     if (const YAML::Node layers = f["layers"]) {
-      if (!layers.IsMap()) throw FormatError(manifest, where + ": 'layers' must be a map");
+      if (!layers.IsMap())
+        throw FormatError(manifest, where + ": 'layers' must be a map");
       for (const auto& kv : layers) {
-        record.layers[kv.first.as<std::string>()] = Resolve(base, kv.second.as<std::string>());
+        record.layers[kv.first.as<std::string>()] =
+            Resolve(base, kv.second.as<std::string>());
       }
     }
     for (const fs::path& p : {record.color_path, record.depth_path}) {
       if (!fs::is_regular_file(p)) {
-        throw FormatError(manifest, fmt::format("{}: file {} does not exist", where, p.string()));
+        throw FormatError(manifest, fmt::format("{}: file {} does not exist",
+                                                where, p.string()));
       }
     }
     index.frames.push_back(std::move(record));

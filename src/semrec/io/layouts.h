@@ -1,5 +1,6 @@
-// Layout detectors used by SequenceReader::Open. Each returns std::nullopt when `folder` is not
-// in its layout, and throws FormatError/IoError when it is but something is broken.
+// Layout detectors used by SequenceReader::Open. Each returns std::nullopt when
+// `folder` is not in its layout, and throws FormatError/IoError when it is but
+// something is broken.
 #pragma once
 
 #include <filesystem>
@@ -9,21 +10,24 @@
 
 namespace semrec::io::internal {
 
-std::optional<SequenceIndex> IndexManifest(const std::filesystem::path& path,
-                                           const SequenceReaderOptions& options);
+std::optional<SequenceIndex> IndexManifest(
+    const std::filesystem::path& path, const SequenceReaderOptions& options);
 std::optional<SequenceIndex> IndexTum(const std::filesystem::path& folder,
                                       const SequenceReaderOptions& options);
 std::optional<SequenceIndex> IndexRedwood(const std::filesystem::path& folder,
                                           const SequenceReaderOptions& options);
-std::optional<SequenceIndex> IndexSevenScenes(const std::filesystem::path& folder,
-                                              const SequenceReaderOptions& options);
+std::optional<SequenceIndex> IndexSevenScenes(
+    const std::filesystem::path& folder, const SequenceReaderOptions& options);
 
-/// Intrinsics from an explicit file: Open3D JSON for *.json, otherwise a 3x3 K matrix text file
-/// (then width/height come from `width`, `height`).
-CameraIntrinsics ReadIntrinsicsFile(const std::filesystem::path& path, int width, int height);
+/// Intrinsics from an explicit file: Open3D JSON for *.json, otherwise a 3x3 K
+/// matrix text file (then width/height come from `width`, `height`).
+CameraIntrinsics ReadIntrinsicsFile(const std::filesystem::path& path,
+                                    int width, int height);
 
-/// Sorted regular files in `folder` whose names end with one of `suffixes` (case-insensitive).
-std::vector<std::filesystem::path> ListFiles(const std::filesystem::path& folder,
-                                             const std::vector<std::string>& suffixes);
+/// Sorted regular files in `folder` whose names end with one of `suffixes`
+/// (case-insensitive).
+std::vector<std::filesystem::path> ListFiles(
+    const std::filesystem::path& folder,
+    const std::vector<std::string>& suffixes);
 
 }  // namespace semrec::io::internal

@@ -15,7 +15,8 @@ namespace fs = std::filesystem;
 namespace semrec::io {
 namespace {
 
-// Numbers of a whitespace-separated text; throws FormatError naming the line of a bad token.
+// Numbers of a whitespace-separated text; throws FormatError naming the line of
+// a bad token.
 std::vector<std::vector<double>> ReadNumberRows(const fs::path& path) {
   std::istringstream in(ReadTextFile(path));
   std::vector<std::vector<double>> rows;
@@ -34,7 +35,8 @@ std::vector<std::vector<double>> ReadNumberRows(const fs::path& path) {
         row.push_back(std::stod(token, &used));
         if (used != token.size()) throw std::invalid_argument(token);
       } catch (const std::exception&) {
-        throw FormatError(path, fmt::format("line {}: '{}' is not a number", line_number, token));
+        throw FormatError(path, fmt::format("line {}: '{}' is not a number",
+                                            line_number, token));
       }
     }
     if (!row.empty()) rows.push_back(std::move(row));
@@ -42,14 +44,16 @@ std::vector<std::vector<double>> ReadNumberRows(const fs::path& path) {
   return rows;
 }
 
-Transform MatrixFromRows(const fs::path& path, const std::vector<std::vector<double>>& rows,
+Transform MatrixFromRows(const fs::path& path,
+                         const std::vector<std::vector<double>>& rows,
                          size_t first, const std::string& what) {
   Eigen::Matrix4d m;
   for (int r = 0; r < 4; ++r) {
     const auto& row = rows.at(first + r);
     if (row.size() != 4) {
-      throw FormatError(path, fmt::format("{}: matrix row {} has {} numbers, expected 4", what,
-                                          r + 1, row.size()));
+      throw FormatError(
+          path, fmt::format("{}: matrix row {} has {} numbers, expected 4",
+                            what, r + 1, row.size()));
     }
     for (int c = 0; c < 4; ++c) m(r, c) = row[c];
   }
@@ -66,17 +70,22 @@ std::vector<Transform> ReadRedwoodLog(const fs::path& path) {
   const auto rows = ReadNumberRows(path);
   if (rows.empty()) throw FormatError(path, "trajectory file is empty");
   if (rows.size() % 5 != 0) {
-    throw FormatError(path, fmt::format("expected blocks of 5 lines (\"i j n\" + 4 matrix rows), "
-                                        "got {} non-empty lines: a pose has too few rows",
-                                        rows.size()));
+    throw FormatError(
+        path,
+        fmt::format("expected blocks of 5 lines (\"i j n\" + 4 matrix rows), "
+                    "got {} non-empty lines: a pose has too few rows",
+                    rows.size()));
   }
   std::vector<Transform> poses;
   for (size_t i = 0; i < rows.size(); i += 5) {
     if (rows[i].size() != 3) {
-      throw FormatError(path, fmt::format("pose {}: header must be 3 numbers \"i j n\", got {}",
-                                          i / 5, rows[i].size()));
+      throw FormatError(
+          path,
+          fmt::format("pose {}: header must be 3 numbers \"i j n\", got {}",
+                      i / 5, rows[i].size()));
     }
-    poses.push_back(MatrixFromRows(path, rows, i + 1, fmt::format("pose {}", i / 5)));
+    poses.push_back(
+        MatrixFromRows(path, rows, i + 1, fmt::format("pose {}", i / 5)));
   }
   return poses;
 }
@@ -84,8 +93,10 @@ std::vector<Transform> ReadRedwoodLog(const fs::path& path) {
 Transform ReadPoseMatrixFile(const fs::path& path) {
   const auto rows = ReadNumberRows(path);
   if (rows.size() != 4) {
-    throw FormatError(path, fmt::format("pose file must have 4 rows of 4 numbers, got {} rows",
-                                        rows.size()));
+    throw FormatError(
+        path,
+        fmt::format("pose file must have 4 rows of 4 numbers, got {} rows",
+                    rows.size()));
   }
   return MatrixFromRows(path, rows, 0, "pose");
 }
@@ -96,13 +107,16 @@ std::vector<StampedPose> ReadTumTrajectory(const fs::path& path) {
   for (size_t i = 0; i < rows.size(); ++i) {
     const auto& r = rows[i];
     if (r.size() != 8) {
-      throw FormatError(path, fmt::format("entry {}: expected 8 numbers \"timestamp tx ty tz qx qy "
-                                          "qz qw\", got {}",
-                                          i + 1, r.size()));
+      throw FormatError(
+          path,
+          fmt::format("entry {}: expected 8 numbers \"timestamp tx ty tz qx qy "
+                      "qz qw\", got {}",
+                      i + 1, r.size()));
     }
     try {
-      out.push_back({r[0], Transform::FromQuaternion(Eigen::Quaterniond(r[7], r[4], r[5], r[6]),
-                                                     Eigen::Vector3d(r[1], r[2], r[3]))});
+      out.push_back({r[0], Transform::FromQuaternion(
+                               Eigen::Quaterniond(r[7], r[4], r[5], r[6]),
+                               Eigen::Vector3d(r[1], r[2], r[3]))});
     } catch (const InvalidArgument& e) {
       throw FormatError(path, fmt::format("entry {}: {}", i + 1, e.what()));
     }
@@ -127,7 +141,8 @@ CameraIntrinsics ReadOpen3dIntrinsics(const fs::path& path) {
     k.width = j.at("width").get<int>();
     k.height = j.at("height").get<int>();
     const auto m = j.at("intrinsic_matrix").get<std::vector<double>>();
-    if (m.size() != 9) throw FormatError(path, "intrinsic_matrix must have 9 numbers");
+    if (m.size() != 9)
+      throw FormatError(path, "intrinsic_matrix must have 9 numbers");
     // Column-major 3x3.
     k.fx = m[0];
     k.fy = m[4];
@@ -136,19 +151,24 @@ CameraIntrinsics ReadOpen3dIntrinsics(const fs::path& path) {
     k.Check();
     return k;
   } catch (const nlohmann::json::exception& e) {
-    throw FormatError(path, std::string("expected {\"width\", \"height\", \"intrinsic_matrix\"}: ") +
-                                e.what());
+    throw FormatError(
+        path, std::string(
+                  "expected {\"width\", \"height\", \"intrinsic_matrix\"}: ") +
+                  e.what());
   } catch (const InvalidArgument& e) {
     throw FormatError(path, e.what());
   }
 }
 
-CameraIntrinsics ReadIntrinsicsMatrixFile(const fs::path& path, int width, int height) {
+CameraIntrinsics ReadIntrinsicsMatrixFile(const fs::path& path, int width,
+                                          int height) {
   const auto rows = ReadNumberRows(path);
-  if (rows.size() != 3 || rows[0].size() != 3 || rows[1].size() != 3 || rows[2].size() != 3) {
+  if (rows.size() != 3 || rows[0].size() != 3 || rows[1].size() != 3 ||
+      rows[2].size() != 3) {
     throw FormatError(path, "expected a 3x3 matrix (3 rows of 3 numbers)");
   }
-  CameraIntrinsics k{width, height, rows[0][0], rows[1][1], rows[0][2], rows[1][2]};
+  CameraIntrinsics k{width,      height,     rows[0][0],
+                     rows[1][1], rows[0][2], rows[1][2]};
   try {
     k.Check();
   } catch (const InvalidArgument& e) {
@@ -157,13 +177,15 @@ CameraIntrinsics ReadIntrinsicsMatrixFile(const fs::path& path, int width, int h
   return k;
 }
 
-void WriteRedwoodLog(const fs::path& path, const std::vector<Transform>& poses) {
+void WriteRedwoodLog(const fs::path& path,
+                     const std::vector<Transform>& poses) {
   std::string text;
   for (size_t i = 0; i < poses.size(); ++i) {
     text += fmt::format("{} {} {}\n", i, i, i + 1);
     const Eigen::Matrix4d m = poses[i].Matrix();
     for (int r = 0; r < 4; ++r) {
-      text += fmt::format("{:.17g} {:.17g} {:.17g} {:.17g}\n", m(r, 0), m(r, 1), m(r, 2), m(r, 3));
+      text += fmt::format("{:.17g} {:.17g} {:.17g} {:.17g}\n", m(r, 0), m(r, 1),
+                          m(r, 2), m(r, 3));
     }
   }
   WriteTextFileAtomic(path, text);

@@ -9,14 +9,16 @@
 
 namespace semrec::io {
 
-/// Redwood / Open3D `.log` trajectory: per frame a line "i j n" and 4 rows of a 4x4
-/// camera-to-world matrix. Returns T_world_camera per entry, in file order.
+/// Redwood / Open3D `.log` trajectory: per frame a line "i j n" and 4 rows of a
+/// 4x4 camera-to-world matrix. Returns T_world_camera per entry, in file order.
 std::vector<Transform> ReadRedwoodLog(const std::filesystem::path& path);
 
-/// A 4x4 camera-to-world matrix as 4 rows of 4 numbers (7-Scenes / 3DMatch `frame-*.pose.txt`).
+/// A 4x4 camera-to-world matrix as 4 rows of 4 numbers (7-Scenes / 3DMatch
+/// `frame-*.pose.txt`).
 Transform ReadPoseMatrixFile(const std::filesystem::path& path);
 
-/// One TUM trajectory sample: "timestamp tx ty tz qx qy qz qw" (camera-to-world).
+/// One TUM trajectory sample: "timestamp tx ty tz qx qy qz qw"
+/// (camera-to-world).
 struct StampedPose {
   double timestamp_s = 0.0;
   Transform T_world_camera;
@@ -24,16 +26,17 @@ struct StampedPose {
 /// TUM `groundtruth.txt` (comments with '#'), sorted by time.
 std::vector<StampedPose> ReadTumTrajectory(const std::filesystem::path& path);
 
-/// Open3D PinholeCameraIntrinsic JSON ({"width", "height", "intrinsic_matrix": 9 numbers,
-/// column-major}).
+/// Open3D PinholeCameraIntrinsic JSON ({"width", "height", "intrinsic_matrix":
+/// 9 numbers, column-major}).
 CameraIntrinsics ReadOpen3dIntrinsics(const std::filesystem::path& path);
 
-/// A 3x3 K matrix as text (7-Scenes / 3DMatch `camera-intrinsics.txt`); the image size is not in
-/// the file and is given by the caller.
-CameraIntrinsics ReadIntrinsicsMatrixFile(const std::filesystem::path& path, int width,
-                                          int height);
+/// A 3x3 K matrix as text (7-Scenes / 3DMatch `camera-intrinsics.txt`); the
+/// image size is not in the file and is given by the caller.
+CameraIntrinsics ReadIntrinsicsMatrixFile(const std::filesystem::path& path,
+                                          int width, int height);
 
 /// Writes a Redwood `.log` trajectory atomically.
-void WriteRedwoodLog(const std::filesystem::path& path, const std::vector<Transform>& poses);
+void WriteRedwoodLog(const std::filesystem::path& path,
+                     const std::vector<Transform>& poses);
 
 }  // namespace semrec::io

@@ -12,7 +12,9 @@ TEST(PoseIo, RedwoodLogRoundTrip) {
   semrec::testing::TempDir dir;
   std::vector<Transform> poses = {
       Transform(),
-      Transform(Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitY()).toRotationMatrix(), {1, 2, 3})};
+      Transform(
+          Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitY()).toRotationMatrix(),
+          {1, 2, 3})};
   WriteRedwoodLog(dir / "t.log", poses);
   const auto read = ReadRedwoodLog(dir / "t.log");
   ASSERT_EQ(read.size(), 2u);
@@ -29,15 +31,18 @@ TEST(PoseIo, TumTrajectoryQuaternionOrderIsXyzw) {
   const auto poses = ReadTumTrajectory(dir / "gt.txt");
   ASSERT_EQ(poses.size(), 2u);
   EXPECT_DOUBLE_EQ(poses[0].timestamp_s, 1.0);  // sorted by time
-  const Eigen::Vector3d x_rotated = poses[0].T_world_camera.rotation() * Eigen::Vector3d::UnitX();
+  const Eigen::Vector3d x_rotated =
+      poses[0].T_world_camera.rotation() * Eigen::Vector3d::UnitX();
   EXPECT_TRUE(x_rotated.isApprox(Eigen::Vector3d::UnitY(), 1e-9));
-  EXPECT_TRUE(poses[0].T_world_camera.translation().isApprox(Eigen::Vector3d(1, 2, 3)));
+  EXPECT_TRUE(
+      poses[0].T_world_camera.translation().isApprox(Eigen::Vector3d(1, 2, 3)));
 }
 
 TEST(PoseIo, IntrinsicsFiles) {
   semrec::testing::TempDir dir;
-  semrec::testing::WriteText(dir / "k.json",
-                             R"({"width": 640, "height": 480, "intrinsic_matrix": [525.0, 0, 0, 0, 520.0, 0, 319.5, 239.5, 1]})");
+  semrec::testing::WriteText(
+      dir / "k.json",
+      R"({"width": 640, "height": 480, "intrinsic_matrix": [525.0, 0, 0, 0, 520.0, 0, 319.5, 239.5, 1]})");
   const CameraIntrinsics a = ReadOpen3dIntrinsics(dir / "k.json");
   EXPECT_EQ(a, (CameraIntrinsics{640, 480, 525.0, 520.0, 319.5, 239.5}));
   semrec::testing::WriteText(dir / "k.txt", "585 0 320\n0 586 240\n0 0 1\n");

@@ -1,4 +1,5 @@
-// The readers against real public data ($SEMREC_DATA; skipped with a reason when absent).
+// The readers against real public data ($SEMREC_DATA; skipped with a reason
+// when absent).
 #include <algorithm>
 #include <cmath>
 #include <unordered_map>
@@ -13,22 +14,26 @@ namespace fs = std::filesystem;
 namespace semrec::io {
 namespace {
 
-std::vector<Eigen::Vector3d> BackProjectToWorld(const Frame& frame, const Transform& T_world_camera,
+std::vector<Eigen::Vector3d> BackProjectToWorld(const Frame& frame,
+                                                const Transform& T_world_camera,
                                                 int step) {
   std::vector<Eigen::Vector3d> points;
   for (int v = 0; v < frame.depth.height(); v += step) {
     for (int u = 0; u < frame.depth.width(); u += step) {
       const float z = frame.depth(u, v);
-      if (z > 0.0f) points.push_back(T_world_camera * frame.intrinsics.BackProject(u, v, z));
+      if (z > 0.0f)
+        points.push_back(T_world_camera *
+                         frame.intrinsics.BackProject(u, v, z));
     }
   }
   return points;
 }
 
-// Median nearest-neighbour distance from `query` to `reference` (a hash grid, exact within
-// `cell` m; farther neighbours count as `cell`).
+// Median nearest-neighbour distance from `query` to `reference` (a hash grid,
+// exact within `cell` m; farther neighbours count as `cell`).
 double MedianNearestDistance(const std::vector<Eigen::Vector3d>& reference,
-                             const std::vector<Eigen::Vector3d>& query, double cell) {
+                             const std::vector<Eigen::Vector3d>& query,
+                             double cell) {
   auto key = [cell](const Eigen::Vector3d& p, int dx, int dy, int dz) {
     const int64_t x = static_cast<int64_t>(std::floor(p.x() / cell)) + dx;
     const int64_t y = static_cast<int64_t>(std::floor(p.y() / cell)) + dy;
@@ -45,11 +50,13 @@ double MedianNearestDistance(const std::vector<Eigen::Vector3d>& reference,
         for (int dz = -1; dz <= 1; ++dz) {
           auto it = grid.find(key(q, dx, dy, dz));
           if (it == grid.end()) continue;
-          for (const auto* r : it->second) best = std::min(best, (*r - q).norm());
+          for (const auto* r : it->second)
+            best = std::min(best, (*r - q).norm());
         }
     distances.push_back(best);
   }
-  std::nth_element(distances.begin(), distances.begin() + distances.size() / 2, distances.end());
+  std::nth_element(distances.begin(), distances.begin() + distances.size() / 2,
+                   distances.end());
   return distances[distances.size() / 2];
 }
 
@@ -59,10 +66,12 @@ TEST(RealData, RedwoodLayout) {
   EXPECT_EQ(reader.layout(), "redwood");
   EXPECT_EQ(reader.size(), 5u);
   EXPECT_EQ(reader.index().pose_source, "odometry.log");
-  EXPECT_EQ(reader.intrinsics(), (CameraIntrinsics{640, 480, 525.0, 525.0, 319.5, 239.5}));
+  EXPECT_EQ(reader.intrinsics(),
+            (CameraIntrinsics{640, 480, 525.0, 525.0, 319.5, 239.5}));
   const Frame f = reader.Read(0);
   EXPECT_EQ(f.color.width(), 640);
-  EXPECT_TRUE(f.T_world_camera.translation().isApprox(Eigen::Vector3d(2, 2, -0.3)));
+  EXPECT_TRUE(
+      f.T_world_camera.translation().isApprox(Eigen::Vector3d(2, 2, -0.3)));
 }
 
 TEST(RealData, SevenScenesConsecutiveFramesOverlapInTheWorld) {
@@ -77,9 +86,11 @@ TEST(RealData, SevenScenesConsecutiveFramesOverlapInTheWorld) {
   const auto world1 = BackProjectToWorld(f1, f1.T_world_camera, 8);
   ASSERT_GT(world0.size(), 10000u);
   const double median = MedianNearestDistance(world0, world1, 0.2);
-  EXPECT_LT(median, 0.03) << "frames 0 and 1 should overlap within a few centimetres";
-  // The wrong convention (poses read as world-to-camera) must be clearly worse, or this test
-  // could not tell conventions apart. Frames 0 and 20 differ by enough motion to show it.
+  EXPECT_LT(median, 0.03)
+      << "frames 0 and 1 should overlap within a few centimetres";
+  // The wrong convention (poses read as world-to-camera) must be clearly worse,
+  // or this test could not tell conventions apart. Frames 0 and 20 differ by
+  // enough motion to show it.
   const Frame f20 = reader.Read(20);
   const auto right = BackProjectToWorld(f20, f20.T_world_camera, 8);
   const auto wrong = BackProjectToWorld(f20, f20.T_world_camera.Inverse(), 8);

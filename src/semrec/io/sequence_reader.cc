@@ -19,15 +19,19 @@ namespace fs = std::filesystem;
 namespace semrec::io {
 
 void SequenceReaderOptions::Check() const {
-  CheckArgument(stride >= 1, fmt::format("sequence reader: stride must be >= 1, got {}", stride));
+  CheckArgument(
+      stride >= 1,
+      fmt::format("sequence reader: stride must be >= 1, got {}", stride));
   CheckArgument(std::isfinite(max_depth_m) && max_depth_m >= 0.0,
                 "sequence reader: max_depth_m must be >= 0 (0 = no limit)");
-  CheckArgument(max_time_diff_s > 0.0, "sequence reader: max_time_diff_s must be > 0");
+  CheckArgument(max_time_diff_s > 0.0,
+                "sequence reader: max_time_diff_s must be > 0");
 }
 
 namespace internal {
 
-std::vector<fs::path> ListFiles(const fs::path& folder, const std::vector<std::string>& suffixes) {
+std::vector<fs::path> ListFiles(const fs::path& folder,
+                                const std::vector<std::string>& suffixes) {
   std::vector<fs::path> out;
   std::error_code ec;
   for (const auto& entry : fs::directory_iterator(folder, ec)) {
@@ -37,7 +41,8 @@ std::vector<fs::path> ListFiles(const fs::path& folder, const std::vector<std::s
                    [](unsigned char c) { return std::tolower(c); });
     for (const auto& suffix : suffixes) {
       if (name.size() >= suffix.size() &&
-          name.compare(name.size() - suffix.size(), suffix.size(), suffix) == 0) {
+          name.compare(name.size() - suffix.size(), suffix.size(), suffix) ==
+              0) {
         out.push_back(entry.path());
         break;
       }
@@ -48,44 +53,53 @@ std::vector<fs::path> ListFiles(const fs::path& folder, const std::vector<std::s
   return out;
 }
 
-CameraIntrinsics ReadIntrinsicsFile(const fs::path& path, int width, int height) {
+CameraIntrinsics ReadIntrinsicsFile(const fs::path& path, int width,
+                                    int height) {
   if (path.extension() == ".json") return ReadOpen3dIntrinsics(path);
   return ReadIntrinsicsMatrixFile(path, width, height);
 }
 
 }  // namespace internal
 
-SequenceReader SequenceReader::Open(const fs::path& path, const SequenceReaderOptions& options) {
+SequenceReader SequenceReader::Open(const fs::path& path,
+                                    const SequenceReaderOptions& options) {
   options.Check();
   std::error_code ec;
-  if (!fs::exists(path, ec)) throw IoError(path, "sequence path does not exist");
+  if (!fs::exists(path, ec))
+    throw IoError(path, "sequence path does not exist");
   std::optional<SequenceIndex> index = internal::IndexManifest(path, options);
   if (!index && fs::is_directory(path)) {
-    for (auto detect : {internal::IndexTum, internal::IndexRedwood, internal::IndexSevenScenes}) {
+    for (auto detect : {internal::IndexTum, internal::IndexRedwood,
+                        internal::IndexSevenScenes}) {
       index = detect(path, options);
       if (index) break;
     }
   }
   if (!index) {
-    throw IoError(path,
-                  "no known RGB-D layout found. Expected one of: a semrec manifest "
-                  "(sequence.yaml/.json), TUM (rgb.txt + depth.txt + groundtruth.txt), Redwood "
-                  "(color/ + depth/ + *.log), 7-Scenes/3DMatch (frame-XXXXXX.depth.png + "
-                  ".pose.txt). See README.md, 'Sequence layouts'.");
+    throw IoError(
+        path,
+        "no known RGB-D layout found. Expected one of: a semrec manifest "
+        "(sequence.yaml/.json), TUM (rgb.txt + depth.txt + groundtruth.txt), "
+        "Redwood "
+        "(color/ + depth/ + *.log), 7-Scenes/3DMatch (frame-XXXXXX.depth.png + "
+        ".pose.txt). See README.md, 'Sequence layouts'.");
   }
   return SequenceReader(std::move(*index), options);
 }
 
-SequenceReader::SequenceReader(SequenceIndex index, const SequenceReaderOptions& options)
+SequenceReader::SequenceReader(SequenceIndex index,
+                               const SequenceReaderOptions& options)
     : index_(std::move(index)), options_(options) {
   options_.Check();
-  if (index_.frames.empty()) throw FormatError(index_.root, "sequence has no frames");
+  if (index_.frames.empty())
+    throw FormatError(index_.root, "sequence has no frames");
   try {
     index_.intrinsics.Check();
   } catch (const InvalidArgument& e) {
     throw FormatError(index_.root, e.what());
   }
-  CheckArgument(index_.depth_scale > 0.0, index_.root.string() + ": depth scale must be > 0");
+  CheckArgument(index_.depth_scale > 0.0,
+                index_.root.string() + ": depth scale must be > 0");
   if (options_.stride > 1 || options_.max_frames > 0) {
     std::vector<FrameRecord> kept;
     for (size_t i = 0; i < index_.frames.size(); i += options_.stride) {
@@ -99,7 +113,8 @@ SequenceReader::SequenceReader(SequenceIndex index, const SequenceReaderOptions&
 Frame SequenceReader::Read(size_t i) const {
   if (i >= size()) {
     throw InvalidArgument(
-        fmt::format("{}: frame {} out of range (sequence has {})", root().string(), i, size()));
+        fmt::format("{}: frame {} out of range (sequence has {})",
+                    root().string(), i, size()));
   }
   const FrameRecord& record = index_.frames[i];
   Frame frame;
@@ -112,20 +127,23 @@ Frame SequenceReader::Read(size_t i) const {
   const DepthImage16 raw = ReadDepthImage(record.depth_path);
   const CameraIntrinsics& k = index_.intrinsics;
   if (!raw.SameSize(k.width, k.height)) {
-    throw FormatError(record.depth_path,
-                      fmt::format("depth image is {}x{} but the camera intrinsics ({}) say {}x{}",
-                                  raw.width(), raw.height(), index_.intrinsics_source, k.width,
-                                  k.height));
+    throw FormatError(
+        record.depth_path,
+        fmt::format(
+            "depth image is {}x{} but the camera intrinsics ({}) say {}x{}",
+            raw.width(), raw.height(), index_.intrinsics_source, k.width,
+            k.height));
   }
-  frame.depth =
-      DepthToMeters(raw, index_.depth_scale, index_.depth_invalid, options_.max_depth_m);
+  frame.depth = DepthToMeters(raw, index_.depth_scale, index_.depth_invalid,
+                              options_.max_depth_m);
   frame.color = ReadColorImage(record.color_path);
   if (!frame.color.SameSize(raw)) {
-    throw FormatError(record.color_path,
-                      fmt::format("colour image is {}x{} but its depth image {} is {}x{}",
-                                  frame.color.width(), frame.color.height(),
-                                  record.depth_path.filename().string(), raw.width(),
-                                  raw.height()));
+    throw FormatError(
+        record.color_path,
+        fmt::format("colour image is {}x{} but its depth image {} is {}x{}",
+                    frame.color.width(), frame.color.height(),
+                    record.depth_path.filename().string(), raw.width(),
+                    raw.height()));
   }
   return frame;
 }
@@ -133,12 +151,15 @@ Frame SequenceReader::Read(size_t i) const {
 double SequenceReader::TrajectoryLengthM() const {
   double length = 0.0;
   for (size_t i = 1; i < size(); ++i) {
-    length += (T_world_camera(i).translation() - T_world_camera(i - 1).translation()).norm();
+    length +=
+        (T_world_camera(i).translation() - T_world_camera(i - 1).translation())
+            .norm();
   }
   return length;
 }
 
-void WriteSequenceManifest(const fs::path& manifest_path, const SequenceIndex& index) {
+void WriteSequenceManifest(const fs::path& manifest_path,
+                           const SequenceIndex& index) {
   const fs::path base = manifest_path.parent_path();
   auto rel = [&](const fs::path& p) {
     const fs::path r = p.lexically_relative(base);
@@ -149,11 +170,14 @@ void WriteSequenceManifest(const fs::path& manifest_path, const SequenceIndex& i
   out << YAML::Key << "format" << YAML::Value << "semrec-sequence";
   out << YAML::Key << "version" << YAML::Value << 1;
   const CameraIntrinsics& k = index.intrinsics;
-  out << YAML::Key << "intrinsics" << YAML::Value << YAML::Flow << YAML::BeginMap;
-  out << YAML::Key << "width" << YAML::Value << k.width << YAML::Key << "height" << YAML::Value
-      << k.height;
-  out << YAML::Key << "fx" << YAML::Value << k.fx << YAML::Key << "fy" << YAML::Value << k.fy;
-  out << YAML::Key << "cx" << YAML::Value << k.cx << YAML::Key << "cy" << YAML::Value << k.cy;
+  out << YAML::Key << "intrinsics" << YAML::Value << YAML::Flow
+      << YAML::BeginMap;
+  out << YAML::Key << "width" << YAML::Value << k.width << YAML::Key << "height"
+      << YAML::Value << k.height;
+  out << YAML::Key << "fx" << YAML::Value << k.fx << YAML::Key << "fy"
+      << YAML::Value << k.fy;
+  out << YAML::Key << "cx" << YAML::Value << k.cx << YAML::Key << "cy"
+      << YAML::Value << k.cy;
   out << YAML::EndMap;
   out << YAML::Key << "depth_scale" << YAML::Value << index.depth_scale;
   out << YAML::Key << "depth_invalid" << YAML::Value << index.depth_invalid;
@@ -164,14 +188,17 @@ void WriteSequenceManifest(const fs::path& manifest_path, const SequenceIndex& i
     out << YAML::Key << "depth" << YAML::Value << rel(f.depth_path);
     out << YAML::Key << "timestamp_s" << YAML::Value << f.timestamp_s;
     const Eigen::Matrix4d m = f.T_world_camera.Matrix();
-    out << YAML::Key << "T_world_camera" << YAML::Value << YAML::Flow << YAML::BeginSeq;
+    out << YAML::Key << "T_world_camera" << YAML::Value << YAML::Flow
+        << YAML::BeginSeq;
     for (int r = 0; r < 4; ++r) {
       for (int c = 0; c < 4; ++c) out << m(r, c);
     }
     out << YAML::EndSeq;
     if (!f.layers.empty()) {
-      out << YAML::Key << "layers" << YAML::Value << YAML::Flow << YAML::BeginMap;
-      for (const auto& [name, path] : f.layers) out << YAML::Key << name << YAML::Value << rel(path);
+      out << YAML::Key << "layers" << YAML::Value << YAML::Flow
+          << YAML::BeginMap;
+      for (const auto& [name, path] : f.layers)
+        out << YAML::Key << name << YAML::Value << rel(path);
       out << YAML::EndMap;
     }
     out << YAML::EndMap;

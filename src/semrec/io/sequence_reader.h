@@ -1,6 +1,7 @@
-// RGB-D sequences on disk. `SequenceReader::Open(path)` detects the layout (semrec manifest,
-// TUM RGB-D, Redwood/Open3D, 7-Scenes/3DMatch), validates the index (files, poses, counts) up
-// front, and reads frames on demand with full checks (decodable images, 16-bit depth, sizes).
+// RGB-D sequences on disk. `SequenceReader::Open(path)` detects the layout
+// (semrec manifest, TUM RGB-D, Redwood/Open3D, 7-Scenes/3DMatch), validates the
+// index (files, poses, counts) up front, and reads frames on demand with full
+// checks (decodable images, 16-bit depth, sizes).
 #pragma once
 
 #include <cstddef>
@@ -24,11 +25,13 @@ struct SequenceReaderOptions {
   size_t max_frames = 0;
   /// Depths at or beyond this are marked invalid; 0 = keep all.
   double max_depth_m = 0.0;
-  /// Overrides the layout's intrinsics: an Open3D JSON (`*.json`) or a 3x3 K matrix text file.
+  /// Overrides the layout's intrinsics: an Open3D JSON (`*.json`) or a 3x3 K
+  /// matrix text file.
   std::filesystem::path intrinsics_path;
   /// TUM: maximum time difference (s) when associating colour, depth and poses.
   double max_time_diff_s = 0.02;
-  /// Redwood: trajectory file name inside the folder; empty = odometry.log, then trajectory.log.
+  /// Redwood: trajectory file name inside the folder; empty = odometry.log,
+  /// then trajectory.log.
   std::string pose_file;
 
   /// Throws InvalidArgument for out-of-range values.
@@ -41,7 +44,8 @@ struct FrameRecord {
   std::filesystem::path depth_path;
   Transform T_world_camera;
   double timestamp_s = 0.0;
-  /// Extra per-frame images by name (e.g. "semantic", "instance", "person"), generic layout only.
+  /// Extra per-frame images by name (e.g. "semantic", "instance", "person"),
+  /// generic layout only.
   std::map<std::string, std::filesystem::path> layers;
 };
 
@@ -53,7 +57,8 @@ struct SequenceIndex {
   CameraIntrinsics intrinsics;
   /// Raw depth units per metre (1000 for millimetres, 5000 for TUM).
   double depth_scale = 1000.0;
-  /// A raw depth value that means "no measurement" besides 0 (7-Scenes uses 65535); 0 = none.
+  /// A raw depth value that means "no measurement" besides 0 (7-Scenes uses
+  /// 65535); 0 = none.
   uint16_t depth_invalid = 0;
   /// Where the poses came from (file name), for reports.
   std::string pose_source;
@@ -64,8 +69,9 @@ struct SequenceIndex {
 
 class SequenceReader {
  public:
-  /// Opens `path` (a folder, or a semrec manifest file), auto-detecting the layout. Throws IoError
-  /// for a missing path or an unknown layout, FormatError for a broken one (names the file).
+  /// Opens `path` (a folder, or a semrec manifest file), auto-detecting the
+  /// layout. Throws IoError for a missing path or an unknown layout,
+  /// FormatError for a broken one (names the file).
   static SequenceReader Open(const std::filesystem::path& path,
                              const SequenceReaderOptions& options = {});
 
@@ -77,14 +83,17 @@ class SequenceReader {
   size_t size() const { return index_.frames.size(); }
   const CameraIntrinsics& intrinsics() const { return index_.intrinsics; }
   const SequenceIndex& index() const { return index_; }
-  const Transform& T_world_camera(size_t i) const { return index_.frames.at(i).T_world_camera; }
+  const Transform& T_world_camera(size_t i) const {
+    return index_.frames.at(i).T_world_camera;
+  }
 
-  /// Reads frame `i`: colour (RGB8), metric depth, pose, intrinsics. Throws FormatError naming
-  /// the file for corrupt images, non-16-bit depth, or sizes that disagree with each other or
-  /// with the intrinsics.
+  /// Reads frame `i`: colour (RGB8), metric depth, pose, intrinsics. Throws
+  /// FormatError naming the file for corrupt images, non-16-bit depth, or sizes
+  /// that disagree with each other or with the intrinsics.
   Frame Read(size_t i) const;
 
-  /// Total camera path length in metres (sum of distances between consecutive positions).
+  /// Total camera path length in metres (sum of distances between consecutive
+  /// positions).
   double TrajectoryLengthM() const;
 
  private:
@@ -92,8 +101,10 @@ class SequenceReader {
   SequenceReaderOptions options_;
 };
 
-/// Writes a generic-layout manifest (`sequence.yaml`) atomically; paths are stored relative to
-/// the manifest's folder when they lie inside it. See README.md "Generic sequence layout".
-void WriteSequenceManifest(const std::filesystem::path& manifest_path, const SequenceIndex& index);
+/// Writes a generic-layout manifest (`sequence.yaml`) atomically; paths are
+/// stored relative to the manifest's folder when they lie inside it. See
+/// README.md "Generic sequence layout".
+void WriteSequenceManifest(const std::filesystem::path& manifest_path,
+                           const SequenceIndex& index);
 
 }  // namespace semrec::io

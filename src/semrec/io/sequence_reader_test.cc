@@ -38,7 +38,8 @@ TEST_P(SequenceReaderLayouts, DetectsLayoutAndReadsFramesExactly) {
     EXPECT_EQ(frame.color(5, 4, 0), 10 * i);
     EXPECT_EQ(frame.color(5, 4, 1), 20);
     EXPECT_EQ(frame.color(5, 4, 2), 30);
-    // TUM timestamps are printed with 6 decimals, so its interpolated poses are off by ~1e-6 m.
+    // TUM timestamps are printed with 6 decimals, so its interpolated poses are
+    // off by ~1e-6 m.
     EXPECT_TRUE(frame.T_world_camera.IsApprox(testing::TestPose(i), 1e-5))
         << frame.T_world_camera.Matrix();
   }
@@ -71,8 +72,8 @@ TEST(SequenceReader, MaxDepthMarksFarPixelsInvalid) {
   SequenceReaderOptions options;
   options.max_depth_m = 1.15;
   const SequenceReader reader = SequenceReader::Open(dir.path(), options);
-  EXPECT_GT(reader.Read(1).depth(0, 0), 0.0f);    // 1.1 m
-  EXPECT_EQ(reader.Read(2).depth(0, 0), 0.0f);    // 1.2 m
+  EXPECT_GT(reader.Read(1).depth(0, 0), 0.0f);  // 1.1 m
+  EXPECT_EQ(reader.Read(2).depth(0, 0), 0.0f);  // 1.2 m
 }
 
 TEST(SequenceReader, ManifestRoundTripKeepsLayersAndTimestamps) {
@@ -88,17 +89,21 @@ TEST(SequenceReader, ManifestRoundTripKeepsLayersAndTimestamps) {
   // Paths inside the folder are stored relative, so the sequence can be moved.
   const fs::path moved = dir / "moved";
   fs::create_directories(moved);
-  for (const char* sub : {"color", "depth", "sequence.yaml"}) fs::rename(dir / sub, moved / sub);
-  EXPECT_EQ(SequenceReader::Open(moved).Read(1).depth_path, moved / "depth/000001.png");
+  for (const char* sub : {"color", "depth", "sequence.yaml"})
+    fs::rename(dir / sub, moved / sub);
+  EXPECT_EQ(SequenceReader::Open(moved).Read(1).depth_path,
+            moved / "depth/000001.png");
 }
 
 TEST(SequenceReader, ManifestPosesKeepFullPrecision) {
   semrec::testing::TempDir dir;
   testing::WriteManifestSequence(dir.path(), 1);
   SequenceIndex index = SequenceReader::Open(dir.path()).index();
-  index.frames[0].T_world_camera = Transform(
-      Eigen::AngleAxisd(0.123456789, Eigen::Vector3d(0.3, -0.5, 0.8).normalized()).toRotationMatrix(),
-      Eigen::Vector3d(1.0 / 3.0, -2.0 / 7.0, 1e-7));
+  index.frames[0].T_world_camera =
+      Transform(Eigen::AngleAxisd(0.123456789,
+                                  Eigen::Vector3d(0.3, -0.5, 0.8).normalized())
+                    .toRotationMatrix(),
+                Eigen::Vector3d(1.0 / 3.0, -2.0 / 7.0, 1e-7));
   WriteSequenceManifest(dir / "sequence.yaml", index);
   EXPECT_TRUE(SequenceReader::Open(dir.path())
                   .T_world_camera(0)

@@ -13,7 +13,8 @@ namespace fs = std::filesystem;
 namespace semrec::io::testing {
 namespace {
 
-void WriteFrameImages(int i, double depth_scale, const fs::path& color, const fs::path& depth) {
+void WriteFrameImages(int i, double depth_scale, const fs::path& color,
+                      const fs::path& depth) {
   ColorImage c(kWidth, kHeight, 3);
   for (int y = 0; y < kHeight; ++y) {
     for (int x = 0; x < kWidth; ++x) {
@@ -23,23 +24,29 @@ void WriteFrameImages(int i, double depth_scale, const fs::path& color, const fs
     }
   }
   WritePng(color, c);
-  DepthImage16 d(kWidth, kHeight, 1,
-                 static_cast<uint16_t>(std::lround((1.0 + 0.1 * i) * depth_scale)));
+  DepthImage16 d(
+      kWidth, kHeight, 1,
+      static_cast<uint16_t>(std::lround((1.0 + 0.1 * i) * depth_scale)));
   WritePng(depth, d);
 }
 
 std::string MatrixText(const Transform& t) {
   const Eigen::Matrix4d m = t.Matrix();
   std::string s;
-  for (int r = 0; r < 4; ++r) s += fmt::format("{} {} {} {}\n", m(r, 0), m(r, 1), m(r, 2), m(r, 3));
+  for (int r = 0; r < 4; ++r)
+    s += fmt::format("{} {} {} {}\n", m(r, 0), m(r, 1), m(r, 2), m(r, 3));
   return s;
 }
 
 }  // namespace
 
-CameraIntrinsics TestIntrinsics() { return {kWidth, kHeight, 10.0, 10.0, 3.5, 2.5}; }
+CameraIntrinsics TestIntrinsics() {
+  return {kWidth, kHeight, 10.0, 10.0, 3.5, 2.5};
+}
 
-Transform TestPose(int i) { return Transform(Eigen::Matrix3d::Identity(), {0.1 * i, 0.0, 0.0}); }
+Transform TestPose(int i) {
+  return Transform(Eigen::Matrix3d::Identity(), {0.1 * i, 0.0, 0.0});
+}
 
 void WriteRedwood(const fs::path& dir, int frames) {
   std::vector<Transform> poses;
@@ -52,23 +59,28 @@ void WriteRedwood(const fs::path& dir, int frames) {
   const CameraIntrinsics k = TestIntrinsics();
   semrec::testing::WriteText(
       dir / "camera_primesense.json",
-      fmt::format(R"({{"width": {}, "height": {}, "intrinsic_matrix": [{}, 0, 0, 0, {}, 0, {}, {}, 1]}})",
-                  k.width, k.height, k.fx, k.fy, k.cx, k.cy));
+      fmt::format(
+          R"({{"width": {}, "height": {}, "intrinsic_matrix": [{}, 0, 0, 0, {}, 0, {}, {}, 1]}})",
+          k.width, k.height, k.fx, k.fy, k.cx, k.cy));
 }
 
 void WriteSevenScenes(const fs::path& dir, int frames) {
   for (int i = 0; i < frames; ++i) {
     const std::string stem = fmt::format("frame-{:06}", i);
-    WriteFrameImages(i, 1000.0, dir / (stem + ".color.png"), dir / (stem + ".depth.png"));
-    semrec::testing::WriteText(dir / (stem + ".pose.txt"), MatrixText(TestPose(i)));
+    WriteFrameImages(i, 1000.0, dir / (stem + ".color.png"),
+                     dir / (stem + ".depth.png"));
+    semrec::testing::WriteText(dir / (stem + ".pose.txt"),
+                               MatrixText(TestPose(i)));
   }
   const CameraIntrinsics k = TestIntrinsics();
-  semrec::testing::WriteText(dir / "camera-intrinsics.txt",
-                             fmt::format("{} 0 {}\n0 {} {}\n0 0 1\n", k.fx, k.cx, k.fy, k.cy));
+  semrec::testing::WriteText(
+      dir / "camera-intrinsics.txt",
+      fmt::format("{} 0 {}\n0 {} {}\n0 0 1\n", k.fx, k.cx, k.fy, k.cy));
 }
 
 void WriteTum(const fs::path& dir, int frames) {
-  std::string rgb = "# color images\n", depth = "# depth images\n", gt = "# ground truth\n";
+  std::string rgb = "# color images\n", depth = "# depth images\n",
+              gt = "# ground truth\n";
   for (int i = 0; i < frames; ++i) {
     const double t = 100.0 + i / 30.0;
     WriteFrameImages(i, 5000.0, dir / fmt::format("rgb/{:.6f}.png", t + 0.004),
@@ -76,7 +88,8 @@ void WriteTum(const fs::path& dir, int frames) {
     rgb += fmt::format("{:.6f} rgb/{:.6f}.png\n", t + 0.004, t + 0.004);
     depth += fmt::format("{:.6f} depth/{:.6f}.png\n", t, t);
   }
-  // Poses at 100 Hz bracketing the frames; camera moves at 3 m/s along x (0.1 m per frame).
+  // Poses at 100 Hz bracketing the frames; camera moves at 3 m/s along x (0.1 m
+  // per frame).
   for (int j = -2; j <= frames * 10 / 3 + 2; ++j) {
     const double t = 100.0 + j / 100.0;
     gt += fmt::format("{:.6f} {:.9f} 0 0 0 0 0 1\n", t, 3.0 * (t - 100.0));
@@ -87,8 +100,9 @@ void WriteTum(const fs::path& dir, int frames) {
   const CameraIntrinsics k = TestIntrinsics();
   semrec::testing::WriteText(
       dir / "intrinsics.json",
-      fmt::format(R"({{"width": {}, "height": {}, "intrinsic_matrix": [{}, 0, 0, 0, {}, 0, {}, {}, 1]}})",
-                  k.width, k.height, k.fx, k.fy, k.cx, k.cy));
+      fmt::format(
+          R"({{"width": {}, "height": {}, "intrinsic_matrix": [{}, 0, 0, 0, {}, 0, {}, {}, 1]}})",
+          k.width, k.height, k.fx, k.fy, k.cx, k.cy));
 }
 
 void WriteManifestSequence(const fs::path& dir, int frames) {

@@ -1,5 +1,5 @@
-// Test helper: writes small, valid sequences in each supported layout, which tests then break in
-// one specific way.
+// Test helper: writes small, valid sequences in each supported layout, which
+// tests then break in one specific way.
 #pragma once
 
 #include <filesystem>
@@ -9,7 +9,8 @@
 
 namespace semrec::io::testing {
 
-/// 8x6 images; depth of frame i is a constant (1.0 + 0.1 i) m; colour of frame i is (10 i, 20, 30).
+/// 8x6 images; depth of frame i is a constant (1.0 + 0.1 i) m; colour of frame
+/// i is (10 i, 20, 30).
 constexpr int kWidth = 8;
 constexpr int kHeight = 6;
 CameraIntrinsics TestIntrinsics();

@@ -11,18 +11,21 @@
 namespace semrec::mesh {
 namespace {
 
-// Open3D's own reference (../shared/data/README.md): integrating the 5 Redwood frames with these
-// exact settings gives 3198 vertices and 4402 triangles. Matching it proves our reader (image
-// decoding, depth scale, pose convention, intrinsics) feeds Open3D exactly what its test does.
+// Open3D's own reference (../shared/data/README.md): integrating the 5 Redwood
+// frames with these exact settings gives 3198 vertices and 4402 triangles.
+// Matching it proves our reader (image decoding, depth scale, pose convention,
+// intrinsics) feeds Open3D exactly what its test does.
 TEST(RedwoodReference, UniformTsdfReproducesOpen3dCounts) {
   SEMREC_REQUIRE_SAMPLE_DATA(dir, "redwood_livingroom1_5");
   const io::SequenceReader reader = io::SequenceReader::Open(dir);
   ASSERT_EQ(reader.size(), 5u);
   open3d::pipelines::integration::UniformTSDFVolume volume(
-      4.0, 100, 0.04, open3d::pipelines::integration::TSDFVolumeColorType::RGB8);
+      4.0, 100, 0.04,
+      open3d::pipelines::integration::TSDFVolumeColorType::RGB8);
   for (size_t i = 0; i < reader.size(); ++i) {
     const Frame frame = reader.Read(i);
-    volume.Integrate(*ToOpen3dRgbd(frame, /*max_depth_m=*/4.0), ToOpen3d(frame.intrinsics),
+    volume.Integrate(*ToOpen3dRgbd(frame, /*max_depth_m=*/4.0),
+                     ToOpen3d(frame.intrinsics),
                      frame.T_world_camera.Inverse().Matrix());
   }
   const auto mesh = volume.ExtractTriangleMesh();
@@ -36,15 +39,18 @@ TEST(RedwoodReference, UniformTsdfReproducesOpen3dCounts) {
   EXPECT_EQ(volume.ExtractPointCloud()->points_.size(), 2227u);
 }
 
-// A camera at a known pose looking at a fronto-parallel wall: the mesh lies on the wall.
+// A camera at a known pose looking at a fronto-parallel wall: the mesh lies on
+// the wall.
 TEST(TsdfIntegrator, PlaneLandsAtItsWorldPosition) {
   Frame frame;
   frame.intrinsics = {64, 48, 50.0, 50.0, 31.5, 23.5};
   frame.color = ColorImage(64, 48, 3, 128);
   frame.depth = DepthImage(64, 48, 1, 1.5f);
-  // Camera at (1, 2, 3), rotated 90 degrees about world y: camera z points along world +x.
+  // Camera at (1, 2, 3), rotated 90 degrees about world y: camera z points
+  // along world +x.
   frame.T_world_camera = Transform(
-      Eigen::AngleAxisd(M_PI / 2, Eigen::Vector3d::UnitY()).toRotationMatrix(), {1, 2, 3});
+      Eigen::AngleAxisd(M_PI / 2, Eigen::Vector3d::UnitY()).toRotationMatrix(),
+      {1, 2, 3});
   TsdfOptions options;
   options.voxel_size_m = 0.02;
   options.sdf_trunc_m = 0.08;
@@ -54,7 +60,8 @@ TEST(TsdfIntegrator, PlaneLandsAtItsWorldPosition) {
   EXPECT_EQ(tsdf.num_integrated(), 2u);
   const auto mesh = tsdf.ExtractMesh();
   ASSERT_GT(mesh->vertices_.size(), 100u);
-  for (const auto& v : mesh->vertices_) EXPECT_NEAR(v.x(), 2.5, 0.01);  // 1 + 1.5 m
+  for (const auto& v : mesh->vertices_)
+    EXPECT_NEAR(v.x(), 2.5, 0.01);  // 1 + 1.5 m
 }
 
 TEST(TsdfOptions, Check) {

@@ -15,8 +15,8 @@ TempDir::TempDir() {
   static std::atomic<int> counter{0};
   std::random_device rd;
   path_ = fs::temp_directory_path() /
-          ("semrec_test_" + std::to_string(getpid()) + "_" + std::to_string(counter++) + "_" +
-           std::to_string(rd()));
+          ("semrec_test_" + std::to_string(getpid()) + "_" +
+           std::to_string(counter++) + "_" + std::to_string(rd()));
   fs::create_directories(path_);
 }
 
@@ -31,7 +31,8 @@ fs::path SourceDir() {
 }
 
 std::optional<fs::path> SampleDataDir() {
-  if (const char* env = std::getenv("SEMREC_DATA"); env != nullptr && *env != '\0') {
+  if (const char* env = std::getenv("SEMREC_DATA");
+      env != nullptr && *env != '\0') {
     if (fs::is_directory(env)) return fs::path(env);
     return std::nullopt;
   }
@@ -41,7 +42,9 @@ std::optional<fs::path> SampleDataDir() {
 }
 
 fs::path ModelDir() {
-  if (const char* env = std::getenv("SEMREC_MODELS"); env != nullptr && *env != '\0') return env;
+  if (const char* env = std::getenv("SEMREC_MODELS");
+      env != nullptr && *env != '\0')
+    return env;
   return SourceDir() / ".deps" / "models";
 }
 

@@ -9,7 +9,8 @@
 
 namespace semrec::testing {
 
-/// A fresh folder under the system temp dir, removed with its content on destruction.
+/// A fresh folder under the system temp dir, removed with its content on
+/// destruction.
 class TempDir {
  public:
   TempDir();
@@ -17,7 +18,9 @@ class TempDir {
   TempDir(const TempDir&) = delete;
   TempDir& operator=(const TempDir&) = delete;
   const std::filesystem::path& path() const { return path_; }
-  std::filesystem::path operator/(const std::string& name) const { return path_ / name; }
+  std::filesystem::path operator/(const std::string& name) const {
+    return path_ / name;
+  }
 
  private:
   std::filesystem::path path_;
@@ -26,8 +29,8 @@ class TempDir {
 /// The repository root (from SEMREC_SOURCE_DIR, set by CTest).
 std::filesystem::path SourceDir();
 
-/// The real sample data folder ($SEMREC_DATA, else ../shared/data beside the repository), or
-/// nullopt when absent.
+/// The real sample data folder ($SEMREC_DATA, else ../shared/data beside the
+/// repository), or nullopt when absent.
 std::optional<std::filesystem::path> SampleDataDir();
 
 /// The model cache ($SEMREC_MODELS, else .deps/models in the repository).
@@ -37,12 +40,13 @@ void WriteText(const std::filesystem::path& path, const std::string& text);
 
 }  // namespace semrec::testing
 
-/// Skips the current test (with the reason) unless the sample data set `name` is present; binds
-/// `var` to its folder.
-#define SEMREC_REQUIRE_SAMPLE_DATA(var, name)                                                   \
-  const auto var##_root = ::semrec::testing::SampleDataDir();                                   \
-  if (!var##_root || !std::filesystem::is_directory(*var##_root / (name))) {                    \
-    GTEST_SKIP() << "sample data '" << (name) << "' not found: set SEMREC_DATA to the shared "  \
-                 << "data folder (CI uses ../shared/data)";                                     \
-  }                                                                                             \
+/// Skips the current test (with the reason) unless the sample data set `name`
+/// is present; binds `var` to its folder.
+#define SEMREC_REQUIRE_SAMPLE_DATA(var, name)                                \
+  const auto var##_root = ::semrec::testing::SampleDataDir();                \
+  if (!var##_root || !std::filesystem::is_directory(*var##_root / (name))) { \
+    GTEST_SKIP() << "sample data '" << (name)                                \
+                 << "' not found: set SEMREC_DATA to the shared "            \
+                 << "data folder (CI uses ../shared/data)";                  \
+  }                                                                          \
   const std::filesystem::path var = *var##_root / (name)
