@@ -9,5 +9,6 @@ namespace semrec::cli {
 
 void RegisterInfo(CLI::App& app);
 void RegisterTsdf(CLI::App& app);
+void RegisterSynth(CLI::App& app);
 
 }  // namespace semrec::cli

@@ -24,6 +24,7 @@ int main(int argc, char** argv) {
   app.require_subcommand(1);
   semrec::cli::RegisterInfo(app);
   semrec::cli::RegisterTsdf(app);
+  semrec::cli::RegisterSynth(app);
   app.parse_complete_callback([&] { semrec::InitLogging(log_level); });
   try {
     app.parse(argc, argv);

@@ -92,4 +92,19 @@ bool Transform::IsApprox(const Transform& other, double tolerance) const {
          (translation_ - other.translation_).cwiseAbs().maxCoeff() <= tolerance;
 }
 
+Transform LookAt(const Eigen::Vector3d& eye, const Eigen::Vector3d& target,
+                 const Eigen::Vector3d& up_world) {
+  const Eigen::Vector3d forward = target - eye;
+  CheckArgument(forward.norm() > 1e-12, "LookAt: eye and target coincide");
+  const Eigen::Vector3d z = forward.normalized();
+  const Eigen::Vector3d x = z.cross(up_world);
+  CheckArgument(x.norm() > 1e-9,
+                "LookAt: view direction is parallel to the up vector");
+  Eigen::Matrix3d R;
+  R.col(0) = x.normalized();
+  R.col(2) = z;
+  R.col(1) = z.cross(R.col(0));
+  return Transform(R, eye);
+}
+
 }  // namespace semrec

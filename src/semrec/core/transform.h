@@ -59,4 +59,11 @@ class Transform {
   Eigen::Vector3d translation_ = Eigen::Vector3d::Zero();
 };
 
+/// T_world_camera of a camera at `eye` looking at `target`, with the camera
+/// convention x right, y down, z forward and `up_world` pointing up in the
+/// image. Throws InvalidArgument when eye and target coincide or the view
+/// direction is parallel to up_world.
+Transform LookAt(const Eigen::Vector3d& eye, const Eigen::Vector3d& target,
+                 const Eigen::Vector3d& up_world = Eigen::Vector3d::UnitZ());
+
 }  // namespace semrec

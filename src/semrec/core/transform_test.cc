@@ -87,5 +87,19 @@ TEST(Transform, QuaternionIsNormalised) {
                InvalidArgument);
 }
 
+TEST(Transform, LookAtConvention) {
+  // Looking along world +x with z up: camera x (right) is world -y, camera y
+  // (down) is world -z.
+  const Transform T_world_camera = LookAt({1, 2, 3}, {5, 2, 3});
+  EXPECT_TRUE((T_world_camera.rotation() * Eigen::Vector3d::UnitX())
+                  .isApprox(-Eigen::Vector3d::UnitY()));
+  EXPECT_TRUE((T_world_camera.rotation() * Eigen::Vector3d::UnitY())
+                  .isApprox(-Eigen::Vector3d::UnitZ()));
+  EXPECT_TRUE((T_world_camera.Inverse() * Eigen::Vector3d(5, 2, 3))
+                  .isApprox(Eigen::Vector3d(0, 0, 4)));
+  EXPECT_NEAR(T_world_camera.rotation().determinant(), 1.0, 1e-12);
+  EXPECT_THROW(LookAt({0, 0, 0}, {0, 0, 1}), InvalidArgument);
+}
+
 }  // namespace
 }  // namespace semrec

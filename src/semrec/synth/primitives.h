@@ -1,5 +1,6 @@
-// Analytic shapes of the synthetic scenes: ray intersection, exact distance to the surface,
-// triangulation and area-uniform surface sampling. World frame: z up, metres.
+// Analytic shapes of the synthetic scenes: ray intersection, exact distance to
+// the surface, triangulation and area-uniform surface sampling. World frame: z
+// up, metres.
 #pragma once
 
 #include <array>
@@ -12,7 +13,8 @@
 
 namespace semrec::synth {
 
-/// An oriented box: centre, half extents along its local axes, rotation local -> world.
+/// An oriented box: centre, half extents along its local axes, rotation local
+/// -> world.
 struct Box {
   Eigen::Vector3d center = Eigen::Vector3d::Zero();
   Eigen::Vector3d half = Eigen::Vector3d::Constant(0.5);
@@ -47,9 +49,12 @@ struct Hit {
   Eigen::Vector3d normal = Eigen::Vector3d::Zero();
 };
 
-/// Nearest intersection with t in (t_min, t_max); `dir` need not be unit length.
-std::optional<Hit> Intersect(const Primitive& shape, const Eigen::Vector3d& origin,
-                             const Eigen::Vector3d& dir, double t_min, double t_max);
+/// Nearest intersection with t in (t_min, t_max); `dir` need not be unit
+/// length.
+std::optional<Hit> Intersect(const Primitive& shape,
+                             const Eigen::Vector3d& origin,
+                             const Eigen::Vector3d& dir, double t_min,
+                             double t_max);
 
 /// Signed distance (negative inside) from `p` to the shape's surface.
 double SignedDistance(const Primitive& shape, const Eigen::Vector3d& p);
@@ -60,15 +65,16 @@ Eigen::AlignedBox3d Bounds(const Primitive& shape);
 /// Surface area (m^2).
 double SurfaceArea(const Primitive& shape);
 
-/// A closed triangle mesh of the surface (flat-shaded boxes and caps, `segments` around round
-/// shapes).
+/// A closed triangle mesh of the surface (flat-shaded boxes and caps,
+/// `segments` around round shapes).
 struct TriangleMesh {
   std::vector<Eigen::Vector3d> vertices;
   std::vector<std::array<uint32_t, 3>> triangles;
 };
 void AppendMesh(const Primitive& shape, int segments, TriangleMesh* mesh);
 
-/// Deterministic, roughly area-uniform points on the surface, about `spacing_m` apart.
+/// Deterministic, roughly area-uniform points on the surface, about `spacing_m`
+/// apart.
 void AppendSurfaceSamples(const Primitive& shape, double spacing_m,
                           std::vector<Eigen::Vector3d>* points);
 

@@ -1,0 +1,447 @@
+#include "semrec/synth/generator.h"
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <mutex>
+#include <random>
+
+#include <fmt/format.h>
+#include <tbb/parallel_for.h>
+#include <nlohmann/json.hpp>
+
+#include "semrec/core/error.h"
+#include "semrec/core/file_util.h"
+#include "semrec/io/image_io.h"
+#include "semrec/io/ply_io.h"
+#include "semrec/io/sequence_reader.h"
+#include "semrec/synth/render.h"
+
+namespace fs = std::filesystem;
+
+namespace semrec::synth {
+namespace {
+
+// Raw depth units per metre in the written PNGs (0.2 mm steps, up to 13.1 m).
+constexpr double kDepthScale = 5000.0;
+
+uint64_t Mix(uint64_t a, uint64_t b) {
+  uint64_t h = a * 0x9E3779B97F4A7C15ULL + b + 0x632BE59BD9B4E019ULL;
+  h ^= h >> 31;
+  h *= 0xBF58476D1CE4E5B9ULL;
+  return h ^ (h >> 29);
+}
+
+DepthImage16 ToRaw(const DepthImage& depth) {
+  DepthImage16 raw(depth.width(), depth.height(), 1);
+  for (size_t i = 0; i < depth.NumPixels(); ++i) {
+    raw.values()[i] = static_cast<uint16_t>(std::min(
+        65535.0,
+        std::round(static_cast<double>(depth.values()[i]) * kDepthScale)));
+  }
+  return raw;
+}
+
+nlohmann::json PrimitiveJson(const Primitive& p) {
+  auto vec = [](const Eigen::Vector3d& v) {
+    return std::vector<double>{v.x(), v.y(), v.z()};
+  };
+  if (const auto* b = std::get_if<Box>(&p)) {
+    const Eigen::Matrix<double, 3, 3, Eigen::RowMajor> rm = b->R_world_box;
+    const std::vector<double> r(rm.data(), rm.data() + 9);
+    return {{"type", "box"},
+            {"center", vec(b->center)},
+            {"half_extents", vec(b->half)},
+            {"R_world_box", r}};
+  }
+  if (const auto* c = std::get_if<Cylinder>(&p)) {
+    return {{"type", "cylinder"},
+            {"a", vec(c->a)},
+            {"b", vec(c->b)},
+            {"radius", c->radius}};
+  }
+  if (const auto* c = std::get_if<Capsule>(&p)) {
+    return {{"type", "capsule"},
+            {"a", vec(c->a)},
+            {"b", vec(c->b)},
+            {"radius", c->radius}};
+  }
+  const auto& s = std::get<Sphere>(p);
+  return {{"type", "sphere"}, {"center", vec(s.center)}, {"radius", s.radius}};
+}
+
+uint64_t FileSize(const fs::path& p) {
+  std::error_code ec;
+  const auto size = fs::file_size(p, ec);
+  return ec ? 0 : size;
+}
+
+}  // namespace
+
+void TrajectoryOptions::Check() const {
+  CheckArgument(height_m > 0.2, "synth trajectory: height_m must be > 0.2");
+  CheckArgument(std::isfinite(arc_deg),
+                "synth trajectory: arc_deg must be finite");
+  CheckArgument(jitter_m >= 0.0 && jitter_deg >= 0.0,
+                "synth trajectory: jitter amplitudes must be >= 0");
+}
+
+void SynthOptions::Check() const {
+  scene.Check();
+  trajectory.Check();
+  noise.Check();
+  CheckArgument(frames > 0,
+                fmt::format("synth: frames must be > 0, got {}", frames));
+  CheckArgument(frames <= 100000, "synth: at most 100000 frames");
+  CheckArgument(fps > 0.0, "synth: fps must be > 0");
+  CheckArgument(
+      width >= 16 && height >= 16 && width <= 8192 && height <= 8192,
+      fmt::format("synth: resolution must be between 16 and 8192, got {}x{}",
+                  width, height));
+  CheckArgument(fx > 0.0 && fy > 0.0, "synth: focal lengths must be > 0");
+  CheckArgument(
+      noise.max_depth_m * kDepthScale < 65535.0,
+      "synth: max_depth_m must be < 13.1 (depth PNGs store 0.2 mm steps)");
+  CheckArgument(gt_object_spacing_m >= 0.001 && gt_structure_spacing_m >= 0.001,
+                "synth: ground-truth sample spacing must be >= 1 mm");
+  CheckArgument(trajectory.kind != TrajectoryOptions::Kind::kOrbit ||
+                    trajectory.height_m < scene.room_height_m - 0.1,
+                "synth: the camera must be below the ceiling");
+}
+
+CameraIntrinsics SynthOptions::Intrinsics() const {
+  return {width, height, fx, fy, (width - 1) / 2.0, (height - 1) / 2.0};
+}
+
+std::vector<std::string> SynthOptions::PresetNames() {
+  return {"six-objects", "people", "office"};
+}
+
+SynthOptions SynthOptions::Preset(const std::string& name) {
+  SynthOptions o;
+  if (name == "six-objects") {
+    // A room with 6 objects, as in the paper's runtime table; table and chair
+    // usually touch.
+    o.scene.object_classes = {"table", "chair",   "sofa",
+                              "shelf", "cabinet", "plant"};
+    o.frames = 60;
+  } else if (name == "people") {
+    // A static camera watching people walk loops that leave the view and come
+    // back.
+    o.scene.room_width_m = 8.0;
+    o.scene.room_depth_m = 6.0;
+    o.scene.room_height_m = 2.8;
+    o.scene.object_classes = {"sofa", "shelf", "table", "chair", "plant"};
+    o.scene.num_people = 3;
+    o.trajectory.kind = TrajectoryOptions::Kind::kStatic;
+    o.trajectory.height_m = 1.6;
+    o.frames = 200;
+    o.fps = 10.0;
+  } else if (name == "office") {
+    o.scene.room_width_m = 12.0;
+    o.scene.room_depth_m = 9.0;
+    o.scene.room_height_m = 3.0;
+    o.scene.object_classes = {
+        "table", "chair",   "chair",   "monitor", "table",   "chair",
+        "chair", "monitor", "table",   "chair",   "monitor", "shelf",
+        "shelf", "cabinet", "cabinet", "box",     "box",     "box",
+        "plant", "plant",   "lamp",    "sofa",    "box",     "lamp"};
+    o.scene.touching_probability = 0.5;
+    o.trajectory.kind = TrajectoryOptions::Kind::kWalkthrough;
+    o.trajectory.height_m = 2.2;
+    o.frames = 300;
+  } else {
+    throw InvalidArgument(
+        fmt::format("synth: unknown preset '{}' (choose six-objects, people or "
+                    "office)",
+                    name));
+  }
+  return o;
+}
+
+std::vector<Transform> MakeTrajectory(const Scene& scene,
+                                      const TrajectoryOptions& options,
+                                      int frames, uint64_t seed) {
+  options.Check();
+  const Eigen::Vector3d size = scene.room_size;
+  const Eigen::Vector3d center(size.x() / 2, size.y() / 2, 0.0);
+  // Smooth hand-held jitter: a few sinusoids per axis with seeded phases and
+  // frequencies.
+  std::mt19937_64 rng(Mix(seed, 0x7A11));
+  std::uniform_real_distribution<double> phase(0.0, 2 * M_PI), freq(0.3, 1.3);
+  std::array<std::array<double, 4>, 6> waves;
+  for (auto& axis : waves)
+    axis = {phase(rng), freq(rng), phase(rng), freq(rng) * 2.3};
+  auto wave = [&](int axis, double t) {
+    const auto& p = waves[axis];
+    return 0.7 * std::sin(p[0] + 2 * M_PI * p[1] * t) +
+           0.3 * std::sin(p[2] + 2 * M_PI * p[3] * t);
+  };
+  std::vector<Transform> poses;
+  for (int i = 0; i < frames; ++i) {
+    const double s = frames > 1 ? static_cast<double>(i) / (frames - 1) : 0.0;
+    Transform pose;
+    switch (options.kind) {
+      case TrajectoryOptions::Kind::kOrbit: {
+        const double radius =
+            std::max(0.5, std::min(size.x(), size.y()) / 2 - 0.5);
+        const double angle = -M_PI / 2 + s * options.arc_deg * M_PI / 180.0;
+        const Eigen::Vector3d eye =
+            center + Eigen::Vector3d(radius * std::cos(angle),
+                                     radius * std::sin(angle),
+                                     options.height_m);
+        pose = LookAt(eye, center + Eigen::Vector3d(0, 0, 0.4));
+        break;
+      }
+      case TrajectoryOptions::Kind::kWalkthrough: {
+        // Along the long axis and back, panning +-40 degrees, looking 35
+        // degrees down.
+        const double travel = 0.5 - 0.5 * std::cos(2 * M_PI * s);
+        const Eigen::Vector3d eye(0.8 + travel * (size.x() - 1.6), size.y() / 2,
+                                  options.height_m);
+        const double heading =
+            0.7 * std::sin(6 * M_PI * s) + (s < 0.5 ? 0.0 : M_PI);
+        const Eigen::Vector3d look(std::cos(heading), std::sin(heading), -0.7);
+        pose = LookAt(eye, eye + look);
+        break;
+      }
+      case TrajectoryOptions::Kind::kStatic: {
+        const Eigen::Vector3d eye(size.x() / 2, 0.15, options.height_m);
+        pose = LookAt(eye, Eigen::Vector3d(size.x() / 2, size.y(), 0.8));
+        break;
+      }
+    }
+    const double t = i / 30.0;
+    const Eigen::Vector3d dp(wave(0, t), wave(1, t), wave(2, t));
+    const double deg = options.jitter_deg * M_PI / 180.0;
+    const Eigen::Matrix3d dR =
+        (Eigen::AngleAxisd(deg * wave(3, t), Eigen::Vector3d::UnitX()) *
+         Eigen::AngleAxisd(deg * wave(4, t), Eigen::Vector3d::UnitY()) *
+         Eigen::AngleAxisd(deg * wave(5, t), Eigen::Vector3d::UnitZ()))
+            .toRotationMatrix();
+    poses.emplace_back(pose.rotation() * dR,
+                       pose.translation() + options.jitter_m * dp);
+  }
+  return poses;
+}
+
+SynthSummary WriteSyntheticSequence(const SynthOptions& options_in,
+                                    const fs::path& out_dir,
+                                    const ProgressOptions& progress_options) {
+  const auto start = std::chrono::steady_clock::now();
+  SynthOptions options = options_in;
+  options.scene.seed = options.seed;
+  options.Check();
+  std::error_code ec;
+  if (fs::exists(out_dir, ec)) {
+    if (!fs::is_directory(out_dir))
+      throw IoError(out_dir, "output exists and is not a folder");
+    if (!fs::is_empty(out_dir) && !options.overwrite) {
+      throw IoError(
+          out_dir,
+          "output folder is not empty (use --overwrite to replace its files)");
+    }
+  }
+  fs::create_directories(out_dir, ec);
+  if (ec)
+    throw IoError(out_dir, "cannot create output folder: " + ec.message());
+
+  const Scene scene = GenerateScene(options.scene);
+  const CameraIntrinsics k = options.Intrinsics();
+  const std::vector<Transform> poses =
+      MakeTrajectory(scene, options.trajectory, options.frames, options.seed);
+
+  SynthSummary summary;
+  summary.frames = static_cast<size_t>(options.frames);
+  summary.people = static_cast<int>(scene.people.size());
+  for (const SceneObject& o : scene.objects)
+    ++summary.objects_per_class[SynthClasses().Get(o.class_id).name];
+
+  io::SequenceIndex index;
+  index.layout = "semrec";
+  index.root = out_dir;
+  index.intrinsics = k;
+  index.depth_scale = kDepthScale;
+  index.frames.resize(options.frames);
+  std::vector<std::string> mot_rows(options.frames);
+  std::vector<int> visible_people(options.frames, 0);
+  std::atomic<uint64_t> bytes{0};
+  std::mutex progress_mutex;
+  Progress progress("rendering", options.frames, progress_options);
+
+  tbb::parallel_for(0, options.frames, [&](int i) {
+    const double time_s = i / options.fps;
+    const RenderedFrame r = Render(scene, time_s, poses[i], k);
+    const DepthImage noisy = ApplyDepthNoise(
+        r.depth, r.cos_incidence, k, options.noise, Mix(options.seed, i + 1));
+    DepthNoiseOptions clean_options = options.noise;
+    clean_options.enabled = false;
+    const DepthImage clean =
+        ApplyDepthNoise(r.depth, r.cos_incidence, k, clean_options, 0);
+    io::FrameRecord& record = index.frames[i];
+    const std::string stem = fmt::format("{:06}.png", i);
+    record.color_path = out_dir / "color" / stem;
+    record.depth_path = out_dir / "depth" / stem;
+    record.timestamp_s = time_s;
+    record.T_world_camera = poses[i];
+    record.layers = {{"depth_clean", out_dir / "depth_clean" / stem},
+                     {"semantic", out_dir / "semantic" / stem},
+                     {"instance", out_dir / "instance" / stem},
+                     {"person", out_dir / "person" / stem}};
+    io::WritePng(record.color_path, r.color);
+    io::WritePng(record.depth_path, ToRaw(noisy));
+    io::WritePng(record.layers["depth_clean"], ToRaw(clean));
+    io::WritePng(record.layers["semantic"], r.semantic);
+    io::WritePng(record.layers["instance"], r.instance);
+    io::WritePng(record.layers["person"], r.person);
+    uint64_t frame_bytes =
+        FileSize(record.color_path) + FileSize(record.depth_path);
+    for (const auto& [name, path] : record.layers)
+      frame_bytes += FileSize(path);
+    bytes += frame_bytes;
+
+    // MOTChallenge rows from the person map: boxes of the visible pixels,
+    // visibility ratio against the unoccluded silhouette.
+    std::map<uint16_t, std::array<int, 5>>
+        boxes;  // id -> x0, y0, x1, y1, pixels
+    for (int v = 0; v < k.height; ++v) {
+      for (int u = 0; u < k.width; ++u) {
+        const uint16_t pid = r.person(u, v);
+        if (pid == 0) continue;
+        auto [it, inserted] =
+            boxes.try_emplace(pid, std::array<int, 5>{u, v, u, v, 0});
+        auto& b = it->second;
+        b[0] = std::min(b[0], u), b[1] = std::min(b[1], v);
+        b[2] = std::max(b[2], u), b[3] = std::max(b[3], v);
+        ++b[4];
+      }
+    }
+    std::string rows;
+    for (const auto& [pid, b] : boxes) {
+      const Silhouette full =
+          UnoccludedSilhouette(scene, pid, time_s, poses[i], k);
+      const double visibility =
+          full.pixels > 0
+              ? std::min(1.0, static_cast<double>(b[4]) / full.pixels)
+              : 1.0;
+      rows +=
+          fmt::format("{},{},{},{},{},{},1,1,{:.4f}\n", i + 1, pid, b[0] + 1,
+                      b[1] + 1, b[2] - b[0] + 1, b[3] - b[1] + 1, visibility);
+    }
+    mot_rows[i] = rows;
+    visible_people[i] = static_cast<int>(boxes.size());
+    std::lock_guard<std::mutex> lock(progress_mutex);
+    progress.Tick();
+  });
+  progress.Finish();
+  for (int n : visible_people) ++summary.frames_with_people[n];
+
+  io::WriteSequenceManifest(out_dir / "sequence.yaml", index);
+
+  // Ground truth.
+  const fs::path gt = out_dir / "gt";
+  nlohmann::json classes = nlohmann::json::array();
+  for (const LabelClass& c : SynthClasses().Classes()) {
+    classes.push_back({{"id", c.id}, {"name", c.name}, {"color", c.color}});
+  }
+  WriteTextFileAtomic(gt / "classes.json", classes.dump(2) + "\n");
+
+  nlohmann::json objects = nlohmann::json::array();
+  io::PlyData surface;
+  for (const SceneObject& o : scene.objects) {
+    const Eigen::AlignedBox3d b = o.Bounds();
+    nlohmann::json parts = nlohmann::json::array();
+    for (const Primitive& p : o.parts) parts.push_back(PrimitiveJson(p));
+    const std::string mesh_name = fmt::format("meshes/{}.ply", o.name);
+    objects.push_back({{"instance_id", o.instance_id},
+                       {"class_id", o.class_id},
+                       {"class", SynthClasses().Get(o.class_id).name},
+                       {"name", o.name},
+                       {"structure", o.structure},
+                       {"color", o.color},
+                       {"bounds_min", {b.min().x(), b.min().y(), b.min().z()}},
+                       {"bounds_max", {b.max().x(), b.max().y(), b.max().z()}},
+                       {"mesh", mesh_name},
+                       {"parts", parts}});
+    TriangleMesh mesh;
+    std::vector<Eigen::Vector3d> samples;
+    const double spacing = o.structure ? options.gt_structure_spacing_m
+                                       : options.gt_object_spacing_m;
+    for (const Primitive& p : o.parts) {
+      AppendMesh(p, 24, &mesh);
+      AppendSurfaceSamples(p, spacing, &samples);
+    }
+    io::PlyData mesh_ply;
+    for (const auto& v : mesh.vertices)
+      mesh_ply.points.push_back(v.cast<float>());
+    mesh_ply.triangles = mesh.triangles;
+    io::WritePly(gt / mesh_name, mesh_ply);
+    const Eigen::Vector3d lo = -Eigen::Vector3d::Constant(1e-6);
+    const Eigen::Vector3d hi =
+        scene.room_size + Eigen::Vector3d::Constant(1e-6);
+    for (const Eigen::Vector3d& s : samples) {
+      // Keep the visible union surface: not inside another part, not outside
+      // the room.
+      if ((s.array() < lo.array()).any() || (s.array() > hi.array()).any())
+        continue;
+      const bool inside = std::any_of(
+          o.parts.begin(), o.parts.end(),
+          [&](const Primitive& p) { return SignedDistance(p, s) < -1e-6; });
+      if (inside) continue;
+      surface.points.push_back(s.cast<float>());
+      surface.colors.push_back(o.color);
+      surface.labels.push_back(o.instance_id);
+    }
+  }
+  WriteTextFileAtomic(gt / "objects.json", objects.dump(2) + "\n");
+  io::WritePly(gt / "surface_points.ply", surface);
+
+  nlohmann::json people = nlohmann::json::array();
+  for (const Person& p : scene.people) {
+    nlohmann::json path = nlohmann::json::array();
+    for (const auto& q : p.path) path.push_back({q.x(), q.y()});
+    people.push_back({{"person_id", p.person_id},
+                      {"instance_id", kPersonInstanceBase + p.person_id},
+                      {"height_m", p.height_m},
+                      {"speed_mps", p.speed_mps},
+                      {"start_offset_m", p.start_offset_m},
+                      {"shirt", p.shirt},
+                      {"pants", p.pants},
+                      {"path", path}});
+  }
+  WriteTextFileAtomic(gt / "people.json", people.dump(2) + "\n");
+  std::string mot;
+  for (const std::string& rows : mot_rows) mot += rows;
+  WriteTextFileAtomic(gt / "people" / "gt.txt", mot);
+
+  nlohmann::json info = {
+      {"generator", "semrec synth"},
+      {"seed", options.seed},
+      {"frames", options.frames},
+      {"fps", options.fps},
+      {"room_size_m",
+       {scene.room_size.x(), scene.room_size.y(), scene.room_size.z()}},
+      {"noise", options.noise.enabled ? "kinect" : "none"},
+      {"noise_strength", options.noise.strength},
+      {"max_depth_m", options.noise.max_depth_m},
+      {"depth_scale", kDepthScale},
+      {"gt_object_spacing_m", options.gt_object_spacing_m},
+      {"gt_structure_spacing_m", options.gt_structure_spacing_m},
+      {"objects", scene.objects.size()},
+      {"people", scene.people.size()},
+      {"surface_points", surface.points.size()}};
+  WriteTextFileAtomic(gt / "scene.json", info.dump(2) + "\n");
+
+  for (const auto& entry : fs::recursive_directory_iterator(gt)) {
+    if (entry.is_regular_file()) bytes += entry.file_size();
+  }
+  bytes += FileSize(out_dir / "sequence.yaml");
+  summary.bytes_written = bytes;
+  summary.seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start)
+          .count();
+  return summary;
+}
+
+}  // namespace semrec::synth

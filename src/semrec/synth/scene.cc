@@ -1,0 +1,450 @@
+#include "semrec/synth/scene.h"
+
+#include <cmath>
+#include <map>
+#include <random>
+
+#include <fmt/format.h>
+
+#include "semrec/core/error.h"
+
+namespace semrec::synth {
+namespace {
+
+struct ClassSpec {
+  uint16_t id;
+  const char* name;
+  Rgb color;
+};
+
+// Colours are the flat albedo of each class (people get their own clothing
+// colours).
+constexpr ClassSpec kClasses[] = {
+    {1, "floor", {150, 120, 90}},     {2, "wall", {210, 205, 195}},
+    {3, "ceiling", {235, 235, 235}},  {4, "table", {140, 90, 50}},
+    {5, "chair", {60, 110, 160}},     {6, "sofa", {120, 60, 120}},
+    {7, "shelf", {170, 140, 100}},    {8, "box", {190, 160, 60}},
+    {9, "lamp", {230, 210, 120}},     {10, "bed", {90, 140, 90}},
+    {11, "cabinet", {110, 110, 120}}, {12, "monitor", {30, 30, 35}},
+    {13, "plant", {50, 150, 60}},     {14, "person", {200, 40, 40}},
+};
+
+Eigen::Matrix3d Yaw(double yaw) {
+  return Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+}
+
+Primitive Transformed(const Primitive& p, const Eigen::Matrix3d& R,
+                      const Eigen::Vector3d& t) {
+  if (const auto* b = std::get_if<Box>(&p))
+    return Box{R * b->center + t, b->half, R * b->R_world_box};
+  if (const auto* c = std::get_if<Cylinder>(&p))
+    return Cylinder{R * c->a + t, R * c->b + t, c->radius};
+  if (const auto* c = std::get_if<Capsule>(&p))
+    return Capsule{R * c->a + t, R * c->b + t, c->radius};
+  const auto& s = std::get<Sphere>(p);
+  return Sphere{R * s.center + t, s.radius};
+}
+
+Box MakeBox(double cx, double cy, double cz, double hx, double hy, double hz) {
+  return Box{{cx, cy, cz}, {hx, hy, hz}, Eigen::Matrix3d::Identity()};
+}
+Cylinder Vertical(double x, double y, double z0, double z1, double r) {
+  return Cylinder{{x, y, z0}, {x, y, z1}, r};
+}
+
+// An object in its local frame: origin at the footprint centre on the floor,
+// facing +x.
+struct Blueprint {
+  std::vector<Primitive> parts;
+  double hx = 0.25;  // footprint half extents
+  double hy = 0.25;
+  double height = 0.5;
+  bool against_wall = false;
+};
+
+Blueprint Build(const std::string& cls, std::mt19937_64& rng) {
+  std::uniform_real_distribution<double> u(0.9, 1.1);
+  const double s = u(rng);
+  Blueprint bp;
+  if (cls == "table") {
+    const double hx = 0.6 * s, hy = 0.4 * s, h = 0.74;
+    bp.parts.push_back(MakeBox(0, 0, h - 0.02, hx, hy, 0.02));
+    for (int sx : {-1, 1})
+      for (int sy : {-1, 1})
+        bp.parts.push_back(
+            Vertical(sx * (hx - 0.06), sy * (hy - 0.06), 0, h - 0.04, 0.03));
+    bp.hx = hx, bp.hy = hy, bp.height = h;
+  } else if (cls == "chair") {
+    const double h = 0.22 * s;
+    bp.parts.push_back(MakeBox(0, 0, 0.45, h, h, 0.02));
+    bp.parts.push_back(MakeBox(-h + 0.02, 0, 0.47 + 0.22, 0.02, h, 0.22));
+    for (int sx : {-1, 1})
+      for (int sy : {-1, 1})
+        bp.parts.push_back(
+            Vertical(sx * (h - 0.03), sy * (h - 0.03), 0, 0.43, 0.02));
+    bp.hx = bp.hy = h, bp.height = 0.91;
+  } else if (cls == "sofa") {
+    const double hy = 0.95 * s, hx = 0.45;
+    bp.parts.push_back(MakeBox(0, 0, 0.21, hx, hy, 0.21));
+    bp.parts.push_back(MakeBox(-hx + 0.1, 0, 0.62, 0.1, hy, 0.2));
+    for (int sy : {-1, 1})
+      bp.parts.push_back(
+          MakeBox(0.05, sy * (hy - 0.1), 0.55, hx - 0.05, 0.1, 0.13));
+    bp.hx = hx, bp.hy = hy, bp.height = 0.82, bp.against_wall = true;
+  } else if (cls == "shelf") {
+    const double hy = 0.45 * s, hx = 0.18, h = 1.8;
+    for (int sy : {-1, 1})
+      bp.parts.push_back(
+          MakeBox(0, sy * (hy - 0.015), h / 2, hx, 0.015, h / 2));
+    bp.parts.push_back(MakeBox(-hx + 0.01, 0, h / 2, 0.01, hy - 0.03, h / 2));
+    for (double z : {0.03, 0.45, 0.9, 1.35, 1.77})
+      bp.parts.push_back(MakeBox(0, 0, z, hx, hy - 0.03, 0.015));
+    bp.hx = hx, bp.hy = hy, bp.height = h, bp.against_wall = true;
+  } else if (cls == "box") {
+    std::uniform_real_distribution<double> d(0.15, 0.3);
+    const double hx = d(rng), hy = d(rng), hz = d(rng);
+    bp.parts.push_back(MakeBox(0, 0, hz, hx, hy, hz));
+    bp.hx = hx, bp.hy = hy, bp.height = 2 * hz;
+  } else if (cls == "lamp") {
+    bp.parts.push_back(Vertical(0, 0, 0, 0.03, 0.15));
+    bp.parts.push_back(Vertical(0, 0, 0.03, 1.45 * s, 0.015));
+    bp.parts.push_back(Vertical(0, 0, 1.45 * s, 1.45 * s + 0.25, 0.2));
+    bp.hx = bp.hy = 0.2, bp.height = 1.45 * s + 0.25;
+  } else if (cls == "bed") {
+    const double hx = 1.0 * s, hy = 0.75 * s;
+    bp.parts.push_back(MakeBox(0, 0, 0.15, hx, hy, 0.15));
+    bp.parts.push_back(MakeBox(0.02, 0, 0.4, hx - 0.03, hy - 0.03, 0.1));
+    bp.parts.push_back(MakeBox(-hx + 0.03, 0, 0.5, 0.03, hy, 0.5));
+    bp.parts.push_back(MakeBox(-hx + 0.3, 0, 0.55, 0.2, hy * 0.6, 0.05));
+    bp.hx = hx, bp.hy = hy, bp.height = 1.0, bp.against_wall = true;
+  } else if (cls == "cabinet") {
+    const double hx = 0.3, hy = 0.4 * s, hz = 0.45 * s;
+    bp.parts.push_back(MakeBox(0, 0, hz, hx, hy, hz));
+    bp.parts.push_back(
+        MakeBox(hx + 0.01, hy * 0.6, hz * 1.4, 0.01, 0.015, 0.12));
+    bp.hx = hx + 0.02, bp.hy = hy, bp.height = 2 * hz, bp.against_wall = true;
+  } else if (cls == "monitor") {
+    bp.parts.push_back(MakeBox(0, 0, 0.01, 0.1, 0.12, 0.01));
+    bp.parts.push_back(Vertical(-0.02, 0, 0.02, 0.2, 0.02));
+    bp.parts.push_back(MakeBox(0, 0, 0.36 * s, 0.02, 0.3 * s, 0.18 * s));
+    bp.hx = 0.1, bp.hy = 0.3 * s, bp.height = 0.54 * s;
+  } else if (cls == "plant") {
+    bp.parts.push_back(Vertical(0, 0, 0, 0.3, 0.15 * s));
+    bp.parts.push_back(Sphere{{0, 0, 0.3 + 0.28 * s}, 0.3 * s});
+    bp.hx = bp.hy = 0.3 * s, bp.height = 0.3 + 0.58 * s;
+  } else {
+    throw InvalidArgument("synth: no blueprint for class '" + cls + "'");
+  }
+  return bp;
+}
+
+// A placed footprint: an oriented rectangle on the floor.
+struct Footprint {
+  Eigen::Vector2d center;
+  double yaw;
+  double hx, hy;
+};
+
+// Separating-axis test for two oriented rectangles grown by `margin`.
+bool Overlap(const Footprint& a, const Footprint& b, double margin) {
+  auto axes = [](const Footprint& f) {
+    return std::array<Eigen::Vector2d, 2>{
+        Eigen::Vector2d(std::cos(f.yaw), std::sin(f.yaw)),
+        Eigen::Vector2d(-std::sin(f.yaw), std::cos(f.yaw))};
+  };
+  const auto aa = axes(a), ba = axes(b);
+  const Eigen::Vector2d d = b.center - a.center;
+  for (const auto& axis : {aa[0], aa[1], ba[0], ba[1]}) {
+    const double ra = (a.hx + margin) * std::abs(aa[0].dot(axis)) +
+                      (a.hy + margin) * std::abs(aa[1].dot(axis));
+    const double rb = (b.hx + margin) * std::abs(ba[0].dot(axis)) +
+                      (b.hy + margin) * std::abs(ba[1].dot(axis));
+    if (std::abs(d.dot(axis)) > ra + rb) return false;
+  }
+  return true;
+}
+
+bool InsideRoom(const Footprint& f, const Eigen::Vector2d& lo,
+                const Eigen::Vector2d& hi) {
+  const double ex =
+      f.hx * std::abs(std::cos(f.yaw)) + f.hy * std::abs(std::sin(f.yaw));
+  const double ey =
+      f.hx * std::abs(std::sin(f.yaw)) + f.hy * std::abs(std::cos(f.yaw));
+  return f.center.x() - ex >= lo.x() - 1e-9 &&
+         f.center.x() + ex <= hi.x() + 1e-9 &&
+         f.center.y() - ey >= lo.y() - 1e-9 &&
+         f.center.y() + ey <= hi.y() + 1e-9;
+}
+
+constexpr Rgb kShirts[] = {{200, 40, 40},  {40, 160, 60},  {230, 200, 40},
+                           {40, 90, 210},  {230, 120, 30}, {150, 50, 180},
+                           {30, 180, 180}, {240, 240, 240}};
+constexpr Rgb kPants[] = {
+    {40, 40, 120}, {30, 30, 30}, {90, 70, 50}, {100, 100, 100}};
+
+}  // namespace
+
+const LabelSet& SynthClasses() {
+  static const LabelSet classes = [] {
+    LabelSet set("semrec-synth");
+    for (const ClassSpec& c : kClasses) set.Add({c.id, c.name, c.color});
+    return set;
+  }();
+  return classes;
+}
+
+Eigen::AlignedBox3d SceneObject::Bounds() const {
+  Eigen::AlignedBox3d box;
+  for (const Primitive& p : parts) box.extend(synth::Bounds(p));
+  return box;
+}
+
+double SceneObject::DistanceToSurface(const Eigen::Vector3d& p) const {
+  double best = std::numeric_limits<double>::infinity();
+  for (const Primitive& part : parts)
+    best = std::min(best, std::abs(SignedDistance(part, p)));
+  return best;
+}
+
+const SceneObject* Scene::FindObject(uint16_t instance_id) const {
+  for (const SceneObject& o : objects) {
+    if (o.instance_id == instance_id) return &o;
+  }
+  return nullptr;
+}
+
+void SceneOptions::Check() const {
+  CheckArgument(
+      room_width_m >= 2.0 && room_depth_m >= 2.0 && room_height_m >= 2.0,
+      "synth: the room must be at least 2 x 2 x 2 m");
+  CheckArgument(room_width_m <= 50 && room_depth_m <= 50 && room_height_m <= 10,
+                "synth: the room must be at most 50 x 50 x 10 m");
+  CheckArgument(touching_probability >= 0.0 && touching_probability <= 1.0,
+                "synth: touching_probability must be in [0, 1]");
+  CheckArgument(num_people >= 0 && num_people <= 8,
+                "synth: num_people must be in [0, 8]");
+  CheckArgument(object_classes.size() <= 900, "synth: at most 900 objects");
+  for (const std::string& cls : object_classes) {
+    const auto id = SynthClasses().FindByName(cls);
+    CheckArgument(id.has_value() && *id != kClassFloor && *id != kClassWall &&
+                      *id != kClassCeiling && *id != kClassPerson,
+                  fmt::format("synth: '{}' is not a placeable object class "
+                              "(use table, chair, sofa, "
+                              "shelf, box, lamp, bed, cabinet, monitor, plant)",
+                              cls));
+  }
+}
+
+Scene GenerateScene(const SceneOptions& options) {
+  options.Check();
+  std::mt19937_64 rng(options.seed * 0x9E3779B97F4A7C15ULL + 17);
+  Scene scene;
+  const double W = options.room_width_m, D = options.room_depth_m,
+               H = options.room_height_m;
+  scene.room_size = {W, D, H};
+  const LabelSet& classes = SynthClasses();
+  uint16_t next_id = 1;
+  auto add_structure = [&](uint16_t cls, const Box& box) {
+    SceneObject o;
+    o.instance_id = next_id++;
+    o.class_id = cls;
+    o.name = fmt::format("{}_{}", classes.Get(cls).name, o.instance_id);
+    o.parts.push_back(box);
+    o.color = classes.Get(cls).color;
+    o.structure = true;
+    scene.objects.push_back(std::move(o));
+  };
+  // Structure as 10 cm slabs just outside the interior, so inner faces are at
+  // the room bounds.
+  const double t = 0.05;
+  add_structure(kClassFloor,
+                MakeBox(W / 2, D / 2, -t, W / 2 + 2 * t, D / 2 + 2 * t, t));
+  add_structure(kClassWall, MakeBox(-t, D / 2, H / 2, t, D / 2, H / 2));
+  add_structure(kClassWall, MakeBox(W + t, D / 2, H / 2, t, D / 2, H / 2));
+  add_structure(kClassWall, MakeBox(W / 2, -t, H / 2, W / 2 + 2 * t, t, H / 2));
+  add_structure(kClassWall,
+                MakeBox(W / 2, D + t, H / 2, W / 2 + 2 * t, t, H / 2));
+  if (options.ceiling)
+    add_structure(kClassCeiling, MakeBox(W / 2, D / 2, H + t, W / 2 + 2 * t,
+                                         D / 2 + 2 * t, t));
+
+  // Objects stay out of a walkway when people are present (the front third of
+  // the room).
+  const Eigen::Vector2d lo(0.0, options.num_people > 0 ? D * 0.55 : 0.0),
+      hi(W, D);
+  std::vector<Footprint> footprints;
+  std::vector<size_t> footprint_object;
+  std::uniform_real_distribution<double> uni(0.0, 1.0);
+  for (const std::string& cls : options.object_classes) {
+    Blueprint bp = Build(cls, rng);
+    const uint16_t class_id = *classes.FindByName(cls);
+    SceneObject object;
+    object.instance_id = next_id++;
+    object.class_id = class_id;
+    object.name = fmt::format("{}_{}", cls, object.instance_id);
+    object.color = classes.Get(class_id).color;
+    bool placed = false;
+    Footprint fp{{0, 0}, 0, bp.hx, bp.hy};
+    double base_z = 0.0;
+    // A monitor stands on a table top when there is a table (stacked,
+    // touching).
+    if (cls == "monitor") {
+      for (size_t k = 0; k < footprints.size() && !placed; ++k) {
+        const SceneObject& other = scene.objects[footprint_object[k]];
+        if (classes.Get(other.class_id).name != "table") continue;
+        fp.center = footprints[k].center;
+        fp.yaw = footprints[k].yaw;
+        base_z = other.Bounds().max().z();
+        placed = true;
+      }
+    }
+    for (int attempt = 0; attempt < 400 && !placed; ++attempt) {
+      const bool touch = !footprints.empty() && attempt < 100 &&
+                         uni(rng) < options.touching_probability;
+      size_t anchor = 0;
+      if (touch) {
+        anchor = std::uniform_int_distribution<size_t>(
+            0, footprints.size() - 1)(rng);
+        const Footprint& a = footprints[anchor];
+        const int side = std::uniform_int_distribution<int>(0, 3)(rng);
+        const Eigen::Vector2d ax(std::cos(a.yaw), std::sin(a.yaw)),
+            ay(-std::sin(a.yaw), std::cos(a.yaw));
+        fp.yaw = a.yaw + (side == 0   ? M_PI
+                          : side == 1 ? 0.0
+                          : side == 2 ? -M_PI / 2
+                                      : M_PI / 2);
+        // The new object's +x faces the anchor; 2 mm gap.
+        const Eigen::Vector2d dir = side == 0   ? ax
+                                    : side == 1 ? -ax
+                                    : side == 2 ? ay
+                                                : -ay;
+        const double reach = (side < 2 ? a.hx : a.hy) + bp.hx + 0.002;
+        const double slide =
+            std::uniform_real_distribution<double>(-0.3, 0.3)(rng);
+        const Eigen::Vector2d along = side < 2 ? ay : ax;
+        fp.center = a.center + reach * dir + slide * along;
+      } else if (bp.against_wall && uni(rng) < 0.8) {
+        const int wall = std::uniform_int_distribution<int>(0, 3)(rng);
+        const double gap = 0.01;
+        if (wall == 0)
+          fp.yaw = 0, fp.center = {lo.x() + bp.hx + gap,
+                                   lo.y() + uni(rng) * (hi.y() - lo.y())};
+        if (wall == 1)
+          fp.yaw = M_PI, fp.center = {hi.x() - bp.hx - gap,
+                                      lo.y() + uni(rng) * (hi.y() - lo.y())};
+        if (wall == 2)
+          fp.yaw = M_PI / 2, fp.center = {lo.x() + uni(rng) * (hi.x() - lo.x()),
+                                          lo.y() + bp.hx + gap};
+        if (wall == 3)
+          fp.yaw = -M_PI / 2,
+          fp.center = {lo.x() + uni(rng) * (hi.x() - lo.x()),
+                       hi.y() - bp.hx - gap};
+      } else {
+        fp.yaw = uni(rng) * 2 * M_PI;
+        fp.center = {lo.x() + uni(rng) * (hi.x() - lo.x()),
+                     lo.y() + uni(rng) * (hi.y() - lo.y())};
+      }
+      if (!InsideRoom(fp, lo, hi)) continue;
+      bool free = true;
+      for (size_t k = 0; k < footprints.size() && free; ++k) {
+        // Touching the anchor is intended: only forbid actual overlap with it.
+        const double margin = (touch && k == anchor) ? -0.0005 : 0.05;
+        free = !Overlap(fp, footprints[k], margin);
+      }
+      placed = free;
+    }
+    if (!placed) {
+      throw Error(fmt::format(
+          "synth: cannot place object {} ('{}') in a {:.1f} x {:.1f} m room "
+          "without overlaps; use a bigger room or fewer objects",
+          object.instance_id, cls, W, D));
+    }
+    const Eigen::Matrix3d R = Yaw(fp.yaw);
+    const Eigen::Vector3d offset(fp.center.x(), fp.center.y(), base_z);
+    for (const Primitive& p : bp.parts)
+      object.parts.push_back(Transformed(p, R, offset));
+    if (base_z == 0.0) {
+      footprints.push_back(fp);
+      footprint_object.push_back(scene.objects.size());
+    }
+    scene.objects.push_back(std::move(object));
+  }
+
+  // People walk rectangular loops in the front part of the room, long enough to
+  // leave the view.
+  for (int i = 0; i < options.num_people; ++i) {
+    Person person;
+    person.person_id = static_cast<uint16_t>(i + 1);
+    person.height_m = std::uniform_real_distribution<double>(1.6, 1.9)(rng);
+    person.shirt = kShirts[i % std::size(kShirts)];
+    person.pants = kPants[i % std::size(kPants)];
+    const double y0 = 0.6 + 0.15 * (i % 3), y1 = D * 0.5 - 0.1 * (i % 2);
+    const double x0 = 0.5 + 0.1 * i, x1 = W - 0.5 - 0.1 * i;
+    person.path = {{x0, y0}, {x1, y0}, {x1, y1}, {x0, y1}};
+    if (i % 2 == 1) std::reverse(person.path.begin(), person.path.end());
+    person.speed_mps = std::uniform_real_distribution<double>(0.9, 1.4)(rng);
+    person.start_offset_m = std::uniform_real_distribution<double>(
+        0.0, 2 * (x1 - x0 + y1 - y0))(rng);
+    scene.people.push_back(std::move(person));
+  }
+  return scene;
+}
+
+PersonBody PoseAt(const Person& person, double time_s) {
+  // Position along the closed loop.
+  std::vector<double> lengths;
+  double total = 0.0;
+  for (size_t i = 0; i < person.path.size(); ++i) {
+    lengths.push_back(
+        (person.path[(i + 1) % person.path.size()] - person.path[i]).norm());
+    total += lengths.back();
+  }
+  const double walked = person.start_offset_m + person.speed_mps * time_s;
+  double s = std::fmod(walked, total);
+  if (s < 0) s += total;
+  size_t seg = 0;
+  while (seg + 1 < lengths.size() && s > lengths[seg]) s -= lengths[seg++];
+  const Eigen::Vector2d a = person.path[seg],
+                        b = person.path[(seg + 1) % person.path.size()];
+  const Eigen::Vector2d dir = (b - a).normalized();
+  PersonBody body;
+  body.position = a + s * dir;
+  body.heading_rad = std::atan2(dir.y(), dir.x());
+
+  const double H = person.height_m;
+  const double phase = 2 * M_PI * walked / 1.3;  // one gait cycle per 1.3 m
+  const double swing = 0.45 * std::sin(phase);
+  const Eigen::Vector3d fwd(dir.x(), dir.y(), 0), side(-dir.y(), dir.x(), 0);
+  const Eigen::Vector3d base(body.position.x(), body.position.y(), 0);
+  const double hip_z = 0.5 * H, shoulder_z = 0.8 * H;
+  const double limb_r = 0.055 * H / 1.75, arm_r = 0.04 * H / 1.75;
+  auto add = [&](const Primitive& p, const Rgb& c) {
+    body.parts.push_back(p);
+    body.colors.push_back(c);
+  };
+  for (int k : {-1, 1}) {
+    const double a_leg = k * swing;
+    const Eigen::Vector3d hip =
+        base + k * 0.1 * H / 1.75 * side + Eigen::Vector3d(0, 0, hip_z);
+    const Eigen::Vector3d foot =
+        hip + (hip_z - limb_r) * (std::sin(a_leg) * fwd -
+                                  std::cos(a_leg) * Eigen::Vector3d::UnitZ());
+    add(Capsule{hip, foot, limb_r}, person.pants);
+    const double a_arm = -k * swing * 0.8;
+    const Eigen::Vector3d shoulder =
+        base + k * 0.22 * H / 1.75 * side + Eigen::Vector3d(0, 0, shoulder_z);
+    const Eigen::Vector3d hand =
+        shoulder + 0.33 * H *
+                       (std::sin(a_arm) * fwd -
+                        std::cos(a_arm) * Eigen::Vector3d::UnitZ());
+    add(Capsule{shoulder, hand, arm_r}, person.shirt);
+  }
+  add(Capsule{base + Eigen::Vector3d(0, 0, hip_z + 0.05 * H),
+              base + Eigen::Vector3d(0, 0, shoulder_z - 0.02 * H),
+              0.15 * H / 1.75},
+      person.shirt);
+  add(Sphere{base + Eigen::Vector3d(0, 0, 0.92 * H), 0.075 * H}, person.skin);
+  return body;
+}
+
+}  // namespace semrec::synth
