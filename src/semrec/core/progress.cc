@@ -90,6 +90,7 @@ void Progress::Emit(bool final) {
       bar_ ? options_.min_interval_s : options_.line_interval_s;
   if (!final && now - last_emit_s_ < interval) return;
   last_emit_s_ = now;
+  emitted_done_ = done_;
   if (bar_) {
     // \r + erase-line redraws in place.
     std::fprintf(stream_, "\r\033[K%s%s", Render(true).c_str(),
@@ -109,6 +110,9 @@ void Progress::Tick(size_t n) {
 void Progress::Finish() {
   if (finished_) return;
   finished_ = true;
+  // A line already reported completion: do not repeat it (a bar still needs its
+  // newline).
+  if (!bar_ && total_ > 0 && emitted_done_ == done_ && done_ >= total_) return;
   Emit(true);
 }
 

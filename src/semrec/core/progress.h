@@ -57,6 +57,7 @@ class Progress {
   bool finished_ = false;
   std::chrono::steady_clock::time_point start_;
   double last_emit_s_ = -1e9;
+  size_t emitted_done_ = static_cast<size_t>(-1);
 };
 
 /// "1h02m", "3m05s", "12.3s".

@@ -35,6 +35,25 @@ TEST(Progress, LineModePrintsFinalSummary) {
   EXPECT_NE(text.find("integrate 1/4"), std::string::npos) << text;
   EXPECT_NE(text.find("integrate 4/4 100%"), std::string::npos) << text;
   EXPECT_EQ(text.find('\r'), std::string::npos) << "line mode must not redraw";
+  EXPECT_EQ(text.find("4/4"), text.rfind("4/4"))
+      << "completion reported twice: " << text;
+}
+
+TEST(Progress, LineModeDoesNotRepeatCompletion) {
+  std::FILE* f = std::tmpfile();
+  ASSERT_NE(f, nullptr);
+  {
+    ProgressOptions options;
+    options.mode = ProgressOptions::Mode::kLines;
+    options.line_interval_s = 0.0;  // every tick prints
+    Progress progress("write", 2, options, f);
+    progress.Tick();
+    progress.Tick();
+  }
+  const std::string text = ReadAll(f);
+  std::fclose(f);
+  EXPECT_EQ(text.find("write 2/2"), text.rfind("write 2/2")) << text;
+  EXPECT_NE(text.find("write 1/2"), std::string::npos) << text;
 }
 
 TEST(Progress, BarModeRedrawsWithBarAndEta) {

@@ -5,7 +5,6 @@
 #include <chrono>
 #include <cmath>
 #include <mutex>
-#include <random>
 
 #include <fmt/format.h>
 #include <tbb/parallel_for.h>
@@ -13,6 +12,7 @@
 
 #include "semrec/core/error.h"
 #include "semrec/core/file_util.h"
+#include "semrec/core/random.h"
 #include "semrec/io/image_io.h"
 #include "semrec/io/ply_io.h"
 #include "semrec/io/sequence_reader.h"
@@ -168,11 +168,12 @@ std::vector<Transform> MakeTrajectory(const Scene& scene,
   const Eigen::Vector3d center(size.x() / 2, size.y() / 2, 0.0);
   // Smooth hand-held jitter: a few sinusoids per axis with seeded phases and
   // frequencies.
-  std::mt19937_64 rng(Mix(seed, 0x7A11));
-  std::uniform_real_distribution<double> phase(0.0, 2 * M_PI), freq(0.3, 1.3);
+  Rng rng(Mix(seed, 0x7A11));
   std::array<std::array<double, 4>, 6> waves;
-  for (auto& axis : waves)
-    axis = {phase(rng), freq(rng), phase(rng), freq(rng) * 2.3};
+  for (auto& axis : waves) {
+    axis = {rng.Uniform(0.0, 2 * M_PI), rng.Uniform(0.3, 1.3),
+            rng.Uniform(0.0, 2 * M_PI), 2.3 * rng.Uniform(0.3, 1.3)};
+  }
   auto wave = [&](int axis, double t) {
     const auto& p = waves[axis];
     return 0.7 * std::sin(p[0] + 2 * M_PI * p[1] * t) +

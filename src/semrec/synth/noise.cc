@@ -1,9 +1,11 @@
 #include "semrec/synth/noise.h"
 
+#include <algorithm>
+#include <array>
 #include <cmath>
-#include <random>
 
 #include "semrec/core/error.h"
+#include "semrec/core/random.h"
 
 namespace semrec::synth {
 
@@ -41,19 +43,35 @@ DepthImage ApplyDepthNoise(const DepthImage& clean,
     }
     return out;
   }
-  std::mt19937_64 rng(seed);
-  std::normal_distribution<double> normal(0.0, 1.0);
+  Rng rng(seed);
   const double cos_min = std::cos(options.max_incidence_deg * M_PI / 180.0);
   const double lateral = options.lateral_sigma_px * options.strength;
+  // The lateral offset is round(lateral * N(0, 1)): a discrete distribution,
+  // drawn by inverting its CDF with one 32-bit uniform instead of a normal
+  // sample.
+  constexpr int kMaxOffset = 8;
+  std::array<uint64_t, 2 * kMaxOffset + 1> cdf{};
+  for (int o = -kMaxOffset; o <= kMaxOffset; ++o) {
+    const double p =
+        lateral > 0.0 ? 0.5 * std::erfc(-(o + 0.5) / (lateral * std::sqrt(2.0)))
+                      : (o >= 0 ? 1.0 : 0.0);
+    cdf[o + kMaxOffset] =
+        static_cast<uint64_t>(std::min(p, 1.0) * 4294967296.0);
+  }
+  cdf.back() = uint64_t{1} << 32;
+  auto offset = [&](uint64_t uniform32) {
+    int o = 0;
+    while (o < 2 * kMaxOffset && uniform32 >= cdf[o]) ++o;
+    return o - kMaxOffset;
+  };
   const double bf = options.baseline_m * k.fx;
   for (int v = 0; v < h; ++v) {
     for (int u = 0; u < w; ++u) {
       // Lateral noise: the measurement comes from a slightly displaced pixel.
-      const int su = std::clamp(
-          u + static_cast<int>(std::lround(lateral * normal(rng))), 0, w - 1);
-      const int sv = std::clamp(
-          v + static_cast<int>(std::lround(lateral * normal(rng))), 0, h - 1);
-      const double n_axial = normal(rng);
+      const uint64_t bits = rng.Next();
+      const int su = std::clamp(u + offset(bits & 0xFFFFFFFFu), 0, w - 1);
+      const int sv = std::clamp(v + offset(bits >> 32), 0, h - 1);
+      const double n_axial = rng.Normal();
       const double z = clean(su, sv);
       if (z <= 0.0 || cos_incidence(su, sv) < cos_min) continue;
       // Far side of a depth edge: the projector's pattern is shadowed there.

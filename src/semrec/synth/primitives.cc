@@ -37,7 +37,8 @@ std::optional<Hit> IntersectBox(const Box& box, const Eigen::Vector3d& origin,
     if (t0 > t1) std::swap(t0, t1);
     if (t0 > t_near) t_near = t0, axis_near = i;
     if (t1 < t_far) t_far = t1, axis_far = i;
-    if (t_near > t_far) return std::nullopt;
+    // Missed, or the entry (hence any hit) lies beyond t_max.
+    if (t_near > t_far || t_near >= t_max) return std::nullopt;
   }
   // Entering hit, or the exit when the origin is inside (rooms are seen from
   // inside).

@@ -59,12 +59,16 @@ double Texture(const Eigen::Vector3d& p) {
   return static_cast<double>(h & 0xFFFF) / 32767.5 - 1.0;
 }
 
+// Objects and people; structure is handled by the room test
+// (Scene::room_faces).
 std::vector<Drawable> CollectDrawables(const Scene& scene,
                                        const std::vector<PersonBody>& bodies) {
   std::vector<Drawable> out;
   for (const SceneObject& o : scene.objects) {
-    for (const Primitive& p : o.parts)
+    if (o.structure) continue;
+    for (const Primitive& p : o.parts) {
       out.push_back({&p, o.instance_id, o.class_id, 0, o.color});
+    }
   }
   for (size_t i = 0; i < bodies.size(); ++i) {
     const uint16_t pid = scene.people[i].person_id;
@@ -77,6 +81,36 @@ std::vector<Drawable> CollectDrawables(const Scene& scene,
   return out;
 }
 
+std::pair<Eigen::Vector3d, double> BoundingSphere(const Primitive& shape) {
+  if (const auto* b = std::get_if<Box>(&shape))
+    return {b->center, b->half.norm()};
+  if (const auto* s = std::get_if<Sphere>(&shape))
+    return {s->center, s->radius};
+  if (const auto* c = std::get_if<Cylinder>(&shape)) {
+    const double half_len = (c->b - c->a).norm() / 2;
+    return {(c->a + c->b) / 2, std::hypot(half_len, c->radius)};
+  }
+  const auto& c = std::get<Capsule>(shape);
+  return {(c.a + c.b) / 2, (c.b - c.a).norm() / 2 + c.radius};
+}
+
+// Exit face of the room box [0, size] seen from `origin` inside it: t and face
+// index
+// (-x, +x, -y, +y, -z, +z), or face -1 when the origin is outside.
+std::pair<double, int> RoomExit(const Eigen::Vector3d& size,
+                                const Eigen::Vector3d& origin,
+                                const Eigen::Vector3d& dir) {
+  double t_exit = std::numeric_limits<double>::infinity();
+  int face = -1;
+  for (int axis = 0; axis < 3; ++axis) {
+    if (dir[axis] == 0.0) continue;
+    const bool positive = dir[axis] > 0.0;
+    const double t = ((positive ? size[axis] : 0.0) - origin[axis]) / dir[axis];
+    if (t < t_exit) t_exit = t, face = 2 * axis + (positive ? 1 : 0);
+  }
+  return {t_exit, face};
+}
+
 }  // namespace
 
 RenderedFrame Render(const Scene& scene, double time_s,
@@ -84,36 +118,77 @@ RenderedFrame Render(const Scene& scene, double time_s,
                      const CameraIntrinsics& k) {
   k.Check();
   std::vector<PersonBody> bodies;
-  for (const Person& person : scene.people)
+  for (const Person& person : scene.people) {
     bodies.push_back(PoseAt(person, time_s));
+  }
   const std::vector<Drawable> drawables = CollectDrawables(scene, bodies);
 
   const Transform T_camera_world = T_world_camera.Inverse();
   const Eigen::Matrix3d& R = T_world_camera.rotation();
   const Eigen::Vector3d origin = T_world_camera.translation();
   const int w = k.width, h = k.height;
-  std::vector<double> zbuf(static_cast<size_t>(w) * h,
-                           std::numeric_limits<double>::infinity());
-  std::vector<int> owner(zbuf.size(), -1);
-  std::vector<Eigen::Vector3f> normals(zbuf.size());
+  const size_t n = static_cast<size_t>(w) * h;
+  // World ray direction per pixel, with unit z in the camera frame so that the
+  // hit parameter is the z-depth.
+  std::vector<Eigen::Vector3d> dirs(n);
+  for (int v = 0; v < h; ++v) {
+    const Eigen::Vector3d row = R.col(1) * ((v - k.cy) / k.fy) + R.col(2);
+    for (int u = 0; u < w; ++u) {
+      dirs[static_cast<size_t>(v) * w + u] =
+          row + R.col(0) * ((u - k.cx) / k.fx);
+    }
+  }
+  std::vector<double> zbuf(n, std::numeric_limits<double>::infinity());
+  // Owner: drawable index, or -(face + 2) for a room face, -1 for nothing.
+  std::vector<int> owner(n, -1);
+  std::vector<Eigen::Vector3f> normals(n);
 
+  const bool inside_room = (origin.array() > 0.0).all() &&
+                           (origin.array() < scene.room_size.array()).all();
+  if (inside_room) {
+    for (size_t i = 0; i < n; ++i) {
+      const auto [t, face] = RoomExit(scene.room_size, origin, dirs[i]);
+      if (face < 0 || scene.room_faces[face] == 0) continue;
+      zbuf[i] = t;
+      owner[i] = -(face + 2);
+      Eigen::Vector3f normal = Eigen::Vector3f::Zero();
+      normal[face / 2] = face % 2 == 1 ? -1.0f : 1.0f;  // facing into the room
+      normals[i] = normal;
+    }
+  }
   for (size_t d = 0; d < drawables.size(); ++d) {
-    const Rect r = ScreenRect(Bounds(*drawables[d].shape), T_camera_world, k);
+    const Primitive& shape = *drawables[d].shape;
+    const Rect r = ScreenRect(Bounds(shape), T_camera_world, k);
+    // Bounding sphere: a ray that misses it (a dozen flops) cannot hit the
+    // shape; most pixels of a thin or rotated part's rectangle are rejected so.
+    const auto [center, radius] = BoundingSphere(shape);
+    const Eigen::Vector3d oc = origin - center;
+    const double c_term = oc.squaredNorm() - radius * radius;
     for (int v = r.y0; v <= r.y1; ++v) {
       for (int u = r.x0; u <= r.x1; ++u) {
         const size_t i = static_cast<size_t>(v) * w + u;
-        // Ray direction with unit z in the camera frame, so the hit parameter
-        // is the z-depth.
-        const Eigen::Vector3d dir =
-            R * Eigen::Vector3d((u - k.cx) / k.fx, (v - k.cy) / k.fy, 1.0);
+        const double half_b = oc.dot(dirs[i]);
+        if (c_term > 0.0 &&
+            (half_b > 0.0 ||
+             half_b * half_b < dirs[i].squaredNorm() * c_term)) {
+          continue;
+        }
         const auto hit =
-            Intersect(*drawables[d].shape, origin, dir, 1e-4, zbuf[i]);
+            Intersect(*drawables[d].shape, origin, dirs[i], 1e-4, zbuf[i]);
         if (!hit) continue;
         zbuf[i] = hit->t;
         owner[i] = static_cast<int>(d);
         normals[i] = hit->normal.cast<float>();
       }
     }
+  }
+
+  // Room faces as drawables for shading and labels.
+  std::array<Drawable, 6> faces{};
+  for (int f = 0; f < 6; ++f) {
+    if (scene.room_faces[f] == 0) continue;
+    const SceneObject* o = scene.FindObject(scene.room_faces[f]);
+    faces[f] = {nullptr, o->instance_id, o->class_id, 0, o->color};
   }
 
   RenderedFrame out;
@@ -124,29 +199,27 @@ RenderedFrame Render(const Scene& scene, double time_s,
   out.instance = LabelMap(w, h);
   out.person = LabelMap(w, h);
   const Eigen::Vector3d light = Eigen::Vector3d(0.3, -0.5, 1.0).normalized();
-  for (int v = 0; v < h; ++v) {
-    for (int u = 0; u < w; ++u) {
-      const size_t i = static_cast<size_t>(v) * w + u;
-      if (owner[i] < 0) continue;
-      const Drawable& dr = drawables[owner[i]];
-      const Eigen::Vector3d dir =
-          R * Eigen::Vector3d((u - k.cx) / k.fx, (v - k.cy) / k.fy, 1.0);
-      const Eigen::Vector3d n = normals[i].cast<double>();
-      const double cos_view = std::abs(n.dot(dir)) / dir.norm();
-      out.depth(u, v) = static_cast<float>(zbuf[i]);
-      out.cos_incidence(u, v) = static_cast<float>(cos_view);
-      out.semantic(u, v) = dr.semantic;
-      out.instance(u, v) = dr.instance;
-      out.person(u, v) = dr.person;
-      // Lambert from a fixed light plus a head-light term, and a surface-fixed
-      // texture.
-      const double shade =
-          0.35 + 0.4 * std::max(0.0, n.dot(light)) + 0.25 * cos_view;
-      const double tex = 1.0 + 0.08 * Texture(origin + zbuf[i] * dir);
-      for (int c = 0; c < 3; ++c) {
-        out.color(u, v, c) = static_cast<uint8_t>(
-            std::clamp(dr.color[c] * shade * tex, 0.0, 255.0) + 0.5);
-      }
+  uint8_t* color = out.color.data();
+  for (size_t i = 0; i < n; ++i) {
+    if (owner[i] == -1) continue;
+    const Drawable& dr =
+        owner[i] >= 0 ? drawables[owner[i]] : faces[-owner[i] - 2];
+    const Eigen::Vector3d& dir = dirs[i];
+    const Eigen::Vector3d n_world = normals[i].cast<double>();
+    const double cos_view = std::abs(n_world.dot(dir)) / dir.norm();
+    out.depth.data()[i] = static_cast<float>(zbuf[i]);
+    out.cos_incidence.data()[i] = static_cast<float>(cos_view);
+    out.semantic.data()[i] = dr.semantic;
+    out.instance.data()[i] = dr.instance;
+    out.person.data()[i] = dr.person;
+    // Lambert from a fixed light plus a head-light term, and a surface-fixed
+    // texture.
+    const double shade =
+        0.35 + 0.4 * std::max(0.0, n_world.dot(light)) + 0.25 * cos_view;
+    const double gain = shade * (1.0 + 0.08 * Texture(origin + zbuf[i] * dir));
+    for (int c = 0; c < 3; ++c) {
+      color[3 * i + c] =
+          static_cast<uint8_t>(std::min(dr.color[c] * gain, 255.0) + 0.5);
     }
   }
   return out;

@@ -2,11 +2,11 @@
 
 #include <cmath>
 #include <map>
-#include <random>
 
 #include <fmt/format.h>
 
 #include "semrec/core/error.h"
+#include "semrec/core/random.h"
 
 namespace semrec::synth {
 namespace {
@@ -62,9 +62,8 @@ struct Blueprint {
   bool against_wall = false;
 };
 
-Blueprint Build(const std::string& cls, std::mt19937_64& rng) {
-  std::uniform_real_distribution<double> u(0.9, 1.1);
-  const double s = u(rng);
+Blueprint Build(const std::string& cls, Rng& rng) {
+  const double s = rng.Uniform(0.9, 1.1);
   Blueprint bp;
   if (cls == "table") {
     const double hx = 0.6 * s, hy = 0.4 * s, h = 0.74;
@@ -101,8 +100,8 @@ Blueprint Build(const std::string& cls, std::mt19937_64& rng) {
       bp.parts.push_back(MakeBox(0, 0, z, hx, hy - 0.03, 0.015));
     bp.hx = hx, bp.hy = hy, bp.height = h, bp.against_wall = true;
   } else if (cls == "box") {
-    std::uniform_real_distribution<double> d(0.15, 0.3);
-    const double hx = d(rng), hy = d(rng), hz = d(rng);
+    const double hx = rng.Uniform(0.15, 0.3), hy = rng.Uniform(0.15, 0.3),
+                 hz = rng.Uniform(0.15, 0.3);
     bp.parts.push_back(MakeBox(0, 0, hz, hx, hy, hz));
     bp.hx = hx, bp.hy = hy, bp.height = 2 * hz;
   } else if (cls == "lamp") {
@@ -237,14 +236,15 @@ void SceneOptions::Check() const {
 
 Scene GenerateScene(const SceneOptions& options) {
   options.Check();
-  std::mt19937_64 rng(options.seed * 0x9E3779B97F4A7C15ULL + 17);
+  Rng rng(options.seed * 0x9E3779B97F4A7C15ULL + 17);
   Scene scene;
   const double W = options.room_width_m, D = options.room_depth_m,
                H = options.room_height_m;
   scene.room_size = {W, D, H};
   const LabelSet& classes = SynthClasses();
   uint16_t next_id = 1;
-  auto add_structure = [&](uint16_t cls, const Box& box) {
+  // Returns the new instance id.
+  auto add_structure = [&](uint16_t cls, const Box& box) -> uint16_t {
     SceneObject o;
     o.instance_id = next_id++;
     o.class_id = cls;
@@ -253,20 +253,26 @@ Scene GenerateScene(const SceneOptions& options) {
     o.color = classes.Get(cls).color;
     o.structure = true;
     scene.objects.push_back(std::move(o));
+    return scene.objects.back().instance_id;
   };
   // Structure as 10 cm slabs just outside the interior, so inner faces are at
   // the room bounds.
   const double t = 0.05;
-  add_structure(kClassFloor,
-                MakeBox(W / 2, D / 2, -t, W / 2 + 2 * t, D / 2 + 2 * t, t));
-  add_structure(kClassWall, MakeBox(-t, D / 2, H / 2, t, D / 2, H / 2));
-  add_structure(kClassWall, MakeBox(W + t, D / 2, H / 2, t, D / 2, H / 2));
-  add_structure(kClassWall, MakeBox(W / 2, -t, H / 2, W / 2 + 2 * t, t, H / 2));
-  add_structure(kClassWall,
-                MakeBox(W / 2, D + t, H / 2, W / 2 + 2 * t, t, H / 2));
-  if (options.ceiling)
-    add_structure(kClassCeiling, MakeBox(W / 2, D / 2, H + t, W / 2 + 2 * t,
-                                         D / 2 + 2 * t, t));
+  scene.room_faces[4] = add_structure(
+      kClassFloor, MakeBox(W / 2, D / 2, -t, W / 2 + 2 * t, D / 2 + 2 * t, t));
+  scene.room_faces[0] =
+      add_structure(kClassWall, MakeBox(-t, D / 2, H / 2, t, D / 2, H / 2));
+  scene.room_faces[1] =
+      add_structure(kClassWall, MakeBox(W + t, D / 2, H / 2, t, D / 2, H / 2));
+  scene.room_faces[2] = add_structure(
+      kClassWall, MakeBox(W / 2, -t, H / 2, W / 2 + 2 * t, t, H / 2));
+  scene.room_faces[3] = add_structure(
+      kClassWall, MakeBox(W / 2, D + t, H / 2, W / 2 + 2 * t, t, H / 2));
+  if (options.ceiling) {
+    scene.room_faces[5] = add_structure(
+        kClassCeiling,
+        MakeBox(W / 2, D / 2, H + t, W / 2 + 2 * t, D / 2 + 2 * t, t));
+  }
 
   // Objects stay out of a walkway when people are present (the front third of
   // the room).
@@ -274,7 +280,6 @@ Scene GenerateScene(const SceneOptions& options) {
       hi(W, D);
   std::vector<Footprint> footprints;
   std::vector<size_t> footprint_object;
-  std::uniform_real_distribution<double> uni(0.0, 1.0);
   for (const std::string& cls : options.object_classes) {
     Blueprint bp = Build(cls, rng);
     const uint16_t class_id = *classes.FindByName(cls);
@@ -300,13 +305,13 @@ Scene GenerateScene(const SceneOptions& options) {
     }
     for (int attempt = 0; attempt < 400 && !placed; ++attempt) {
       const bool touch = !footprints.empty() && attempt < 100 &&
-                         uni(rng) < options.touching_probability;
+                         rng.Uniform() < options.touching_probability;
       size_t anchor = 0;
       if (touch) {
-        anchor = std::uniform_int_distribution<size_t>(
-            0, footprints.size() - 1)(rng);
+        anchor = static_cast<size_t>(
+            rng.UniformInt(0, static_cast<int64_t>(footprints.size()) - 1));
         const Footprint& a = footprints[anchor];
-        const int side = std::uniform_int_distribution<int>(0, 3)(rng);
+        const int side = static_cast<int>(rng.UniformInt(0, 3));
         const Eigen::Vector2d ax(std::cos(a.yaw), std::sin(a.yaw)),
             ay(-std::sin(a.yaw), std::cos(a.yaw));
         fp.yaw = a.yaw + (side == 0   ? M_PI
@@ -319,30 +324,31 @@ Scene GenerateScene(const SceneOptions& options) {
                                     : side == 2 ? ay
                                                 : -ay;
         const double reach = (side < 2 ? a.hx : a.hy) + bp.hx + 0.002;
-        const double slide =
-            std::uniform_real_distribution<double>(-0.3, 0.3)(rng);
+        const double slide = rng.Uniform(-0.3, 0.3);
         const Eigen::Vector2d along = side < 2 ? ay : ax;
         fp.center = a.center + reach * dir + slide * along;
-      } else if (bp.against_wall && uni(rng) < 0.8) {
-        const int wall = std::uniform_int_distribution<int>(0, 3)(rng);
+      } else if (bp.against_wall && rng.Uniform() < 0.8) {
+        const int wall = static_cast<int>(rng.UniformInt(0, 3));
         const double gap = 0.01;
         if (wall == 0)
           fp.yaw = 0, fp.center = {lo.x() + bp.hx + gap,
-                                   lo.y() + uni(rng) * (hi.y() - lo.y())};
+                                   lo.y() + rng.Uniform() * (hi.y() - lo.y())};
         if (wall == 1)
-          fp.yaw = M_PI, fp.center = {hi.x() - bp.hx - gap,
-                                      lo.y() + uni(rng) * (hi.y() - lo.y())};
+          fp.yaw = M_PI,
+          fp.center = {hi.x() - bp.hx - gap,
+                       lo.y() + rng.Uniform() * (hi.y() - lo.y())};
         if (wall == 2)
-          fp.yaw = M_PI / 2, fp.center = {lo.x() + uni(rng) * (hi.x() - lo.x()),
-                                          lo.y() + bp.hx + gap};
+          fp.yaw = M_PI / 2,
+          fp.center = {lo.x() + rng.Uniform() * (hi.x() - lo.x()),
+                       lo.y() + bp.hx + gap};
         if (wall == 3)
           fp.yaw = -M_PI / 2,
-          fp.center = {lo.x() + uni(rng) * (hi.x() - lo.x()),
+          fp.center = {lo.x() + rng.Uniform() * (hi.x() - lo.x()),
                        hi.y() - bp.hx - gap};
       } else {
-        fp.yaw = uni(rng) * 2 * M_PI;
-        fp.center = {lo.x() + uni(rng) * (hi.x() - lo.x()),
-                     lo.y() + uni(rng) * (hi.y() - lo.y())};
+        fp.yaw = rng.Uniform() * 2 * M_PI;
+        fp.center = {lo.x() + rng.Uniform() * (hi.x() - lo.x()),
+                     lo.y() + rng.Uniform() * (hi.y() - lo.y())};
       }
       if (!InsideRoom(fp, lo, hi)) continue;
       bool free = true;
@@ -375,16 +381,15 @@ Scene GenerateScene(const SceneOptions& options) {
   for (int i = 0; i < options.num_people; ++i) {
     Person person;
     person.person_id = static_cast<uint16_t>(i + 1);
-    person.height_m = std::uniform_real_distribution<double>(1.6, 1.9)(rng);
+    person.height_m = rng.Uniform(1.6, 1.9);
     person.shirt = kShirts[i % std::size(kShirts)];
     person.pants = kPants[i % std::size(kPants)];
     const double y0 = 0.6 + 0.15 * (i % 3), y1 = D * 0.5 - 0.1 * (i % 2);
     const double x0 = 0.5 + 0.1 * i, x1 = W - 0.5 - 0.1 * i;
     person.path = {{x0, y0}, {x1, y0}, {x1, y1}, {x0, y1}};
     if (i % 2 == 1) std::reverse(person.path.begin(), person.path.end());
-    person.speed_mps = std::uniform_real_distribution<double>(0.9, 1.4)(rng);
-    person.start_offset_m = std::uniform_real_distribution<double>(
-        0.0, 2 * (x1 - x0 + y1 - y0))(rng);
+    person.speed_mps = rng.Uniform(0.9, 1.4);
+    person.start_offset_m = rng.Uniform(0.0, 2 * (x1 - x0 + y1 - y0));
     scene.people.push_back(std::move(person));
   }
   return scene;
