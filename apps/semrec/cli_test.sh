@@ -6,12 +6,28 @@ fail() { echo "FAIL: $*"; exit 1; }
 tmp="$(mktemp -d)"; trap 'rm -rf "$tmp"' EXIT
 
 "$SEMREC" --help >"$tmp/help" || fail "--help exited non-zero"
-grep -q "info" "$tmp/help" && grep -q "tsdf" "$tmp/help" || fail "--help does not list subcommands"
+grep -q "info" "$tmp/help" && grep -q "tsdf" "$tmp/help" && grep -q "synth" "$tmp/help" ||
+  fail "--help does not list subcommands"
 "$SEMREC" tsdf --help | grep -q -- "--voxel-size-m" || fail "tsdf --help lacks --voxel-size-m"
 
 "$SEMREC" info /nonexistent/seq 2>"$tmp/err"; rc=$?
 [ "$rc" -eq 1 ] || fail "missing sequence: exit $rc, expected 1"
 grep -q "error: /nonexistent/seq: sequence path does not exist" "$tmp/err" || fail "message: $(cat "$tmp/err")"
+
+"$SEMREC" synth --preset kitchen --out "$tmp/s" 2>"$tmp/err"; rc=$?
+[ "$rc" -eq 1 ] && grep -q "unknown preset 'kitchen'" "$tmp/err" || fail "bad preset: exit $rc, $(cat "$tmp/err")"
+"$SEMREC" synth --frames 0 --out "$tmp/s" 2>"$tmp/err"; rc=$?
+[ "$rc" -eq 1 ] && grep -q "frames must be > 0" "$tmp/err" || fail "zero frames: exit $rc, $(cat "$tmp/err")"
+"$SEMREC" synth --noise-strength -1 --out "$tmp/s" 2>"$tmp/err"; rc=$?
+[ "$rc" -eq 1 ] && grep -q "strength must be >= 0" "$tmp/err" || fail "negative noise: exit $rc"
+"$SEMREC" synth --frames 3 --width 160 --height 120 --gt-spacing-m 0.02 --out "$tmp/syn" \
+  >"$tmp/synth.out" 2>"$tmp/synth.err" || fail "synth failed: $(cat "$tmp/synth.err")"
+grep -q "rendering 3/3" "$tmp/synth.err" || fail "synth: no progress report"
+grep -q "objects: .*1 chair" "$tmp/synth.out" || fail "synth: no summary: $(cat "$tmp/synth.out")"
+"$SEMREC" info "$tmp/syn" >"$tmp/syninfo" 2>/dev/null || fail "info on synthetic data failed"
+grep -q "layout: *semrec" "$tmp/syninfo" && grep -q "160x120" "$tmp/syninfo" || fail "info: $(cat "$tmp/syninfo")"
+"$SEMREC" synth --frames 3 --out "$tmp/syn" 2>"$tmp/err"; rc=$?
+[ "$rc" -eq 1 ] && grep -q "not empty" "$tmp/err" || fail "synth overwrote a non-empty folder"
 
 "$SEMREC" bogus >/dev/null 2>&1; rc=$?
 [ "$rc" -ne 0 ] || fail "unknown subcommand accepted"

@@ -1,6 +1,7 @@
 // `semrec synth --preset NAME --out DIR`: synthetic RGB-D sequences with full
 // ground truth.
 #include <cstdio>
+#include <optional>
 
 #include <fmt/format.h>
 
@@ -14,23 +15,29 @@ namespace {
 struct SynthArgs {
   std::string preset = "six-objects";
   std::string out;
-  int frames = 0;
+  std::optional<int> frames;
   uint64_t seed = 1;
   std::string noise = "kinect";
   double noise_strength = 1.0;
   double max_depth_m = 4.0;
-  int width = 0;
-  int height = 0;
-  double gt_spacing_m = 0.0;
+  std::optional<int> width;
+  std::optional<int> height;
+  std::optional<double> gt_spacing_m;
   bool overwrite = false;
 };
 
 void RunSynth(const SynthArgs& args) {
   synth::SynthOptions options = synth::SynthOptions::Preset(args.preset);
-  if (args.frames != 0) options.frames = args.frames;
-  if (args.width != 0) options.width = args.width;
-  if (args.height != 0) options.height = args.height;
-  if (args.gt_spacing_m != 0.0) options.gt_object_spacing_m = args.gt_spacing_m;
+  options.frames = args.frames.value_or(options.frames);
+  // A different resolution keeps the field of view: the focal length scales
+  // with the width.
+  const int default_width = options.width;
+  options.width = args.width.value_or(options.width);
+  options.fx *= static_cast<double>(options.width) / default_width;
+  options.fy *= static_cast<double>(options.width) / default_width;
+  options.height = args.height.value_or(options.height);
+  options.gt_object_spacing_m =
+      args.gt_spacing_m.value_or(options.gt_object_spacing_m);
   options.seed = args.seed;
   if (args.noise != "kinect" && args.noise != "none") {
     throw InvalidArgument("--noise must be 'kinect' or 'none', got '" +
@@ -93,7 +100,7 @@ void RegisterSynth(CLI::App& app) {
   cmd->add_option("--max-depth-m", args->max_depth_m,
                   "No depth beyond this (m)")
       ->capture_default_str();
-  cmd->add_option("--width", args->width, "Image width (default 640)");
+  cmd->add_option("--width", args->width, "Image width (default 640; the focal length 525 scales with it)");
   cmd->add_option("--height", args->height, "Image height (default 480)");
   cmd->add_option(
       "--gt-spacing-m", args->gt_spacing_m,
