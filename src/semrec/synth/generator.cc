@@ -14,6 +14,7 @@
 #include "semrec/core/file_util.h"
 #include "semrec/core/random.h"
 #include "semrec/io/image_io.h"
+#include "semrec/io/label_set_io.h"
 #include "semrec/io/ply_io.h"
 #include "semrec/io/sequence_reader.h"
 #include "semrec/synth/render.h"
@@ -342,11 +343,7 @@ SynthSummary WriteSyntheticSequence(const SynthOptions& options_in,
 
   // Ground truth.
   const fs::path gt = out_dir / "gt";
-  nlohmann::json classes = nlohmann::json::array();
-  for (const LabelClass& c : SynthClasses().Classes()) {
-    classes.push_back({{"id", c.id}, {"name", c.name}, {"color", c.color}});
-  }
-  WriteTextFileAtomic(gt / "classes.json", classes.dump(2) + "\n");
+  io::WriteLabelSetJson(gt / "classes.json", SynthClasses());
 
   nlohmann::json objects = nlohmann::json::array();
   io::PlyData surface;

@@ -1,0 +1,210 @@
+#define SPDLOG_ACTIVE_LEVEL SPDLOG_LEVEL_TRACE
+#include "semrec/fuse/fusion.h"
+
+#include <algorithm>
+#include <chrono>
+#include <map>
+#include <numeric>
+
+#include <spdlog/spdlog.h>
+#include <tbb/parallel_for.h>
+
+#include "semrec/core/error.h"
+#include "semrec/fuse/overlap.h"
+
+namespace semrec::fuse {
+namespace {
+
+Eigen::AlignedBox3f BoundsOf(const Cloud& cloud) {
+  Eigen::AlignedBox3f box;
+  for (const auto& p : cloud) box.extend(p);
+  return box;
+}
+
+// Grown by `margin`: boxes farther apart than the correspondence distance share no pair.
+bool Near(const Eigen::AlignedBox3f& a, const Eigen::AlignedBox3f& b, float margin) {
+  return (a.min().array() - margin <= b.max().array()).all() &&
+         (b.min().array() - margin <= a.max().array()).all();
+}
+
+struct UnionFind {
+  explicit UnionFind(size_t n) : parent(n) { std::iota(parent.begin(), parent.end(), 0); }
+  size_t Find(size_t x) {
+    while (parent[x] != x) x = parent[x] = parent[parent[x]];
+    return x;
+  }
+  void Unite(size_t a, size_t b) {
+    a = Find(a), b = Find(b);
+    if (a != b) parent[std::max(a, b)] = std::min(a, b);  // the lower index (older) wins
+  }
+  std::vector<size_t> parent;
+};
+
+}  // namespace
+
+void FusionOptions::Check() const {
+  CheckArgument(corr_voxel_size_m > 0.0, "fusion: corr_voxel_size_m must be > 0");
+  CheckArgument(store_voxel_size_m > 0.0, "fusion: store_voxel_size_m must be > 0");
+  CheckArgument(max_corr_dist_m > 0.0, "fusion: max_corr_dist_m must be > 0");
+  CheckArgument(alpha >= 0.0 && alpha < 1.0, "fusion: alpha must be in [0, 1)");
+}
+
+SceneFusion::SceneFusion(const FusionOptions& options) : options_(options) { options_.Check(); }
+
+FrameFusionStats SceneFusion::Integrate(const std::vector<FrameSegment>& frame_segments,
+                                        size_t frame_index) {
+  const auto start = std::chrono::steady_clock::now();
+  FrameFusionStats stats;
+  stats.frame_index = frame_index;
+  stats.frame_segments = frame_segments.size();
+  stats.scene_segments_before = segments_.size();
+  const bool fast = options_.method == FusionOptions::Method::kFast;
+
+  // Comparison clouds of the frame segments.
+  std::vector<Cloud> frame_corr(frame_segments.size());
+  std::vector<Eigen::AlignedBox3f> frame_bounds(frame_segments.size());
+  tbb::parallel_for(size_t{0}, frame_segments.size(), [&](size_t f) {
+    frame_corr[f] = VoxelDownsample(frame_segments[f].points_world, options_.corr_voxel_size_m);
+    frame_bounds[f] = BoundsOf(frame_corr[f]);
+  });
+  for (const Cloud& c : frame_corr) stats.frame_points += c.size();
+  for (const SceneSegment& s : segments_) stats.scene_points += s.corr_points.size();
+  for (size_t f = 0; f < frame_segments.size(); ++f) {
+    for (const SceneSegment& s : segments_) {
+      const uint64_t pairs = static_cast<uint64_t>(frame_corr[f].size()) * s.corr_points.size();
+      stats.distance_computations_ungated += pairs;
+      if (s.class_id == frame_segments[f].class_id) stats.distance_computations_gated += pairs;
+    }
+  }
+
+  // Matches of every frame segment against the scene before this frame.
+  std::vector<std::vector<size_t>> matches(frame_segments.size());
+  std::vector<uint64_t> computations(frame_segments.size(), 0);
+  std::vector<size_t> compared(frame_segments.size(), 0);
+  const float margin = static_cast<float>(options_.max_corr_dist_m);
+  auto compare = [&](size_t f) {
+    for (size_t s = 0; s < segments_.size(); ++s) {
+      const SceneSegment& scene = segments_[s];
+      if (options_.label_gating && scene.class_id != frame_segments[f].class_id) continue;
+      ++compared[f];
+      OverlapResult overlap;
+      if (fast) {
+        if (!Near(frame_bounds[f], scene.bounds, margin)) continue;  // no pair can be close
+        overlap = MutualOverlapGrid(frame_corr[f], scene.corr_points, scene.corr_grid,
+                                    options_.max_corr_dist_m);
+      } else {
+        overlap = MutualOverlapBruteForce(frame_corr[f], scene.corr_points,
+                                          options_.max_corr_dist_m);
+      }
+      computations[f] += overlap.distance_computations;
+      SPDLOG_TRACE("frame {} segment {} (class {}, {} pts) vs scene {} ({} pts): |M|={} sigma={:.3f}",
+                   frame_index, f, frame_segments[f].class_id, frame_corr[f].size(), scene.id,
+                   scene.corr_points.size(), overlap.mutual_pairs, overlap.sigma);
+      if (overlap.sigma > options_.alpha) matches[f].push_back(s);
+    }
+  };
+  if (fast) {
+    tbb::parallel_for(size_t{0}, frame_segments.size(), compare);
+  } else {
+    for (size_t f = 0; f < frame_segments.size(); ++f) compare(f);
+  }
+  for (size_t f = 0; f < frame_segments.size(); ++f) {
+    stats.distance_computations_done += computations[f];
+    stats.compared_pairs += compared[f];
+  }
+
+  // Apply: union scene segments linked through a frame segment, attach the frame segments.
+  UnionFind groups(segments_.size());
+  for (const auto& m : matches) {
+    for (size_t k = 1; k < m.size(); ++k) groups.Unite(m[0], m[k]);
+  }
+  std::map<size_t, std::vector<size_t>> attached;  // group root -> frame segments
+  std::vector<SceneSegment> created;
+  stats.assigned_ids.resize(frame_segments.size());
+  for (size_t f = 0; f < frame_segments.size(); ++f) {
+    if (matches[f].empty()) {
+      SceneSegment s;
+      s.id = next_id_++;
+      stats.assigned_ids[f] = s.id;
+      s.class_id = frame_segments[f].class_id;
+      s.points = frame_segments[f].points_world;
+      s.first_seen_frame = s.last_seen_frame = frame_index;
+      s.observations = 1;
+      created.push_back(std::move(s));
+    } else {
+      const size_t root = groups.Find(matches[f][0]);
+      attached[root].push_back(f);
+      stats.assigned_ids[f] = segments_[root].id;
+      ++stats.merged_frame_segments;
+    }
+  }
+  std::map<size_t, std::vector<size_t>> members;  // root -> scene segments in the group
+  for (size_t s = 0; s < segments_.size(); ++s) members[groups.Find(s)].push_back(s);
+
+  std::vector<SceneSegment> next;
+  std::vector<size_t> changed;  // indices into `next` whose clouds must be rebuilt
+  for (auto& [root, group] : members) {
+    const auto it = attached.find(root);
+    if (it == attached.end()) {  // untouched this frame
+      for (size_t s : group) next.push_back(std::move(segments_[s]));
+      continue;
+    }
+    SceneSegment merged = std::move(segments_[root]);
+    std::map<uint16_t, size_t> class_points;
+    class_points[merged.class_id] += merged.points.size();
+    Cloud all = std::move(merged.points);
+    for (size_t s : group) {
+      if (s == root) continue;
+      SceneSegment& other = segments_[s];
+      class_points[other.class_id] += other.points.size();
+      all.insert(all.end(), other.points.begin(), other.points.end());
+      merged.first_seen_frame = std::min(merged.first_seen_frame, other.first_seen_frame);
+      merged_into_[other.id] = merged.id;
+      merged.observations += other.observations;
+      ++stats.removed_by_merge;
+    }
+    for (size_t f : it->second) {
+      const Cloud& p = frame_segments[f].points_world;
+      class_points[frame_segments[f].class_id] += p.size();
+      all.insert(all.end(), p.begin(), p.end());
+      ++merged.observations;
+    }
+    if (!options_.label_gating) {
+      size_t best = 0;
+      for (const auto& [cls, count] : class_points) {
+        if (count > best) best = count, merged.class_id = cls;
+      }
+    }
+    merged.points = std::move(all);
+    merged.last_seen_frame = frame_index;
+    changed.push_back(next.size());
+    next.push_back(std::move(merged));
+  }
+  for (SceneSegment& s : created) {
+    changed.push_back(next.size());
+    next.push_back(std::move(s));
+  }
+  stats.new_segments = created.size();
+  tbb::parallel_for(size_t{0}, changed.size(), [&](size_t c) {
+    SceneSegment& s = next[changed[c]];
+    s.points = VoxelDownsample(s.points, options_.store_voxel_size_m);
+    s.corr_points = VoxelDownsample(s.points, options_.corr_voxel_size_m);
+    s.bounds = BoundsOf(s.corr_points);
+    s.corr_grid = VoxelGrid(s.corr_points, options_.max_corr_dist_m);
+  });
+  std::sort(next.begin(), next.end(),
+            [](const SceneSegment& a, const SceneSegment& b) { return a.id < b.id; });
+  segments_ = std::move(next);
+  stats.seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return stats;
+}
+
+uint32_t SceneFusion::ResolveId(uint32_t id) const {
+  for (auto it = merged_into_.find(id); it != merged_into_.end(); it = merged_into_.find(id)) {
+    id = it->second;
+  }
+  return id;
+}
+
+}  // namespace semrec::fuse

@@ -1,0 +1,91 @@
+#include "semrec/fuse/overlap.h"
+
+#include <algorithm>
+#include <limits>
+
+namespace semrec::fuse {
+namespace {
+
+// The same float expression in both implementations, so that ties and thresholds agree bit for
+// bit.
+inline float SquaredDistance(const Eigen::Vector3f& p, const Eigen::Vector3f& q) {
+  const float dx = p.x() - q.x(), dy = p.y() - q.y(), dz = p.z() - q.z();
+  return dx * dx + dy * dy + dz * dz;
+}
+
+struct Nearest {
+  float d2 = std::numeric_limits<float>::infinity();
+  int64_t index = -1;
+  void Offer(float d, int64_t i) {
+    if (d < d2 || (d == d2 && i < index)) d2 = d, index = i;
+  }
+};
+
+double Sigma(size_t pairs, size_t na, size_t nb) {
+  const size_t denominator = std::min(na, nb);
+  return denominator == 0 ? 0.0 : static_cast<double>(pairs) / denominator;
+}
+
+}  // namespace
+
+OverlapResult MutualOverlapBruteForce(const Cloud& a, const Cloud& b, double max_dist_m) {
+  const float max_d2 = static_cast<float>(max_dist_m * max_dist_m);
+  std::vector<Nearest> nn_a(a.size()), nn_b(b.size());
+  // One pass over the full |a| x |b| distance matrix gives both directions.
+  for (size_t i = 0; i < a.size(); ++i) {
+    for (size_t j = 0; j < b.size(); ++j) {
+      const float d2 = SquaredDistance(a[i], b[j]);
+      if (d2 > max_d2) continue;
+      nn_a[i].Offer(d2, static_cast<int64_t>(j));
+      nn_b[j].Offer(d2, static_cast<int64_t>(i));
+    }
+  }
+  OverlapResult result;
+  result.distance_computations = static_cast<uint64_t>(a.size()) * b.size();
+  for (size_t i = 0; i < a.size(); ++i) {
+    const int64_t j = nn_a[i].index;
+    if (j >= 0 && nn_b[j].index == static_cast<int64_t>(i)) ++result.mutual_pairs;
+  }
+  result.sigma = Sigma(result.mutual_pairs, a.size(), b.size());
+  return result;
+}
+
+OverlapResult MutualOverlapGrid(const Cloud& a, const Cloud& b, const VoxelGrid& grid_b,
+                                double max_dist_m) {
+  const float max_d2 = static_cast<float>(max_dist_m * max_dist_m);
+  OverlapResult result;
+  if (a.empty() || b.empty()) return result;
+  // Nearest in b for each a; then, for each b point that is some a's nearest, its own nearest
+  // in a (through a grid over a). Only such b points can be in a mutual pair.
+  std::vector<int64_t> nn_of_a(a.size(), -1);
+  uint64_t computations = 0;
+  for (size_t i = 0; i < a.size(); ++i) {
+    Nearest best;
+    grid_b.ForEachNear(a[i], [&](uint32_t j) {
+      const float d2 = SquaredDistance(a[i], b[j]);
+      ++computations;
+      if (d2 <= max_d2) best.Offer(d2, j);
+    });
+    nn_of_a[i] = best.index;
+  }
+  const VoxelGrid grid_a(a, max_dist_m);
+  std::vector<uint8_t> checked(b.size(), 0);
+  for (size_t i = 0; i < a.size(); ++i) {
+    const int64_t j = nn_of_a[i];
+    if (j < 0 || checked[j]) continue;
+    checked[j] = 1;
+    Nearest best;
+    grid_a.ForEachNear(b[j], [&](uint32_t k) {
+      const float d2 = SquaredDistance(a[k], b[j]);
+      ++computations;
+      if (d2 <= max_d2) best.Offer(d2, k);
+    });
+    // b_j's nearest a point must have b_j as its nearest: then the pair is mutual.
+    if (best.index >= 0 && nn_of_a[best.index] == j) ++result.mutual_pairs;
+  }
+  result.distance_computations = computations;
+  result.sigma = Sigma(result.mutual_pairs, a.size(), b.size());
+  return result;
+}
+
+}  // namespace semrec::fuse

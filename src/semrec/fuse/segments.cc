@@ -1,0 +1,158 @@
+#include "semrec/fuse/segments.h"
+
+#include <map>
+
+#include <fmt/format.h>
+
+#include "semrec/core/error.h"
+#include "semrec/io/image_io.h"
+#include "semrec/io/label_set_io.h"
+
+namespace fs = std::filesystem;
+
+namespace semrec::fuse {
+namespace {
+
+LabelMap ReadChecked(const fs::path& path, const CameraIntrinsics& k) {
+  LabelMap labels = io::ReadLabelImage(path);
+  if (!labels.SameSize(k.width, k.height)) {
+    throw FormatError(path, fmt::format("label map is {}x{} but the frames are {}x{}",
+                                        labels.width(), labels.height(), k.width, k.height));
+  }
+  return labels;
+}
+
+class LayerSource : public SegmentationSource {
+ public:
+  explicit LayerSource(const io::SequenceReader& reader) {
+    const fs::path classes = reader.root() / "gt" / "classes.json";
+    if (!fs::is_regular_file(classes)) {
+      throw IoError(classes, "class table missing (labels 'gt' need the sequence's gt/classes.json)");
+    }
+    classes_ = io::ReadLabelSetJson(classes);
+  }
+  FrameLabels Get(const io::SequenceReader& reader, size_t i) const override {
+    const auto& layers = reader.index().frames.at(i).layers;
+    for (const char* name : {"instance", "semantic"}) {
+      if (layers.count(name) == 0) {
+        throw FormatError(reader.root() / "sequence.yaml",
+                          fmt::format("frame {} has no '{}' layer (labels 'gt' need the "
+                                      "instance and semantic layers)",
+                                      i, name));
+      }
+    }
+    return {ReadChecked(layers.at("instance"), reader.intrinsics()),
+            ReadChecked(layers.at("semantic"), reader.intrinsics()),
+            layers.at("instance").string()};
+  }
+  const LabelSet& classes() const override { return classes_; }
+
+ private:
+  LabelSet classes_;
+};
+
+class FolderSource : public SegmentationSource {
+ public:
+  explicit FolderSource(const fs::path& folder) : folder_(folder) {
+    classes_ = io::ReadLabelSetJson(folder / "classes.json");
+  }
+  FrameLabels Get(const io::SequenceReader& reader, size_t i) const override {
+    const fs::path name = reader.index().frames.at(i).depth_path.filename();
+    return {ReadChecked(folder_ / "instance" / name, reader.intrinsics()),
+            ReadChecked(folder_ / "semantic" / name, reader.intrinsics()),
+            (folder_ / "instance" / name).string()};
+  }
+  const LabelSet& classes() const override { return classes_; }
+
+ private:
+  fs::path folder_;
+  LabelSet classes_;
+};
+
+class SingleClassSource : public SegmentationSource {
+ public:
+  explicit SingleClassSource(const std::string& name) : classes_("single") {
+    classes_.Add({1, name, {200, 200, 200}});
+  }
+  FrameLabels Get(const io::SequenceReader& reader, size_t) const override {
+    const CameraIntrinsics& k = reader.intrinsics();
+    return {LabelMap(k.width, k.height, 1, 1), LabelMap(k.width, k.height, 1, 1), "single class"};
+  }
+  const LabelSet& classes() const override { return classes_; }
+
+ private:
+  LabelSet classes_;
+};
+
+}  // namespace
+
+std::unique_ptr<SegmentationSource> SegmentationSource::Create(const std::string& spec,
+                                                               const io::SequenceReader& reader) {
+  if (spec == "gt") return std::make_unique<LayerSource>(reader);
+  if (spec.rfind("single:", 0) == 0) {
+    const std::string name = spec.substr(7);
+    CheckArgument(!name.empty(), "labels 'single:<class>' need a class name");
+    return std::make_unique<SingleClassSource>(name);
+  }
+  if (!fs::is_directory(spec)) {
+    throw IoError(spec, "labels must be 'gt', 'single:<class>' or an existing folder with "
+                        "instance/, semantic/ and classes.json");
+  }
+  return std::make_unique<FolderSource>(spec);
+}
+
+void SegmentExtractionOptions::Check() const {
+  CheckArgument(pixel_stride >= 1, "segments: pixel_stride must be >= 1");
+}
+
+std::vector<FrameSegment> ExtractFrameSegments(const Frame& frame, const FrameLabels& labels,
+                                               const LabelSet& classes,
+                                               const SegmentExtractionOptions& options) {
+  options.Check();
+  const int w = frame.depth.width(), h = frame.depth.height();
+  if (!labels.instance.SameSize(w, h) || !labels.semantic.SameSize(w, h)) {
+    throw FormatError(labels.source, fmt::format("label maps are {}x{} / {}x{} but the depth is {}x{}",
+                                                 labels.instance.width(), labels.instance.height(),
+                                                 labels.semantic.width(), labels.semantic.height(),
+                                                 w, h));
+  }
+  // Per instance: its points and a histogram of its semantic labels.
+  struct Accumulator {
+    Cloud points;
+    std::map<uint16_t, size_t> votes;
+  };
+  std::map<uint16_t, Accumulator> by_instance;
+  const CameraIntrinsics& k = frame.intrinsics;
+  for (int v = 0; v < h; v += options.pixel_stride) {
+    for (int u = 0; u < w; u += options.pixel_stride) {
+      const uint16_t instance = labels.instance(u, v);
+      if (instance == 0) continue;
+      Accumulator& acc = by_instance[instance];
+      ++acc.votes[labels.semantic(u, v)];
+      const float z = frame.depth(u, v);
+      if (z <= 0.0f) continue;
+      acc.points.push_back(
+          (frame.T_world_camera * k.BackProject(u, v, z)).cast<float>());
+    }
+  }
+  std::vector<FrameSegment> out;
+  for (auto& [instance, acc] : by_instance) {
+    uint16_t cls = 0;
+    size_t best = 0;
+    for (const auto& [label, count] : acc.votes) {
+      if (count > best) best = count, cls = label;
+    }
+    if (cls == 0) continue;  // unlabelled
+    if (!classes.Contains(cls)) {
+      throw FormatError(labels.source, fmt::format("semantic label {} is not in the class table "
+                                                   "'{}' ({} classes)",
+                                                   cls, classes.name(), classes.size()));
+    }
+    if (options.excluded_classes.count(classes.Get(cls).name) != 0) continue;
+    if (acc.points.size() < options.min_points) continue;
+    out.push_back({cls, instance, std::move(acc.points)});
+  }
+  return out;
+}
+
+}  // namespace semrec::fuse

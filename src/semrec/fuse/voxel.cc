@@ -1,0 +1,71 @@
+#include "semrec/fuse/voxel.h"
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+
+#include "semrec/core/error.h"
+
+namespace semrec::fuse {
+
+uint64_t PackVoxel(int64_t x, int64_t y, int64_t z) {
+  constexpr int64_t kOffset = 1 << 20;
+  constexpr uint64_t kMask = (1u << 21) - 1;
+  return ((static_cast<uint64_t>(x + kOffset) & kMask) << 42) |
+         ((static_cast<uint64_t>(y + kOffset) & kMask) << 21) |
+         (static_cast<uint64_t>(z + kOffset) & kMask);
+}
+
+uint64_t VoxelKey(const Eigen::Vector3f& p, float inv_voxel_size) {
+  return PackVoxel(static_cast<int64_t>(std::floor(p.x() * inv_voxel_size)),
+                   static_cast<int64_t>(std::floor(p.y() * inv_voxel_size)),
+                   static_cast<int64_t>(std::floor(p.z() * inv_voxel_size)));
+}
+
+Cloud VoxelDownsample(const Cloud& points, double voxel_size_m) {
+  CheckArgument(voxel_size_m > 0.0, "VoxelDownsample: voxel size must be > 0");
+  const float inv = static_cast<float>(1.0 / voxel_size_m);
+  std::vector<std::pair<uint64_t, uint32_t>> keyed(points.size());
+  for (size_t i = 0; i < points.size(); ++i) {
+    keyed[i] = {VoxelKey(points[i], inv), static_cast<uint32_t>(i)};
+  }
+  // Sorting by (key, index) fixes the summation order, so results are reproducible.
+  std::sort(keyed.begin(), keyed.end());
+  Cloud out;
+  for (size_t i = 0; i < keyed.size();) {
+    Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+    size_t j = i;
+    for (; j < keyed.size() && keyed[j].first == keyed[i].first; ++j) {
+      sum += points[keyed[j].second].cast<double>();
+    }
+    out.push_back((sum / static_cast<double>(j - i)).cast<float>());
+    i = j;
+  }
+  return out;
+}
+
+VoxelGrid::VoxelGrid(const Cloud& points, double cell_size_m) {
+  CheckArgument(cell_size_m > 0.0, "VoxelGrid: cell size must be > 0");
+  inv_cell_ = static_cast<float>(1.0 / cell_size_m);
+  std::vector<std::pair<uint64_t, uint32_t>> keyed(points.size());
+  for (size_t i = 0; i < points.size(); ++i) {
+    keyed[i] = {VoxelKey(points[i], inv_cell_), static_cast<uint32_t>(i)};
+  }
+  std::sort(keyed.begin(), keyed.end());
+  order_.resize(keyed.size());
+  for (size_t i = 0; i < keyed.size(); ++i) {
+    order_[i] = keyed[i].second;
+    if (cells_.empty() || cells_.back().key != keyed[i].first) {
+      cells_.push_back({keyed[i].first, static_cast<uint32_t>(i), 0});
+    }
+    ++cells_.back().count;
+  }
+}
+
+const VoxelGrid::Cell* VoxelGrid::Find(uint64_t key) const {
+  auto it = std::lower_bound(cells_.begin(), cells_.end(), key,
+                             [](const Cell& c, uint64_t k) { return c.key < k; });
+  return it != cells_.end() && it->key == key ? &*it : nullptr;
+}
+
+}  // namespace semrec::fuse

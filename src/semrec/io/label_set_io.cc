@@ -1,0 +1,43 @@
+#include "semrec/io/label_set_io.h"
+
+#include <nlohmann/json.hpp>
+
+#include "semrec/core/error.h"
+#include "semrec/core/file_util.h"
+
+namespace semrec::io {
+
+LabelSet ReadLabelSetJson(const std::filesystem::path& path) {
+  nlohmann::json j;
+  try {
+    j = nlohmann::json::parse(ReadTextFile(path));
+  } catch (const nlohmann::json::exception& e) {
+    throw FormatError(path, std::string("invalid JSON: ") + e.what());
+  }
+  if (!j.is_array()) throw FormatError(path, "expected a JSON list of classes");
+  LabelSet labels(path.stem().string());
+  for (size_t i = 0; i < j.size(); ++i) {
+    try {
+      LabelClass c;
+      c.id = j[i].at("id").get<uint16_t>();
+      c.name = j[i].at("name").get<std::string>();
+      if (j[i].contains("color")) c.color = j[i]["color"].get<std::array<uint8_t, 3>>();
+      labels.Add(c);
+    } catch (const nlohmann::json::exception& e) {
+      throw FormatError(path, "class " + std::to_string(i) + ": " + e.what());
+    } catch (const InvalidArgument& e) {
+      throw FormatError(path, e.what());
+    }
+  }
+  return labels;
+}
+
+void WriteLabelSetJson(const std::filesystem::path& path, const LabelSet& labels) {
+  nlohmann::json j = nlohmann::json::array();
+  for (const LabelClass& c : labels.Classes()) {
+    j.push_back({{"id", c.id}, {"name", c.name}, {"color", c.color}});
+  }
+  WriteTextFileAtomic(path, j.dump(2) + "\n");
+}
+
+}  // namespace semrec::io
