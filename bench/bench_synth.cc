@@ -33,7 +33,7 @@ int main(int argc, char** argv) {
   const synth::Scene scene = synth::GenerateScene(options.scene);
   const CameraIntrinsics k = options.Intrinsics();
   const auto poses =
-      synth::MakeTrajectory(scene, options.trajectory, frames, options.seed);
+      synth::MakeTrajectory(scene, options.trajectory, frames, options.fps, options.seed);
 
   double t_render = 0, t_noise = 0, t_png = 0;
   const std::filesystem::path tmp =

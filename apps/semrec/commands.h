@@ -10,5 +10,7 @@ namespace semrec::cli {
 void RegisterInfo(CLI::App& app);
 void RegisterTsdf(CLI::App& app);
 void RegisterSynth(CLI::App& app);
+void RegisterFuse(CLI::App& app);
+void RegisterEval(CLI::App& app);
 
 }  // namespace semrec::cli

@@ -25,6 +25,8 @@ int main(int argc, char** argv) {
   semrec::cli::RegisterInfo(app);
   semrec::cli::RegisterTsdf(app);
   semrec::cli::RegisterSynth(app);
+  semrec::cli::RegisterFuse(app);
+  semrec::cli::RegisterEval(app);
   app.parse_complete_callback([&] { semrec::InitLogging(log_level); });
   try {
     app.parse(argc, argv);

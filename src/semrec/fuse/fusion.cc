@@ -60,11 +60,14 @@ FrameFusionStats SceneFusion::Integrate(const std::vector<FrameSegment>& frame_s
   stats.scene_segments_before = segments_.size();
   const bool fast = options_.method == FusionOptions::Method::kFast;
 
-  // Comparison clouds of the frame segments.
+  // Frame segments at the stored resolution (what a merge adds) and at the comparison
+  // resolution (from the stored one: a few thousand points instead of the raw pixels).
+  std::vector<Cloud> frame_store(frame_segments.size());
   std::vector<Cloud> frame_corr(frame_segments.size());
   std::vector<Eigen::AlignedBox3f> frame_bounds(frame_segments.size());
   tbb::parallel_for(size_t{0}, frame_segments.size(), [&](size_t f) {
-    frame_corr[f] = VoxelDownsample(frame_segments[f].points_world, options_.corr_voxel_size_m);
+    frame_store[f] = VoxelDownsample(frame_segments[f].points_world, options_.store_voxel_size_m);
+    frame_corr[f] = VoxelDownsample(frame_store[f], options_.corr_voxel_size_m);
     frame_bounds[f] = BoundsOf(frame_corr[f]);
   });
   for (const Cloud& c : frame_corr) stats.frame_points += c.size();
@@ -78,6 +81,7 @@ FrameFusionStats SceneFusion::Integrate(const std::vector<FrameSegment>& frame_s
   }
 
   // Matches of every frame segment against the scene before this frame.
+  const auto compare_start = std::chrono::steady_clock::now();
   std::vector<std::vector<size_t>> matches(frame_segments.size());
   std::vector<uint64_t> computations(frame_segments.size(), 0);
   std::vector<size_t> compared(frame_segments.size(), 0);
@@ -108,6 +112,8 @@ FrameFusionStats SceneFusion::Integrate(const std::vector<FrameSegment>& frame_s
   } else {
     for (size_t f = 0; f < frame_segments.size(); ++f) compare(f);
   }
+  stats.compare_seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - compare_start).count();
   for (size_t f = 0; f < frame_segments.size(); ++f) {
     stats.distance_computations_done += computations[f];
     stats.compared_pairs += compared[f];
@@ -127,7 +133,7 @@ FrameFusionStats SceneFusion::Integrate(const std::vector<FrameSegment>& frame_s
       s.id = next_id_++;
       stats.assigned_ids[f] = s.id;
       s.class_id = frame_segments[f].class_id;
-      s.points = frame_segments[f].points_world;
+      s.points = std::move(frame_store[f]);
       s.first_seen_frame = s.last_seen_frame = frame_index;
       s.observations = 1;
       created.push_back(std::move(s));
@@ -164,7 +170,7 @@ FrameFusionStats SceneFusion::Integrate(const std::vector<FrameSegment>& frame_s
       ++stats.removed_by_merge;
     }
     for (size_t f : it->second) {
-      const Cloud& p = frame_segments[f].points_world;
+      const Cloud& p = frame_store[f];
       class_points[frame_segments[f].class_id] += p.size();
       all.insert(all.end(), p.begin(), p.end());
       ++merged.observations;

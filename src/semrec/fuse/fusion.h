@@ -8,8 +8,10 @@
 // comparisons are independent and run in parallel). A frame segment that matches several scene
 // segments merges them all; scene segments linked through any frame segment end as one segment
 // (union-find), which keeps the smallest id, the earliest first-seen frame and the summed
-// observations. Unmatched frame segments become new scene segments, in frame-segment order. Merged
-// clouds are the union of the members' points, downsampled at store_voxel_size_m. With gating off,
+// observations. Unmatched frame segments become new scene segments, in frame-segment order. Frame
+// segments are first downsampled at store_voxel_size_m (their comparison cloud is derived from
+// that); merged clouds are the union of the members' stored points, downsampled again at
+// store_voxel_size_m. With gating off,
 // a merged segment takes the class holding most of its points (ties: the smaller class id).
 #pragma once
 
@@ -80,7 +82,9 @@ struct FrameFusionStats {
   size_t merged_frame_segments = 0;
   size_t new_segments = 0;
   size_t removed_by_merge = 0;
+  /// Whole Integrate() call, and its comparison stage alone (the overlap tests).
   double seconds = 0.0;
+  double compare_seconds = 0.0;
   /// For each input frame segment, the id of the scene segment it ended in (later merges may
   /// absorb that id: SceneFusion::ResolveId gives the current one).
   std::vector<uint32_t> assigned_ids;

@@ -149,7 +149,6 @@ TEST(Fusion, SyntheticSixObjectsEndAsOneSegmentEach) {
   testing::TempDir dir;
   synth::SynthOptions o = synth::SynthOptions::Preset("six-objects");
   o.frames = 12;
-  o.trajectory.arc_deg = 24;
   o.width = 320;
   o.height = 240;
   o.fx = o.fy = 262.5;

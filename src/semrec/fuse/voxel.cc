@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numeric>
+#include <unordered_map>
 
 #include "semrec/core/error.h"
 
@@ -25,22 +26,29 @@ uint64_t VoxelKey(const Eigen::Vector3f& p, float inv_voxel_size) {
 Cloud VoxelDownsample(const Cloud& points, double voxel_size_m) {
   CheckArgument(voxel_size_m > 0.0, "VoxelDownsample: voxel size must be > 0");
   const float inv = static_cast<float>(1.0 / voxel_size_m);
-  std::vector<std::pair<uint64_t, uint32_t>> keyed(points.size());
-  for (size_t i = 0; i < points.size(); ++i) {
-    keyed[i] = {VoxelKey(points[i], inv), static_cast<uint32_t>(i)};
+  // Hash accumulation (linear time), then voxels sorted by key: the output order and the
+  // summation order (input order within a voxel) are fixed, so results are reproducible.
+  struct Accumulator {
+    uint64_t key;
+    Eigen::Vector3d sum;
+    uint32_t count;
+  };
+  std::vector<Accumulator> voxels;
+  std::unordered_map<uint64_t, uint32_t> index;
+  index.reserve(points.size() / 4 + 16);
+  for (const Eigen::Vector3f& p : points) {
+    const uint64_t key = VoxelKey(p, inv);
+    const auto [it, inserted] = index.try_emplace(key, static_cast<uint32_t>(voxels.size()));
+    if (inserted) voxels.push_back({key, Eigen::Vector3d::Zero(), 0});
+    Accumulator& acc = voxels[it->second];
+    acc.sum += p.cast<double>();
+    ++acc.count;
   }
-  // Sorting by (key, index) fixes the summation order, so results are reproducible.
-  std::sort(keyed.begin(), keyed.end());
+  std::sort(voxels.begin(), voxels.end(),
+            [](const Accumulator& a, const Accumulator& b) { return a.key < b.key; });
   Cloud out;
-  for (size_t i = 0; i < keyed.size();) {
-    Eigen::Vector3d sum = Eigen::Vector3d::Zero();
-    size_t j = i;
-    for (; j < keyed.size() && keyed[j].first == keyed[i].first; ++j) {
-      sum += points[keyed[j].second].cast<double>();
-    }
-    out.push_back((sum / static_cast<double>(j - i)).cast<float>());
-    i = j;
-  }
+  out.reserve(voxels.size());
+  for (const Accumulator& v : voxels) out.push_back((v.sum / v.count).cast<float>());
   return out;
 }
 

@@ -82,8 +82,10 @@ uint64_t FileSize(const fs::path& p) {
 
 void TrajectoryOptions::Check() const {
   CheckArgument(height_m > 0.2, "synth trajectory: height_m must be > 0.2");
-  CheckArgument(std::isfinite(arc_deg),
-                "synth trajectory: arc_deg must be finite");
+  CheckArgument(std::isfinite(orbit_deg_per_s),
+                "synth trajectory: orbit_deg_per_s must be finite");
+  CheckArgument(walking_speed_mps > 0.0 && walking_speed_mps < 10.0,
+                "synth trajectory: walking_speed_mps must be in (0, 10)");
   CheckArgument(jitter_m >= 0.0 && jitter_deg >= 0.0,
                 "synth trajectory: jitter amplitudes must be >= 0");
 }
@@ -163,7 +165,8 @@ SynthOptions SynthOptions::Preset(const std::string& name) {
 
 std::vector<Transform> MakeTrajectory(const Scene& scene,
                                       const TrajectoryOptions& options,
-                                      int frames, uint64_t seed) {
+                                      int frames, double fps, uint64_t seed) {
+  CheckArgument(fps > 0.0, "synth trajectory: fps must be > 0");
   options.Check();
   const Eigen::Vector3d size = scene.room_size;
   const Eigen::Vector3d center(size.x() / 2, size.y() / 2, 0.0);
@@ -182,13 +185,15 @@ std::vector<Transform> MakeTrajectory(const Scene& scene,
   };
   std::vector<Transform> poses;
   for (int i = 0; i < frames; ++i) {
-    const double s = frames > 1 ? static_cast<double>(i) / (frames - 1) : 0.0;
+    // Poses depend on time only, so a shorter sequence is a prefix of a longer one.
+    const double t = i / fps;
     Transform pose;
     switch (options.kind) {
       case TrajectoryOptions::Kind::kOrbit: {
         const double radius =
             std::max(0.5, std::min(size.x(), size.y()) / 2 - 0.5);
-        const double angle = -M_PI / 2 + s * options.arc_deg * M_PI / 180.0;
+        const double angle =
+            -M_PI / 2 + t * options.orbit_deg_per_s * M_PI / 180.0;
         const Eigen::Vector3d eye =
             center + Eigen::Vector3d(radius * std::cos(angle),
                                      radius * std::sin(angle),
@@ -197,13 +202,15 @@ std::vector<Transform> MakeTrajectory(const Scene& scene,
         break;
       }
       case TrajectoryOptions::Kind::kWalkthrough: {
-        // Along the long axis and back, panning +-40 degrees, looking 35
-        // degrees down.
-        const double travel = 0.5 - 0.5 * std::cos(2 * M_PI * s);
-        const Eigen::Vector3d eye(0.8 + travel * (size.x() - 1.6), size.y() / 2,
-                                  options.height_m);
+        // Along the long axis and back at walking_speed_mps, panning +-40
+        // degrees every 6 s, looking 35 degrees down.
+        const double length = size.x() - 1.6;
+        const double lap = std::fmod(t * options.walking_speed_mps, 2 * length);
+        const bool forward = lap < length;
+        const double x = forward ? lap : 2 * length - lap;
+        const Eigen::Vector3d eye(0.8 + x, size.y() / 2, options.height_m);
         const double heading =
-            0.7 * std::sin(6 * M_PI * s) + (s < 0.5 ? 0.0 : M_PI);
+            0.7 * std::sin(2 * M_PI * t / 6.0) + (forward ? 0.0 : M_PI);
         const Eigen::Vector3d look(std::cos(heading), std::sin(heading), -0.7);
         pose = LookAt(eye, eye + look);
         break;
@@ -214,7 +221,6 @@ std::vector<Transform> MakeTrajectory(const Scene& scene,
         break;
       }
     }
-    const double t = i / 30.0;
     const Eigen::Vector3d dp(wave(0, t), wave(1, t), wave(2, t));
     const double deg = options.jitter_deg * M_PI / 180.0;
     const Eigen::Matrix3d dR =
@@ -252,7 +258,8 @@ SynthSummary WriteSyntheticSequence(const SynthOptions& options_in,
   const Scene scene = GenerateScene(options.scene);
   const CameraIntrinsics k = options.Intrinsics();
   const std::vector<Transform> poses =
-      MakeTrajectory(scene, options.trajectory, options.frames, options.seed);
+      MakeTrajectory(scene, options.trajectory, options.frames, options.fps,
+                     options.seed);
 
   SynthSummary summary;
   summary.frames = static_cast<size_t>(options.frames);

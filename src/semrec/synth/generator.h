@@ -31,8 +31,11 @@ struct TrajectoryOptions {
   /// Camera height for orbit and walk-through (above the tallest furniture, 1.8
   /// m).
   double height_m = 2.1;
-  /// Orbit: swept angle over the whole sequence.
-  double arc_deg = 360.0;
+  /// Orbit: angular speed (60 degrees/s = 2 degrees per frame at 30 fps, a brisk hand-held
+  /// pan).
+  double orbit_deg_per_s = 60.0;
+  /// Walk-through: speed along the room.
+  double walking_speed_mps = 0.5;
   /// Hand-held jitter amplitudes (smooth, seeded).
   double jitter_m = 0.01;
   double jitter_deg = 0.5;
@@ -70,10 +73,11 @@ struct SynthOptions {
   static std::vector<std::string> PresetNames();
 };
 
-/// Camera poses (T_world_camera) for every frame.
+/// Camera poses (T_world_camera) for frames at times i / fps. They depend on time only, so a
+/// shorter sequence is a prefix of a longer one.
 std::vector<Transform> MakeTrajectory(const Scene& scene,
                                       const TrajectoryOptions& options,
-                                      int frames, uint64_t seed);
+                                      int frames, double fps, uint64_t seed);
 
 struct SynthSummary {
   size_t frames = 0;

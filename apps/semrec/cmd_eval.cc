@@ -1,0 +1,61 @@
+// `semrec eval c2c <estimate.ply> <reference.ply>`: cloud-to-cloud distance.
+#include <cstdio>
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include "commands.h"
+#include "semrec/eval/c2c.h"
+#include "semrec/io/ply_io.h"
+
+namespace semrec::cli {
+namespace {
+
+struct C2cArgs {
+  std::string estimate;
+  std::string reference;
+  bool json = false;
+};
+
+void RunC2c(const C2cArgs& args) {
+  const io::PlyData estimate = io::ReadPly(args.estimate);
+  const io::PlyData reference = io::ReadPly(args.reference);
+  const eval::DistanceStats s =
+      eval::Summarize(eval::CloudToCloudDistances(estimate.points, reference.points));
+  if (args.json) {
+    std::printf("%s\n", nlohmann::json({{"points", s.count},
+                                        {"mean_mm", s.mean_m * 1e3},
+                                        {"std_mm", s.std_m * 1e3},
+                                        {"median_mm", s.median_m * 1e3},
+                                        {"rms_mm", s.rms_m * 1e3},
+                                        {"max_mm", s.max_m * 1e3}})
+                            .dump(2)
+                            .c_str());
+    return;
+  }
+  std::printf("%s", fmt::format("C2C {} -> {} ({} points, reference {}):\n"
+                                "  mean {:.3f} mm  std {:.3f} mm  median {:.3f} mm  rms {:.3f} mm  "
+                                "max {:.3f} mm\n",
+                                args.estimate, args.reference, s.count, reference.points.size(),
+                                s.mean_m * 1e3, s.std_m * 1e3, s.median_m * 1e3, s.rms_m * 1e3,
+                                s.max_m * 1e3)
+                        .c_str());
+}
+
+}  // namespace
+
+void RegisterEval(CLI::App& app) {
+  CLI::App* eval = app.add_subcommand("eval", "Evaluate results against ground truth.");
+  eval->require_subcommand(1);
+  auto args = std::make_shared<C2cArgs>();
+  CLI::App* c2c = eval->add_subcommand(
+      "c2c",
+      "Cloud-to-cloud distance (as CloudCompare's C2C): for each estimate point, the distance "
+      "to the nearest reference point; prints mean, std, median, rms and max in mm.");
+  c2c->add_option("estimate", args->estimate, "Estimated cloud (PLY)")->required();
+  c2c->add_option("reference", args->reference, "Reference cloud (PLY)")->required();
+  c2c->add_flag("--json", args->json, "Print JSON");
+  c2c->callback([args] { RunC2c(*args); });
+}
+
+}  // namespace semrec::cli

@@ -1,0 +1,110 @@
+#include "semrec/fuse/fuse_sequence.h"
+
+#include <chrono>
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+#include <spdlog/spdlog.h>
+
+#include "semrec/core/error.h"
+#include "semrec/core/file_util.h"
+#include "semrec/io/ply_io.h"
+
+namespace fs = std::filesystem;
+
+namespace semrec::fuse {
+
+FuseSequenceResult FuseSequence(const io::SequenceReader& reader, const SegmentationSource& source,
+                                const SegmentExtractionOptions& extraction, SceneFusion* fusion,
+                                const ProgressOptions& progress_options) {
+  CheckArgument(fusion != nullptr, "FuseSequence: fusion is null");
+  const auto start = std::chrono::steady_clock::now();
+  FuseSequenceResult result;
+  Progress progress("fusing", reader.size(), progress_options);
+  for (size_t i = 0; i < reader.size(); ++i) {
+    const Frame frame = reader.Read(i);
+    const std::vector<FrameSegment> segments =
+        ExtractFrameSegments(frame, source.Get(reader, i), source.classes(), extraction);
+    if (segments.empty()) {
+      ++result.empty_frames;
+      spdlog::debug("frame {} ({}): no segment with valid depth, skipped", i,
+                    frame.depth_path.string());
+    }
+    result.frames.push_back(fusion->Integrate(segments, i));
+    progress.Tick();
+  }
+  progress.Finish();
+  if (result.empty_frames > 0) {
+    spdlog::warn("{} of {} frames had no segment with valid depth", result.empty_frames,
+                 reader.size());
+  }
+  result.seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return result;
+}
+
+void WriteFusionResult(const fs::path& out_dir, const SceneFusion& fusion, const LabelSet& classes,
+                       const FuseSequenceResult& result, const std::string& input_description,
+                       bool overwrite) {
+  std::error_code ec;
+  if (fs::exists(out_dir, ec) && !fs::is_empty(out_dir, ec) && !overwrite) {
+    throw IoError(out_dir, "output folder is not empty (use --overwrite to replace its files)");
+  }
+  io::PlyData all;
+  nlohmann::json segments = nlohmann::json::array();
+  for (const SceneSegment& s : fusion.segments()) {
+    const LabelClass& cls = classes.Get(s.class_id);
+    const std::string file = fmt::format("segments/{:04}_{}.ply", s.id, cls.name);
+    io::PlyData ply;
+    ply.points = s.points;
+    ply.colors.assign(s.points.size(), cls.color);
+    io::WritePly(out_dir / file, ply);
+    all.points.insert(all.points.end(), s.points.begin(), s.points.end());
+    all.colors.insert(all.colors.end(), s.points.size(), cls.color);
+    all.labels.insert(all.labels.end(), s.points.size(), s.id);
+    const Eigen::AlignedBox3f& b = s.bounds;
+    segments.push_back({{"id", s.id},
+                        {"class_id", s.class_id},
+                        {"class", cls.name},
+                        {"points", s.points.size()},
+                        {"first_seen_frame", s.first_seen_frame},
+                        {"last_seen_frame", s.last_seen_frame},
+                        {"observations", s.observations},
+                        {"bounds_min", {b.min().x(), b.min().y(), b.min().z()}},
+                        {"bounds_max", {b.max().x(), b.max().y(), b.max().z()}},
+                        {"file", file}});
+  }
+  io::WritePly(out_dir / "fused.ply", all);
+  nlohmann::json frames = nlohmann::json::array();
+  for (const FrameFusionStats& f : result.frames) {
+    frames.push_back({{"frame", f.frame_index},
+                      {"frame_segments", f.frame_segments},
+                      {"scene_segments_before", f.scene_segments_before},
+                      {"frame_points", f.frame_points},
+                      {"scene_points", f.scene_points},
+                      {"compared_pairs", f.compared_pairs},
+                      {"distance_computations_ungated", f.distance_computations_ungated},
+                      {"distance_computations_gated", f.distance_computations_gated},
+                      {"distance_computations_done", f.distance_computations_done},
+                      {"merged", f.merged_frame_segments},
+                      {"new", f.new_segments},
+                      {"seconds", f.seconds}});
+  }
+  const FusionOptions& o = fusion.options();
+  const nlohmann::json summary = {
+      {"input", input_description},
+      {"options",
+       {{"corr_voxel_size_m", o.corr_voxel_size_m},
+        {"store_voxel_size_m", o.store_voxel_size_m},
+        {"max_corr_dist_m", o.max_corr_dist_m},
+        {"alpha", o.alpha},
+        {"label_gating", o.label_gating},
+        {"method", o.method == FusionOptions::Method::kFast ? "fast" : "brute_force"}}},
+      {"segments", segments},
+      {"frames", frames},
+      {"empty_frames", result.empty_frames},
+      {"seconds", result.seconds}};
+  WriteTextFileAtomic(out_dir / "summary.json", summary.dump(2) + "\n");
+}
+
+}  // namespace semrec::fuse
