@@ -1,12 +1,18 @@
-// Semantics-guided fusion: the paper's runtime table and accuracy, reproduced on synthetic scenes.
-//   bench_fusion [frames=10] [office_frames=60]
-// 1. six-objects preset (640x480, Kinect noise): per frame, scene and frame points (at the 10 cm
-//    comparison resolution), distance computations without and with labels and their ratio (the
-//    paper's reduction factor, 1.52-2.15x, mean 1.81x), wall time of brute force without/with
-//    labels and of the fast method, all in this one run.
-// 2. Accuracy after 5 frames: C2C of the fused clouds to the exact surfaces (analytic distance)
-//    and to the dense GT samples (as CloudCompare would), and per-object merge correctness.
-// 3. office preset: fast vs brute force wall time (target >= 50x), with identical merges.
+// Semantics-guided fusion: the paper's runtime table and accuracy, reproduced
+// on synthetic scenes.
+//   bench_fusion [frames=10] [office_frames=300]
+// 1. six-objects preset (640x480, Kinect noise): per frame, scene and frame
+// points (at the 10 cm
+//    comparison resolution), distance computations without and with labels and
+//    their ratio (the paper's reduction factor, 1.52-2.15x, mean 1.81x), wall
+//    time of brute force without/with labels and of the fast method, all in
+//    this one run.
+// 2. Accuracy after 5 frames: C2C of the fused clouds to the exact surfaces
+// (analytic distance)
+//    and to the dense GT samples (as CloudCompare would), and per-object merge
+//    correctness.
+// 3. office preset: fast vs brute force wall time (target >= 50x), with
+// identical merges.
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
@@ -47,8 +53,8 @@ Prepared Prepare(const std::string& preset, int frames, const fs::path& dir) {
   const io::SequenceReader reader = io::SequenceReader::Open(dir);
   const auto source = fuse::SegmentationSource::Create("gt", reader);
   for (size_t i = 0; i < reader.size(); ++i) {
-    p.frames.push_back(fuse::ExtractFrameSegments(reader.Read(i), source->Get(reader, i),
-                                                  source->classes(), {}));
+    p.frames.push_back(fuse::ExtractFrameSegments(
+        reader.Read(i), source->Get(reader, i), source->classes(), {}));
   }
   return p;
 }
@@ -60,7 +66,8 @@ struct Run {
   std::vector<fuse::SceneSegment> segments;
 };
 
-Run Fuse(const Prepared& p, bool gating, fuse::FusionOptions::Method method, size_t frames) {
+Run Fuse(const Prepared& p, bool gating, fuse::FusionOptions::Method method,
+         size_t frames) {
   fuse::FusionOptions options;
   options.label_gating = gating;
   options.method = method;
@@ -71,15 +78,19 @@ Run Fuse(const Prepared& p, bool gating, fuse::FusionOptions::Method method, siz
     run.stats.push_back(fusion.Integrate(p.frames[i], i));
     run.compare_seconds += run.stats.back().compare_seconds;
   }
-  run.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  run.seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start)
+          .count();
   run.segments = fusion.segments();
   return run;
 }
 
-bool SameSegments(const std::vector<fuse::SceneSegment>& a, const std::vector<fuse::SceneSegment>& b) {
+bool SameSegments(const std::vector<fuse::SceneSegment>& a,
+                  const std::vector<fuse::SceneSegment>& b) {
   if (a.size() != b.size()) return false;
   for (size_t i = 0; i < a.size(); ++i) {
-    if (a[i].id != b[i].id || a[i].class_id != b[i].class_id || a[i].points != b[i].points) {
+    if (a[i].id != b[i].id || a[i].class_id != b[i].class_id ||
+        a[i].points != b[i].points) {
       return false;
     }
   }
@@ -90,7 +101,7 @@ bool SameSegments(const std::vector<fuse::SceneSegment>& a, const std::vector<fu
 
 int main(int argc, char** argv) {
   const int frames = argc > 1 ? std::stoi(argv[1]) : 10;
-  const int office_frames = argc > 2 ? std::stoi(argv[2]) : 60;
+  const int office_frames = argc > 2 ? std::stoi(argv[2]) : 300;
   const fs::path tmp = fs::temp_directory_path() / "semrec_bench_fusion";
   using Method = fuse::FusionOptions::Method;
 
@@ -99,37 +110,48 @@ int main(int argc, char** argv) {
   const Run brute_ungated = Fuse(six, false, Method::kBruteForce, frames);
   const Run brute_gated = Fuse(six, true, Method::kBruteForce, frames);
   const Run fast_gated = Fuse(six, true, Method::kFast, frames);
-  std::printf("%5s %7s %7s %8s %14s %14s %9s %10s %10s %9s\n", "frame", "scene", "frame", "segments",
-              "dist(no lab)", "dist(labels)", "reduction", "brute(ms)", "brute+lab", "fast+lab");
+  std::printf("%5s %7s %7s %8s %14s %14s %9s %10s %10s %9s\n", "frame", "scene",
+              "frame", "segments", "dist(no lab)", "dist(labels)", "reduction",
+              "brute(ms)", "brute+lab", "fast+lab");
   double reduction_sum = 0.0;
   int reduction_n = 0;
   for (size_t i = 0; i < brute_gated.stats.size(); ++i) {
     const auto& u = brute_ungated.stats[i];
     const auto& g = brute_gated.stats[i];
-    const double reduction = g.distance_computations_gated > 0
-                                 ? static_cast<double>(u.distance_computations_done) /
-                                       g.distance_computations_done
-                                 : 0.0;
-    if (i > 0 && g.distance_computations_done > 0) reduction_sum += reduction, ++reduction_n;
-    std::printf("%5zu %7zu %7zu %8zu %14llu %14llu %8.2fx %10.2f %10.2f %9.2f\n", i, g.scene_points,
-                g.frame_points, g.frame_segments,
-                static_cast<unsigned long long>(u.distance_computations_done),
-                static_cast<unsigned long long>(g.distance_computations_done), reduction,
-                1e3 * u.compare_seconds, 1e3 * g.compare_seconds,
-                1e3 * fast_gated.stats[i].compare_seconds);
+    const double reduction =
+        g.distance_computations_gated > 0
+            ? static_cast<double>(u.distance_computations_done) /
+                  g.distance_computations_done
+            : 0.0;
+    if (i > 0 && g.distance_computations_done > 0)
+      reduction_sum += reduction, ++reduction_n;
+    std::printf(
+        "%5zu %7zu %7zu %8zu %14llu %14llu %8.2fx %10.2f %10.2f %9.2f\n", i,
+        g.scene_points, g.frame_points, g.frame_segments,
+        static_cast<unsigned long long>(u.distance_computations_done),
+        static_cast<unsigned long long>(g.distance_computations_done),
+        reduction, 1e3 * u.compare_seconds, 1e3 * g.compare_seconds,
+        1e3 * fast_gated.stats[i].compare_seconds);
   }
-  std::printf("mean reduction factor with labels: %.2fx (paper: 1.81x, range 1.52-2.15x)\n",
-              reduction_n > 0 ? reduction_sum / reduction_n : 0.0);
-  std::printf("comparison stage (ms columns above): brute force %.3f s, brute force + labels "
-              "%.3f s (%.2fx), fast + labels %.3f s (%.1fx vs brute force + labels)\n",
-              brute_ungated.compare_seconds, brute_gated.compare_seconds,
-              brute_ungated.compare_seconds / brute_gated.compare_seconds,
-              fast_gated.compare_seconds, brute_gated.compare_seconds / fast_gated.compare_seconds);
-  std::printf("whole fusion (incl. downsampling, merging): brute force %.3f s, + labels %.3f s, "
-              "fast + labels %.3f s (%.1fx); identical result: %s\n",
-              brute_ungated.seconds, brute_gated.seconds, fast_gated.seconds,
-              brute_gated.seconds / fast_gated.seconds,
-              SameSegments(brute_gated.segments, fast_gated.segments) ? "yes" : "NO");
+  std::printf(
+      "mean reduction factor with labels: %.2fx (paper: 1.81x, range "
+      "1.52-2.15x)\n",
+      reduction_n > 0 ? reduction_sum / reduction_n : 0.0);
+  std::printf(
+      "comparison stage (ms columns above): brute force %.3f s, brute force + "
+      "labels "
+      "%.3f s (%.2fx), fast + labels %.3f s (%.1fx vs brute force + labels)\n",
+      brute_ungated.compare_seconds, brute_gated.compare_seconds,
+      brute_ungated.compare_seconds / brute_gated.compare_seconds,
+      fast_gated.compare_seconds,
+      brute_gated.compare_seconds / fast_gated.compare_seconds);
+  std::printf(
+      "whole fusion (incl. downsampling, merging): brute force %.3f s, + "
+      "labels %.3f s, "
+      "fast + labels %.3f s (%.1fx); identical result: %s\n",
+      brute_ungated.seconds, brute_gated.seconds, fast_gated.seconds,
+      brute_gated.seconds / fast_gated.seconds,
+      SameSegments(brute_gated.segments, fast_gated.segments) ? "yes" : "NO");
 
   // Accuracy after 5 frames.
   const Run five = Fuse(six, true, Method::kFast, 5);
@@ -139,41 +161,54 @@ int main(int argc, char** argv) {
     for (const auto& p : s.points) {
       fused.push_back(p);
       double best = 1e9;
-      for (const auto& o : six.scene.objects) best = std::min(best, o.DistanceToSurface(p.cast<double>()));
+      for (const auto& o : six.scene.objects)
+        best = std::min(best, o.DistanceToSurface(p.cast<double>()));
       exact.push_back(best);
     }
   }
   const eval::DistanceStats e = eval::Summarize(exact);
   const eval::DistanceStats c = eval::Summarize(eval::CloudToCloudDistances(
       fused, io::ReadPly(six.dir / "gt/surface_points.ply").points));
-  std::printf("accuracy after 5 frames (%zu fused points, %zu segments):\n", fused.size(),
-              five.segments.size());
-  std::printf("  to the exact surfaces:     mean %.1f mm, std %.1f mm, median %.1f mm\n",
-              1e3 * e.mean_m, 1e3 * e.std_m, 1e3 * e.median_m);
-  std::printf("  C2C to GT samples (5 mm):  mean %.1f mm, std %.1f mm (paper: 25.3 / 19.1 mm)\n",
-              1e3 * c.mean_m, 1e3 * c.std_m);
+  std::printf("accuracy after 5 frames (%zu fused points, %zu segments):\n",
+              fused.size(), five.segments.size());
+  std::printf(
+      "  to the exact surfaces:     mean %.1f mm, std %.1f mm, median %.1f "
+      "mm\n",
+      1e3 * e.mean_m, 1e3 * e.std_m, 1e3 * e.median_m);
+  std::printf(
+      "  C2C to GT samples (5 mm):  mean %.1f mm, std %.1f mm (paper: 25.3 / "
+      "19.1 mm)\n",
+      1e3 * c.mean_m, 1e3 * c.std_m);
   std::map<std::string, int> per_class;
-  for (const auto& s : five.segments) ++per_class[synth::SynthClasses().Get(s.class_id).name];
+  for (const auto& s : five.segments)
+    ++per_class[synth::SynthClasses().Get(s.class_id).name];
   std::printf("  segments per class:");
-  for (const auto& [name, n] : per_class) std::printf(" %s %d", name.c_str(), n);
+  for (const auto& [name, n] : per_class)
+    std::printf(" %s %d", name.c_str(), n);
   std::printf("\n");
 
   if (office_frames > 0) {
-    std::printf("\n== office, %d frames: fast vs brute force (labels on) ==\n", office_frames);
+    std::printf("\n== office, %d frames: fast vs brute force (labels on) ==\n",
+                office_frames);
     const Prepared office = Prepare("office", office_frames, tmp / "office");
     const Run b = Fuse(office, true, Method::kBruteForce, office_frames);
     const Run f = Fuse(office, true, Method::kFast, office_frames);
     uint64_t done_b = 0, done_f = 0;
     for (const auto& s : b.stats) done_b += s.distance_computations_done;
     for (const auto& s : f.stats) done_f += s.distance_computations_done;
-    std::printf("comparison stage: brute force %.3f s (%llu distances), fast %.3f s (%llu "
-                "distances): %.1fx faster (target >= 50x)\n",
-                b.compare_seconds, static_cast<unsigned long long>(done_b), f.compare_seconds,
-                static_cast<unsigned long long>(done_f), b.compare_seconds / f.compare_seconds);
-    std::printf("whole fusion: brute force %.3f s, fast %.3f s: %.1fx; %zu segments; identical "
-                "result: %s\n",
-                b.seconds, f.seconds, b.seconds / f.seconds, f.segments.size(),
-                SameSegments(b.segments, f.segments) ? "yes" : "NO");
+    std::printf(
+        "comparison stage: brute force %.3f s (%llu distances), fast %.3f s "
+        "(%llu "
+        "distances): %.1fx faster (target >= 50x)\n",
+        b.compare_seconds, static_cast<unsigned long long>(done_b),
+        f.compare_seconds, static_cast<unsigned long long>(done_f),
+        b.compare_seconds / f.compare_seconds);
+    std::printf(
+        "whole fusion: brute force %.3f s, fast %.3f s: %.1fx; %zu segments; "
+        "identical "
+        "result: %s\n",
+        b.seconds, f.seconds, b.seconds / f.seconds, f.segments.size(),
+        SameSegments(b.segments, f.segments) ? "yes" : "NO");
   }
   fs::remove_all(tmp);
   return 0;

@@ -32,8 +32,8 @@ int main(int argc, char** argv) {
   options.scene.seed = options.seed;
   const synth::Scene scene = synth::GenerateScene(options.scene);
   const CameraIntrinsics k = options.Intrinsics();
-  const auto poses =
-      synth::MakeTrajectory(scene, options.trajectory, frames, options.fps, options.seed);
+  const auto poses = synth::MakeTrajectory(scene, options.trajectory, frames,
+                                           options.fps, options.seed);
 
   double t_render = 0, t_noise = 0, t_png = 0;
   const std::filesystem::path tmp =

@@ -20,8 +20,8 @@ struct C2cArgs {
 void RunC2c(const C2cArgs& args) {
   const io::PlyData estimate = io::ReadPly(args.estimate);
   const io::PlyData reference = io::ReadPly(args.reference);
-  const eval::DistanceStats s =
-      eval::Summarize(eval::CloudToCloudDistances(estimate.points, reference.points));
+  const eval::DistanceStats s = eval::Summarize(
+      eval::CloudToCloudDistances(estimate.points, reference.points));
   if (args.json) {
     std::printf("%s\n", nlohmann::json({{"points", s.count},
                                         {"mean_mm", s.mean_m * 1e3},
@@ -33,27 +33,35 @@ void RunC2c(const C2cArgs& args) {
                             .c_str());
     return;
   }
-  std::printf("%s", fmt::format("C2C {} -> {} ({} points, reference {}):\n"
-                                "  mean {:.3f} mm  std {:.3f} mm  median {:.3f} mm  rms {:.3f} mm  "
-                                "max {:.3f} mm\n",
-                                args.estimate, args.reference, s.count, reference.points.size(),
-                                s.mean_m * 1e3, s.std_m * 1e3, s.median_m * 1e3, s.rms_m * 1e3,
-                                s.max_m * 1e3)
-                        .c_str());
+  std::printf(
+      "%s",
+      fmt::format(
+          "C2C {} -> {} ({} points, reference {}):\n"
+          "  mean {:.3f} mm  std {:.3f} mm  median {:.3f} mm  rms {:.3f} mm  "
+          "max {:.3f} mm\n",
+          args.estimate, args.reference, s.count, reference.points.size(),
+          s.mean_m * 1e3, s.std_m * 1e3, s.median_m * 1e3, s.rms_m * 1e3,
+          s.max_m * 1e3)
+          .c_str());
 }
 
 }  // namespace
 
 void RegisterEval(CLI::App& app) {
-  CLI::App* eval = app.add_subcommand("eval", "Evaluate results against ground truth.");
+  CLI::App* eval =
+      app.add_subcommand("eval", "Evaluate results against ground truth.");
   eval->require_subcommand(1);
   auto args = std::make_shared<C2cArgs>();
-  CLI::App* c2c = eval->add_subcommand(
-      "c2c",
-      "Cloud-to-cloud distance (as CloudCompare's C2C): for each estimate point, the distance "
-      "to the nearest reference point; prints mean, std, median, rms and max in mm.");
-  c2c->add_option("estimate", args->estimate, "Estimated cloud (PLY)")->required();
-  c2c->add_option("reference", args->reference, "Reference cloud (PLY)")->required();
+  CLI::App* c2c =
+      eval->add_subcommand("c2c",
+                           "Cloud-to-cloud distance (as CloudCompare's C2C): "
+                           "for each estimate point, the distance "
+                           "to the nearest reference point; prints mean, std, "
+                           "median, rms and max in mm.");
+  c2c->add_option("estimate", args->estimate, "Estimated cloud (PLY)")
+      ->required();
+  c2c->add_option("reference", args->reference, "Reference cloud (PLY)")
+      ->required();
   c2c->add_flag("--json", args->json, "Print JSON");
   c2c->callback([args] { RunC2c(*args); });
 }

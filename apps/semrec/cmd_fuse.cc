@@ -1,4 +1,5 @@
-// `semrec fuse <sequence> --labels gt|DIR|single:CLASS --out DIR`: semantics-guided fusion.
+// `semrec fuse <sequence> --labels gt|DIR|single:CLASS --out DIR`:
+// semantics-guided fusion.
 #include <cstdio>
 #include <map>
 
@@ -27,10 +28,12 @@ struct FuseArgs {
 
 void RunFuse(FuseArgs args) {
   if (args.method != "fast" && args.method != "brute_force") {
-    throw InvalidArgument("--method must be 'fast' or 'brute_force', got '" + args.method + "'");
+    throw InvalidArgument("--method must be 'fast' or 'brute_force', got '" +
+                          args.method + "'");
   }
-  args.fusion.method = args.method == "fast" ? fuse::FusionOptions::Method::kFast
-                                             : fuse::FusionOptions::Method::kBruteForce;
+  args.fusion.method = args.method == "fast"
+                           ? fuse::FusionOptions::Method::kFast
+                           : fuse::FusionOptions::Method::kBruteForce;
   args.fusion.label_gating = !args.no_gating;
   args.fusion.Check();
   args.extraction.Check();
@@ -38,15 +41,16 @@ void RunFuse(FuseArgs args) {
   reader_options.stride = args.stride;
   reader_options.max_frames = args.max_frames;
   reader_options.max_depth_m = args.max_depth_m;
-  const io::SequenceReader reader = io::SequenceReader::Open(args.sequence, reader_options);
+  const io::SequenceReader reader =
+      io::SequenceReader::Open(args.sequence, reader_options);
   const auto source = fuse::SegmentationSource::Create(args.labels, reader);
   fuse::SceneFusion fusion(args.fusion);
   const fuse::FuseSequenceResult result =
       fuse::FuseSequence(reader, *source, args.extraction, &fusion);
   fuse::WriteFusionResult(args.out, fusion, source->classes(), result,
                           fmt::format("{} ({} layout, {} frames), labels {}",
-                                      reader.root().string(), reader.layout(), reader.size(),
-                                      args.labels),
+                                      reader.root().string(), reader.layout(),
+                                      reader.size(), args.labels),
                           args.overwrite);
   std::map<std::string, int> per_class;
   size_t points = 0;
@@ -58,29 +62,39 @@ void RunFuse(FuseArgs args) {
   for (const auto& [name, n] : per_class) {
     classes += fmt::format("{}{} {}", classes.empty() ? "" : ", ", n, name);
   }
-  std::printf("%s", fmt::format("{} frames -> {} segments ({} points): {}\nwrote {} in {:.2f} s\n",
-                                reader.size(), fusion.segments().size(), points, classes,
-                                args.out, result.seconds)
-                        .c_str());
+  std::printf(
+      "%s",
+      fmt::format(
+          "{} frames -> {} segments ({} points): {}\nwrote {} in {:.2f} s\n",
+          reader.size(), fusion.segments().size(), points, classes, args.out,
+          result.seconds)
+          .c_str());
 }
 
 }  // namespace
 
 void RegisterFuse(CLI::App& app) {
   auto args = std::make_shared<FuseArgs>();
-  CLI::App* cmd = app.add_subcommand(
-      "fuse",
-      "Semantics-guided point-cloud fusion: back-project each frame's segments, merge them with "
-      "scene segments of the same class whose overlap sigma = |mutual closest pairs| / "
-      "min(|a|, |b|) exceeds alpha. Writes one PLY per fused segment, fused.ply and "
-      "summary.json.");
-  cmd->add_option("sequence", args->sequence, "Sequence folder (or sequence.yaml)")->required();
+  CLI::App* cmd =
+      app.add_subcommand("fuse",
+                         "Semantics-guided point-cloud fusion: back-project "
+                         "each frame's segments, merge them with "
+                         "scene segments of the same class whose overlap sigma "
+                         "= |mutual closest pairs| / "
+                         "min(|a|, |b|) exceeds alpha. Writes one PLY per "
+                         "fused segment, fused.ply and "
+                         "summary.json.");
+  cmd->add_option("sequence", args->sequence,
+                  "Sequence folder (or sequence.yaml)")
+      ->required();
   cmd->add_option("--labels", args->labels,
-                  "Segmentation: 'gt' (the sequence's instance/semantic layers), a folder with "
+                  "Segmentation: 'gt' (the sequence's instance/semantic "
+                  "layers), a folder with "
                   "instance/, semantic/ and classes.json, or 'single:<class>'")
       ->capture_default_str();
   cmd->add_option("--out,-o", args->out, "Output folder")->required();
-  cmd->add_option("--alpha", args->fusion.alpha, "Merge when sigma > alpha")->capture_default_str();
+  cmd->add_option("--alpha", args->fusion.alpha, "Merge when sigma > alpha")
+      ->capture_default_str();
   cmd->add_option("--corr-voxel-m", args->fusion.corr_voxel_size_m,
                   "Voxel size of the overlap test (m)")
       ->capture_default_str();
@@ -90,8 +104,10 @@ void RegisterFuse(CLI::App& app) {
   cmd->add_option("--max-corr-dist-m", args->fusion.max_corr_dist_m,
                   "Farthest mutually closest pair that counts (m)")
       ->capture_default_str();
-  cmd->add_flag("--no-gating", args->no_gating, "Compare segments of all classes (for comparison)");
-  cmd->add_option("--method", args->method, "fast or brute_force (identical results)")
+  cmd->add_flag("--no-gating", args->no_gating,
+                "Compare segments of all classes (for comparison)");
+  cmd->add_option("--method", args->method,
+                  "fast or brute_force (identical results)")
       ->capture_default_str();
   cmd->add_option("--pixel-stride", args->extraction.pixel_stride,
                   "Back-project every n-th pixel")
@@ -99,12 +115,16 @@ void RegisterFuse(CLI::App& app) {
   cmd->add_option("--min-segment-points", args->extraction.min_points,
                   "Skip frame segments with fewer points")
       ->capture_default_str();
-  cmd->add_option("--stride", args->stride, "Use every n-th frame")->capture_default_str();
-  cmd->add_option("--max-frames", args->max_frames, "Use at most this many frames (0 = all)")
+  cmd->add_option("--stride", args->stride, "Use every n-th frame")
       ->capture_default_str();
-  cmd->add_option("--max-depth-m", args->max_depth_m, "Ignore depth beyond this (m)")
+  cmd->add_option("--max-frames", args->max_frames,
+                  "Use at most this many frames (0 = all)")
       ->capture_default_str();
-  cmd->add_flag("--overwrite", args->overwrite, "Write into a non-empty output folder");
+  cmd->add_option("--max-depth-m", args->max_depth_m,
+                  "Ignore depth beyond this (m)")
+      ->capture_default_str();
+  cmd->add_flag("--overwrite", args->overwrite,
+                "Write into a non-empty output folder");
   cmd->callback([args] { RunFuse(*args); });
 }
 

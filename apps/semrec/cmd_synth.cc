@@ -100,7 +100,9 @@ void RegisterSynth(CLI::App& app) {
   cmd->add_option("--max-depth-m", args->max_depth_m,
                   "No depth beyond this (m)")
       ->capture_default_str();
-  cmd->add_option("--width", args->width, "Image width (default 640; the focal length 525 scales with it)");
+  cmd->add_option(
+      "--width", args->width,
+      "Image width (default 640; the focal length 525 scales with it)");
   cmd->add_option("--height", args->height, "Image height (default 480)");
   cmd->add_option(
       "--gt-spacing-m", args->gt_spacing_m,

@@ -3,8 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
-#include <nanoflann.hpp>
 #include <tbb/parallel_for.h>
+#include <nanoflann.hpp>
 
 #include "semrec/core/error.h"
 
@@ -22,13 +22,16 @@ struct CloudAdaptor {
 };
 
 using KdTree = nanoflann::KDTreeSingleIndexAdaptor<
-    nanoflann::L2_Simple_Adaptor<float, CloudAdaptor, double>, CloudAdaptor, 3, size_t>;
+    nanoflann::L2_Simple_Adaptor<float, CloudAdaptor, double>, CloudAdaptor, 3,
+    size_t>;
 
 }  // namespace
 
-std::vector<double> CloudToCloudDistances(const std::vector<Eigen::Vector3f>& estimate,
-                                          const std::vector<Eigen::Vector3f>& reference) {
-  CheckArgument(!reference.empty(), "cloud-to-cloud distance: the reference cloud is empty");
+std::vector<double> CloudToCloudDistances(
+    const std::vector<Eigen::Vector3f>& estimate,
+    const std::vector<Eigen::Vector3f>& reference) {
+  CheckArgument(!reference.empty(),
+                "cloud-to-cloud distance: the reference cloud is empty");
   const CloudAdaptor adaptor{reference};
   KdTree tree(3, adaptor, nanoflann::KDTreeSingleIndexAdaptorParams(16));
   tree.buildIndex();
@@ -39,9 +42,10 @@ std::vector<double> CloudToCloudDistances(const std::vector<Eigen::Vector3f>& es
     nanoflann::KNNResultSet<double, size_t> result(1);
     result.init(&index, &d2);
     tree.findNeighbors(result, estimate[i].data(), nanoflann::SearchParams());
-    // Recompute in double from the points themselves (the tree's metric is exact, this only
-    // fixes the precision of the reported value).
-    out[i] = (estimate[i].cast<double>() - reference[index].cast<double>()).norm();
+    // Recompute in double from the points themselves (the tree's metric is
+    // exact, this only fixes the precision of the reported value).
+    out[i] =
+        (estimate[i].cast<double>() - reference[index].cast<double>()).norm();
   });
   return out;
 }
@@ -65,7 +69,8 @@ DistanceStats Summarize(std::vector<double> d) {
   std::nth_element(d.begin(), d.begin() + mid, d.end());
   s.median_m = d[mid];
   if (d.size() % 2 == 0) {
-    s.median_m = (s.median_m + *std::max_element(d.begin(), d.begin() + mid)) / 2;
+    s.median_m =
+        (s.median_m + *std::max_element(d.begin(), d.begin() + mid)) / 2;
   }
   return s;
 }

@@ -1,5 +1,6 @@
-// Cloud-to-cloud distance, as CloudCompare's C2C computes it: for each point of the estimate,
-// the Euclidean distance to the nearest point of the reference (exact nearest neighbour).
+// Cloud-to-cloud distance, as CloudCompare's C2C computes it: for each point of
+// the estimate, the Euclidean distance to the nearest point of the reference
+// (exact nearest neighbour).
 #pragma once
 
 #include <cstddef>
@@ -9,10 +10,11 @@
 
 namespace semrec::eval {
 
-/// Distance (m) from each estimate point to its nearest reference point. Throws InvalidArgument
-/// when the reference is empty.
-std::vector<double> CloudToCloudDistances(const std::vector<Eigen::Vector3f>& estimate,
-                                          const std::vector<Eigen::Vector3f>& reference);
+/// Distance (m) from each estimate point to its nearest reference point. Throws
+/// InvalidArgument when the reference is empty.
+std::vector<double> CloudToCloudDistances(
+    const std::vector<Eigen::Vector3f>& estimate,
+    const std::vector<Eigen::Vector3f>& reference);
 
 struct DistanceStats {
   size_t count = 0;

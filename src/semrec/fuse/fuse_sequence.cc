@@ -3,8 +3,8 @@
 #include <chrono>
 
 #include <fmt/format.h>
-#include <nlohmann/json.hpp>
 #include <spdlog/spdlog.h>
+#include <nlohmann/json.hpp>
 
 #include "semrec/core/error.h"
 #include "semrec/core/file_util.h"
@@ -14,8 +14,10 @@ namespace fs = std::filesystem;
 
 namespace semrec::fuse {
 
-FuseSequenceResult FuseSequence(const io::SequenceReader& reader, const SegmentationSource& source,
-                                const SegmentExtractionOptions& extraction, SceneFusion* fusion,
+FuseSequenceResult FuseSequence(const io::SequenceReader& reader,
+                                const SegmentationSource& source,
+                                const SegmentExtractionOptions& extraction,
+                                SceneFusion* fusion,
                                 const ProgressOptions& progress_options) {
   CheckArgument(fusion != nullptr, "FuseSequence: fusion is null");
   const auto start = std::chrono::steady_clock::now();
@@ -23,8 +25,8 @@ FuseSequenceResult FuseSequence(const io::SequenceReader& reader, const Segmenta
   Progress progress("fusing", reader.size(), progress_options);
   for (size_t i = 0; i < reader.size(); ++i) {
     const Frame frame = reader.Read(i);
-    const std::vector<FrameSegment> segments =
-        ExtractFrameSegments(frame, source.Get(reader, i), source.classes(), extraction);
+    const std::vector<FrameSegment> segments = ExtractFrameSegments(
+        frame, source.Get(reader, i), source.classes(), extraction);
     if (segments.empty()) {
       ++result.empty_frames;
       spdlog::debug("frame {} ({}): no segment with valid depth, skipped", i,
@@ -35,26 +37,31 @@ FuseSequenceResult FuseSequence(const io::SequenceReader& reader, const Segmenta
   }
   progress.Finish();
   if (result.empty_frames > 0) {
-    spdlog::warn("{} of {} frames had no segment with valid depth", result.empty_frames,
-                 reader.size());
+    spdlog::warn("{} of {} frames had no segment with valid depth",
+                 result.empty_frames, reader.size());
   }
   result.seconds =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start)
+          .count();
   return result;
 }
 
-void WriteFusionResult(const fs::path& out_dir, const SceneFusion& fusion, const LabelSet& classes,
-                       const FuseSequenceResult& result, const std::string& input_description,
-                       bool overwrite) {
+void WriteFusionResult(const fs::path& out_dir, const SceneFusion& fusion,
+                       const LabelSet& classes,
+                       const FuseSequenceResult& result,
+                       const std::string& input_description, bool overwrite) {
   std::error_code ec;
   if (fs::exists(out_dir, ec) && !fs::is_empty(out_dir, ec) && !overwrite) {
-    throw IoError(out_dir, "output folder is not empty (use --overwrite to replace its files)");
+    throw IoError(
+        out_dir,
+        "output folder is not empty (use --overwrite to replace its files)");
   }
   io::PlyData all;
   nlohmann::json segments = nlohmann::json::array();
   for (const SceneSegment& s : fusion.segments()) {
     const LabelClass& cls = classes.Get(s.class_id);
-    const std::string file = fmt::format("segments/{:04}_{}.ply", s.id, cls.name);
+    const std::string file =
+        fmt::format("segments/{:04}_{}.ply", s.id, cls.name);
     io::PlyData ply;
     ply.points = s.points;
     ply.colors.assign(s.points.size(), cls.color);
@@ -77,18 +84,19 @@ void WriteFusionResult(const fs::path& out_dir, const SceneFusion& fusion, const
   io::WritePly(out_dir / "fused.ply", all);
   nlohmann::json frames = nlohmann::json::array();
   for (const FrameFusionStats& f : result.frames) {
-    frames.push_back({{"frame", f.frame_index},
-                      {"frame_segments", f.frame_segments},
-                      {"scene_segments_before", f.scene_segments_before},
-                      {"frame_points", f.frame_points},
-                      {"scene_points", f.scene_points},
-                      {"compared_pairs", f.compared_pairs},
-                      {"distance_computations_ungated", f.distance_computations_ungated},
-                      {"distance_computations_gated", f.distance_computations_gated},
-                      {"distance_computations_done", f.distance_computations_done},
-                      {"merged", f.merged_frame_segments},
-                      {"new", f.new_segments},
-                      {"seconds", f.seconds}});
+    frames.push_back(
+        {{"frame", f.frame_index},
+         {"frame_segments", f.frame_segments},
+         {"scene_segments_before", f.scene_segments_before},
+         {"frame_points", f.frame_points},
+         {"scene_points", f.scene_points},
+         {"compared_pairs", f.compared_pairs},
+         {"distance_computations_ungated", f.distance_computations_ungated},
+         {"distance_computations_gated", f.distance_computations_gated},
+         {"distance_computations_done", f.distance_computations_done},
+         {"merged", f.merged_frame_segments},
+         {"new", f.new_segments},
+         {"seconds", f.seconds}});
   }
   const FusionOptions& o = fusion.options();
   const nlohmann::json summary = {
@@ -99,7 +107,8 @@ void WriteFusionResult(const fs::path& out_dir, const SceneFusion& fusion, const
         {"max_corr_dist_m", o.max_corr_dist_m},
         {"alpha", o.alpha},
         {"label_gating", o.label_gating},
-        {"method", o.method == FusionOptions::Method::kFast ? "fast" : "brute_force"}}},
+        {"method",
+         o.method == FusionOptions::Method::kFast ? "fast" : "brute_force"}}},
       {"segments", segments},
       {"frames", frames},
       {"empty_frames", result.empty_frames},

@@ -1,4 +1,5 @@
-// Running fusion over a whole sequence and writing its result (the `semrec fuse` command).
+// Running fusion over a whole sequence and writing its result (the `semrec
+// fuse` command).
 #pragma once
 
 #include <filesystem>
@@ -18,17 +19,21 @@ struct FuseSequenceResult {
   double seconds = 0.0;
 };
 
-/// Reads every frame of `reader`, extracts its segments with `source`, fuses them.
-FuseSequenceResult FuseSequence(const io::SequenceReader& reader, const SegmentationSource& source,
-                                const SegmentExtractionOptions& extraction, SceneFusion* fusion,
+/// Reads every frame of `reader`, extracts its segments with `source`, fuses
+/// them.
+FuseSequenceResult FuseSequence(const io::SequenceReader& reader,
+                                const SegmentationSource& source,
+                                const SegmentExtractionOptions& extraction,
+                                SceneFusion* fusion,
                                 const ProgressOptions& progress = {});
 
-/// Writes `out_dir`/segments/<id>_<class>.ply (one cloud per fused segment, class colour),
-/// `out_dir`/fused.ply (all segments, `label` = segment id) and `out_dir`/summary.json
-/// (options, per-segment class/points/frames, per-frame statistics, timings). Refuses a non-empty
-/// folder unless `overwrite`.
-void WriteFusionResult(const std::filesystem::path& out_dir, const SceneFusion& fusion,
-                       const LabelSet& classes, const FuseSequenceResult& result,
+/// Writes `out_dir`/segments/<id>_<class>.ply (one cloud per fused segment,
+/// class colour), `out_dir`/fused.ply (all segments, `label` = segment id) and
+/// `out_dir`/summary.json (options, per-segment class/points/frames, per-frame
+/// statistics, timings). Refuses a non-empty folder unless `overwrite`.
+void WriteFusionResult(const std::filesystem::path& out_dir,
+                       const SceneFusion& fusion, const LabelSet& classes,
+                       const FuseSequenceResult& result,
                        const std::string& input_description, bool overwrite);
 
 }  // namespace semrec::fuse

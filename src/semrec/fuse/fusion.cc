@@ -21,21 +21,26 @@ Eigen::AlignedBox3f BoundsOf(const Cloud& cloud) {
   return box;
 }
 
-// Grown by `margin`: boxes farther apart than the correspondence distance share no pair.
-bool Near(const Eigen::AlignedBox3f& a, const Eigen::AlignedBox3f& b, float margin) {
+// Grown by `margin`: boxes farther apart than the correspondence distance share
+// no pair.
+bool Near(const Eigen::AlignedBox3f& a, const Eigen::AlignedBox3f& b,
+          float margin) {
   return (a.min().array() - margin <= b.max().array()).all() &&
          (b.min().array() - margin <= a.max().array()).all();
 }
 
 struct UnionFind {
-  explicit UnionFind(size_t n) : parent(n) { std::iota(parent.begin(), parent.end(), 0); }
+  explicit UnionFind(size_t n) : parent(n) {
+    std::iota(parent.begin(), parent.end(), 0);
+  }
   size_t Find(size_t x) {
     while (parent[x] != x) x = parent[x] = parent[parent[x]];
     return x;
   }
   void Unite(size_t a, size_t b) {
     a = Find(a), b = Find(b);
-    if (a != b) parent[std::max(a, b)] = std::min(a, b);  // the lower index (older) wins
+    if (a != b)
+      parent[std::max(a, b)] = std::min(a, b);  // the lower index (older) wins
   }
   std::vector<size_t> parent;
 };
@@ -43,16 +48,20 @@ struct UnionFind {
 }  // namespace
 
 void FusionOptions::Check() const {
-  CheckArgument(corr_voxel_size_m > 0.0, "fusion: corr_voxel_size_m must be > 0");
-  CheckArgument(store_voxel_size_m > 0.0, "fusion: store_voxel_size_m must be > 0");
+  CheckArgument(corr_voxel_size_m > 0.0,
+                "fusion: corr_voxel_size_m must be > 0");
+  CheckArgument(store_voxel_size_m > 0.0,
+                "fusion: store_voxel_size_m must be > 0");
   CheckArgument(max_corr_dist_m > 0.0, "fusion: max_corr_dist_m must be > 0");
   CheckArgument(alpha >= 0.0 && alpha < 1.0, "fusion: alpha must be in [0, 1)");
 }
 
-SceneFusion::SceneFusion(const FusionOptions& options) : options_(options) { options_.Check(); }
+SceneFusion::SceneFusion(const FusionOptions& options) : options_(options) {
+  options_.Check();
+}
 
-FrameFusionStats SceneFusion::Integrate(const std::vector<FrameSegment>& frame_segments,
-                                        size_t frame_index) {
+FrameFusionStats SceneFusion::Integrate(
+    const std::vector<FrameSegment>& frame_segments, size_t frame_index) {
   const auto start = std::chrono::steady_clock::now();
   FrameFusionStats stats;
   stats.frame_index = frame_index;
@@ -60,23 +69,31 @@ FrameFusionStats SceneFusion::Integrate(const std::vector<FrameSegment>& frame_s
   stats.scene_segments_before = segments_.size();
   const bool fast = options_.method == FusionOptions::Method::kFast;
 
-  // Frame segments at the stored resolution (what a merge adds) and at the comparison
-  // resolution (from the stored one: a few thousand points instead of the raw pixels).
+  // Frame segments at the stored resolution (what a merge adds) and at the
+  // comparison resolution (from the stored one: a few thousand points instead
+  // of the raw pixels).
   std::vector<Cloud> frame_store(frame_segments.size());
   std::vector<Cloud> frame_corr(frame_segments.size());
   std::vector<Eigen::AlignedBox3f> frame_bounds(frame_segments.size());
+  std::vector<VoxelGrid> frame_grids(fast ? frame_segments.size() : 0);
   tbb::parallel_for(size_t{0}, frame_segments.size(), [&](size_t f) {
-    frame_store[f] = VoxelDownsample(frame_segments[f].points_world, options_.store_voxel_size_m);
+    frame_store[f] = VoxelDownsample(frame_segments[f].points_world,
+                                     options_.store_voxel_size_m);
     frame_corr[f] = VoxelDownsample(frame_store[f], options_.corr_voxel_size_m);
     frame_bounds[f] = BoundsOf(frame_corr[f]);
+    if (fast)
+      frame_grids[f] = VoxelGrid(frame_corr[f], options_.max_corr_dist_m);
   });
   for (const Cloud& c : frame_corr) stats.frame_points += c.size();
-  for (const SceneSegment& s : segments_) stats.scene_points += s.corr_points.size();
+  for (const SceneSegment& s : segments_)
+    stats.scene_points += s.corr_points.size();
   for (size_t f = 0; f < frame_segments.size(); ++f) {
     for (const SceneSegment& s : segments_) {
-      const uint64_t pairs = static_cast<uint64_t>(frame_corr[f].size()) * s.corr_points.size();
+      const uint64_t pairs =
+          static_cast<uint64_t>(frame_corr[f].size()) * s.corr_points.size();
       stats.distance_computations_ungated += pairs;
-      if (s.class_id == frame_segments[f].class_id) stats.distance_computations_gated += pairs;
+      if (s.class_id == frame_segments[f].class_id)
+        stats.distance_computations_gated += pairs;
     }
   }
 
@@ -89,22 +106,36 @@ FrameFusionStats SceneFusion::Integrate(const std::vector<FrameSegment>& frame_s
   auto compare = [&](size_t f) {
     for (size_t s = 0; s < segments_.size(); ++s) {
       const SceneSegment& scene = segments_[s];
-      if (options_.label_gating && scene.class_id != frame_segments[f].class_id) continue;
+      if (options_.label_gating && scene.class_id != frame_segments[f].class_id)
+        continue;
       ++compared[f];
       OverlapResult overlap;
+      bool exceeds = false;
       if (fast) {
-        if (!Near(frame_bounds[f], scene.bounds, margin)) continue;  // no pair can be close
-        overlap = MutualOverlapGrid(frame_corr[f], scene.corr_points, scene.corr_grid,
-                                    options_.max_corr_dist_m);
+        if (!Near(frame_bounds[f], scene.bounds, margin))
+          continue;  // no pair can be close
+        // Stops as soon as the decision is settled (same decision as the full
+        // sigma).
+        const OverlapDecision d = MutualOverlapExceeds(
+            frame_corr[f], frame_grids[f], scene.corr_points, scene.corr_grid,
+            options_.max_corr_dist_m, options_.alpha);
+        overlap = d.partial;
+        exceeds = d.exceeds;
       } else {
         overlap = MutualOverlapBruteForce(frame_corr[f], scene.corr_points,
                                           options_.max_corr_dist_m);
+        exceeds = overlap.sigma > options_.alpha;
       }
       computations[f] += overlap.distance_computations;
-      SPDLOG_TRACE("frame {} segment {} (class {}, {} pts) vs scene {} ({} pts): |M|={} sigma={:.3f}",
-                   frame_index, f, frame_segments[f].class_id, frame_corr[f].size(), scene.id,
-                   scene.corr_points.size(), overlap.mutual_pairs, overlap.sigma);
-      if (overlap.sigma > options_.alpha) matches[f].push_back(s);
+      SPDLOG_TRACE(
+          "frame {} segment {} (class {}, {} pts) vs scene {} ({} pts): "
+          "|M|{}{} "
+          "sigma{}{:.3f} -> {}",
+          frame_index, f, frame_segments[f].class_id, frame_corr[f].size(),
+          scene.id, scene.corr_points.size(), fast ? ">=" : "=",
+          overlap.mutual_pairs, fast ? ">=" : "=", overlap.sigma,
+          exceeds ? "merge" : "no");
+      if (exceeds) matches[f].push_back(s);
     }
   };
   if (fast) {
@@ -112,19 +143,22 @@ FrameFusionStats SceneFusion::Integrate(const std::vector<FrameSegment>& frame_s
   } else {
     for (size_t f = 0; f < frame_segments.size(); ++f) compare(f);
   }
-  stats.compare_seconds =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - compare_start).count();
+  stats.compare_seconds = std::chrono::duration<double>(
+                              std::chrono::steady_clock::now() - compare_start)
+                              .count();
   for (size_t f = 0; f < frame_segments.size(); ++f) {
     stats.distance_computations_done += computations[f];
     stats.compared_pairs += compared[f];
   }
 
-  // Apply: union scene segments linked through a frame segment, attach the frame segments.
+  // Apply: union scene segments linked through a frame segment, attach the
+  // frame segments.
   UnionFind groups(segments_.size());
   for (const auto& m : matches) {
     for (size_t k = 1; k < m.size(); ++k) groups.Unite(m[0], m[k]);
   }
-  std::map<size_t, std::vector<size_t>> attached;  // group root -> frame segments
+  std::map<size_t, std::vector<size_t>>
+      attached;  // group root -> frame segments
   std::vector<SceneSegment> created;
   stats.assigned_ids.resize(frame_segments.size());
   for (size_t f = 0; f < frame_segments.size(); ++f) {
@@ -144,11 +178,14 @@ FrameFusionStats SceneFusion::Integrate(const std::vector<FrameSegment>& frame_s
       ++stats.merged_frame_segments;
     }
   }
-  std::map<size_t, std::vector<size_t>> members;  // root -> scene segments in the group
-  for (size_t s = 0; s < segments_.size(); ++s) members[groups.Find(s)].push_back(s);
+  std::map<size_t, std::vector<size_t>>
+      members;  // root -> scene segments in the group
+  for (size_t s = 0; s < segments_.size(); ++s)
+    members[groups.Find(s)].push_back(s);
 
   std::vector<SceneSegment> next;
-  std::vector<size_t> changed;  // indices into `next` whose clouds must be rebuilt
+  std::vector<size_t>
+      changed;  // indices into `next` whose clouds must be rebuilt
   for (auto& [root, group] : members) {
     const auto it = attached.find(root);
     if (it == attached.end()) {  // untouched this frame
@@ -164,7 +201,8 @@ FrameFusionStats SceneFusion::Integrate(const std::vector<FrameSegment>& frame_s
       SceneSegment& other = segments_[s];
       class_points[other.class_id] += other.points.size();
       all.insert(all.end(), other.points.begin(), other.points.end());
-      merged.first_seen_frame = std::min(merged.first_seen_frame, other.first_seen_frame);
+      merged.first_seen_frame =
+          std::min(merged.first_seen_frame, other.first_seen_frame);
       merged_into_[other.id] = merged.id;
       merged.observations += other.observations;
       ++stats.removed_by_merge;
@@ -198,16 +236,19 @@ FrameFusionStats SceneFusion::Integrate(const std::vector<FrameSegment>& frame_s
     s.bounds = BoundsOf(s.corr_points);
     s.corr_grid = VoxelGrid(s.corr_points, options_.max_corr_dist_m);
   });
-  std::sort(next.begin(), next.end(),
-            [](const SceneSegment& a, const SceneSegment& b) { return a.id < b.id; });
+  std::sort(
+      next.begin(), next.end(),
+      [](const SceneSegment& a, const SceneSegment& b) { return a.id < b.id; });
   segments_ = std::move(next);
   stats.seconds =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start)
+          .count();
   return stats;
 }
 
 uint32_t SceneFusion::ResolveId(uint32_t id) const {
-  for (auto it = merged_into_.find(id); it != merged_into_.end(); it = merged_into_.find(id)) {
+  for (auto it = merged_into_.find(id); it != merged_into_.end();
+       it = merged_into_.find(id)) {
     id = it->second;
   }
   return id;

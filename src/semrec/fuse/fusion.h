@@ -1,18 +1,21 @@
 // Semantics-guided point-cloud fusion (the paper's Section II-C).
 //
-// Each new frame's segments are compared with the scene's segments of the same class (label
-// gating): both clouds are voxel-downsampled at corr_voxel_size_m, M = mutually closest point
-// pairs within max_corr_dist_m, sigma = |M| / min(|a|, |b|); sigma > alpha means "same object".
+// Each new frame's segments are compared with the scene's segments of the same
+// class (label gating): both clouds are voxel-downsampled at corr_voxel_size_m,
+// M = mutually closest point pairs within max_corr_dist_m, sigma = |M| /
+// min(|a|, |b|); sigma > alpha means "same object".
 //
-// Merge rule: all frame segments are compared with the scene as it was before the frame (so the
-// comparisons are independent and run in parallel). A frame segment that matches several scene
-// segments merges them all; scene segments linked through any frame segment end as one segment
-// (union-find), which keeps the smallest id, the earliest first-seen frame and the summed
-// observations. Unmatched frame segments become new scene segments, in frame-segment order. Frame
-// segments are first downsampled at store_voxel_size_m (their comparison cloud is derived from
-// that); merged clouds are the union of the members' stored points, downsampled again at
-// store_voxel_size_m. With gating off,
-// a merged segment takes the class holding most of its points (ties: the smaller class id).
+// Merge rule: all frame segments are compared with the scene as it was before
+// the frame (so the comparisons are independent and run in parallel). A frame
+// segment that matches several scene segments merges them all; scene segments
+// linked through any frame segment end as one segment (union-find), which keeps
+// the smallest id, the earliest first-seen frame and the summed observations.
+// Unmatched frame segments become new scene segments, in frame-segment order.
+// Frame segments are first downsampled at store_voxel_size_m (their comparison
+// cloud is derived from that); merged clouds are the union of the members'
+// stored points, downsampled again at store_voxel_size_m. With gating off, a
+// merged segment takes the class holding most of its points (ties: the smaller
+// class id).
 #pragma once
 
 #include <cstdint>
@@ -28,21 +31,24 @@ namespace semrec::fuse {
 
 struct FusionOptions {
   enum class Method {
-    /// Hashed-grid neighbour search, bounding-box rejection, TBB over frame segments.
+    /// Hashed-grid neighbour search, bounding-box rejection, TBB over frame
+    /// segments.
     kFast,
-    /// All pairwise distances, as the paper counts them; same decisions as kFast.
+    /// All pairwise distances, as the paper counts them; same decisions as
+    /// kFast.
     kBruteForce,
   };
   /// Voxel size for the overlap test (the paper's 100 mm).
   double corr_voxel_size_m = 0.10;
   /// Voxel size of the stored clouds (the paper's 50 mm).
   double store_voxel_size_m = 0.05;
-  /// Mutually closest pairs farther apart than this do not count: one comparison voxel, so that
-  /// only surfaces that actually coincide overlap.
+  /// Mutually closest pairs farther apart than this do not count: one
+  /// comparison voxel, so that only surfaces that actually coincide overlap.
   double max_corr_dist_m = 0.10;
   /// Merge when sigma > alpha.
   double alpha = 0.5;
-  /// Compare only segments of the same class (off: compare with every scene segment).
+  /// Compare only segments of the same class (off: compare with every scene
+  /// segment).
   bool label_gating = true;
   Method method = Method::kFast;
 
@@ -73,8 +79,9 @@ struct FrameFusionStats {
   size_t scene_points = 0;
   /// Pairs (frame segment, scene segment) that were compared.
   size_t compared_pairs = 0;
-  /// |a| x |b| summed over all pairs (what brute force computes) without and with label gating,
-  /// whatever the method: their ratio is the paper's reduction factor.
+  /// |a| x |b| summed over all pairs (what brute force computes) without and
+  /// with label gating, whatever the method: their ratio is the paper's
+  /// reduction factor.
   uint64_t distance_computations_ungated = 0;
   uint64_t distance_computations_gated = 0;
   /// Distances this run actually evaluated.
@@ -82,11 +89,13 @@ struct FrameFusionStats {
   size_t merged_frame_segments = 0;
   size_t new_segments = 0;
   size_t removed_by_merge = 0;
-  /// Whole Integrate() call, and its comparison stage alone (the overlap tests).
+  /// Whole Integrate() call, and its comparison stage alone (the overlap
+  /// tests).
   double seconds = 0.0;
   double compare_seconds = 0.0;
-  /// For each input frame segment, the id of the scene segment it ended in (later merges may
-  /// absorb that id: SceneFusion::ResolveId gives the current one).
+  /// For each input frame segment, the id of the scene segment it ended in
+  /// (later merges may absorb that id: SceneFusion::ResolveId gives the current
+  /// one).
   std::vector<uint32_t> assigned_ids;
 };
 
@@ -95,13 +104,15 @@ class SceneFusion {
   explicit SceneFusion(const FusionOptions& options = {});
 
   /// Fuses one frame's segments (from ExtractFrameSegments) into the scene.
-  FrameFusionStats Integrate(const std::vector<FrameSegment>& frame_segments, size_t frame_index);
+  FrameFusionStats Integrate(const std::vector<FrameSegment>& frame_segments,
+                             size_t frame_index);
 
   /// Scene segments, sorted by id.
   const std::vector<SceneSegment>& segments() const { return segments_; }
   const FusionOptions& options() const { return options_; }
 
-  /// The current id of the segment that segment `id` was merged into (itself if it was not).
+  /// The current id of the segment that segment `id` was merged into (itself if
+  /// it was not).
   uint32_t ResolveId(uint32_t id) const;
 
  private:

@@ -1,8 +1,8 @@
 #include "semrec/fuse/fusion.h"
 
 #include <map>
-#include <set>
 #include <random>
+#include <set>
 
 #include <gtest/gtest.h>
 
@@ -17,13 +17,14 @@ namespace semrec::fuse {
 namespace {
 
 // A box surface sampled with noise, as one frame would see it.
-Cloud BoxSurface(const Eigen::Vector3f& lo, const Eigen::Vector3f& hi, std::mt19937& rng,
-                 int n, float noise) {
+Cloud BoxSurface(const Eigen::Vector3f& lo, const Eigen::Vector3f& hi,
+                 std::mt19937& rng, int n, float noise) {
   std::uniform_real_distribution<float> u(0, 1);
   std::normal_distribution<float> g(0, noise);
   Cloud c;
   for (int i = 0; i < n; ++i) {
-    Eigen::Vector3f p = lo + (hi - lo).cwiseProduct(Eigen::Vector3f(u(rng), u(rng), u(rng)));
+    Eigen::Vector3f p =
+        lo + (hi - lo).cwiseProduct(Eigen::Vector3f(u(rng), u(rng), u(rng)));
     const int axis = i % 3;
     p[axis] = (i / 3) % 2 ? lo[axis] : hi[axis];
     c.push_back(p + Eigen::Vector3f(g(rng), g(rng), g(rng)));
@@ -41,15 +42,17 @@ std::vector<std::vector<FrameSegment>> RandomFrames(uint32_t seed) {
   std::vector<Object> objects;
   for (int i = 0; i < 8; ++i) {
     const Eigen::Vector3f lo(u(rng), u(rng), 0);
-    objects.push_back({lo, lo + Eigen::Vector3f(0.3f + u(rng) / 4, 0.3f + u(rng) / 4, 0.5f),
-                       static_cast<uint16_t>(1 + i % 3)});
+    objects.push_back(
+        {lo, lo + Eigen::Vector3f(0.3f + u(rng) / 4, 0.3f + u(rng) / 4, 0.5f),
+         static_cast<uint16_t>(1 + i % 3)});
   }
   std::vector<std::vector<FrameSegment>> frames(6);
   for (auto& frame : frames) {
     for (size_t o = 0; o < objects.size(); ++o) {
       if (rng() % 3 == 0) continue;  // not seen in this frame
-      frame.push_back({objects[o].cls, static_cast<uint16_t>(o + 1),
-                       BoxSurface(objects[o].lo, objects[o].hi, rng, 1500, 0.01f)});
+      frame.push_back(
+          {objects[o].cls, static_cast<uint16_t>(o + 1),
+           BoxSurface(objects[o].lo, objects[o].hi, rng, 1500, 0.01f)});
     }
   }
   return frames;
@@ -80,9 +83,11 @@ TEST(Fusion, FastAndBruteForceMakeIdenticalDecisions) {
         const FrameFusionStats sf = fast.Integrate(frames[f], f);
         const FrameFusionStats sb = brute.Integrate(frames[f], f);
         EXPECT_EQ(sf.merged_frame_segments, sb.merged_frame_segments);
-        EXPECT_EQ(sf.distance_computations_ungated, sb.distance_computations_ungated);
+        EXPECT_EQ(sf.distance_computations_ungated,
+                  sb.distance_computations_ungated);
         EXPECT_EQ(sb.distance_computations_done,
-                  gating ? sb.distance_computations_gated : sb.distance_computations_ungated);
+                  gating ? sb.distance_computations_gated
+                         : sb.distance_computations_ungated);
         EXPECT_LE(sf.distance_computations_done, sb.distance_computations_done);
       }
       ExpectSameScene(fast, brute);
@@ -94,9 +99,11 @@ TEST(Fusion, FastAndBruteForceMakeIdenticalDecisions) {
 
 TEST(Fusion, GatingKeepsTouchingObjectsOfDifferentClassesApart) {
   std::mt19937 rng(3);
-  // Two coinciding surfaces of different classes (e.g. a monitor standing on a table top).
+  // Two coinciding surfaces of different classes (e.g. a monitor standing on a
+  // table top).
   const Cloud top = BoxSurface({0, 0, 0.7f}, {1, 1, 0.75f}, rng, 3000, 0.003f);
-  const Cloud base = BoxSurface({0.3f, 0.3f, 0.75f}, {0.6f, 0.6f, 0.77f}, rng, 3000, 0.003f);
+  const Cloud base =
+      BoxSurface({0.3f, 0.3f, 0.75f}, {0.6f, 0.6f, 0.77f}, rng, 3000, 0.003f);
   for (bool gating : {true, false}) {
     FusionOptions options;
     options.label_gating = gating;
@@ -108,7 +115,8 @@ TEST(Fusion, GatingKeepsTouchingObjectsOfDifferentClassesApart) {
       EXPECT_EQ(stats.distance_computations_gated, 0u);
       EXPECT_GT(stats.distance_computations_ungated, 0u);
     } else {
-      EXPECT_EQ(fusion.segments().size(), 1u) << "without labels the two objects merge";
+      EXPECT_EQ(fusion.segments().size(), 1u)
+          << "without labels the two objects merge";
     }
   }
 }
@@ -116,11 +124,13 @@ TEST(Fusion, GatingKeepsTouchingObjectsOfDifferentClassesApart) {
 TEST(Fusion, OneFrameSegmentMatchingTwoSceneSegmentsMergesThem) {
   std::mt19937 rng(4);
   SceneFusion fusion;
-  fusion.Integrate({{1, 1, BoxSurface({0, 0, 0}, {0.5f, 1, 0.5f}, rng, 4000, 0.002f)},
-                    {1, 2, BoxSurface({2, 0, 0}, {2.5f, 1, 0.5f}, rng, 4000, 0.002f)}},
-                   0);
+  fusion.Integrate(
+      {{1, 1, BoxSurface({0, 0, 0}, {0.5f, 1, 0.5f}, rng, 4000, 0.002f)},
+       {1, 2, BoxSurface({2, 0, 0}, {2.5f, 1, 0.5f}, rng, 4000, 0.002f)}},
+      0);
   ASSERT_EQ(fusion.segments().size(), 2u);
-  // A later view sees both halves as one segment (same class): they become one, id 1.
+  // A later view sees both halves as one segment (same class): they become one,
+  // id 1.
   Cloud both = BoxSurface({0, 0, 0}, {0.5f, 1, 0.5f}, rng, 4000, 0.002f);
   const Cloud right = BoxSurface({2, 0, 0}, {2.5f, 1, 0.5f}, rng, 4000, 0.002f);
   both.insert(both.end(), right.begin(), right.end());
@@ -142,9 +152,9 @@ TEST(Fusion, OptionsAreChecked) {
   EXPECT_THROW(SceneFusion{o}, InvalidArgument);
 }
 
-// On a synthetic sequence with ground-truth labels (a hand-held pace: 2 degrees of orbit per
-// frame), every object ends as exactly one segment, no segment mixes objects, and fast and brute
-// force agree on rendered data too.
+// On a synthetic sequence with ground-truth labels (a hand-held pace: 2 degrees
+// of orbit per frame), every object ends as exactly one segment, no segment
+// mixes objects, and fast and brute force agree on rendered data too.
 TEST(Fusion, SyntheticSixObjectsEndAsOneSegmentEach) {
   testing::TempDir dir;
   synth::SynthOptions o = synth::SynthOptions::Preset("six-objects");
@@ -167,7 +177,8 @@ TEST(Fusion, SyntheticSixObjectsEndAsOneSegmentEach) {
   for (size_t i = 0; i < reader.size(); ++i) {
     const Frame frame = reader.Read(i);
     const FrameLabels labels = source->Get(reader, i);
-    const auto segments = ExtractFrameSegments(frame, labels, source->classes(), {});
+    const auto segments =
+        ExtractFrameSegments(frame, labels, source->classes(), {});
     const FrameFusionStats stats = fast.Integrate(segments, i);
     brute.Integrate(segments, i);
     for (size_t k = 0; k < segments.size(); ++k) {
@@ -186,15 +197,19 @@ TEST(Fusion, SyntheticSixObjectsEndAsOneSegmentEach) {
   const synth::Scene scene = synth::GenerateScene(scene_options);
   int objects_seen = 0;
   for (const synth::SceneObject& object : scene.objects) {
-    if (object.structure || segments_of_object.count(object.instance_id) == 0) continue;
+    if (object.structure || segments_of_object.count(object.instance_id) == 0)
+      continue;
     ++objects_seen;
-    EXPECT_EQ(segments_of_object[object.instance_id].size(), 1u) << object.name << " over-segmented";
+    EXPECT_EQ(segments_of_object[object.instance_id].size(), 1u)
+        << object.name << " over-segmented";
   }
   EXPECT_GE(objects_seen, 4);
   for (const auto& [id, objects] : objects_of_segment) {
-    EXPECT_EQ(objects.size(), 1u) << "segment " << id << " merges different objects";
+    EXPECT_EQ(objects.size(), 1u)
+        << "segment " << id << " merges different objects";
   }
-  for (const SceneSegment& s : fast.segments()) EXPECT_EQ(s.id, fast.ResolveId(s.id));
+  for (const SceneSegment& s : fast.segments())
+    EXPECT_EQ(s.id, fast.ResolveId(s.id));
 }
 
 TEST(Segments, BadLabelsGiveClearErrors) {
@@ -203,20 +218,23 @@ TEST(Segments, BadLabelsGiveClearErrors) {
   frame.depth = DepthImage(4, 3, 1, 1.0f);
   LabelSet classes("test");
   classes.Add({1, "table", {}});
-  FrameLabels labels{LabelMap(4, 3, 1, 7), LabelMap(4, 3, 1, 9), "labels/000001.png"};
+  FrameLabels labels{LabelMap(4, 3, 1, 7), LabelMap(4, 3, 1, 9),
+                     "labels/000001.png"};
   SegmentExtractionOptions options;
   options.min_points = 1;
   try {
     ExtractFrameSegments(frame, labels, classes, options);
     FAIL();
   } catch (const FormatError& e) {
-    EXPECT_NE(std::string(e.what()).find("labels/000001.png: semantic label 9 is not in the "
-                                         "class table"),
+    EXPECT_NE(std::string(e.what()).find(
+                  "labels/000001.png: semantic label 9 is not in the "
+                  "class table"),
               std::string::npos)
         << e.what();
   }
   labels.semantic = LabelMap(5, 3, 1, 1);
-  EXPECT_THROW(ExtractFrameSegments(frame, labels, classes, options), FormatError);
+  EXPECT_THROW(ExtractFrameSegments(frame, labels, classes, options),
+               FormatError);
   // No valid depth: no segments, no error.
   labels.semantic = LabelMap(4, 3, 1, 1);
   frame.depth = DepthImage(4, 3, 1, 0.0f);

@@ -1,14 +1,16 @@
 #include "semrec/fuse/overlap.h"
 
 #include <algorithm>
+#include <cmath>
 #include <limits>
 
 namespace semrec::fuse {
 namespace {
 
-// The same float expression in both implementations, so that ties and thresholds agree bit for
-// bit.
-inline float SquaredDistance(const Eigen::Vector3f& p, const Eigen::Vector3f& q) {
+// The same float expression in both implementations, so that ties and
+// thresholds agree bit for bit.
+inline float SquaredDistance(const Eigen::Vector3f& p,
+                             const Eigen::Vector3f& q) {
   const float dx = p.x() - q.x(), dy = p.y() - q.y(), dz = p.z() - q.z();
   return dx * dx + dy * dy + dz * dz;
 }
@@ -28,7 +30,8 @@ double Sigma(size_t pairs, size_t na, size_t nb) {
 
 }  // namespace
 
-OverlapResult MutualOverlapBruteForce(const Cloud& a, const Cloud& b, double max_dist_m) {
+OverlapResult MutualOverlapBruteForce(const Cloud& a, const Cloud& b,
+                                      double max_dist_m) {
   const float max_d2 = static_cast<float>(max_dist_m * max_dist_m);
   std::vector<Nearest> nn_a(a.size()), nn_b(b.size());
   // One pass over the full |a| x |b| distance matrix gives both directions.
@@ -44,19 +47,21 @@ OverlapResult MutualOverlapBruteForce(const Cloud& a, const Cloud& b, double max
   result.distance_computations = static_cast<uint64_t>(a.size()) * b.size();
   for (size_t i = 0; i < a.size(); ++i) {
     const int64_t j = nn_a[i].index;
-    if (j >= 0 && nn_b[j].index == static_cast<int64_t>(i)) ++result.mutual_pairs;
+    if (j >= 0 && nn_b[j].index == static_cast<int64_t>(i))
+      ++result.mutual_pairs;
   }
   result.sigma = Sigma(result.mutual_pairs, a.size(), b.size());
   return result;
 }
 
-OverlapResult MutualOverlapGrid(const Cloud& a, const Cloud& b, const VoxelGrid& grid_b,
-                                double max_dist_m) {
+OverlapResult MutualOverlapGrid(const Cloud& a, const Cloud& b,
+                                const VoxelGrid& grid_b, double max_dist_m) {
   const float max_d2 = static_cast<float>(max_dist_m * max_dist_m);
   OverlapResult result;
   if (a.empty() || b.empty()) return result;
-  // Nearest in b for each a; then, for each b point that is some a's nearest, its own nearest
-  // in a (through a grid over a). Only such b points can be in a mutual pair.
+  // Nearest in b for each a; then, for each b point that is some a's nearest,
+  // its own nearest in a (through a grid over a). Only such b points can be in
+  // a mutual pair.
   std::vector<int64_t> nn_of_a(a.size(), -1);
   uint64_t computations = 0;
   for (size_t i = 0; i < a.size(); ++i) {
@@ -80,12 +85,60 @@ OverlapResult MutualOverlapGrid(const Cloud& a, const Cloud& b, const VoxelGrid&
       ++computations;
       if (d2 <= max_d2) best.Offer(d2, k);
     });
-    // b_j's nearest a point must have b_j as its nearest: then the pair is mutual.
+    // b_j's nearest a point must have b_j as its nearest: then the pair is
+    // mutual.
     if (best.index >= 0 && nn_of_a[best.index] == j) ++result.mutual_pairs;
   }
   result.distance_computations = computations;
   result.sigma = Sigma(result.mutual_pairs, a.size(), b.size());
   return result;
+}
+
+OverlapDecision MutualOverlapExceeds(const Cloud& a, const VoxelGrid& grid_a,
+                                     const Cloud& b, const VoxelGrid& grid_b,
+                                     double max_dist_m, double alpha) {
+  const float max_d2 = static_cast<float>(max_dist_m * max_dist_m);
+  OverlapDecision decision;
+  const size_t denominator = std::min(a.size(), b.size());
+  if (denominator == 0) return decision;
+  // The smallest pair count whose sigma (the same double expression as the full
+  // computation) exceeds alpha: sigma > alpha  <=>  pairs >= need.
+  size_t need =
+      static_cast<size_t>(std::max(0.0, std::floor(alpha * denominator) - 1));
+  while (need <= denominator && !(Sigma(need, a.size(), b.size()) > alpha))
+    ++need;
+  // nn_of_b[j]: b_j's nearest a (-1 none), computed on first use (-2 = not
+  // yet).
+  std::vector<int64_t> nn_of_b(b.size(), -2);
+  uint64_t computations = 0;
+  size_t pairs = 0;
+  for (size_t i = 0; i < a.size(); ++i) {
+    if (pairs + (a.size() - i) < need) break;  // cannot reach `need` any more
+    Nearest to_b;
+    grid_b.ForEachNear(a[i], [&](uint32_t j) {
+      const float d2 = SquaredDistance(a[i], b[j]);
+      ++computations;
+      if (d2 <= max_d2) to_b.Offer(d2, j);
+    });
+    if (to_b.index < 0) continue;
+    int64_t& back = nn_of_b[to_b.index];
+    if (back == -2) {
+      Nearest to_a;
+      const Eigen::Vector3f& q = b[to_b.index];
+      grid_a.ForEachNear(q, [&](uint32_t k) {
+        const float d2 = SquaredDistance(a[k], q);
+        ++computations;
+        if (d2 <= max_d2) to_a.Offer(d2, k);
+      });
+      back = to_a.index;
+    }
+    if (back == static_cast<int64_t>(i) && ++pairs >= need) break;
+  }
+  decision.exceeds = pairs >= need;
+  decision.partial.mutual_pairs = pairs;
+  decision.partial.distance_computations = computations;
+  decision.partial.sigma = Sigma(pairs, a.size(), b.size());
+  return decision;
 }
 
 }  // namespace semrec::fuse

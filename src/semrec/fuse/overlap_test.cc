@@ -8,7 +8,8 @@ namespace semrec::fuse {
 namespace {
 
 TEST(Overlap, HandWorkedExample) {
-  // a0-b0 mutual (0.02), a1's nearest is b0 but b0 prefers a0: not mutual; a2 far from all.
+  // a0-b0 mutual (0.02), a1's nearest is b0 but b0 prefers a0: not mutual; a2
+  // far from all.
   const Cloud a = {{0, 0, 0}, {0.05f, 0, 0}, {5, 5, 5}};
   const Cloud b = {{0.02f, 0, 0}, {0.2f, 0, 0}};
   const OverlapResult r = MutualOverlapBruteForce(a, b, 0.1);
@@ -21,7 +22,8 @@ TEST(Overlap, HandWorkedExample) {
   EXPECT_EQ(MutualOverlapBruteForce(a, {}, 0.1).sigma, 0.0);
 }
 
-// The grid search must give exactly the brute-force answer, also with ties (points on a grid).
+// The grid search must give exactly the brute-force answer, also with ties
+// (points on a grid).
 TEST(Overlap, GridEqualsBruteForceOnRandomClouds) {
   std::mt19937 rng(9);
   for (int trial = 0; trial < 60; ++trial) {
@@ -40,10 +42,22 @@ TEST(Overlap, GridEqualsBruteForceOnRandomClouds) {
     const Cloud b = make(80 + trial * 3, 0.3f * (trial % 4));
     const double max_dist = 0.05 + 0.01 * (trial % 5);
     const OverlapResult brute = MutualOverlapBruteForce(a, b, max_dist);
-    const OverlapResult grid = MutualOverlapGrid(a, b, VoxelGrid(b, max_dist), max_dist);
+    const OverlapResult grid =
+        MutualOverlapGrid(a, b, VoxelGrid(b, max_dist), max_dist);
     ASSERT_EQ(brute.mutual_pairs, grid.mutual_pairs) << "trial " << trial;
     ASSERT_EQ(brute.sigma, grid.sigma);
     EXPECT_LE(grid.distance_computations, brute.distance_computations);
+    // The early-stopping decision equals the full one at every threshold,
+    // including the boundary alpha = sigma (sigma > alpha is false there).
+    const VoxelGrid grid_a(a, max_dist), grid_b(b, max_dist);
+    for (double alpha : {0.0, 0.1, 0.3, 0.5, 0.7, 0.9, brute.sigma}) {
+      if (alpha >= 1.0) continue;
+      const OverlapDecision d =
+          MutualOverlapExceeds(a, grid_a, b, grid_b, max_dist, alpha);
+      ASSERT_EQ(d.exceeds, brute.sigma > alpha)
+          << "trial " << trial << " alpha " << alpha;
+      EXPECT_LE(d.partial.mutual_pairs, brute.mutual_pairs);
+    }
   }
 }
 

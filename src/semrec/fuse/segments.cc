@@ -16,8 +16,9 @@ namespace {
 LabelMap ReadChecked(const fs::path& path, const CameraIntrinsics& k) {
   LabelMap labels = io::ReadLabelImage(path);
   if (!labels.SameSize(k.width, k.height)) {
-    throw FormatError(path, fmt::format("label map is {}x{} but the frames are {}x{}",
-                                        labels.width(), labels.height(), k.width, k.height));
+    throw FormatError(
+        path, fmt::format("label map is {}x{} but the frames are {}x{}",
+                          labels.width(), labels.height(), k.width, k.height));
   }
   return labels;
 }
@@ -27,7 +28,9 @@ class LayerSource : public SegmentationSource {
   explicit LayerSource(const io::SequenceReader& reader) {
     const fs::path classes = reader.root() / "gt" / "classes.json";
     if (!fs::is_regular_file(classes)) {
-      throw IoError(classes, "class table missing (labels 'gt' need the sequence's gt/classes.json)");
+      throw IoError(classes,
+                    "class table missing (labels 'gt' need the sequence's "
+                    "gt/classes.json)");
     }
     classes_ = io::ReadLabelSetJson(classes);
   }
@@ -35,10 +38,11 @@ class LayerSource : public SegmentationSource {
     const auto& layers = reader.index().frames.at(i).layers;
     for (const char* name : {"instance", "semantic"}) {
       if (layers.count(name) == 0) {
-        throw FormatError(reader.root() / "sequence.yaml",
-                          fmt::format("frame {} has no '{}' layer (labels 'gt' need the "
-                                      "instance and semantic layers)",
-                                      i, name));
+        throw FormatError(
+            reader.root() / "sequence.yaml",
+            fmt::format("frame {} has no '{}' layer (labels 'gt' need the "
+                        "instance and semantic layers)",
+                        i, name));
       }
     }
     return {ReadChecked(layers.at("instance"), reader.intrinsics()),
@@ -76,7 +80,8 @@ class SingleClassSource : public SegmentationSource {
   }
   FrameLabels Get(const io::SequenceReader& reader, size_t) const override {
     const CameraIntrinsics& k = reader.intrinsics();
-    return {LabelMap(k.width, k.height, 1, 1), LabelMap(k.width, k.height, 1, 1), "single class"};
+    return {LabelMap(k.width, k.height, 1, 1),
+            LabelMap(k.width, k.height, 1, 1), "single class"};
   }
   const LabelSet& classes() const override { return classes_; }
 
@@ -86,8 +91,8 @@ class SingleClassSource : public SegmentationSource {
 
 }  // namespace
 
-std::unique_ptr<SegmentationSource> SegmentationSource::Create(const std::string& spec,
-                                                               const io::SequenceReader& reader) {
+std::unique_ptr<SegmentationSource> SegmentationSource::Create(
+    const std::string& spec, const io::SequenceReader& reader) {
   if (spec == "gt") return std::make_unique<LayerSource>(reader);
   if (spec.rfind("single:", 0) == 0) {
     const std::string name = spec.substr(7);
@@ -95,8 +100,10 @@ std::unique_ptr<SegmentationSource> SegmentationSource::Create(const std::string
     return std::make_unique<SingleClassSource>(name);
   }
   if (!fs::is_directory(spec)) {
-    throw IoError(spec, "labels must be 'gt', 'single:<class>' or an existing folder with "
-                        "instance/, semantic/ and classes.json");
+    throw IoError(
+        spec,
+        "labels must be 'gt', 'single:<class>' or an existing folder with "
+        "instance/, semantic/ and classes.json");
   }
   return std::make_unique<FolderSource>(spec);
 }
@@ -105,16 +112,17 @@ void SegmentExtractionOptions::Check() const {
   CheckArgument(pixel_stride >= 1, "segments: pixel_stride must be >= 1");
 }
 
-std::vector<FrameSegment> ExtractFrameSegments(const Frame& frame, const FrameLabels& labels,
-                                               const LabelSet& classes,
-                                               const SegmentExtractionOptions& options) {
+std::vector<FrameSegment> ExtractFrameSegments(
+    const Frame& frame, const FrameLabels& labels, const LabelSet& classes,
+    const SegmentExtractionOptions& options) {
   options.Check();
   const int w = frame.depth.width(), h = frame.depth.height();
   if (!labels.instance.SameSize(w, h) || !labels.semantic.SameSize(w, h)) {
-    throw FormatError(labels.source, fmt::format("label maps are {}x{} / {}x{} but the depth is {}x{}",
-                                                 labels.instance.width(), labels.instance.height(),
-                                                 labels.semantic.width(), labels.semantic.height(),
-                                                 w, h));
+    throw FormatError(
+        labels.source,
+        fmt::format("label maps are {}x{} / {}x{} but the depth is {}x{}",
+                    labels.instance.width(), labels.instance.height(),
+                    labels.semantic.width(), labels.semantic.height(), w, h));
   }
   // Per instance: its points and a histogram of its semantic labels.
   struct Accumulator {
@@ -144,9 +152,11 @@ std::vector<FrameSegment> ExtractFrameSegments(const Frame& frame, const FrameLa
     }
     if (cls == 0) continue;  // unlabelled
     if (!classes.Contains(cls)) {
-      throw FormatError(labels.source, fmt::format("semantic label {} is not in the class table "
-                                                   "'{}' ({} classes)",
-                                                   cls, classes.name(), classes.size()));
+      throw FormatError(
+          labels.source,
+          fmt::format("semantic label {} is not in the class table "
+                      "'{}' ({} classes)",
+                      cls, classes.name(), classes.size()));
     }
     if (options.excluded_classes.count(classes.Get(cls).name) != 0) continue;
     if (acc.points.size() < options.min_points) continue;

@@ -1,5 +1,5 @@
-// Where per-frame segmentations come from (files, for now: ground-truth layers or label PNGs)
-// and how a frame's segments become world-frame point clouds.
+// Where per-frame segmentations come from (files, for now: ground-truth layers
+// or label PNGs) and how a frame's segments become world-frame point clouds.
 #pragma once
 
 #include <cstdint>
@@ -16,8 +16,8 @@
 
 namespace semrec::fuse {
 
-/// A frame's segmentation: pixels with the same non-zero instance id form one segment; its class
-/// is the semantic label its pixels carry (majority).
+/// A frame's segmentation: pixels with the same non-zero instance id form one
+/// segment; its class is the semantic label its pixels carry (majority).
 struct FrameLabels {
   LabelMap instance;
   LabelMap semantic;
@@ -29,22 +29,26 @@ class SegmentationSource {
  public:
   virtual ~SegmentationSource() = default;
 
-  /// Labels for frame `i` of `reader`; throws FormatError (naming the file) for label maps of
-  /// the wrong size or type.
+  /// Labels for frame `i` of `reader`; throws FormatError (naming the file) for
+  /// label maps of the wrong size or type.
   virtual FrameLabels Get(const io::SequenceReader& reader, size_t i) const = 0;
 
-  /// The class table: from the source's data (e.g. gt/classes.json) or the one given.
+  /// The class table: from the source's data (e.g. gt/classes.json) or the one
+  /// given.
   virtual const LabelSet& classes() const = 0;
 
   /// `spec`:
-  ///  - "gt": the sequence's own `instance` and `semantic` layers (generic layout, e.g. from
+  ///  - "gt": the sequence's own `instance` and `semantic` layers (generic
+  ///  layout, e.g. from
   ///    `semrec synth`), classes from <sequence>/gt/classes.json;
-  ///  - a folder: <folder>/instance/<depth file name> and <folder>/semantic/<depth file name>
+  ///  - a folder: <folder>/instance/<depth file name> and
+  ///  <folder>/semantic/<depth file name>
   ///    (single-channel 8- or 16-bit PNGs), classes from <folder>/classes.json;
-  ///  - "single:<class name>": every pixel with depth is one segment of that class (class table
+  ///  - "single:<class name>": every pixel with depth is one segment of that
+  ///  class (class table
   ///    with that single class, id 1).
-  static std::unique_ptr<SegmentationSource> Create(const std::string& spec,
-                                                    const io::SequenceReader& reader);
+  static std::unique_ptr<SegmentationSource> Create(
+      const std::string& spec, const io::SequenceReader& reader);
 };
 
 /// One segment of one frame, back-projected into the world frame.
@@ -58,7 +62,8 @@ struct FrameSegment {
 struct SegmentExtractionOptions {
   /// Back-project every n-th pixel in u and v (1 = all).
   int pixel_stride = 1;
-  /// Segments with fewer back-projected points are skipped (mask fringes, specks).
+  /// Segments with fewer back-projected points are skipped (mask fringes,
+  /// specks).
   size_t min_points = 50;
   /// Classes left out of static fusion (people are tracked, not fused).
   std::set<std::string> excluded_classes = {"person"};
@@ -66,11 +71,11 @@ struct SegmentExtractionOptions {
   void Check() const;
 };
 
-/// Segments of `frame` per its labels. Pixels without depth are ignored; instance 0 and
-/// semantic 0 are "unlabelled". Throws FormatError when a semantic label is not in `classes`,
-/// or when label and depth sizes differ.
-std::vector<FrameSegment> ExtractFrameSegments(const Frame& frame, const FrameLabels& labels,
-                                               const LabelSet& classes,
-                                               const SegmentExtractionOptions& options);
+/// Segments of `frame` per its labels. Pixels without depth are ignored;
+/// instance 0 and semantic 0 are "unlabelled". Throws FormatError when a
+/// semantic label is not in `classes`, or when label and depth sizes differ.
+std::vector<FrameSegment> ExtractFrameSegments(
+    const Frame& frame, const FrameLabels& labels, const LabelSet& classes,
+    const SegmentExtractionOptions& options);
 
 }  // namespace semrec::fuse

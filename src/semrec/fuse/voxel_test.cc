@@ -9,7 +9,9 @@ namespace semrec::fuse {
 namespace {
 
 TEST(VoxelDownsample, CentroidPerVoxelIndependentOfOrder) {
-  Cloud points = {{0.01f, 0.01f, 0.01f}, {0.03f, 0.05f, 0.07f}, {0.15f, 0.0f, 0.0f},
+  Cloud points = {{0.01f, 0.01f, 0.01f},
+                  {0.03f, 0.05f, 0.07f},
+                  {0.15f, 0.0f, 0.0f},
                   {-0.01f, 0.0f, 0.0f}};
   const Cloud down = VoxelDownsample(points, 0.1);
   ASSERT_EQ(down.size(), 3u);  // voxels (0,0,0), (1,0,0), (-1,0,0)
@@ -22,11 +24,16 @@ TEST(VoxelDownsample, CentroidPerVoxelIndependentOfOrder) {
   EXPECT_EQ(VoxelDownsample(points, 0.1), down);
 }
 
-TEST(VoxelGrid, NeighboursMatchBruteForce) {
+class VoxelGridModes : public ::testing::TestWithParam<bool> {};
+
+// Dense (compact clouds) and sparse (a far outlier makes the box huge) modes
+// agree with brute force.
+TEST_P(VoxelGridModes, NeighboursMatchBruteForce) {
   std::mt19937 rng(5);
   std::uniform_real_distribution<float> u(-1.0f, 1.0f);
   Cloud points(2000);
   for (auto& p : points) p = {u(rng), u(rng), u(rng)};
+  if (GetParam()) points.push_back({3000.0f, -3000.0f, 3000.0f});
   const float radius = 0.15f;
   const VoxelGrid grid(points, radius);
   for (int q = 0; q < 200; ++q) {
@@ -41,6 +48,9 @@ TEST(VoxelGrid, NeighboursMatchBruteForce) {
     ASSERT_EQ(near_grid, near_brute);
   }
 }
+
+INSTANTIATE_TEST_SUITE_P(DenseAndSparse, VoxelGridModes,
+                         ::testing::Values(false, true));
 
 }  // namespace
 }  // namespace semrec::fuse

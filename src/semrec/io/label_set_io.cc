@@ -21,7 +21,8 @@ LabelSet ReadLabelSetJson(const std::filesystem::path& path) {
       LabelClass c;
       c.id = j[i].at("id").get<uint16_t>();
       c.name = j[i].at("name").get<std::string>();
-      if (j[i].contains("color")) c.color = j[i]["color"].get<std::array<uint8_t, 3>>();
+      if (j[i].contains("color"))
+        c.color = j[i]["color"].get<std::array<uint8_t, 3>>();
       labels.Add(c);
     } catch (const nlohmann::json::exception& e) {
       throw FormatError(path, "class " + std::to_string(i) + ": " + e.what());
@@ -32,7 +33,8 @@ LabelSet ReadLabelSetJson(const std::filesystem::path& path) {
   return labels;
 }
 
-void WriteLabelSetJson(const std::filesystem::path& path, const LabelSet& labels) {
+void WriteLabelSetJson(const std::filesystem::path& path,
+                       const LabelSet& labels) {
   nlohmann::json j = nlohmann::json::array();
   for (const LabelClass& c : labels.Classes()) {
     j.push_back({{"id", c.id}, {"name", c.name}, {"color", c.color}});

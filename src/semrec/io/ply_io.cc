@@ -25,17 +25,21 @@ void WritePly(const fs::path& path, const PlyData& data) {
                   path.string() + ": triangle index out of range");
   }
   std::string header = fmt::format(
-      "ply\nformat binary_little_endian 1.0\ncomment written by semrec\nelement vertex {}\n"
+      "ply\nformat binary_little_endian 1.0\ncomment written by "
+      "semrec\nelement vertex {}\n"
       "property float x\nproperty float y\nproperty float z\n",
       n);
-  if (!data.colors.empty()) header += "property uchar red\nproperty uchar green\nproperty uchar blue\n";
+  if (!data.colors.empty())
+    header += "property uchar red\nproperty uchar green\nproperty uchar blue\n";
   if (!data.labels.empty()) header += "property uint label\n";
   if (!data.triangles.empty()) {
-    header += fmt::format("element face {}\nproperty list uchar uint vertex_indices\n",
-                          data.triangles.size());
+    header += fmt::format(
+        "element face {}\nproperty list uchar uint vertex_indices\n",
+        data.triangles.size());
   }
   header += "end_header\n";
-  const size_t vertex_bytes = 12 + (data.colors.empty() ? 0 : 3) + (data.labels.empty() ? 0 : 4);
+  const size_t vertex_bytes =
+      12 + (data.colors.empty() ? 0 : 3) + (data.labels.empty() ? 0 : 4);
   std::string body(n * vertex_bytes + data.triangles.size() * 13, '\0');
   char* p = body.data();
   for (size_t i = 0; i < n; ++i) {
@@ -68,10 +72,13 @@ struct Property {
 };
 
 size_t TypeSize(const fs::path& path, const std::string& type) {
-  if (type == "char" || type == "uchar" || type == "int8" || type == "uint8") return 1;
-  if (type == "short" || type == "ushort" || type == "int16" || type == "uint16") return 2;
-  if (type == "int" || type == "uint" || type == "float" || type == "int32" || type == "uint32" ||
-      type == "float32")
+  if (type == "char" || type == "uchar" || type == "int8" || type == "uint8")
+    return 1;
+  if (type == "short" || type == "ushort" || type == "int16" ||
+      type == "uint16")
+    return 2;
+  if (type == "int" || type == "uint" || type == "float" || type == "int32" ||
+      type == "uint32" || type == "float32")
     return 4;
   if (type == "double" || type == "float64") return 8;
   throw FormatError(path, "unknown PLY property type '" + type + "'");
@@ -99,7 +106,8 @@ PlyData ReadPly(const fs::path& path) {
   const std::string text(bytes.begin(), bytes.end());
   const size_t end = text.find("end_header\n");
   if (text.rfind("ply", 0) != 0 || end == std::string::npos) {
-    throw FormatError(path, "not a PLY file (missing 'ply' magic or 'end_header')");
+    throw FormatError(path,
+                      "not a PLY file (missing 'ply' magic or 'end_header')");
   }
   std::istringstream header(text.substr(0, end));
   std::string line, format;
@@ -120,7 +128,8 @@ PlyData ReadPly(const fs::path& path) {
       tokens >> e.name >> e.count;
       elements.push_back(e);
     } else if (keyword == "property") {
-      if (elements.empty()) throw FormatError(path, "property before any element");
+      if (elements.empty())
+        throw FormatError(path, "property before any element");
       Property prop;
       tokens >> prop.type;
       if (prop.type == "list") {
@@ -141,13 +150,15 @@ PlyData ReadPly(const fs::path& path) {
   auto next_value = [&](const std::string& type) -> double {
     if (binary) {
       const size_t size = TypeSize(path, type);
-      if (offset + size > bytes.size()) throw FormatError(path, "file is truncated");
+      if (offset + size > bytes.size())
+        throw FormatError(path, "file is truncated");
       const double v = ReadBinaryValue(text.data() + offset, type);
       offset += size;
       return v;
     }
     double v = 0;
-    if (!(ascii >> v)) throw FormatError(path, "file is truncated or has a non-number");
+    if (!(ascii >> v))
+      throw FormatError(path, "file is truncated or has a non-number");
     return v;
   };
   for (const Element& e : elements) {
@@ -164,19 +175,27 @@ PlyData ReadPly(const fs::path& path) {
           for (auto& v : idx) v = static_cast<uint32_t>(next_value(prop.type));
           if (face) {
             // Fan-triangulate polygons.
-            for (size_t j = 2; j < k; ++j) out.triangles.push_back({idx[0], idx[j - 1], idx[j]});
+            for (size_t j = 2; j < k; ++j)
+              out.triangles.push_back({idx[0], idx[j - 1], idx[j]});
           }
           continue;
         }
         const double v = next_value(prop.type);
         if (!vertex) continue;
-        if (prop.name == "x") p.x() = static_cast<float>(v);
-        else if (prop.name == "y") p.y() = static_cast<float>(v);
-        else if (prop.name == "z") p.z() = static_cast<float>(v);
-        else if (prop.name == "red") c[0] = static_cast<uint8_t>(v), has_color = true;
-        else if (prop.name == "green") c[1] = static_cast<uint8_t>(v);
-        else if (prop.name == "blue") c[2] = static_cast<uint8_t>(v);
-        else if (prop.name == "label") label = static_cast<uint32_t>(v), has_label = true;
+        if (prop.name == "x")
+          p.x() = static_cast<float>(v);
+        else if (prop.name == "y")
+          p.y() = static_cast<float>(v);
+        else if (prop.name == "z")
+          p.z() = static_cast<float>(v);
+        else if (prop.name == "red")
+          c[0] = static_cast<uint8_t>(v), has_color = true;
+        else if (prop.name == "green")
+          c[1] = static_cast<uint8_t>(v);
+        else if (prop.name == "blue")
+          c[2] = static_cast<uint8_t>(v);
+        else if (prop.name == "label")
+          label = static_cast<uint32_t>(v), has_label = true;
       }
       if (vertex) {
         out.points.push_back(p);
@@ -186,7 +205,8 @@ PlyData ReadPly(const fs::path& path) {
     }
   }
   for (const auto& t : out.triangles) {
-    if (t[0] >= out.points.size() || t[1] >= out.points.size() || t[2] >= out.points.size()) {
+    if (t[0] >= out.points.size() || t[1] >= out.points.size() ||
+        t[2] >= out.points.size()) {
       throw FormatError(path, "face index out of range");
     }
   }

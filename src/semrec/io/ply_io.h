@@ -1,5 +1,6 @@
-// Minimal PLY I/O for point clouds and triangle meshes (binary little-endian on write; binary or
-// ASCII vertex positions on read). Open3D, CloudCompare and MeshLab read what this writes.
+// Minimal PLY I/O for point clouds and triangle meshes (binary little-endian on
+// write; binary or ASCII vertex positions on read). Open3D, CloudCompare and
+// MeshLab read what this writes.
 #pragma once
 
 #include <array>
@@ -21,12 +22,13 @@ struct PlyData {
   std::vector<std::array<uint32_t, 3>> triangles;
 };
 
-/// Writes atomically. Throws InvalidArgument when optional arrays are sized inconsistently or
-/// triangles index out of range.
+/// Writes atomically. Throws InvalidArgument when optional arrays are sized
+/// inconsistently or triangles index out of range.
 void WritePly(const std::filesystem::path& path, const PlyData& data);
 
-/// Reads vertex positions (float or double x, y, z), colours (uchar red/green/blue) and labels
-/// when present, and triangle faces. Throws FormatError naming the file for anything malformed.
+/// Reads vertex positions (float or double x, y, z), colours (uchar
+/// red/green/blue) and labels when present, and triangle faces. Throws
+/// FormatError naming the file for anything malformed.
 PlyData ReadPly(const std::filesystem::path& path);
 
 }  // namespace semrec::io

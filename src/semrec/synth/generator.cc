@@ -185,7 +185,8 @@ std::vector<Transform> MakeTrajectory(const Scene& scene,
   };
   std::vector<Transform> poses;
   for (int i = 0; i < frames; ++i) {
-    // Poses depend on time only, so a shorter sequence is a prefix of a longer one.
+    // Poses depend on time only, so a shorter sequence is a prefix of a longer
+    // one.
     const double t = i / fps;
     Transform pose;
     switch (options.kind) {
@@ -257,9 +258,8 @@ SynthSummary WriteSyntheticSequence(const SynthOptions& options_in,
 
   const Scene scene = GenerateScene(options.scene);
   const CameraIntrinsics k = options.Intrinsics();
-  const std::vector<Transform> poses =
-      MakeTrajectory(scene, options.trajectory, options.frames, options.fps,
-                     options.seed);
+  const std::vector<Transform> poses = MakeTrajectory(
+      scene, options.trajectory, options.frames, options.fps, options.seed);
 
   SynthSummary summary;
   summary.frames = static_cast<size_t>(options.frames);

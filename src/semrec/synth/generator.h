@@ -31,8 +31,8 @@ struct TrajectoryOptions {
   /// Camera height for orbit and walk-through (above the tallest furniture, 1.8
   /// m).
   double height_m = 2.1;
-  /// Orbit: angular speed (60 degrees/s = 2 degrees per frame at 30 fps, a brisk hand-held
-  /// pan).
+  /// Orbit: angular speed (60 degrees/s = 2 degrees per frame at 30 fps, a
+  /// brisk hand-held pan).
   double orbit_deg_per_s = 60.0;
   /// Walk-through: speed along the room.
   double walking_speed_mps = 0.5;
@@ -73,8 +73,8 @@ struct SynthOptions {
   static std::vector<std::string> PresetNames();
 };
 
-/// Camera poses (T_world_camera) for frames at times i / fps. They depend on time only, so a
-/// shorter sequence is a prefix of a longer one.
+/// Camera poses (T_world_camera) for frames at times i / fps. They depend on
+/// time only, so a shorter sequence is a prefix of a longer one.
 std::vector<Transform> MakeTrajectory(const Scene& scene,
                                       const TrajectoryOptions& options,
                                       int frames, double fps, uint64_t seed);

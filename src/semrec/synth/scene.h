@@ -72,9 +72,10 @@ PersonBody PoseAt(const Person& person, double time_s);
 struct Scene {
   /// Room interior: [0, size.x] x [0, size.y] x [0, size.z], z up.
   Eigen::Vector3d room_size = Eigen::Vector3d(5, 4, 2.6);
-  /// Instance id of the structure object forming each interior face, in the order -x, +x, -y,
-  /// +y, -z (floor), +z (ceiling); 0 = open (no ceiling). The renderer casts rays against the
-  /// room as one box seen from inside instead of six slabs.
+  /// Instance id of the structure object forming each interior face, in the
+  /// order -x, +x, -y, +y, -z (floor), +z (ceiling); 0 = open (no ceiling). The
+  /// renderer casts rays against the room as one box seen from inside instead
+  /// of six slabs.
   std::array<uint16_t, 6> room_faces = {0, 0, 0, 0, 0, 0};
   std::vector<SceneObject> objects;
   std::vector<Person> people;
