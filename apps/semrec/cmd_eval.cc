@@ -5,6 +5,7 @@
 #include <nlohmann/json.hpp>
 
 #include "commands.h"
+#include "semrec/core/file_util.h"
 #include "semrec/eval/c2c.h"
 #include "semrec/io/ply_io.h"
 
@@ -15,13 +16,25 @@ struct C2cArgs {
   std::string estimate;
   std::string reference;
   bool json = false;
+  std::string per_point;
 };
 
 void RunC2c(const C2cArgs& args) {
   const io::PlyData estimate = io::ReadPly(args.estimate);
   const io::PlyData reference = io::ReadPly(args.reference);
-  const eval::DistanceStats s = eval::Summarize(
-      eval::CloudToCloudDistances(estimate.points, reference.points));
+  const std::vector<double> distances =
+      eval::CloudToCloudDistances(estimate.points, reference.points);
+  if (!args.per_point.empty()) {
+    std::string text;
+    text.reserve(distances.size() * 48);
+    for (size_t i = 0; i < distances.size(); ++i) {
+      const auto& p = estimate.points[i];
+      text += fmt::format("{:.6f} {:.6f} {:.6f} {:.8f}\n", p.x(), p.y(), p.z(),
+                          distances[i]);
+    }
+    WriteTextFileAtomic(args.per_point, text);
+  }
+  const eval::DistanceStats s = eval::Summarize(distances);
   if (args.json) {
     std::printf("%s\n", nlohmann::json({{"points", s.count},
                                         {"mean_mm", s.mean_m * 1e3},
@@ -63,6 +76,8 @@ void RegisterEval(CLI::App& app) {
   c2c->add_option("reference", args->reference, "Reference cloud (PLY)")
       ->required();
   c2c->add_flag("--json", args->json, "Print JSON");
+  c2c->add_option("--per-point", args->per_point,
+                  "Also write 'x y z distance_m' per estimate point to this text file");
   c2c->callback([args] { RunC2c(*args); });
 }
 
