@@ -29,6 +29,21 @@ grep -q "layout: *semrec" "$tmp/syninfo" && grep -q "160x120" "$tmp/syninfo" || 
 "$SEMREC" synth --frames 3 --out "$tmp/syn" 2>"$tmp/err"; rc=$?
 [ "$rc" -eq 1 ] && grep -q "not empty" "$tmp/err" || fail "synth overwrote a non-empty folder"
 
+"$SEMREC" fuse "$tmp/syn" --out "$tmp/fused" >"$tmp/fuse.out" 2>"$tmp/fuse.err" || fail "fuse failed: $(cat "$tmp/fuse.err")"
+grep -q "fusing 3/3" "$tmp/fuse.err" || fail "fuse: no progress report"
+grep -q "segments" "$tmp/fuse.out" && [ -s "$tmp/fused/fused.ply" ] && [ -s "$tmp/fused/summary.json" ] ||
+  fail "fuse: outputs missing: $(cat "$tmp/fuse.out")"
+ls "$tmp/fused/segments" | grep -q "_chair.ply" || fail "fuse: no per-segment PLY for the chair"
+"$SEMREC" fuse "$tmp/syn" --out "$tmp/fused" 2>"$tmp/err"; rc=$?
+[ "$rc" -eq 1 ] && grep -q "not empty" "$tmp/err" || fail "fuse overwrote a non-empty folder"
+"$SEMREC" fuse "$tmp/syn" --labels "$tmp/nolabels" --out "$tmp/f2" 2>"$tmp/err"; rc=$?
+[ "$rc" -eq 1 ] && grep -q "nolabels" "$tmp/err" || fail "fuse: bad labels folder: exit $rc $(cat "$tmp/err")"
+"$SEMREC" eval c2c "$tmp/fused/fused.ply" "$tmp/syn/gt/surface_points.ply" --json >"$tmp/c2c.json" ||
+  fail "eval c2c failed"
+grep -q '"mean_mm"' "$tmp/c2c.json" || fail "eval c2c: no mean"
+"$SEMREC" eval c2c "$tmp/missing.ply" "$tmp/syn/gt/surface_points.ply" 2>"$tmp/err"; rc=$?
+[ "$rc" -eq 1 ] && grep -q "missing.ply" "$tmp/err" || fail "eval c2c: missing file: exit $rc"
+
 "$SEMREC" bogus >/dev/null 2>&1; rc=$?
 [ "$rc" -ne 0 ] || fail "unknown subcommand accepted"
 
