@@ -76,8 +76,9 @@ void RegisterEval(CLI::App& app) {
   c2c->add_option("reference", args->reference, "Reference cloud (PLY)")
       ->required();
   c2c->add_flag("--json", args->json, "Print JSON");
-  c2c->add_option("--per-point", args->per_point,
-                  "Also write 'x y z distance_m' per estimate point to this text file");
+  c2c->add_option(
+      "--per-point", args->per_point,
+      "Also write 'x y z distance_m' per estimate point to this text file");
   c2c->callback([args] { RunC2c(*args); });
 }
 

@@ -13,15 +13,13 @@ namespace semrec::cli {
 namespace {
 
 struct FuseArgs {
-  std::string sequence;
+  SequenceArgs sequence;
   std::string labels = "gt";
   std::string out;
   fuse::FusionOptions fusion;
   fuse::SegmentExtractionOptions extraction;
   bool no_gating = false;
   std::string method = "fast";
-  int stride = 1;
-  size_t max_frames = 0;
   double max_depth_m = 4.0;
   bool overwrite = false;
 };
@@ -37,12 +35,10 @@ void RunFuse(FuseArgs args) {
   args.fusion.label_gating = !args.no_gating;
   args.fusion.Check();
   args.extraction.Check();
-  io::SequenceReaderOptions reader_options;
-  reader_options.stride = args.stride;
-  reader_options.max_frames = args.max_frames;
+  io::SequenceReaderOptions reader_options = args.sequence.ReaderOptions();
   reader_options.max_depth_m = args.max_depth_m;
   const io::SequenceReader reader =
-      io::SequenceReader::Open(args.sequence, reader_options);
+      io::SequenceReader::Open(args.sequence.path, reader_options);
   const auto source = fuse::SegmentationSource::Create(args.labels, reader);
   fuse::SceneFusion fusion(args.fusion);
   const fuse::FuseSequenceResult result =
@@ -84,9 +80,7 @@ void RegisterFuse(CLI::App& app) {
                          "min(|a|, |b|) exceeds alpha. Writes one PLY per "
                          "fused segment, fused.ply and "
                          "summary.json.");
-  cmd->add_option("sequence", args->sequence,
-                  "Sequence folder (or sequence.yaml)")
-      ->required();
+  AddSequenceArgs(cmd, &args->sequence);
   cmd->add_option("--labels", args->labels,
                   "Segmentation: 'gt' (the sequence's instance/semantic "
                   "layers), a folder with "
@@ -114,11 +108,6 @@ void RegisterFuse(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--min-segment-points", args->extraction.min_points,
                   "Skip frame segments with fewer points")
-      ->capture_default_str();
-  cmd->add_option("--stride", args->stride, "Use every n-th frame")
-      ->capture_default_str();
-  cmd->add_option("--max-frames", args->max_frames,
-                  "Use at most this many frames (0 = all)")
       ->capture_default_str();
   cmd->add_option("--max-depth-m", args->max_depth_m,
                   "Ignore depth beyond this (m)")

@@ -14,17 +14,14 @@ namespace semrec::cli {
 namespace {
 
 struct InfoArgs {
-  std::string sequence;
+  SequenceArgs sequence;
   bool json = false;
   size_t scan_frames = 0;
-  std::string intrinsics;
 };
 
 void RunInfo(const InfoArgs& args) {
-  io::SequenceReaderOptions options;
-  options.intrinsics_path = args.intrinsics;
-  const io::SequenceReader reader =
-      io::SequenceReader::Open(args.sequence, options);
+  const io::SequenceReader reader = io::SequenceReader::Open(
+      args.sequence.path, args.sequence.ReaderOptions());
   const CameraIntrinsics& k = reader.intrinsics();
 
   // Depth range over the frames (all, or an evenly spaced subset): reads every
@@ -105,15 +102,11 @@ void RegisterInfo(CLI::App& app) {
                          "Print a sequence's detected layout, frame count, "
                          "resolution, intrinsics, depth "
                          "range and trajectory length.");
-  cmd->add_option("sequence", args->sequence,
-                  "Sequence folder (or sequence.yaml)")
-      ->required();
+  AddSequenceArgs(cmd, &args->sequence);
   cmd->add_flag("--json", args->json, "Print JSON instead of text");
   cmd->add_option("--scan-frames", args->scan_frames,
                   "Frames read for the depth range, evenly spaced (0 = all)")
       ->capture_default_str();
-  cmd->add_option("--intrinsics", args->intrinsics,
-                  "Override intrinsics: Open3D JSON or 3x3 K matrix text file");
   cmd->callback([args] { RunInfo(*args); });
 }
 

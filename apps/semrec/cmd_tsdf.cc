@@ -14,23 +14,16 @@ namespace semrec::cli {
 namespace {
 
 struct TsdfArgs {
-  std::string sequence;
+  SequenceArgs sequence;
   std::string out;
   mesh::TsdfOptions tsdf;
-  int stride = 1;
-  size_t max_frames = 0;
-  std::string intrinsics;
 };
 
 void RunTsdf(const TsdfArgs& args) {
   args.tsdf.Check();  // before any expensive work
   const auto start = std::chrono::steady_clock::now();
-  io::SequenceReaderOptions options;
-  options.stride = args.stride;
-  options.max_frames = args.max_frames;
-  options.intrinsics_path = args.intrinsics;
-  const io::SequenceReader reader =
-      io::SequenceReader::Open(args.sequence, options);
+  const io::SequenceReader reader = io::SequenceReader::Open(
+      args.sequence.path, args.sequence.ReaderOptions());
   mesh::TsdfIntegrator tsdf(args.tsdf);
   {
     Progress progress("integrating", reader.size());
@@ -63,9 +56,7 @@ void RegisterTsdf(CLI::App& app) {
                          "Integrate all frames of a sequence into one Open3D "
                          "ScalableTSDFVolume and write "
                          "the triangle mesh (binary PLY with vertex colours).");
-  cmd->add_option("sequence", args->sequence,
-                  "Sequence folder (or sequence.yaml)")
-      ->required();
+  AddSequenceArgs(cmd, &args->sequence);
   cmd->add_option("--out,-o", args->out,
                   "Output mesh (.ply), written atomically")
       ->required();
@@ -78,13 +69,6 @@ void RegisterTsdf(CLI::App& app) {
   cmd->add_option("--max-depth-m", args->tsdf.max_depth_m,
                   "Ignore depth beyond this (m)")
       ->capture_default_str();
-  cmd->add_option("--stride", args->stride, "Use every n-th frame")
-      ->capture_default_str();
-  cmd->add_option("--max-frames", args->max_frames,
-                  "Use at most this many frames (0 = all)")
-      ->capture_default_str();
-  cmd->add_option("--intrinsics", args->intrinsics,
-                  "Override intrinsics: Open3D JSON or 3x3 K matrix text file");
   cmd->callback([args] { RunTsdf(*args); });
 }
 

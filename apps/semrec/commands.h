@@ -3,9 +3,25 @@
 // main() turns into "error: ..." + exit 1.
 #pragma once
 
+#include <string>
+
 #include <CLI/CLI.hpp>
 
+#include "semrec/io/sequence_reader.h"
+
 namespace semrec::cli {
+
+/// What every command that reads a sequence accepts: the sequence, --stride,
+/// --max-frames,
+/// --intrinsics.
+struct SequenceArgs {
+  std::string path;
+  int stride = 1;
+  size_t max_frames = 0;
+  std::string intrinsics;
+  io::SequenceReaderOptions ReaderOptions() const;
+};
+void AddSequenceArgs(CLI::App* cmd, SequenceArgs* args);
 
 void RegisterInfo(CLI::App& app);
 void RegisterTsdf(CLI::App& app);

@@ -15,10 +15,10 @@ class Error : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
-/// A file or folder is missing or cannot be read / written.
-class IoError : public Error {
+/// An error about one file; the message starts with its path.
+class FileError : public Error {
  public:
-  IoError(const std::filesystem::path& path, const std::string& problem)
+  FileError(const std::filesystem::path& path, const std::string& problem)
       : Error(path.string() + ": " + problem), path_(path) {}
   const std::filesystem::path& path() const { return path_; }
 
@@ -26,16 +26,17 @@ class IoError : public Error {
   std::filesystem::path path_;
 };
 
+/// A file or folder is missing or cannot be read / written.
+class IoError : public FileError {
+ public:
+  using FileError::FileError;
+};
+
 /// A file exists but its content is wrong (corrupt image, malformed pose, bad
 /// manifest, ...).
-class FormatError : public Error {
+class FormatError : public FileError {
  public:
-  FormatError(const std::filesystem::path& path, const std::string& problem)
-      : Error(path.string() + ": " + problem), path_(path) {}
-  const std::filesystem::path& path() const { return path_; }
-
- private:
-  std::filesystem::path path_;
+  using FileError::FileError;
 };
 
 /// An option or argument has an invalid value.

@@ -1,0 +1,25 @@
+#include "commands.h"
+
+namespace semrec::cli {
+
+io::SequenceReaderOptions SequenceArgs::ReaderOptions() const {
+  io::SequenceReaderOptions options;
+  options.stride = stride;
+  options.max_frames = max_frames;
+  options.intrinsics_path = intrinsics;
+  return options;
+}
+
+void AddSequenceArgs(CLI::App* cmd, SequenceArgs* args) {
+  cmd->add_option("sequence", args->path, "Sequence folder (or sequence.yaml)")
+      ->required();
+  cmd->add_option("--stride", args->stride, "Use every n-th frame")
+      ->capture_default_str();
+  cmd->add_option("--max-frames", args->max_frames,
+                  "Use at most this many frames (0 = all)")
+      ->capture_default_str();
+  cmd->add_option("--intrinsics", args->intrinsics,
+                  "Override intrinsics: Open3D JSON or 3x3 K matrix text file");
+}
+
+}  // namespace semrec::cli
