@@ -123,8 +123,9 @@ int main(int argc, char** argv) {
             ? static_cast<double>(u.distance_computations_done) /
                   g.distance_computations_done
             : 0.0;
-    if (i > 0 && g.distance_computations_done > 0)
+    if (i > 0 && g.distance_computations_done > 0) {
       reduction_sum += reduction, ++reduction_n;
+    }
     std::printf(
         "%5zu %7zu %7zu %8zu %14llu %14llu %8.2fx %10.2f %10.2f %9.2f\n", i,
         g.scene_points, g.frame_points, g.frame_segments,
@@ -161,8 +162,9 @@ int main(int argc, char** argv) {
     for (const auto& p : s.points) {
       fused.push_back(p);
       double best = 1e9;
-      for (const auto& o : six.scene.objects)
+      for (const auto& o : six.scene.objects) {
         best = std::min(best, o.DistanceToSurface(p.cast<double>()));
+      }
       exact.push_back(best);
     }
   }
@@ -180,11 +182,13 @@ int main(int argc, char** argv) {
       "19.1 mm)\n",
       1e3 * c.mean_m, 1e3 * c.std_m);
   std::map<std::string, int> per_class;
-  for (const auto& s : five.segments)
+  for (const auto& s : five.segments) {
     ++per_class[synth::SynthClasses().Get(s.class_id).name];
+  }
   std::printf("  segments per class:");
-  for (const auto& [name, n] : per_class)
+  for (const auto& [name, n] : per_class) {
     std::printf(" %s %d", name.c_str(), n);
+  }
   std::printf("\n");
 
   if (office_frames > 0) {

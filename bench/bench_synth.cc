@@ -48,8 +48,9 @@ int main(int argc, char** argv) {
     double t2 = Now();
     io::WritePng(tmp / "c.png", r.color);
     DepthImage16 raw(k.width, k.height, 1);
-    for (size_t p = 0; p < raw.NumPixels(); ++p)
+    for (size_t p = 0; p < raw.NumPixels(); ++p) {
       raw.values()[p] = static_cast<uint16_t>(noisy.values()[p] * 5000);
+    }
     io::WritePng(tmp / "d.png", raw);
     io::WritePng(tmp / "s.png", r.semantic);
     io::WritePng(tmp / "i.png", r.instance);

@@ -18,9 +18,10 @@ void WriteFileAtomic(const fs::path& path,
   std::error_code ec;
   if (path.has_parent_path()) {
     fs::create_directories(path.parent_path(), ec);
-    if (ec)
+    if (ec) {
       throw IoError(path.parent_path(),
                     "cannot create folder: " + ec.message());
+    }
   }
   static std::atomic<unsigned> counter{0};
   // Keep the extension: writers such as Open3D pick the format from it.
@@ -32,9 +33,10 @@ void WriteFileAtomic(const fs::path& path,
     write(tmp);
     if (!fs::exists(tmp)) throw IoError(path, "writer produced no file");
     fs::rename(tmp, path, ec);
-    if (ec)
+    if (ec) {
       throw IoError(path,
                     "cannot rename temporary file into place: " + ec.message());
+    }
   } catch (...) {
     fs::remove(tmp, ec);
     throw;
@@ -72,15 +74,17 @@ std::string ReadTextFile(const fs::path& path) {
 void RequireFile(const fs::path& path, const std::string& what) {
   std::error_code ec;
   if (!fs::exists(path, ec)) throw IoError(path, what + " does not exist");
-  if (!fs::is_regular_file(path, ec))
+  if (!fs::is_regular_file(path, ec)) {
     throw IoError(path, what + " is not a regular file");
+  }
 }
 
 void RequireDirectory(const fs::path& path, const std::string& what) {
   std::error_code ec;
   if (!fs::exists(path, ec)) throw IoError(path, what + " does not exist");
-  if (!fs::is_directory(path, ec))
+  if (!fs::is_directory(path, ec)) {
     throw IoError(path, what + " is not a folder");
+  }
 }
 
 }  // namespace semrec

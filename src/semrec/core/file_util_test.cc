@@ -25,8 +25,9 @@ TEST(WriteFileAtomic, ReplacesOnlyOnSuccess) {
   EXPECT_EQ(ReadTextFile(target), "first");
   size_t files = 0;
   for ([[maybe_unused]] const auto& e :
-       fs::directory_iterator(target.parent_path()))
+       fs::directory_iterator(target.parent_path())) {
     ++files;
+  }
   EXPECT_EQ(files, 1u);
 }
 

@@ -16,8 +16,9 @@ Transform::Transform(const Eigen::Matrix3d& rotation,
 
 Transform Transform::FromMatrix(const Eigen::Matrix4d& matrix,
                                 const std::string& what, double tolerance) {
-  if (!matrix.allFinite())
+  if (!matrix.allFinite()) {
     throw InvalidArgument(what + ": matrix has non-finite entries");
+  }
   const Eigen::RowVector4d last = matrix.row(3);
   if ((last - Eigen::RowVector4d(0, 0, 0, 1)).cwiseAbs().maxCoeff() >
       tolerance) {

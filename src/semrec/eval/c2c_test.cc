@@ -19,8 +19,9 @@ TEST(C2C, MatchesBruteForceNearestNeighbour) {
   ASSERT_EQ(d.size(), est.size());
   for (size_t i = 0; i < est.size(); ++i) {
     double best = 1e9;
-    for (const auto& r : ref)
+    for (const auto& r : ref) {
       best = std::min(best, (est[i].cast<double>() - r.cast<double>()).norm());
+    }
     ASSERT_NEAR(d[i], best, 1e-12);
   }
   EXPECT_THROW(CloudToCloudDistances(est, {}), InvalidArgument);

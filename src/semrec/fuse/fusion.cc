@@ -39,8 +39,9 @@ struct UnionFind {
   }
   void Unite(size_t a, size_t b) {
     a = Find(a), b = Find(b);
-    if (a != b)
+    if (a != b) {
       parent[std::max(a, b)] = std::min(a, b);  // the lower index (older) wins
+    }
   }
   std::vector<size_t> parent;
 };
@@ -81,19 +82,22 @@ FrameFusionStats SceneFusion::Integrate(
                                      options_.store_voxel_size_m);
     frame_corr[f] = VoxelDownsample(frame_store[f], options_.corr_voxel_size_m);
     frame_bounds[f] = BoundsOf(frame_corr[f]);
-    if (fast)
+    if (fast) {
       frame_grids[f] = VoxelGrid(frame_corr[f], options_.max_corr_dist_m);
+    }
   });
   for (const Cloud& c : frame_corr) stats.frame_points += c.size();
-  for (const SceneSegment& s : segments_)
+  for (const SceneSegment& s : segments_) {
     stats.scene_points += s.corr_points.size();
+  }
   for (size_t f = 0; f < frame_segments.size(); ++f) {
     for (const SceneSegment& s : segments_) {
       const uint64_t pairs =
           static_cast<uint64_t>(frame_corr[f].size()) * s.corr_points.size();
       stats.distance_computations_ungated += pairs;
-      if (s.class_id == frame_segments[f].class_id)
+      if (s.class_id == frame_segments[f].class_id) {
         stats.distance_computations_gated += pairs;
+      }
     }
   }
 
@@ -106,14 +110,17 @@ FrameFusionStats SceneFusion::Integrate(
   auto compare = [&](size_t f) {
     for (size_t s = 0; s < segments_.size(); ++s) {
       const SceneSegment& scene = segments_[s];
-      if (options_.label_gating && scene.class_id != frame_segments[f].class_id)
+      if (options_.label_gating &&
+          scene.class_id != frame_segments[f].class_id) {
         continue;
+      }
       ++compared[f];
       OverlapResult overlap;
       bool exceeds = false;
       if (fast) {
-        if (!Near(frame_bounds[f], scene.bounds, margin))
+        if (!Near(frame_bounds[f], scene.bounds, margin)) {
           continue;  // no pair can be close
+        }
         // Stops as soon as the decision is settled (same decision as the full
         // sigma).
         const OverlapDecision d = MutualOverlapExceeds(
@@ -180,8 +187,9 @@ FrameFusionStats SceneFusion::Integrate(
   }
   std::map<size_t, std::vector<size_t>>
       members;  // root -> scene segments in the group
-  for (size_t s = 0; s < segments_.size(); ++s)
+  for (size_t s = 0; s < segments_.size(); ++s) {
     members[groups.Find(s)].push_back(s);
+  }
 
   std::vector<SceneSegment> next;
   std::vector<size_t>

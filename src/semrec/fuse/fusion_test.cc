@@ -197,8 +197,9 @@ TEST(Fusion, SyntheticSixObjectsEndAsOneSegmentEach) {
   const synth::Scene scene = synth::GenerateScene(scene_options);
   int objects_seen = 0;
   for (const synth::SceneObject& object : scene.objects) {
-    if (object.structure || segments_of_object.count(object.instance_id) == 0)
+    if (object.structure || segments_of_object.count(object.instance_id) == 0) {
       continue;
+    }
     ++objects_seen;
     EXPECT_EQ(segments_of_object[object.instance_id].size(), 1u)
         << object.name << " over-segmented";
@@ -208,8 +209,9 @@ TEST(Fusion, SyntheticSixObjectsEndAsOneSegmentEach) {
     EXPECT_EQ(objects.size(), 1u)
         << "segment " << id << " merges different objects";
   }
-  for (const SceneSegment& s : fast.segments())
+  for (const SceneSegment& s : fast.segments()) {
     EXPECT_EQ(s.id, fast.ResolveId(s.id));
+  }
 }
 
 TEST(Segments, BadLabelsGiveClearErrors) {

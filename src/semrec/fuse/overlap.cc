@@ -47,8 +47,9 @@ OverlapResult MutualOverlapBruteForce(const Cloud& a, const Cloud& b,
   result.distance_computations = static_cast<uint64_t>(a.size()) * b.size();
   for (size_t i = 0; i < a.size(); ++i) {
     const int64_t j = nn_a[i].index;
-    if (j >= 0 && nn_b[j].index == static_cast<int64_t>(i))
+    if (j >= 0 && nn_b[j].index == static_cast<int64_t>(i)) {
       ++result.mutual_pairs;
+    }
   }
   result.sigma = Sigma(result.mutual_pairs, a.size(), b.size());
   return result;
@@ -105,8 +106,9 @@ OverlapDecision MutualOverlapExceeds(const Cloud& a, const VoxelGrid& grid_a,
   // computation) exceeds alpha: sigma > alpha  <=>  pairs >= need.
   size_t need =
       static_cast<size_t>(std::max(0.0, std::floor(alpha * denominator) - 1));
-  while (need <= denominator && !(Sigma(need, a.size(), b.size()) > alpha))
+  while (need <= denominator && !(Sigma(need, a.size(), b.size()) > alpha)) {
     ++need;
+  }
   // nn_of_b[j]: b_j's nearest a (-1 none), computed on first use (-2 = not
   // yet).
   std::vector<int64_t> nn_of_b(b.size(), -2);

@@ -53,8 +53,9 @@ Cloud VoxelDownsample(const Cloud& points, double voxel_size_m) {
       [](const Accumulator& a, const Accumulator& b) { return a.key < b.key; });
   Cloud out;
   out.reserve(voxels.size());
-  for (const Accumulator& v : voxels)
+  for (const Accumulator& v : voxels) {
     out.push_back((v.sum / v.count).cast<float>());
+  }
   return out;
 }
 
@@ -89,12 +90,14 @@ VoxelGrid::VoxelGrid(const Cloud& points, double cell_size_m) {
           (coords[i][2] - lo_[2]));
       ++dense_first_[cell_of[i] + 1];
     }
-    for (size_t c = 1; c < dense_first_.size(); ++c)
+    for (size_t c = 1; c < dense_first_.size(); ++c) {
       dense_first_[c] += dense_first_[c - 1];
+    }
     order_.resize(points.size());
     std::vector<uint32_t> fill(dense_first_.begin(), dense_first_.end() - 1);
-    for (size_t i = 0; i < points.size(); ++i)
+    for (size_t i = 0; i < points.size(); ++i) {
       order_[fill[cell_of[i]]++] = static_cast<uint32_t>(i);
+    }
     return;
   }
   std::vector<std::pair<uint64_t, uint32_t>> keyed(points.size());

@@ -69,11 +69,13 @@ template <typename Fn>
 void VoxelGrid::ForEachInCell(int64_t x, int64_t y, int64_t z, Fn&& fn) const {
   if (dense_) {
     x -= lo_[0], y -= lo_[1], z -= lo_[2];
-    if (x < 0 || y < 0 || z < 0 || x >= n_[0] || y >= n_[1] || z >= n_[2])
+    if (x < 0 || y < 0 || z < 0 || x >= n_[0] || y >= n_[1] || z >= n_[2]) {
       return;
+    }
     const size_t c = static_cast<size_t>((x * n_[1] + y) * n_[2] + z);
-    for (uint32_t k = dense_first_[c]; k < dense_first_[c + 1]; ++k)
+    for (uint32_t k = dense_first_[c]; k < dense_first_[c + 1]; ++k) {
       fn(order_[k]);
+    }
     return;
   }
   const Cell* cell = Find(PackVoxel(x, y, z));
@@ -88,8 +90,9 @@ void VoxelGrid::ForEachNear(const Eigen::Vector3f& p, Fn&& fn) const {
   const int64_t z = static_cast<int64_t>(std::floor(p.z() * inv_cell_));
   for (int64_t dx = -1; dx <= 1; ++dx) {
     for (int64_t dy = -1; dy <= 1; ++dy) {
-      for (int64_t dz = -1; dz <= 1; ++dz)
+      for (int64_t dz = -1; dz <= 1; ++dz) {
         ForEachInCell(x + dx, y + dy, z + dz, fn);
+      }
     }
   }
 }

@@ -85,11 +85,13 @@ PngData ReadPng(const fs::path& path, bool header_only = false) {
   const int color_type = png_get_color_type(png, info);
   int bit_depth = png_get_bit_depth(png, info);
   if (color_type == PNG_COLOR_TYPE_PALETTE) png_set_palette_to_rgb(png);
-  if (color_type == PNG_COLOR_TYPE_GRAY && bit_depth < 8)
+  if (color_type == PNG_COLOR_TYPE_GRAY && bit_depth < 8) {
     png_set_expand_gray_1_2_4_to_8(png);
+  }
   if (png_get_valid(png, info, PNG_INFO_tRNS)) png_set_tRNS_to_alpha(png);
-  if (bit_depth == 16)
+  if (bit_depth == 16) {
     png_set_swap(png);  // PNG is big-endian; we want host order.
+  }
   png_read_update_info(png, info);
   out.width = static_cast<int>(png_get_image_width(png, info));
   out.height = static_cast<int>(png_get_image_height(png, info));
@@ -108,8 +110,9 @@ PngData ReadPng(const fs::path& path, bool header_only = false) {
       }
     } else {
       out.data8.resize(row_bytes * out.height);
-      for (int y = 0; y < out.height; ++y)
+      for (int y = 0; y < out.height; ++y) {
         rows[y] = out.data8.data() + row_bytes * y;
+      }
     }
     png_read_image(png, rows.data());
     png_read_end(png, nullptr);
@@ -189,8 +192,9 @@ void WritePngImpl(const fs::path& path, const Image<T>& image, int bit_depth) {
     png_write_image(png, rows.data());
     png_write_end(png, nullptr);
     png_destroy_write_struct(&png, &info);
-    if (std::fflush(file.get()) != 0)
+    if (std::fflush(file.get()) != 0) {
       throw IoError(path, "write failed (disk full?)");
+    }
   });
 }
 

@@ -14,8 +14,9 @@ namespace {
 TEST(ImageIo, Png16RoundTripKeepsEveryBit) {
   semrec::testing::TempDir dir;
   DepthImage16 depth(5, 3, 1);
-  for (size_t i = 0; i < depth.values().size(); ++i)
+  for (size_t i = 0; i < depth.values().size(); ++i) {
     depth.values()[i] = static_cast<uint16_t>(i * 4099 + 1);
+  }
   depth(4, 2) = 65535;
   WritePng(dir / "d.png", depth);
   EXPECT_EQ(ReadDepthImage(dir / "d.png"), depth);

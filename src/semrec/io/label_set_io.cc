@@ -21,8 +21,9 @@ LabelSet ReadLabelSetJson(const std::filesystem::path& path) {
       LabelClass c;
       c.id = j[i].at("id").get<uint16_t>();
       c.name = j[i].at("name").get<std::string>();
-      if (j[i].contains("color"))
+      if (j[i].contains("color")) {
         c.color = j[i]["color"].get<std::array<uint8_t, 3>>();
+      }
       labels.Add(c);
     } catch (const nlohmann::json::exception& e) {
       throw FormatError(path, "class " + std::to_string(i) + ": " + e.what());

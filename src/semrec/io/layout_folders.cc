@@ -51,8 +51,9 @@ std::optional<SequenceIndex> IndexRedwood(
     const fs::path& folder, const SequenceReaderOptions& options) {
   const fs::path color_dir = folder / "color";
   const fs::path depth_dir = folder / "depth";
-  if (!fs::is_directory(color_dir) || !fs::is_directory(depth_dir))
+  if (!fs::is_directory(color_dir) || !fs::is_directory(depth_dir)) {
     return std::nullopt;
+  }
 
   SequenceIndex index;
   index.layout = "redwood";
@@ -67,8 +68,9 @@ std::optional<SequenceIndex> IndexRedwood(
     colors = ListFiles(color_dir, {".jpg", ".jpeg", ".png"});
     depths = ListFiles(depth_dir, {".png"});
   }
-  if (depths.empty())
+  if (depths.empty()) {
     throw FormatError(depth_dir, "no depth images (*.png) in folder");
+  }
   if (colors.size() != depths.size()) {
     throw FormatError(
         folder,
@@ -160,8 +162,9 @@ std::optional<SequenceIndex> IndexSevenScenes(
     }
     std::sort(seqs.begin(), seqs.end());
     for (const fs::path& seq : seqs) {
-      for (fs::path& d : ListFiles(seq, {".depth.png"}))
+      for (fs::path& d : ListFiles(seq, {".depth.png"})) {
         depths.push_back(std::move(d));
+      }
     }
   }
   if (depths.empty()) return std::nullopt;

@@ -16,8 +16,9 @@ template <typename T>
 T Get(const YAML::Node& node, const char* key, const fs::path& path,
       const std::string& where) {
   const YAML::Node value = node[key];
-  if (!value)
+  if (!value) {
     throw FormatError(path, fmt::format("{}: missing key '{}'", where, key));
+  }
   try {
     return value.as<T>();
   } catch (const YAML::Exception&) {
@@ -88,18 +89,21 @@ std::optional<SequenceIndex> IndexManifest(
                            index.intrinsics.height);
     index.intrinsics_source = options.intrinsics_path.string();
   }
-  if (root["depth_scale"])
+  if (root["depth_scale"]) {
     index.depth_scale = Get<double>(root, "depth_scale", manifest, "manifest");
+  }
   if (root["depth_invalid"]) {
     index.depth_invalid =
         Get<uint16_t>(root, "depth_invalid", manifest, "manifest");
   }
-  if (!(index.depth_scale > 0.0))
+  if (!(index.depth_scale > 0.0)) {
     throw FormatError(manifest, "depth_scale must be > 0");
+  }
 
   const YAML::Node frames = root["frames"];
-  if (!frames || !frames.IsSequence())
+  if (!frames || !frames.IsSequence()) {
     throw FormatError(manifest, "missing list 'frames'");
+  }
   for (size_t i = 0; i < frames.size(); ++i) {
     const YAML::Node f = frames[i];
     const std::string where = fmt::format("frame {}", i);
@@ -130,8 +134,9 @@ std::optional<SequenceIndex> IndexManifest(
       throw FormatError(manifest, e.what());
     }
     if (const YAML::Node layers = f["layers"]) {
-      if (!layers.IsMap())
+      if (!layers.IsMap()) {
         throw FormatError(manifest, where + ": 'layers' must be a map");
+      }
       for (const auto& kv : layers) {
         record.layers[kv.first.as<std::string>()] =
             Resolve(base, kv.second.as<std::string>());

@@ -29,8 +29,9 @@ void WritePly(const fs::path& path, const PlyData& data) {
       "semrec\nelement vertex {}\n"
       "property float x\nproperty float y\nproperty float z\n",
       n);
-  if (!data.colors.empty())
+  if (!data.colors.empty()) {
     header += "property uchar red\nproperty uchar green\nproperty uchar blue\n";
+  }
   if (!data.labels.empty()) header += "property uint label\n";
   if (!data.triangles.empty()) {
     header += fmt::format(
@@ -72,14 +73,17 @@ struct Property {
 };
 
 size_t TypeSize(const fs::path& path, const std::string& type) {
-  if (type == "char" || type == "uchar" || type == "int8" || type == "uint8")
+  if (type == "char" || type == "uchar" || type == "int8" || type == "uint8") {
     return 1;
+  }
   if (type == "short" || type == "ushort" || type == "int16" ||
-      type == "uint16")
+      type == "uint16") {
     return 2;
+  }
   if (type == "int" || type == "uint" || type == "float" || type == "int32" ||
-      type == "uint32" || type == "float32")
+      type == "uint32" || type == "float32") {
     return 4;
+  }
   if (type == "double" || type == "float64") return 8;
   throw FormatError(path, "unknown PLY property type '" + type + "'");
 }
@@ -128,8 +132,9 @@ PlyData ReadPly(const fs::path& path) {
       tokens >> e.name >> e.count;
       elements.push_back(e);
     } else if (keyword == "property") {
-      if (elements.empty())
+      if (elements.empty()) {
         throw FormatError(path, "property before any element");
+      }
       Property prop;
       tokens >> prop.type;
       if (prop.type == "list") {
@@ -150,15 +155,17 @@ PlyData ReadPly(const fs::path& path) {
   auto next_value = [&](const std::string& type) -> double {
     if (binary) {
       const size_t size = TypeSize(path, type);
-      if (offset + size > bytes.size())
+      if (offset + size > bytes.size()) {
         throw FormatError(path, "file is truncated");
+      }
       const double v = ReadBinaryValue(text.data() + offset, type);
       offset += size;
       return v;
     }
     double v = 0;
-    if (!(ascii >> v))
+    if (!(ascii >> v)) {
       throw FormatError(path, "file is truncated or has a non-number");
+    }
     return v;
   };
   for (const Element& e : elements) {
@@ -175,27 +182,29 @@ PlyData ReadPly(const fs::path& path) {
           for (auto& v : idx) v = static_cast<uint32_t>(next_value(prop.type));
           if (face) {
             // Fan-triangulate polygons.
-            for (size_t j = 2; j < k; ++j)
+            for (size_t j = 2; j < k; ++j) {
               out.triangles.push_back({idx[0], idx[j - 1], idx[j]});
+            }
           }
           continue;
         }
         const double v = next_value(prop.type);
         if (!vertex) continue;
-        if (prop.name == "x")
+        if (prop.name == "x") {
           p.x() = static_cast<float>(v);
-        else if (prop.name == "y")
+        } else if (prop.name == "y") {
           p.y() = static_cast<float>(v);
-        else if (prop.name == "z")
+        } else if (prop.name == "z") {
           p.z() = static_cast<float>(v);
-        else if (prop.name == "red")
+        } else if (prop.name == "red") {
           c[0] = static_cast<uint8_t>(v), has_color = true;
-        else if (prop.name == "green")
+        } else if (prop.name == "green") {
           c[1] = static_cast<uint8_t>(v);
-        else if (prop.name == "blue")
+        } else if (prop.name == "blue") {
           c[2] = static_cast<uint8_t>(v);
-        else if (prop.name == "label")
+        } else if (prop.name == "label") {
           label = static_cast<uint32_t>(v), has_label = true;
+        }
       }
       if (vertex) {
         out.points.push_back(p);

@@ -141,8 +141,9 @@ CameraIntrinsics ReadOpen3dIntrinsics(const fs::path& path) {
     k.width = j.at("width").get<int>();
     k.height = j.at("height").get<int>();
     const auto m = j.at("intrinsic_matrix").get<std::vector<double>>();
-    if (m.size() != 9)
+    if (m.size() != 9) {
       throw FormatError(path, "intrinsic_matrix must have 9 numbers");
+    }
     // Column-major 3x3.
     k.fx = m[0];
     k.fy = m[4];

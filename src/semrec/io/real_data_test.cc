@@ -21,9 +21,10 @@ std::vector<Eigen::Vector3d> BackProjectToWorld(const Frame& frame,
   for (int v = 0; v < frame.depth.height(); v += step) {
     for (int u = 0; u < frame.depth.width(); u += step) {
       const float z = frame.depth(u, v);
-      if (z > 0.0f)
+      if (z > 0.0f) {
         points.push_back(T_world_camera *
                          frame.intrinsics.BackProject(u, v, z));
+      }
     }
   }
   return points;
@@ -45,14 +46,17 @@ double MedianNearestDistance(const std::vector<Eigen::Vector3d>& reference,
   std::vector<double> distances;
   for (const auto& q : query) {
     double best = cell;
-    for (int dx = -1; dx <= 1; ++dx)
-      for (int dy = -1; dy <= 1; ++dy)
+    for (int dx = -1; dx <= 1; ++dx) {
+      for (int dy = -1; dy <= 1; ++dy) {
         for (int dz = -1; dz <= 1; ++dz) {
           auto it = grid.find(key(q, dx, dy, dz));
           if (it == grid.end()) continue;
-          for (const auto* r : it->second)
+          for (const auto* r : it->second) {
             best = std::min(best, (*r - q).norm());
+          }
         }
+      }
+    }
     distances.push_back(best);
   }
   std::nth_element(distances.begin(), distances.begin() + distances.size() / 2,

@@ -65,8 +65,9 @@ SequenceReader SequenceReader::Open(const fs::path& path,
                                     const SequenceReaderOptions& options) {
   options.Check();
   std::error_code ec;
-  if (!fs::exists(path, ec))
+  if (!fs::exists(path, ec)) {
     throw IoError(path, "sequence path does not exist");
+  }
   std::optional<SequenceIndex> index = internal::IndexManifest(path, options);
   if (!index && fs::is_directory(path)) {
     for (auto detect : {internal::IndexTum, internal::IndexRedwood,
@@ -91,8 +92,9 @@ SequenceReader::SequenceReader(SequenceIndex index,
                                const SequenceReaderOptions& options)
     : index_(std::move(index)), options_(options) {
   options_.Check();
-  if (index_.frames.empty())
+  if (index_.frames.empty()) {
     throw FormatError(index_.root, "sequence has no frames");
+  }
   try {
     index_.intrinsics.Check();
   } catch (const InvalidArgument& e) {
@@ -197,8 +199,9 @@ void WriteSequenceManifest(const fs::path& manifest_path,
     if (!f.layers.empty()) {
       out << YAML::Key << "layers" << YAML::Value << YAML::Flow
           << YAML::BeginMap;
-      for (const auto& [name, path] : f.layers)
+      for (const auto& [name, path] : f.layers) {
         out << YAML::Key << name << YAML::Value << rel(path);
+      }
       out << YAML::EndMap;
     }
     out << YAML::EndMap;

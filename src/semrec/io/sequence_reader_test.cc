@@ -89,8 +89,9 @@ TEST(SequenceReader, ManifestRoundTripKeepsLayersAndTimestamps) {
   // Paths inside the folder are stored relative, so the sequence can be moved.
   const fs::path moved = dir / "moved";
   fs::create_directories(moved);
-  for (const char* sub : {"color", "depth", "sequence.yaml"})
+  for (const char* sub : {"color", "depth", "sequence.yaml"}) {
     fs::rename(dir / sub, moved / sub);
+  }
   EXPECT_EQ(SequenceReader::Open(moved).Read(1).depth_path,
             moved / "depth/000001.png");
 }

@@ -33,8 +33,9 @@ void WriteFrameImages(int i, double depth_scale, const fs::path& color,
 std::string MatrixText(const Transform& t) {
   const Eigen::Matrix4d m = t.Matrix();
   std::string s;
-  for (int r = 0; r < 4; ++r)
+  for (int r = 0; r < 4; ++r) {
     s += fmt::format("{} {} {} {}\n", m(r, 0), m(r, 1), m(r, 2), m(r, 3));
+  }
   return s;
 }
 

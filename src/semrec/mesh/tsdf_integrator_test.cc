@@ -60,8 +60,9 @@ TEST(TsdfIntegrator, PlaneLandsAtItsWorldPosition) {
   EXPECT_EQ(tsdf.num_integrated(), 2u);
   const auto mesh = tsdf.ExtractMesh();
   ASSERT_GT(mesh->vertices_.size(), 100u);
-  for (const auto& v : mesh->vertices_)
+  for (const auto& v : mesh->vertices_) {
     EXPECT_NEAR(v.x(), 2.5, 0.01);  // 1 + 1.5 m
+  }
 }
 
 TEST(TsdfOptions, Check) {

@@ -244,8 +244,9 @@ SynthSummary WriteSyntheticSequence(const SynthOptions& options_in,
   options.Check();
   std::error_code ec;
   if (fs::exists(out_dir, ec)) {
-    if (!fs::is_directory(out_dir))
+    if (!fs::is_directory(out_dir)) {
       throw IoError(out_dir, "output exists and is not a folder");
+    }
     if (!fs::is_empty(out_dir) && !options.overwrite) {
       throw IoError(
           out_dir,
@@ -253,8 +254,9 @@ SynthSummary WriteSyntheticSequence(const SynthOptions& options_in,
     }
   }
   fs::create_directories(out_dir, ec);
-  if (ec)
+  if (ec) {
     throw IoError(out_dir, "cannot create output folder: " + ec.message());
+  }
 
   const Scene scene = GenerateScene(options.scene);
   const CameraIntrinsics k = options.Intrinsics();
@@ -264,8 +266,9 @@ SynthSummary WriteSyntheticSequence(const SynthOptions& options_in,
   SynthSummary summary;
   summary.frames = static_cast<size_t>(options.frames);
   summary.people = static_cast<int>(scene.people.size());
-  for (const SceneObject& o : scene.objects)
+  for (const SceneObject& o : scene.objects) {
     ++summary.objects_per_class[SynthClasses().Get(o.class_id).name];
+  }
 
   io::SequenceIndex index;
   index.layout = "semrec";
@@ -306,8 +309,9 @@ SynthSummary WriteSyntheticSequence(const SynthOptions& options_in,
     io::WritePng(record.layers["person"], r.person);
     uint64_t frame_bytes =
         FileSize(record.color_path) + FileSize(record.depth_path);
-    for (const auto& [name, path] : record.layers)
+    for (const auto& [name, path] : record.layers) {
       frame_bytes += FileSize(path);
+    }
     bytes += frame_bytes;
 
     // MOTChallenge rows from the person map: boxes of the visible pixels,
@@ -378,8 +382,9 @@ SynthSummary WriteSyntheticSequence(const SynthOptions& options_in,
       AppendSurfaceSamples(p, spacing, &samples);
     }
     io::PlyData mesh_ply;
-    for (const auto& v : mesh.vertices)
+    for (const auto& v : mesh.vertices) {
       mesh_ply.points.push_back(v.cast<float>());
+    }
     mesh_ply.triangles = mesh.triangles;
     io::WritePly(gt / mesh_name, mesh_ply);
     const Eigen::Vector3d lo = -Eigen::Vector3d::Constant(1e-6);
@@ -388,8 +393,9 @@ SynthSummary WriteSyntheticSequence(const SynthOptions& options_in,
     for (const Eigen::Vector3d& s : samples) {
       // Keep the visible union surface: not inside another part, not outside
       // the room.
-      if ((s.array() < lo.array()).any() || (s.array() > hi.array()).any())
+      if ((s.array() < lo.array()).any() || (s.array() > hi.array()).any()) {
         continue;
+      }
       const bool inside = std::any_of(
           o.parts.begin(), o.parts.end(),
           [&](const Primitive& p) { return SignedDistance(p, s) < -1e-6; });

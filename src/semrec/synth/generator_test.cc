@@ -122,8 +122,9 @@ TEST(Synth, WritesAReadableSequenceWhoseDepthLiesOnTheGroundTruth) {
 std::map<std::string, std::string> AllFiles(const fs::path& root) {
   std::map<std::string, std::string> out;
   for (const auto& e : fs::recursive_directory_iterator(root)) {
-    if (e.is_regular_file())
+    if (e.is_regular_file()) {
       out[fs::relative(e.path(), root).string()] = ReadTextFile(e.path());
+    }
   }
   return out;
 }
@@ -161,8 +162,9 @@ TEST(Synth, PeoplePresetHasReEntryAndConsistentTracks) {
   EXPECT_EQ(summary.people, 3);
   EXPECT_GT(summary.frames_with_people[0], 0) << "some frames must have nobody";
   int several = 0;
-  for (const auto& [count, frames] : summary.frames_with_people)
+  for (const auto& [count, frames] : summary.frames_with_people) {
     several += count >= 2 ? frames : 0;
+  }
   EXPECT_GT(several, 10) << "several frames must show 2+ people";
 
   std::map<int, std::vector<int>> frames_of;  // person id -> frames with a box
@@ -180,8 +182,9 @@ TEST(Synth, PeoplePresetHasReEntryAndConsistentTracks) {
   }
   int re_entries = 0;
   for (const auto& [id, frames] : frames_of) {
-    for (size_t i = 1; i < frames.size(); ++i)
+    for (size_t i = 1; i < frames.size(); ++i) {
       re_entries += frames[i] - frames[i - 1] > 5;
+    }
   }
   EXPECT_GT(re_entries, 0) << "someone must leave the view and come back";
 

@@ -81,8 +81,9 @@ DepthImage ApplyDepthNoise(const DepthImage& clean,
         if (nu < 0 || nv < 0 || nu >= w || nv >= h) continue;
         const double zn = clean(nu, nv);
         if (zn > 0.0 &&
-            z - zn > options.edge_jump_m + options.edge_jump_rel * z)
+            z - zn > options.edge_jump_m + options.edge_jump_rel * z) {
           edge = true;
+        }
       }
       if (edge) continue;
       double noisy = z + options.strength * KinectAxialSigmaM(z) * n_axial;
@@ -93,8 +94,9 @@ DepthImage ApplyDepthNoise(const DepthImage& clean,
             options.disparity_step_px;
         noisy = quantised > 0.0 ? bf / quantised : 0.0;
       }
-      if (noisy > 0.0 && noisy < options.max_depth_m)
+      if (noisy > 0.0 && noisy < options.max_depth_m) {
         out(u, v) = static_cast<float>(noisy);
+      }
     }
   }
   return out;

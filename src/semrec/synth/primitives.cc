@@ -174,8 +174,9 @@ void SampleTube(const Eigen::Vector3d& a, const Eigen::Vector3d& b, double r,
   for (int i = 0; i < na; ++i) {
     const double phi = 2 * M_PI * (i + 0.5) / na;
     const Eigen::Vector3d radial = r * (std::cos(phi) * u + std::sin(phi) * v);
-    for (int j = 0; j < nh; ++j)
+    for (int j = 0; j < nh; ++j) {
       points->push_back(a + (j + 0.5) / nh * axis + radial);
+    }
   }
 }
 
@@ -292,8 +293,9 @@ double SignedDistance(const Primitive& shape, const Eigen::Vector3d& p) {
         box->half;
     return q.cwiseMax(0.0).norm() + std::min(q.maxCoeff(), 0.0);
   }
-  if (const auto* s = std::get_if<Sphere>(&shape))
+  if (const auto* s = std::get_if<Sphere>(&shape)) {
     return (p - s->center).norm() - s->radius;
+  }
   if (const auto* c = std::get_if<Cylinder>(&shape)) {
     const Eigen::Vector3d axis = c->b - c->a;
     const double len = axis.norm();
@@ -339,8 +341,9 @@ double SurfaceArea(const Primitive& shape) {
     const Eigen::Vector3d e = 2 * b->half;
     return 2 * (e.x() * e.y() + e.y() * e.z() + e.x() * e.z());
   }
-  if (const auto* s = std::get_if<Sphere>(&shape))
+  if (const auto* s = std::get_if<Sphere>(&shape)) {
     return 4 * M_PI * s->radius * s->radius;
+  }
   if (const auto* c = std::get_if<Cylinder>(&shape)) {
     return 2 * M_PI * c->radius * ((c->b - c->a).norm() + c->radius);
   }

@@ -86,8 +86,9 @@ TEST(Primitives, SamplesAndMeshesLieOnTheSurface) {
     const double expected = SurfaceArea(shape) / (0.01 * 0.01);
     EXPECT_GT(samples.size(), 0.8 * expected);
     EXPECT_LT(samples.size(), 1.5 * expected);
-    for (const auto& p : samples)
+    for (const auto& p : samples) {
       ASSERT_NEAR(SignedDistance(shape, p), 0.0, 1e-9);
+    }
     TriangleMesh mesh;
     AppendMesh(shape, 24, &mesh);
     ASSERT_FALSE(mesh.triangles.empty());

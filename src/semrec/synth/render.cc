@@ -36,8 +36,9 @@ Rect ScreenRect(const Eigen::AlignedBox3d& bounds,
     v0 = std::min(v0, uv.y()), v1 = std::max(v1, uv.y());
   }
   if (in_front == 0) return {};
-  if (in_front < 8)
+  if (in_front < 8) {
     return {0, 0, k.width - 1, k.height - 1};  // straddles the camera plane
+  }
   Rect r;
   r.x0 = std::max(0, static_cast<int>(std::floor(u0)) - 1);
   r.y0 = std::max(0, static_cast<int>(std::floor(v0)) - 1);
@@ -82,10 +83,12 @@ std::vector<Drawable> CollectDrawables(const Scene& scene,
 }
 
 std::pair<Eigen::Vector3d, double> BoundingSphere(const Primitive& shape) {
-  if (const auto* b = std::get_if<Box>(&shape))
+  if (const auto* b = std::get_if<Box>(&shape)) {
     return {b->center, b->half.norm()};
-  if (const auto* s = std::get_if<Sphere>(&shape))
+  }
+  if (const auto* s = std::get_if<Sphere>(&shape)) {
     return {s->center, s->radius};
+  }
   if (const auto* c = std::get_if<Cylinder>(&shape)) {
     const double half_len = (c->b - c->a).norm() / 2;
     return {(c->a + c->b) / 2, std::hypot(half_len, c->radius)};

@@ -77,8 +77,9 @@ TEST(Render, BackProjectedPixelsLieOnTheirObject) {
           << "instance " << id << " has two classes";
       ASSERT_EQ(r.person(u, v) != 0, id >= kPersonInstanceBase);
       const SceneObject* object = scene.FindObject(id);
-      if (object == nullptr)
+      if (object == nullptr) {
         continue;  // people move; checked through the person map above
+      }
       ASSERT_EQ(object->class_id, r.semantic(u, v));
       const Eigen::Vector3d p =
           T_world_camera * kK.BackProject(u, v, r.depth(u, v));

@@ -35,12 +35,15 @@ Eigen::Matrix3d Yaw(double yaw) {
 
 Primitive Transformed(const Primitive& p, const Eigen::Matrix3d& R,
                       const Eigen::Vector3d& t) {
-  if (const auto* b = std::get_if<Box>(&p))
+  if (const auto* b = std::get_if<Box>(&p)) {
     return Box{R * b->center + t, b->half, R * b->R_world_box};
-  if (const auto* c = std::get_if<Cylinder>(&p))
+  }
+  if (const auto* c = std::get_if<Cylinder>(&p)) {
     return Cylinder{R * c->a + t, R * c->b + t, c->radius};
-  if (const auto* c = std::get_if<Capsule>(&p))
+  }
+  if (const auto* c = std::get_if<Capsule>(&p)) {
     return Capsule{R * c->a + t, R * c->b + t, c->radius};
+  }
   const auto& s = std::get<Sphere>(p);
   return Sphere{R * s.center + t, s.radius};
 }
@@ -68,36 +71,43 @@ Blueprint Build(const std::string& cls, Rng& rng) {
   if (cls == "table") {
     const double hx = 0.6 * s, hy = 0.4 * s, h = 0.74;
     bp.parts.push_back(MakeBox(0, 0, h - 0.02, hx, hy, 0.02));
-    for (int sx : {-1, 1})
-      for (int sy : {-1, 1})
+    for (int sx : {-1, 1}) {
+      for (int sy : {-1, 1}) {
         bp.parts.push_back(
             Vertical(sx * (hx - 0.06), sy * (hy - 0.06), 0, h - 0.04, 0.03));
+      }
+    }
     bp.hx = hx, bp.hy = hy, bp.height = h;
   } else if (cls == "chair") {
     const double h = 0.22 * s;
     bp.parts.push_back(MakeBox(0, 0, 0.45, h, h, 0.02));
     bp.parts.push_back(MakeBox(-h + 0.02, 0, 0.47 + 0.22, 0.02, h, 0.22));
-    for (int sx : {-1, 1})
-      for (int sy : {-1, 1})
+    for (int sx : {-1, 1}) {
+      for (int sy : {-1, 1}) {
         bp.parts.push_back(
             Vertical(sx * (h - 0.03), sy * (h - 0.03), 0, 0.43, 0.02));
+      }
+    }
     bp.hx = bp.hy = h, bp.height = 0.91;
   } else if (cls == "sofa") {
     const double hy = 0.95 * s, hx = 0.45;
     bp.parts.push_back(MakeBox(0, 0, 0.21, hx, hy, 0.21));
     bp.parts.push_back(MakeBox(-hx + 0.1, 0, 0.62, 0.1, hy, 0.2));
-    for (int sy : {-1, 1})
+    for (int sy : {-1, 1}) {
       bp.parts.push_back(
           MakeBox(0.05, sy * (hy - 0.1), 0.55, hx - 0.05, 0.1, 0.13));
+    }
     bp.hx = hx, bp.hy = hy, bp.height = 0.82, bp.against_wall = true;
   } else if (cls == "shelf") {
     const double hy = 0.45 * s, hx = 0.18, h = 1.8;
-    for (int sy : {-1, 1})
+    for (int sy : {-1, 1}) {
       bp.parts.push_back(
           MakeBox(0, sy * (hy - 0.015), h / 2, hx, 0.015, h / 2));
+    }
     bp.parts.push_back(MakeBox(-hx + 0.01, 0, h / 2, 0.01, hy - 0.03, h / 2));
-    for (double z : {0.03, 0.45, 0.9, 1.35, 1.77})
+    for (double z : {0.03, 0.45, 0.9, 1.35, 1.77}) {
       bp.parts.push_back(MakeBox(0, 0, z, hx, hy - 0.03, 0.015));
+    }
     bp.hx = hx, bp.hy = hy, bp.height = h, bp.against_wall = true;
   } else if (cls == "box") {
     const double hx = rng.Uniform(0.15, 0.3), hy = rng.Uniform(0.15, 0.3),
@@ -200,8 +210,9 @@ Eigen::AlignedBox3d SceneObject::Bounds() const {
 
 double SceneObject::DistanceToSurface(const Eigen::Vector3d& p) const {
   double best = std::numeric_limits<double>::infinity();
-  for (const Primitive& part : parts)
+  for (const Primitive& part : parts) {
     best = std::min(best, std::abs(SignedDistance(part, p)));
+  }
   return best;
 }
 
@@ -330,21 +341,25 @@ Scene GenerateScene(const SceneOptions& options) {
       } else if (bp.against_wall && rng.Uniform() < 0.8) {
         const int wall = static_cast<int>(rng.UniformInt(0, 3));
         const double gap = 0.01;
-        if (wall == 0)
+        if (wall == 0) {
           fp.yaw = 0, fp.center = {lo.x() + bp.hx + gap,
                                    lo.y() + rng.Uniform() * (hi.y() - lo.y())};
-        if (wall == 1)
+        }
+        if (wall == 1) {
           fp.yaw = M_PI,
           fp.center = {hi.x() - bp.hx - gap,
                        lo.y() + rng.Uniform() * (hi.y() - lo.y())};
-        if (wall == 2)
+        }
+        if (wall == 2) {
           fp.yaw = M_PI / 2,
           fp.center = {lo.x() + rng.Uniform() * (hi.x() - lo.x()),
                        lo.y() + bp.hx + gap};
-        if (wall == 3)
+        }
+        if (wall == 3) {
           fp.yaw = -M_PI / 2,
           fp.center = {lo.x() + rng.Uniform() * (hi.x() - lo.x()),
                        hi.y() - bp.hx - gap};
+        }
       } else {
         fp.yaw = rng.Uniform() * 2 * M_PI;
         fp.center = {lo.x() + rng.Uniform() * (hi.x() - lo.x()),
@@ -367,8 +382,9 @@ Scene GenerateScene(const SceneOptions& options) {
     }
     const Eigen::Matrix3d R = Yaw(fp.yaw);
     const Eigen::Vector3d offset(fp.center.x(), fp.center.y(), base_z);
-    for (const Primitive& p : bp.parts)
+    for (const Primitive& p : bp.parts) {
       object.parts.push_back(Transformed(p, R, offset));
+    }
     if (base_z == 0.0) {
       footprints.push_back(fp);
       footprint_object.push_back(scene.objects.size());

@@ -43,8 +43,9 @@ std::optional<fs::path> SampleDataDir() {
 
 fs::path ModelDir() {
   if (const char* env = std::getenv("SEMREC_MODELS");
-      env != nullptr && *env != '\0')
+      env != nullptr && *env != '\0') {
     return env;
+  }
   return SourceDir() / ".deps" / "models";
 }
 
