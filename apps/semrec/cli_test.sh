@@ -68,4 +68,10 @@ ls "$tmp" | grep -q "tmp" && fail "temporary files left behind"
 "$SEMREC" tsdf "$data/redwood_livingroom1_5" --out "$tmp/m2.ply" --sdf-trunc-m 0.001 2>"$tmp/err"; rc=$?
 [ "$rc" -eq 1 ] && grep -q "sdf_trunc_m" "$tmp/err" || fail "bad option: exit $rc, $(cat "$tmp/err")"
 [ -e "$tmp/m2.ply" ] && fail "output written despite bad options"
+"$SEMREC" eval mot "$data/mot15_tud_campus/gt/gt.txt" "$data/mot15_tud_campus/reference_tracker_output.txt" \
+  >"$tmp/mot" || fail "eval mot failed"
+grep -q "MOTA 0.5265" "$tmp/mot" && grep -q "HOTA 0.3914" "$tmp/mot" || fail "eval mot: $(cat "$tmp/mot")"
+printf '1,1,0,0,10\n' >"$tmp/bad_mot.txt"
+"$SEMREC" eval mot "$tmp/bad_mot.txt" "$tmp/bad_mot.txt" 2>"$tmp/err"; rc=$?
+[ "$rc" -eq 1 ] && grep -q "bad_mot.txt: line 1" "$tmp/err" || fail "eval mot: malformed file: exit $rc"
 echo "cli end-to-end: all checks passed"

@@ -7,6 +7,8 @@
 #include "commands.h"
 #include "semrec/core/file_util.h"
 #include "semrec/eval/c2c.h"
+#include "semrec/eval/mot.h"
+#include "semrec/io/mot_io.h"
 #include "semrec/io/ply_io.h"
 
 namespace semrec::cli {
@@ -58,6 +60,57 @@ void RunC2c(const C2cArgs& args) {
           .c_str());
 }
 
+struct MotArgs {
+  std::string gt;
+  std::string result;
+  bool json = false;
+};
+
+void RunMot(const MotArgs& args) {
+  const eval::MotMetrics m =
+      eval::EvaluateMot(io::ReadMotFile(args.gt), io::ReadMotFile(args.result));
+  const nlohmann::json j = {{"frames", m.frames},
+                            {"gt_boxes", m.gt_boxes},
+                            {"gt_ids", m.gt_ids},
+                            {"predicted_boxes", m.predicted_boxes},
+                            {"predicted_ids", m.predicted_ids},
+                            {"mota", m.mota},
+                            {"motp", m.motp},
+                            {"idf1", m.idf1},
+                            {"idp", m.idp},
+                            {"idr", m.idr},
+                            {"precision", m.precision},
+                            {"recall", m.recall},
+                            {"fp", m.false_positives},
+                            {"fn", m.false_negatives},
+                            {"id_switches", m.id_switches},
+                            {"fragmentations", m.fragmentations},
+                            {"mostly_tracked", m.mostly_tracked},
+                            {"partially_tracked", m.partially_tracked},
+                            {"mostly_lost", m.mostly_lost},
+                            {"hota", m.hota},
+                            {"deta", m.deta},
+                            {"assa", m.assa}};
+  if (args.json) {
+    std::printf("%s\n", j.dump(2).c_str());
+    return;
+  }
+  std::printf(
+      "%s",
+      fmt::format(
+          "{} vs {}: {} frames, {} gt boxes ({} ids), {} predicted ({} ids)\n"
+          "  MOTA {:.4f}  MOTP {:.4f}  IDF1 {:.4f}  IDP {:.4f}  IDR {:.4f}\n"
+          "  precision {:.4f}  recall {:.4f}  FP {}  FN {}  IDsw {}  Frag {}"
+          "  MT/PT/ML {}/{}/{}\n"
+          "  HOTA {:.4f}  DetA {:.4f}  AssA {:.4f}\n",
+          args.result, args.gt, m.frames, m.gt_boxes, m.gt_ids,
+          m.predicted_boxes, m.predicted_ids, m.mota, m.motp, m.idf1, m.idp,
+          m.idr, m.precision, m.recall, m.false_positives, m.false_negatives,
+          m.id_switches, m.fragmentations, m.mostly_tracked,
+          m.partially_tracked, m.mostly_lost, m.hota, m.deta, m.assa)
+          .c_str());
+}
+
 }  // namespace
 
 void RegisterEval(CLI::App& app) {
@@ -80,6 +133,21 @@ void RegisterEval(CLI::App& app) {
       "--per-point", args->per_point,
       "Also write 'x y z distance_m' per estimate point to this text file");
   c2c->callback([args] { RunC2c(*args); });
+
+  auto mot_args = std::make_shared<MotArgs>();
+  CLI::App* mot =
+      eval->add_subcommand("mot",
+                           "Tracking metrics with MOTChallenge conventions "
+                           "(IoU >= 0.5): CLEAR MOT (MOTA, MOTP, FP, "
+                           "FN, ID switches, fragmentations, MT/PT/ML), "
+                           "IDF1/IDP/IDR and HOTA/DetA/AssA.");
+  mot->add_option("gt", mot_args->gt, "Ground truth (MOTChallenge gt.txt)")
+      ->required();
+  mot->add_option("result", mot_args->result,
+                  "Tracker output (MOTChallenge format)")
+      ->required();
+  mot->add_flag("--json", mot_args->json, "Print JSON");
+  mot->callback([mot_args] { RunMot(*mot_args); });
 }
 
 }  // namespace semrec::cli
