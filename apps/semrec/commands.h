@@ -28,5 +28,6 @@ void RegisterTsdf(CLI::App& app);
 void RegisterSynth(CLI::App& app);
 void RegisterFuse(CLI::App& app);
 void RegisterEval(CLI::App& app);
+void RegisterTrack(CLI::App& app);
 
 }  // namespace semrec::cli

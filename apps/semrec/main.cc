@@ -27,6 +27,7 @@ int main(int argc, char** argv) {
   semrec::cli::RegisterSynth(app);
   semrec::cli::RegisterFuse(app);
   semrec::cli::RegisterEval(app);
+  semrec::cli::RegisterTrack(app);
   app.parse_complete_callback([&] { semrec::InitLogging(log_level); });
   try {
     app.parse(argc, argv);

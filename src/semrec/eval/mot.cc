@@ -22,7 +22,8 @@ struct FrameBoxes {
 Eigen::MatrixXd IouMatrix(const FrameBoxes& f) {
   Eigen::MatrixXd iou(f.gt.size(), f.predicted.size());
   for (size_t i = 0; i < f.gt.size(); ++i) {
-    for (size_t j = 0; j < f.predicted.size(); ++j) iou(i, j) = BoxIou(*f.gt[i], *f.predicted[j]);
+    for (size_t j = 0; j < f.predicted.size(); ++j)
+      iou(i, j) = BoxIou(*f.gt[i], *f.predicted[j]);
   }
   return iou;
 }
@@ -30,15 +31,18 @@ Eigen::MatrixXd IouMatrix(const FrameBoxes& f) {
 }  // namespace
 
 double BoxIou(const io::MotBox& a, const io::MotBox& b) {
-  const double w = std::min(a.left + a.width, b.left + b.width) - std::max(a.left, b.left);
-  const double h = std::min(a.top + a.height, b.top + b.height) - std::max(a.top, b.top);
+  const double w =
+      std::min(a.left + a.width, b.left + b.width) - std::max(a.left, b.left);
+  const double h =
+      std::min(a.top + a.height, b.top + b.height) - std::max(a.top, b.top);
   if (w <= 0.0 || h <= 0.0) return 0.0;
   const double inter = w * h;
   const double uni = a.width * a.height + b.width * b.height - inter;
   return uni > 0.0 ? inter / uni : 0.0;
 }
 
-MotMetrics EvaluateMot(const std::vector<io::MotBox>& gt, const std::vector<io::MotBox>& predicted,
+MotMetrics EvaluateMot(const std::vector<io::MotBox>& gt,
+                       const std::vector<io::MotBox>& predicted,
                        double iou_threshold) {
   CheckArgument(iou_threshold > 0.0 && iou_threshold <= 1.0,
                 "MOT evaluation: IoU threshold must be in (0, 1]");
@@ -46,27 +50,33 @@ MotMetrics EvaluateMot(const std::vector<io::MotBox>& gt, const std::vector<io::
   std::map<int, int> gt_ids, pred_ids;  // id -> dense index
   std::map<int, FrameBoxes> frames;
   for (const auto& b : gt) {
-    const int idx = gt_ids.try_emplace(b.id, static_cast<int>(gt_ids.size())).first->second;
+    const int idx =
+        gt_ids.try_emplace(b.id, static_cast<int>(gt_ids.size())).first->second;
     frames[b.frame].gt.push_back(&b);
     frames[b.frame].gt_index.push_back(idx);
   }
   for (const auto& b : predicted) {
-    const int idx = pred_ids.try_emplace(b.id, static_cast<int>(pred_ids.size())).first->second;
+    const int idx =
+        pred_ids.try_emplace(b.id, static_cast<int>(pred_ids.size()))
+            .first->second;
     frames[b.frame].predicted.push_back(&b);
     frames[b.frame].predicted_index.push_back(idx);
   }
-  const int G = static_cast<int>(gt_ids.size()), P = static_cast<int>(pred_ids.size());
+  const int G = static_cast<int>(gt_ids.size()),
+            P = static_cast<int>(pred_ids.size());
   m.frames = frames.empty() ? 0 : static_cast<size_t>(frames.rbegin()->first);
   m.gt_boxes = gt.size();
   m.predicted_boxes = predicted.size();
   m.gt_ids = G;
   m.predicted_ids = P;
 
-  // CLEAR MOT: keep last frame's matches that are still valid, then Hungarian on the rest
-  // (cost 1 - IoU, pairs below the IoU threshold forbidden).
-  std::vector<int> last_match(G, -1);    // gt -> predicted id index it was last matched to
+  // CLEAR MOT: keep last frame's matches that are still valid, then Hungarian
+  // on the rest (cost 1 - IoU, pairs below the IoU threshold forbidden).
+  std::vector<int> last_match(
+      G, -1);  // gt -> predicted id index it was last matched to
   std::vector<int> frames_present(G, 0), frames_tracked(G, 0);
-  std::vector<std::vector<char>> tracked_history(G);  // per present frame: matched?
+  std::vector<std::vector<char>> tracked_history(
+      G);  // per present frame: matched?
   Eigen::MatrixXi overlap_count = Eigen::MatrixXi::Zero(G, P);  // for IDF1
   double distance_sum = 0.0;
   for (const auto& [frame, f] : frames) {
@@ -78,7 +88,8 @@ MotMetrics EvaluateMot(const std::vector<io::MotBox>& gt, const std::vector<io::
       const int previous = last_match[f.gt_index[i]];
       if (previous < 0) continue;
       for (size_t j = 0; j < np; ++j) {
-        if (!pred_taken[j] && f.predicted_index[j] == previous && iou(i, j) >= iou_threshold) {
+        if (!pred_taken[j] && f.predicted_index[j] == previous &&
+            iou(i, j) >= iou_threshold) {
           match_of_gt[i] = static_cast<int>(j);
           pred_taken[j] = 1;
           break;
@@ -103,7 +114,8 @@ MotMetrics EvaluateMot(const std::vector<io::MotBox>& gt, const std::vector<io::
       const int i = free_gt[a], j = free_pred[b];
       match_of_gt[i] = j;
       const int g = f.gt_index[i];
-      if (last_match[g] >= 0 && last_match[g] != f.predicted_index[j]) ++m.id_switches;
+      if (last_match[g] >= 0 && last_match[g] != f.predicted_index[j])
+        ++m.id_switches;
     }
     size_t matched = 0;
     for (size_t i = 0; i < ng; ++i) {
@@ -122,18 +134,22 @@ MotMetrics EvaluateMot(const std::vector<io::MotBox>& gt, const std::vector<io::
     m.false_positives += np - matched;
     for (size_t i = 0; i < ng; ++i) {
       for (size_t j = 0; j < np; ++j) {
-        if (iou(i, j) >= iou_threshold) ++overlap_count(f.gt_index[i], f.predicted_index[j]);
+        if (iou(i, j) >= iou_threshold)
+          ++overlap_count(f.gt_index[i], f.predicted_index[j]);
       }
     }
   }
-  // Fragmentations: within each gt track's tracked span, transitions from tracked to missed.
+  // Fragmentations: within each gt track's tracked span, transitions from
+  // tracked to missed.
   for (int g = 0; g < G; ++g) {
     const auto& h = tracked_history[g];
     const auto first = std::find(h.begin(), h.end(), 1);
     if (first == h.end()) continue;
     const auto last = std::find(h.rbegin(), h.rend(), 1).base();
-    for (auto it = first + 1; it != last; ++it) m.fragmentations += (!*it && *(it - 1)) ? 1 : 0;
-    const double ratio = static_cast<double>(frames_tracked[g]) / frames_present[g];
+    for (auto it = first + 1; it != last; ++it)
+      m.fragmentations += (!*it && *(it - 1)) ? 1 : 0;
+    const double ratio =
+        static_cast<double>(frames_tracked[g]) / frames_present[g];
     if (ratio >= 0.8) {
       ++m.mostly_tracked;
     } else if (ratio >= 0.2) {
@@ -141,32 +157,44 @@ MotMetrics EvaluateMot(const std::vector<io::MotBox>& gt, const std::vector<io::
     }
   }
   for (int g = 0; g < G; ++g) {
-    const double ratio = frames_present[g] ? static_cast<double>(frames_tracked[g]) / frames_present[g] : 0;
+    const double ratio =
+        frames_present[g]
+            ? static_cast<double>(frames_tracked[g]) / frames_present[g]
+            : 0;
     if (ratio < 0.2) ++m.mostly_lost;
   }
   const double n_gt = static_cast<double>(m.gt_boxes);
-  m.mota = n_gt > 0 ? 1.0 - (m.false_negatives + m.false_positives + m.id_switches) / n_gt : 0.0;
+  m.mota =
+      n_gt > 0
+          ? 1.0 - (m.false_negatives + m.false_positives + m.id_switches) / n_gt
+          : 0.0;
   m.motp = m.true_positives > 0 ? distance_sum / m.true_positives : 0.0;
   m.recall = n_gt > 0 ? m.true_positives / n_gt : 0.0;
   m.precision = m.true_positives + m.false_positives > 0
-                    ? static_cast<double>(m.true_positives) / (m.true_positives + m.false_positives)
+                    ? static_cast<double>(m.true_positives) /
+                          (m.true_positives + m.false_positives)
                     : 0.0;
 
-  // Identity metrics: one-to-one gt/predicted trajectory matching maximising co-tracked frames.
+  // Identity metrics: one-to-one gt/predicted trajectory matching maximising
+  // co-tracked frames.
   if (G > 0 && P > 0) {
     const Eigen::MatrixXd cost = -overlap_count.cast<double>();
-    for (const auto& [g, p] : track::SolveAssignment(cost).pairs) m.idtp += overlap_count(g, p);
+    for (const auto& [g, p] : track::SolveAssignment(cost).pairs)
+      m.idtp += overlap_count(g, p);
   }
-  m.idp = m.predicted_boxes ? static_cast<double>(m.idtp) / m.predicted_boxes : 0.0;
+  m.idp =
+      m.predicted_boxes ? static_cast<double>(m.idtp) / m.predicted_boxes : 0.0;
   m.idr = m.gt_boxes ? static_cast<double>(m.idtp) / m.gt_boxes : 0.0;
-  m.idf1 = m.gt_boxes + m.predicted_boxes
-               ? 2.0 * m.idtp / static_cast<double>(m.gt_boxes + m.predicted_boxes)
-               : 0.0;
+  m.idf1 =
+      m.gt_boxes + m.predicted_boxes
+          ? 2.0 * m.idtp / static_cast<double>(m.gt_boxes + m.predicted_boxes)
+          : 0.0;
 
   // HOTA (TrackEval's algorithm).
   constexpr double kEps = std::numeric_limits<double>::epsilon();
   Eigen::MatrixXd potential = Eigen::MatrixXd::Zero(G, P);
-  Eigen::VectorXd gt_count = Eigen::VectorXd::Zero(G), pred_count = Eigen::VectorXd::Zero(P);
+  Eigen::VectorXd gt_count = Eigen::VectorXd::Zero(G),
+                  pred_count = Eigen::VectorXd::Zero(P);
   std::vector<Eigen::MatrixXd> ious;
   for (const auto& [frame, f] : frames) {
     ious.push_back(IouMatrix(f));
@@ -176,7 +204,8 @@ MotMetrics EvaluateMot(const std::vector<io::MotBox>& gt, const std::vector<io::
     for (int i = 0; i < s.rows(); ++i) {
       for (int j = 0; j < s.cols(); ++j) {
         const double denom = row_sum(i) + col_sum(j) - s(i, j);
-        if (denom > kEps) potential(f.gt_index[i], f.predicted_index[j]) += s(i, j) / denom;
+        if (denom > kEps)
+          potential(f.gt_index[i], f.predicted_index[j]) += s(i, j) / denom;
       }
     }
     for (int g : f.gt_index) gt_count(g) += 1;
@@ -185,7 +214,8 @@ MotMetrics EvaluateMot(const std::vector<io::MotBox>& gt, const std::vector<io::
   Eigen::MatrixXd global(G, P);
   for (int g = 0; g < G; ++g) {
     for (int p = 0; p < P; ++p) {
-      global(g, p) = potential(g, p) / (gt_count(g) + pred_count(p) - potential(g, p));
+      global(g, p) =
+          potential(g, p) / (gt_count(g) + pred_count(p) - potential(g, p));
     }
   }
   constexpr int kAlphas = 19;
@@ -222,7 +252,8 @@ MotMetrics EvaluateMot(const std::vector<io::MotBox>& gt, const std::vector<io::
     for (int g = 0; g < G; ++g) {
       for (int p = 0; p < P; ++p) {
         const double c = matches[a](g, p);
-        if (c > 0) ass += c * c / std::max(1.0, gt_count(g) + pred_count(p) - c);
+        if (c > 0)
+          ass += c * c / std::max(1.0, gt_count(g) + pred_count(p) - c);
       }
     }
     const double assa = ass / std::max(1.0, tp[a]);

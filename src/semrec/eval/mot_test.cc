@@ -8,8 +8,9 @@
 namespace semrec::eval {
 namespace {
 
-// Reference values from three independent evaluators (py-motmetrics, TrackEval, mmtracking) for
-// a published tracker's output on MOT15 TUD-Campus (../shared/data/README.md).
+// Reference values from three independent evaluators (py-motmetrics, TrackEval,
+// mmtracking) for a published tracker's output on MOT15 TUD-Campus
+// (../shared/data/README.md).
 TEST(MotMetrics, ReproducesReferenceEvaluatorsOnTudCampus) {
   SEMREC_REQUIRE_SAMPLE_DATA(dir, "mot15_tud_campus");
   const auto gt = io::ReadMotFile(dir / "gt/gt.txt");
@@ -66,7 +67,8 @@ TEST(MotIo, MalformedLinesNameTheLine) {
     io::ReadMotFile(dir / "b.txt");
     FAIL();
   } catch (const FormatError& e) {
-    EXPECT_NE(std::string(e.what()).find("line 2: 'x' is not a number"), std::string::npos);
+    EXPECT_NE(std::string(e.what()).find("line 2: 'x' is not a number"),
+              std::string::npos);
   }
   semrec::testing::WriteText(dir / "c.txt", "1,1,0,0,-10,10\n");
   EXPECT_THROW(io::ReadMotFile(dir / "c.txt"), FormatError);

@@ -29,44 +29,54 @@ std::vector<MotBox> ReadMotFile(const std::filesystem::path& path) {
         v.push_back(std::stod(token, &used));
         if (used != token.size()) throw std::invalid_argument(token);
       } catch (const std::exception&) {
-        throw FormatError(path, fmt::format("line {}: '{}' is not a number", line_number, token));
+        throw FormatError(path, fmt::format("line {}: '{}' is not a number",
+                                            line_number, token));
       }
     }
     if (v.empty()) continue;
     if (v.size() < 6) {
-      throw FormatError(path, fmt::format("line {}: {} columns, expected at least 6 (frame, id, "
-                                          "left, top, width, height)",
-                                          line_number, v.size()));
+      throw FormatError(
+          path,
+          fmt::format("line {}: {} columns, expected at least 6 (frame, id, "
+                      "left, top, width, height)",
+                      line_number, v.size()));
     }
     if (v[0] != std::floor(v[0]) || v[1] != std::floor(v[1]) || v[0] < 1) {
-      throw FormatError(path, fmt::format("line {}: frame and id must be integers, frame >= 1",
-                                          line_number));
+      throw FormatError(
+          path,
+          fmt::format("line {}: frame and id must be integers, frame >= 1",
+                      line_number));
     }
-    if (!(v[4] >= 0 && v[5] >= 0) || !std::isfinite(v[2] + v[3] + v[4] + v[5])) {
-      throw FormatError(path, fmt::format("line {}: box size must be finite and >= 0",
-                                          line_number));
+    if (!(v[4] >= 0 && v[5] >= 0) ||
+        !std::isfinite(v[2] + v[3] + v[4] + v[5])) {
+      throw FormatError(path,
+                        fmt::format("line {}: box size must be finite and >= 0",
+                                    line_number));
     }
-    boxes.push_back({static_cast<int>(v[0]), static_cast<int>(v[1]), v[2], v[3], v[4], v[5],
-                     v.size() > 6 ? v[6] : 1.0});
+    boxes.push_back({static_cast<int>(v[0]), static_cast<int>(v[1]), v[2], v[3],
+                     v[4], v[5], v.size() > 6 ? v[6] : 1.0});
   }
-  std::stable_sort(boxes.begin(), boxes.end(), [](const MotBox& a, const MotBox& b) {
-    return a.frame != b.frame ? a.frame < b.frame : a.id < b.id;
-  });
+  std::stable_sort(
+      boxes.begin(), boxes.end(), [](const MotBox& a, const MotBox& b) {
+        return a.frame != b.frame ? a.frame < b.frame : a.id < b.id;
+      });
   for (size_t i = 1; i < boxes.size(); ++i) {
-    if (boxes[i].frame == boxes[i - 1].frame && boxes[i].id == boxes[i - 1].id &&
-        boxes[i].id >= 0) {
-      throw FormatError(path, fmt::format("frame {}: id {} appears twice", boxes[i].frame,
-                                          boxes[i].id));
+    if (boxes[i].frame == boxes[i - 1].frame &&
+        boxes[i].id == boxes[i - 1].id && boxes[i].id >= 0) {
+      throw FormatError(path, fmt::format("frame {}: id {} appears twice",
+                                          boxes[i].frame, boxes[i].id));
     }
   }
   return boxes;
 }
 
-void WriteMotFile(const std::filesystem::path& path, const std::vector<MotBox>& boxes) {
+void WriteMotFile(const std::filesystem::path& path,
+                  const std::vector<MotBox>& boxes) {
   std::string text;
   for (const MotBox& b : boxes) {
-    text += fmt::format("{},{},{:.3f},{:.3f},{:.3f},{:.3f},{:.6g},-1,-1,-1\n", b.frame, b.id,
-                        b.left, b.top, b.width, b.height, b.confidence);
+    text += fmt::format("{},{},{:.3f},{:.3f},{:.3f},{:.3f},{:.6g},-1,-1,-1\n",
+                        b.frame, b.id, b.left, b.top, b.width, b.height,
+                        b.confidence);
   }
   WriteTextFileAtomic(path, text);
 }

@@ -8,13 +8,15 @@
 namespace semrec::track {
 namespace {
 
-// Square or wide (rows <= cols) matrix, all entries finite: classic potentials-based Hungarian
-// method (Kuhn-Munkres with Dijkstra-like augmentation). Returns the column of each row.
+// Square or wide (rows <= cols) matrix, all entries finite: classic
+// potentials-based Hungarian method (Kuhn-Munkres with Dijkstra-like
+// augmentation). Returns the column of each row.
 std::vector<int> SolveDense(const Eigen::MatrixXd& a) {
   const int n = static_cast<int>(a.rows()), m = static_cast<int>(a.cols());
   const double inf = std::numeric_limits<double>::infinity();
   std::vector<double> u(n + 1, 0.0), v(m + 1, 0.0), min_v(m + 1);
-  std::vector<int> p(m + 1, 0), way(m + 1, 0);  // p[j]: row (1-based) matched to column j
+  std::vector<int> p(m + 1, 0),
+      way(m + 1, 0);  // p[j]: row (1-based) matched to column j
   std::vector<char> used(m + 1);
   for (int i = 1; i <= n; ++i) {
     p[0] = i;
@@ -59,7 +61,8 @@ std::vector<int> SolveDense(const Eigen::MatrixXd& a) {
 
 Assignment SolveAssignment(const Eigen::MatrixXd& cost) {
   Assignment result;
-  const int rows = static_cast<int>(cost.rows()), cols = static_cast<int>(cost.cols());
+  const int rows = static_cast<int>(cost.rows()),
+            cols = static_cast<int>(cost.cols());
   if (rows == 0 || cols == 0) return result;
   double max_finite = 0.0;
   for (int r = 0; r < rows; ++r) {
@@ -69,9 +72,10 @@ Assignment SolveAssignment(const Eigen::MatrixXd& cost) {
       if (std::isfinite(x)) max_finite = std::max(max_finite, std::abs(x));
     }
   }
-  // Forbidden entries become a penalty larger than any sum of finite costs, so the optimum
-  // first maximises the number of allowed pairs, then minimises their cost; pairs that still
-  // use a penalty entry are dropped afterwards. Padding to rows <= cols keeps it rectangular.
+  // Forbidden entries become a penalty larger than any sum of finite costs, so
+  // the optimum first maximises the number of allowed pairs, then minimises
+  // their cost; pairs that still use a penalty entry are dropped afterwards.
+  // Padding to rows <= cols keeps it rectangular.
   const int n = std::min(rows, cols);
   const double penalty = (max_finite + 1.0) * (n + 1) * 2.0;
   const bool transpose = rows > cols;

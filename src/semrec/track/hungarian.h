@@ -1,5 +1,6 @@
-// Minimum-cost assignment (the Hungarian method, O(n^2 m) with potentials and shortest
-// augmenting paths) for rectangular cost matrices with forbidden entries.
+// Minimum-cost assignment (the Hungarian method, O(n^2 m) with potentials and
+// shortest augmenting paths) for rectangular cost matrices with forbidden
+// entries.
 #pragma once
 
 #include <limits>
@@ -19,9 +20,10 @@ struct Assignment {
   double cost = 0.0;
 };
 
-/// Among the assignments that match as many pairs as possible without forbidden entries, one of
-/// minimum total cost. Rows or columns may stay unassigned (rectangular matrices, forbidden
-/// entries). Throws InvalidArgument for NaN costs.
+/// Among the assignments that match as many pairs as possible without forbidden
+/// entries, one of minimum total cost. Rows or columns may stay unassigned
+/// (rectangular matrices, forbidden entries). Throws InvalidArgument for NaN
+/// costs.
 Assignment SolveAssignment(const Eigen::MatrixXd& cost);
 
 }  // namespace semrec::track

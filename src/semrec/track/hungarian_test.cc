@@ -9,8 +9,8 @@
 namespace semrec::track {
 namespace {
 
-// Reference: try every injective map of the smaller side into the larger one; best = most
-// allowed pairs, then least cost.
+// Reference: try every injective map of the smaller side into the larger one;
+// best = most allowed pairs, then least cost.
 std::pair<int, double> BruteForce(const Eigen::MatrixXd& cost) {
   const bool t = cost.rows() > cost.cols();
   const Eigen::MatrixXd a = t ? Eigen::MatrixXd(cost.transpose()) : cost;
@@ -40,12 +40,16 @@ TEST(Hungarian, MatchesBruteForceOnRandomRectangularMatrices) {
     Eigen::MatrixXd cost(rows, cols);
     for (int r = 0; r < rows; ++r) {
       for (int c = 0; c < cols; ++c) {
-        cost(r, c) = (trial % 3 == 0 && u(rng) < 3.0) ? kForbidden : std::round(u(rng) * 4) / 4;
+        cost(r, c) = (trial % 3 == 0 && u(rng) < 3.0)
+                         ? kForbidden
+                         : std::round(u(rng) * 4) / 4;
       }
     }
     const Assignment a = SolveAssignment(cost);
     const auto [pairs, best] = BruteForce(cost);
-    ASSERT_EQ(static_cast<int>(a.pairs.size()), pairs) << "trial " << trial << "\n" << cost;
+    ASSERT_EQ(static_cast<int>(a.pairs.size()), pairs)
+        << "trial " << trial << "\n"
+        << cost;
     ASSERT_NEAR(a.cost, best, 1e-9) << "trial " << trial << "\n" << cost;
     std::vector<int> seen_cols;
     for (const auto& [r, c] : a.pairs) {
@@ -53,7 +57,8 @@ TEST(Hungarian, MatchesBruteForceOnRandomRectangularMatrices) {
       seen_cols.push_back(c);
     }
     std::sort(seen_cols.begin(), seen_cols.end());
-    ASSERT_TRUE(std::adjacent_find(seen_cols.begin(), seen_cols.end()) == seen_cols.end());
+    ASSERT_TRUE(std::adjacent_find(seen_cols.begin(), seen_cols.end()) ==
+                seen_cols.end());
   }
 }
 
