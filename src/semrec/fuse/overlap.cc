@@ -109,9 +109,6 @@ OverlapDecision MutualOverlapExceeds(const Cloud& a, const VoxelGrid& grid_a,
   while (need <= denominator && !(Sigma(need, a.size(), b.size()) > alpha)) {
     ++need;
   }
-  // nn_of_b[j]: b_j's nearest a (-1 none), computed on first use (-2 = not
-  // yet).
-  std::vector<int64_t> nn_of_b(b.size(), -2);
   uint64_t computations = 0;
   size_t pairs = 0;
   for (size_t i = 0; i < a.size(); ++i) {
@@ -123,18 +120,17 @@ OverlapDecision MutualOverlapExceeds(const Cloud& a, const VoxelGrid& grid_a,
       if (d2 <= max_d2) to_b.Offer(d2, j);
     });
     if (to_b.index < 0) continue;
-    int64_t& back = nn_of_b[to_b.index];
-    if (back == -2) {
-      Nearest to_a;
-      const Eigen::Vector3f& q = b[to_b.index];
-      grid_a.ForEachNear(q, [&](uint32_t k) {
-        const float d2 = SquaredDistance(a[k], q);
-        ++computations;
-        if (d2 <= max_d2) to_a.Offer(d2, k);
-      });
-      back = to_a.index;
-    }
-    if (back == static_cast<int64_t>(i) && ++pairs >= need) break;
+    // Mutual when a_i is also b_j's nearest. (Recomputed rather than cached: a
+    // per-pair cache over b costs an allocation that dominates for large scene
+    // segments.)
+    Nearest to_a;
+    const Eigen::Vector3f& q = b[to_b.index];
+    grid_a.ForEachNear(q, [&](uint32_t k) {
+      const float d2 = SquaredDistance(a[k], q);
+      ++computations;
+      if (d2 <= max_d2) to_a.Offer(d2, k);
+    });
+    if (to_a.index == static_cast<int64_t>(i) && ++pairs >= need) break;
   }
   decision.exceeds = pairs >= need;
   decision.partial.mutual_pairs = pairs;

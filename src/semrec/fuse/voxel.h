@@ -88,6 +88,12 @@ void VoxelGrid::ForEachNear(const Eigen::Vector3f& p, Fn&& fn) const {
   const int64_t x = static_cast<int64_t>(std::floor(p.x() * inv_cell_));
   const int64_t y = static_cast<int64_t>(std::floor(p.y() * inv_cell_));
   const int64_t z = static_cast<int64_t>(std::floor(p.z() * inv_cell_));
+  // Most queries of a large cloud against a small one are nowhere near it.
+  if (dense_ &&
+      (x < lo_[0] - 1 || y < lo_[1] - 1 || z < lo_[2] - 1 ||
+       x > lo_[0] + n_[0] || y > lo_[1] + n_[1] || z > lo_[2] + n_[2])) {
+    return;
+  }
   for (int64_t dx = -1; dx <= 1; ++dx) {
     for (int64_t dy = -1; dy <= 1; ++dy) {
       for (int64_t dz = -1; dz <= 1; ++dz) {
