@@ -1,0 +1,180 @@
+#include "semrec/usd/usda_writer.h"
+
+#include <cctype>
+#include <set>
+
+#include <fmt/format.h>
+#include <Eigen/Geometry>
+
+#include "semrec/core/error.h"
+#include "semrec/core/file_util.h"
+
+namespace semrec::usd {
+namespace {
+
+// A USDA string literal: quotes and backslashes escaped, control characters
+// dropped.
+std::string Quote(const std::string& s) {
+  std::string out = "\"";
+  for (char c : s) {
+    if (c == '"' || c == '\\') out += '\\';
+    if (static_cast<unsigned char>(c) >= 0x20) out += c;
+  }
+  return out + "\"";
+}
+
+// Shortest float text that reads back to the same float.
+std::string Num(float x) { return fmt::format("{}", x); }
+
+std::string Header(const StageOptions& o, const std::string& extra) {
+  std::string data;
+  for (const auto& [key, value] : o.custom_layer_data) {
+    data += fmt::format("        string {} = {}\n", SanitizeName(key),
+                        Quote(value));
+  }
+  return fmt::format(
+      "#usda 1.0\n(\n    defaultPrim = \"World\"\n    metersPerUnit = {}\n    "
+      "upAxis = \"{}\"\n"
+      "{}{})\n\n",
+      o.meters_per_unit, o.up_axis,
+      data.empty() ? "" : "    customLayerData = {\n" + data + "    }\n",
+      extra);
+}
+
+}  // namespace
+
+void StageOptions::Check() const {
+  CheckArgument(up_axis == "Z" || up_axis == "Y",
+                "usd: up_axis must be \"Z\" or \"Y\"");
+  CheckArgument(meters_per_unit > 0.0, "usd: meters_per_unit must be > 0");
+}
+
+std::string SanitizeName(const std::string& label) {
+  std::string out;
+  for (unsigned char c : label)
+    out += (std::isalnum(c) || c == '_') ? static_cast<char>(c) : '_';
+  if (out.empty() || std::isdigit(static_cast<unsigned char>(out[0])))
+    out = "_" + out;
+  return out;
+}
+
+std::string StaticLayerText(const std::vector<MeshPrim>& meshes,
+                            const StageOptions& options) {
+  options.Check();
+  std::string text = Header(options, "");
+  text += "def Xform \"World\"\n{\n    def Scope \"Objects\"\n    {\n";
+  std::set<std::string> names;
+  for (const MeshPrim& m : meshes) {
+    for (const auto& t : m.triangles) {
+      CheckArgument(
+          t[0] < m.points.size() && t[1] < m.points.size() &&
+              t[2] < m.points.size(),
+          "usd: mesh '" + m.label + "' has a triangle index out of range");
+    }
+    CheckArgument(m.normals.empty() || m.normals.size() == m.points.size(),
+                  "usd: normals must be empty or one per point");
+    CheckArgument(
+        m.vertex_colors.empty() || m.vertex_colors.size() == m.points.size(),
+        "usd: vertex colours must be empty or one per point");
+    const std::string name =
+        fmt::format("{}_{}", SanitizeName(m.label), m.instance_id);
+    CheckArgument(names.insert(name).second,
+                  "usd: duplicate object prim " + name);
+    Eigen::AlignedBox3f box;
+    for (const auto& p : m.points) box.extend(p);
+    if (m.points.empty()) box.extend(Eigen::Vector3f::Zero());
+    std::string points, indices, counts, normals, colors;
+    for (size_t i = 0; i < m.points.size(); ++i) {
+      const auto& p = m.points[i];
+      points += fmt::format("{}({}, {}, {})", i ? ", " : "", Num(p.x()),
+                            Num(p.y()), Num(p.z()));
+    }
+    for (size_t i = 0; i < m.triangles.size(); ++i) {
+      const auto& t = m.triangles[i];
+      indices += fmt::format("{}{}, {}, {}", i ? ", " : "", t[0], t[1], t[2]);
+      counts += i ? ", 3" : "3";
+    }
+    for (size_t i = 0; i < m.normals.size(); ++i) {
+      const auto& n = m.normals[i];
+      normals += fmt::format("{}({}, {}, {})", i ? ", " : "", Num(n.x()),
+                             Num(n.y()), Num(n.z()));
+    }
+    auto color3 = [](const std::array<uint8_t, 3>& c) {
+      return fmt::format("({}, {}, {})", Num(c[0] / 255.0f), Num(c[1] / 255.0f),
+                         Num(c[2] / 255.0f));
+    };
+    for (size_t i = 0; i < m.vertex_colors.size(); ++i) {
+      colors += (i ? ", " : "") + color3(m.vertex_colors[i]);
+    }
+    const std::string label = Quote(m.label);
+    text += fmt::format(
+        "        def Mesh \"{}\" (\n"
+        "            prepend apiSchemas = [\"SemanticsLabelsAPI:class\", "
+        "\"SemanticsAPI:Semantics\"]\n"
+        "        )\n        {{\n"
+        "            float3[] extent = [({}, {}, {}), ({}, {}, {})]\n"
+        "            int[] faceVertexCounts = [{}]\n"
+        "            int[] faceVertexIndices = [{}]\n"
+        "            point3f[] points = [{}]\n",
+        name, Num(box.min().x()), Num(box.min().y()), Num(box.min().z()),
+        Num(box.max().x()), Num(box.max().y()), Num(box.max().z()), counts,
+        indices, points);
+    if (!m.normals.empty()) {
+      text += fmt::format(
+          "            normal3f[] normals = [{}] (\n                "
+          "interpolation = \"vertex\"\n"
+          "            )\n",
+          normals);
+    }
+    if (!m.vertex_colors.empty()) {
+      text += fmt::format(
+          "            color3f[] primvars:displayColor = [{}] (\n"
+          "                interpolation = \"vertex\"\n            )\n",
+          colors);
+    } else {
+      text += fmt::format(
+          "            color3f[] primvars:displayColor = [{}] (\n"
+          "                interpolation = \"constant\"\n            )\n",
+          color3(m.color));
+    }
+    text += fmt::format(
+        "            uniform token subdivisionScheme = \"none\"\n"
+        "            token[] semantics:labels:class = [{}]\n"
+        "            string semantic:Semantics:params:semanticData = {}\n"
+        "            string semantic:Semantics:params:semanticType = "
+        "\"class\"\n"
+        "            custom int semrec:instanceId = {}\n"
+        "            custom string semrec:label = {}\n"
+        "            custom int semrec:pointCount = {}\n"
+        "            custom int semrec:firstSeenFrame = {}\n"
+        "            custom int semrec:lastSeenFrame = {}\n"
+        "            custom float semrec:confidence = {}\n"
+        "        }}\n",
+        label, label, m.instance_id, label, m.point_count, m.first_seen_frame,
+        m.last_seen_frame, Num(static_cast<float>(m.confidence)));
+  }
+  text += "    }\n}\n";
+  return text;
+}
+
+std::string RootLayerText(const std::vector<std::string>& sublayers,
+                          const StageOptions& options) {
+  options.Check();
+  std::string list;
+  for (size_t i = 0; i < sublayers.size(); ++i) {
+    list += fmt::format("{}        @{}@", i ? ",\n" : "", sublayers[i]);
+  }
+  return Header(options, "    subLayers = [\n" + list + "\n    ]\n") +
+         "def Xform \"World\"\n{\n}\n";
+}
+
+void WriteScene(const std::filesystem::path& dir,
+                const std::vector<MeshPrim>& meshes,
+                const StageOptions& options) {
+  const std::string static_text = StaticLayerText(meshes, options);
+  WriteTextFileAtomic(dir / "static.usda", static_text);
+  WriteTextFileAtomic(dir / "scene.usda",
+                      RootLayerText({"./static.usda"}, options));
+}
+
+}  // namespace semrec::usd

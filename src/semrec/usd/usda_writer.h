@@ -1,0 +1,70 @@
+// Our own USDA (USD text) writer for reconstructed scenes, following the USD
+// file format: a `#usda 1.0` header with defaultPrim / metersPerUnit / upAxis,
+// `/World` (Xform) holding `Objects/<class>_<id>` Mesh prims. Every mesh
+// carries its class the ways robotics simulators read it: the UsdSemantics
+// labels API (`semantics:labels:class`, token array) and Isaac Sim's legacy
+// `Semantics` schema (`semantic:Semantics:params:semanticType/semanticData`),
+// plus `semrec:*` custom attributes (instance id, original label, point count,
+// frames, confidence).
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <filesystem>
+#include <map>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+namespace semrec::usd {
+
+struct MeshPrim {
+  /// Class label as the segmentation named it (any characters; sanitised for
+  /// the prim name).
+  std::string label;
+  uint32_t instance_id = 0;
+  std::vector<Eigen::Vector3f> points;
+  std::vector<std::array<uint32_t, 3>> triangles;
+  /// Optional per-vertex normals and colours (0-255); without colours, `color`
+  /// is constant.
+  std::vector<Eigen::Vector3f> normals;
+  std::vector<std::array<uint8_t, 3>> vertex_colors;
+  std::array<uint8_t, 3> color = {200, 200, 200};
+  /// Provenance, written as custom attributes.
+  size_t point_count = 0;
+  size_t first_seen_frame = 0;
+  size_t last_seen_frame = 0;
+  double confidence = 1.0;
+};
+
+struct StageOptions {
+  /// "Z" (robotics) or "Y".
+  std::string up_axis = "Z";
+  double meters_per_unit = 1.0;
+  /// Free-form provenance stored in the layer's customLayerData (options,
+  /// inputs).
+  std::map<std::string, std::string> custom_layer_data;
+  void Check() const;
+};
+
+/// A valid USD prim name for `label`: [A-Za-z_][A-Za-z0-9_]*, other characters
+/// become '_', a leading digit gets a '_' prefix. Deterministic; the original
+/// stays in `semrec:label`.
+std::string SanitizeName(const std::string& label);
+
+/// Text of a USDA layer with /World/Objects/<sanitised label>_<id> meshes.
+std::string StaticLayerText(const std::vector<MeshPrim>& meshes,
+                            const StageOptions& options);
+
+/// Text of a root layer that sublayers the given files (relative paths).
+std::string RootLayerText(const std::vector<std::string>& sublayers,
+                          const StageOptions& options);
+
+/// Writes `dir`/scene.usda (root, sublayering static.usda) and
+/// `dir`/static.usda, atomically. Throws IoError for an unwritable folder.
+void WriteScene(const std::filesystem::path& dir,
+                const std::vector<MeshPrim>& meshes,
+                const StageOptions& options);
+
+}  // namespace semrec::usd
