@@ -9,6 +9,7 @@
 
 #include "semrec/core/error.h"
 #include "semrec/track/hungarian.h"
+#include "semrec/track/tracker.h"
 
 namespace semrec::eval {
 namespace {
@@ -31,14 +32,7 @@ Eigen::MatrixXd IouMatrix(const FrameBoxes& f) {
 }  // namespace
 
 double BoxIou(const io::MotBox& a, const io::MotBox& b) {
-  const double w =
-      std::min(a.left + a.width, b.left + b.width) - std::max(a.left, b.left);
-  const double h =
-      std::min(a.top + a.height, b.top + b.height) - std::max(a.top, b.top);
-  if (w <= 0.0 || h <= 0.0) return 0.0;
-  const double inter = w * h;
-  const double uni = a.width * a.height + b.width * b.height - inter;
-  return uni > 0.0 ? inter / uni : 0.0;
+  return track::Iou({a.left, a.top, a.width, a.height}, {b.left, b.top, b.width, b.height});
 }
 
 MotMetrics EvaluateMot(const std::vector<io::MotBox>& gt,

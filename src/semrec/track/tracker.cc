@@ -25,7 +25,8 @@ double Iou(const Box& a, const Box& b) {
       std::min(a.top + a.height, b.top + b.height) - std::max(a.top, b.top);
   if (w <= 0 || h <= 0) return 0.0;
   const double inter = w * h;
-  return inter / (a.width * a.height + b.width * b.height - inter);
+  const double uni = a.width * a.height + b.width * b.height - inter;
+  return uni > 0.0 ? inter / uni : 0.0;
 }
 
 void TrackerOptions::Check() const {
