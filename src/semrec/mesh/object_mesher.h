@@ -1,0 +1,61 @@
+// Per-object TSDF meshing: one Open3D ScalableTSDFVolume per object, each
+// integrating only that object's pixels (depth masked by the object's mask) at
+// the frame's pose.
+#pragma once
+
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <vector>
+
+#include <open3d/geometry/TriangleMesh.h>
+
+#include "semrec/core/frame.h"
+#include "semrec/core/label_map.h"
+#include "semrec/mesh/tsdf_integrator.h"
+
+namespace semrec::mesh {
+
+struct ObjectMeshingOptions {
+  /// Voxel size of each object's volume: 2 cm keeps furniture detail at a
+  /// fraction of the memory of 1 cm.
+  TsdfOptions tsdf = {0.02, 0.08, 4.0, true};
+  /// Objects integrated in fewer frames are not meshed (spurious segments).
+  size_t min_observations = 1;
+  void Check() const;
+};
+
+class ObjectMesher {
+ public:
+  explicit ObjectMesher(const ObjectMeshingOptions& options = {});
+  ~ObjectMesher();
+
+  /// Integrates, for every (label, object id) pair, the pixels of `frame` whose
+  /// `labels` value is `label` into object `object_id`'s volume. Marks those
+  /// objects as changed.
+  void Integrate(
+      const Frame& frame, const LabelMap& labels,
+      const std::vector<std::pair<uint16_t, uint32_t>>& label_to_object);
+
+  /// Meshes of the objects changed since the last call (all objects with enough
+  /// observations on the first call); unchanged objects keep their previous
+  /// mesh, so only changed objects are re-meshed.
+  std::map<uint32_t, std::shared_ptr<open3d::geometry::TriangleMesh>>
+  UpdateMeshes();
+
+  size_t remeshed_last_update() const { return remeshed_last_update_; }
+  size_t num_objects() const { return objects_.size(); }
+
+ private:
+  struct Object {
+    std::unique_ptr<TsdfIntegrator> volume;
+    size_t observations = 0;
+    bool changed = false;
+    std::shared_ptr<open3d::geometry::TriangleMesh> mesh;
+  };
+  ObjectMeshingOptions options_;
+  std::map<uint32_t, Object> objects_;
+  size_t remeshed_last_update_ = 0;
+};
+
+}  // namespace semrec::mesh
