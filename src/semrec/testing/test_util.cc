@@ -55,4 +55,21 @@ void WriteText(const fs::path& path, const std::string& text) {
   out << text;
 }
 
+std::optional<nlohmann::json> ValidateUsd(const fs::path& file,
+                                          const fs::path& scratch) {
+  const fs::path pkg = SourceDir() / ".deps/node/node_modules/tinyusdz";
+  if (!fs::is_regular_file(pkg / "tinyusdz.wasm") ||
+      std::system("node --version >/dev/null 2>&1") != 0) {
+    return std::nullopt;
+  }
+  const fs::path script = SourceDir() / "src/semrec/usd/validate_usd.mjs";
+  const fs::path out = scratch / "validation.json";
+  const std::string cmd = "node '" + script.string() + "' '" + pkg.string() +
+                          "' '" + file.string() + "' > '" + out.string() +
+                          "' 2>/dev/null";
+  if (std::system(cmd.c_str()) != 0) return std::nullopt;
+  std::ifstream in(out);
+  return nlohmann::json::parse(in);
+}
+
 }  // namespace semrec::testing

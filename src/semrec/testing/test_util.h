@@ -6,6 +6,7 @@
 #include <string>
 
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 
 namespace semrec::testing {
 
@@ -37,6 +38,13 @@ std::optional<std::filesystem::path> SampleDataDir();
 std::filesystem::path ModelDir();
 
 void WriteText(const std::filesystem::path& path, const std::string& text);
+
+/// Parses a USD file with the independent parser (tinyusdz in node, installed
+/// by scripts/setup) and returns its report {ok, error, meshes: [{path, points,
+/// faceVertexCounts, faceVertexIndices}], layer}; nullopt when node or tinyusdz
+/// is missing. `scratch` is a folder for the report file.
+std::optional<nlohmann::json> ValidateUsd(const std::filesystem::path& file,
+                                          const std::filesystem::path& scratch);
 
 }  // namespace semrec::testing
 

@@ -33,29 +33,10 @@ MeshPrim Tetrahedron(const std::string& label, uint32_t id, bool per_vertex) {
   return m;
 }
 
-// Runs the independent parser (tinyusdz in node) on `file`; nullopt when it is
-// not installed.
-std::optional<nlohmann::json> Validate(const fs::path& file,
-                                       const fs::path& scratch) {
-  const fs::path pkg =
-      testing::SourceDir() / ".deps/node/node_modules/tinyusdz";
-  if (!fs::is_regular_file(pkg / "tinyusdz.wasm") ||
-      std::system("node --version >/dev/null 2>&1") != 0) {
-    return std::nullopt;
-  }
-  const fs::path script =
-      testing::SourceDir() / "src/semrec/usd/validate_usd.mjs";
-  const fs::path out = scratch / "validation.json";
-  const std::string cmd = "node " + script.string() + " " + pkg.string() + " " +
-                          file.string() + " > " + out.string() + " 2>/dev/null";
-  if (std::system(cmd.c_str()) != 0) return std::nullopt;
-  return nlohmann::json::parse(ReadTextFile(out));
-}
-
-#define SEMREC_REQUIRE_VALIDATOR(var, file, dir) \
-  const auto var = Validate(file, dir);          \
-  if (!var)                                      \
-  GTEST_SKIP()                                   \
+#define SEMREC_REQUIRE_VALIDATOR(var, file, dir)    \
+  const auto var = testing::ValidateUsd(file, dir); \
+  if (!var)                                         \
+  GTEST_SKIP()                                      \
       << "tinyusdz (npm) or node missing: run scripts/setup to install it"
 
 TEST(Usda, IndependentParserReadsWhatWeWrite) {

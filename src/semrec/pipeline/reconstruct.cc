@@ -1,0 +1,163 @@
+#include "semrec/pipeline/reconstruct.h"
+
+#include <chrono>
+#include <map>
+
+#include <fmt/format.h>
+#include <spdlog/spdlog.h>
+#include <nlohmann/json.hpp>
+
+#include "semrec/core/error.h"
+#include "semrec/core/file_util.h"
+#include "semrec/io/ply_io.h"
+
+namespace fs = std::filesystem;
+
+namespace semrec::pipeline {
+
+void ReconstructOptions::Check() const {
+  fusion.Check();
+  extraction.Check();
+  meshing.Check();
+  stage.Check();
+}
+
+ReconstructResult Reconstruct(const io::SequenceReader& reader,
+                              const fuse::SegmentationSource& source,
+                              const ReconstructOptions& options,
+                              const fs::path& out_dir,
+                              const ProgressOptions& progress_options) {
+  options.Check();
+  const auto start = std::chrono::steady_clock::now();
+  std::error_code ec;
+  if (fs::exists(out_dir, ec) && !fs::is_empty(out_dir, ec) &&
+      !options.overwrite) {
+    throw IoError(
+        out_dir,
+        "output folder is not empty (use --overwrite to replace its files)");
+  }
+  fs::create_directories(out_dir, ec);
+  if (ec)
+    throw IoError(out_dir, "cannot create output folder: " + ec.message());
+
+  // Pass 1: fusion; remember which frame label went into which segment.
+  fuse::SceneFusion fusion(options.fusion);
+  std::vector<std::vector<std::pair<uint16_t, uint32_t>>> assignments(
+      reader.size());
+  {
+    Progress progress("fusing", reader.size(), progress_options);
+    for (size_t i = 0; i < reader.size(); ++i) {
+      const auto segments =
+          fuse::ExtractFrameSegments(reader.Read(i), source.Get(reader, i),
+                                     source.classes(), options.extraction);
+      const fuse::FrameFusionStats stats = fusion.Integrate(segments, i);
+      for (size_t k = 0; k < segments.size(); ++k) {
+        assignments[i].emplace_back(segments[k].source_label,
+                                    stats.assigned_ids[k]);
+      }
+      progress.Tick();
+    }
+  }
+  // Pass 2: per-object volumes with the final ids.
+  mesh::ObjectMesher mesher(options.meshing);
+  {
+    Progress progress("meshing", reader.size(), progress_options);
+    for (size_t i = 0; i < reader.size(); ++i) {
+      for (auto& [label, id] : assignments[i]) id = fusion.ResolveId(id);
+      if (!assignments[i].empty()) {
+        mesher.Integrate(reader.Read(i), source.Get(reader, i).instance,
+                         assignments[i]);
+      }
+      progress.Tick();
+    }
+  }
+  const auto meshes = mesher.UpdateMeshes();
+
+  ReconstructResult result;
+  result.frames = reader.size();
+  std::vector<usd::MeshPrim> prims;
+  nlohmann::json objects = nlohmann::json::array();
+  for (const fuse::SceneSegment& s : fusion.segments()) {
+    const auto it = meshes.find(s.id);
+    if (it == meshes.end() || it->second->triangles_.empty()) {
+      ++result.skipped_empty_objects;
+      spdlog::warn("object {} ({}) has no surface to mesh; skipped", s.id,
+                   source.classes().Get(s.class_id).name);
+      continue;
+    }
+    const open3d::geometry::TriangleMesh& m = *it->second;
+    const LabelClass& cls = source.classes().Get(s.class_id);
+    usd::MeshPrim prim;
+    prim.label = cls.name;
+    prim.instance_id = s.id;
+    prim.color = cls.color;
+    prim.point_count = s.points.size();
+    prim.first_seen_frame = s.first_seen_frame;
+    prim.last_seen_frame = s.last_seen_frame;
+    for (size_t v = 0; v < m.vertices_.size(); ++v) {
+      prim.points.push_back(m.vertices_[v].cast<float>());
+      if (m.HasVertexNormals())
+        prim.normals.push_back(m.vertex_normals_[v].cast<float>());
+      if (m.HasVertexColors()) {
+        const Eigen::Vector3d c =
+            (m.vertex_colors_[v] * 255.0).cwiseMax(0.0).cwiseMin(255.0);
+        prim.vertex_colors.push_back({static_cast<uint8_t>(c.x() + 0.5),
+                                      static_cast<uint8_t>(c.y() + 0.5),
+                                      static_cast<uint8_t>(c.z() + 0.5)});
+      }
+    }
+    for (const auto& t : m.triangles_) {
+      prim.triangles.push_back({static_cast<uint32_t>(t.x()),
+                                static_cast<uint32_t>(t.y()),
+                                static_cast<uint32_t>(t.z())});
+    }
+    result.triangles += prim.triangles.size();
+    const std::string ply =
+        fmt::format("objects/{:04}_{}.ply", s.id, usd::SanitizeName(cls.name));
+    if (options.write_ply) {
+      io::PlyData data;
+      data.points = prim.points;
+      data.colors = prim.vertex_colors;
+      data.triangles = prim.triangles;
+      io::WritePly(out_dir / ply, data);
+    }
+    objects.push_back({{"id", s.id},
+                       {"class", cls.name},
+                       {"vertices", prim.points.size()},
+                       {"triangles", prim.triangles.size()},
+                       {"fused_points", s.points.size()},
+                       {"first_seen_frame", s.first_seen_frame},
+                       {"last_seen_frame", s.last_seen_frame},
+                       {"ply", options.write_ply ? ply : ""}});
+    prims.push_back(std::move(prim));
+  }
+  result.objects = prims.size();
+  usd::StageOptions stage = options.stage;
+  stage.custom_layer_data["input"] =
+      fmt::format("{} ({} layout, {} frames)", reader.root().string(),
+                  reader.layout(), reader.size());
+  const auto& f = options.fusion;
+  const auto& t = options.meshing.tsdf;
+  stage.custom_layer_data["options"] = fmt::format(
+      "fusion: alpha {} corr_voxel_size_m {} store_voxel_size_m {} "
+      "max_corr_dist_m {} "
+      "label_gating {}; tsdf: voxel_size_m {} sdf_trunc_m {} max_depth_m {}",
+      f.alpha, f.corr_voxel_size_m, f.store_voxel_size_m, f.max_corr_dist_m,
+      f.label_gating, t.voxel_size_m, t.sdf_trunc_m, t.max_depth_m);
+  usd::WriteScene(out_dir, prims, stage);
+  result.seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start)
+          .count();
+  WriteTextFileAtomic(
+      out_dir / "summary.json",
+      nlohmann::json({{"input", stage.custom_layer_data["input"]},
+                      {"options", stage.custom_layer_data["options"]},
+                      {"objects", objects},
+                      {"skipped_empty_objects", result.skipped_empty_objects},
+                      {"seconds", result.seconds}})
+              .dump(2) +
+          "\n");
+  return result;
+}
+
+}  // namespace semrec::pipeline

@@ -1,0 +1,51 @@
+// The reconstruction pipeline from labelled RGB-D frames to a USD scene:
+// semantics-guided fusion decides which frame segments belong to which object,
+// then each object's pixels are integrated into its own TSDF volume and meshed,
+// and the scene is written as USD (+ PLY per object).
+//
+// Volumes are built from the stored observations once fusion has settled the
+// final object ids (a second pass over the frames): when fusion merges two
+// objects, their observations simply go into one volume, so merged objects need
+// no volume merging.
+#pragma once
+
+#include <filesystem>
+#include <string>
+
+#include "semrec/core/progress.h"
+#include "semrec/fuse/fusion.h"
+#include "semrec/fuse/segments.h"
+#include "semrec/io/sequence_reader.h"
+#include "semrec/mesh/object_mesher.h"
+#include "semrec/usd/usda_writer.h"
+
+namespace semrec::pipeline {
+
+struct ReconstructOptions {
+  fuse::FusionOptions fusion;
+  fuse::SegmentExtractionOptions extraction;
+  mesh::ObjectMeshingOptions meshing;
+  usd::StageOptions stage;
+  /// Also write objects/<id>_<class>.ply for tools that do not read USD.
+  bool write_ply = true;
+  /// Write into a non-empty output folder.
+  bool overwrite = false;
+  void Check() const;
+};
+
+struct ReconstructResult {
+  size_t frames = 0;
+  size_t objects = 0;
+  size_t skipped_empty_objects = 0;
+  size_t triangles = 0;
+  double seconds = 0.0;
+};
+
+/// Writes `out_dir`/scene.usda, static.usda, objects/*.ply and summary.json.
+ReconstructResult Reconstruct(const io::SequenceReader& reader,
+                              const fuse::SegmentationSource& source,
+                              const ReconstructOptions& options,
+                              const std::filesystem::path& out_dir,
+                              const ProgressOptions& progress = {});
+
+}  // namespace semrec::pipeline
