@@ -29,5 +29,6 @@ void RegisterSynth(CLI::App& app);
 void RegisterFuse(CLI::App& app);
 void RegisterEval(CLI::App& app);
 void RegisterTrack(CLI::App& app);
+void RegisterMesh(CLI::App& app);
 
 }  // namespace semrec::cli

@@ -28,6 +28,7 @@ int main(int argc, char** argv) {
   semrec::cli::RegisterFuse(app);
   semrec::cli::RegisterEval(app);
   semrec::cli::RegisterTrack(app);
+  semrec::cli::RegisterMesh(app);
   app.parse_complete_callback([&] { semrec::InitLogging(log_level); });
   try {
     app.parse(argc, argv);
