@@ -42,6 +42,11 @@ ls "$tmp/fused/segments" | grep -q "_chair.ply" || fail "fuse: no per-segment PL
 grep -q "meshing 3/3" "$tmp/mesh.err" || fail "mesh: no progress report"
 [ -s "$tmp/scene/scene.usda" ] && [ -s "$tmp/scene/static.usda" ] || fail "mesh: no USD written"
 grep -q 'semantics:labels:class = \["chair"\]' "$tmp/scene/static.usda" || fail "mesh: no chair prim"
+"$SEMREC" query "$tmp/scene/scene.usda" --class chair --json >"$tmp/q.json" || fail "query failed"
+grep -q '"class": "chair"' "$tmp/q.json" || fail "query: no chair: $(cat "$tmp/q.json")"
+[ "$(grep -c '"class"' "$tmp/q.json")" -eq 1 ] || fail "query --class returned other classes"
+"$SEMREC" query "$tmp/scene/scene.usda" >"$tmp/q.txt" || fail "query (table) failed"
+grep -q "objects" "$tmp/q.txt" || fail "query: no table"
 "$SEMREC" mesh "$tmp/syn" --out "$tmp/scene" 2>"$tmp/err"; rc=$?
 [ "$rc" -eq 1 ] && grep -q "not empty" "$tmp/err" || fail "mesh overwrote a non-empty folder"
 "$SEMREC" eval c2c "$tmp/fused/fused.ply" "$tmp/syn/gt/surface_points.ply" --json >"$tmp/c2c.json" ||

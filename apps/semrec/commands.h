@@ -30,5 +30,6 @@ void RegisterFuse(CLI::App& app);
 void RegisterEval(CLI::App& app);
 void RegisterTrack(CLI::App& app);
 void RegisterMesh(CLI::App& app);
+void RegisterQuery(CLI::App& app);
 
 }  // namespace semrec::cli

@@ -29,6 +29,7 @@ int main(int argc, char** argv) {
   semrec::cli::RegisterEval(app);
   semrec::cli::RegisterTrack(app);
   semrec::cli::RegisterMesh(app);
+  semrec::cli::RegisterQuery(app);
   app.parse_complete_callback([&] { semrec::InitLogging(log_level); });
   try {
     app.parse(argc, argv);

@@ -112,3 +112,31 @@ TEST(Usda, NamesAndErrors) {
 
 }  // namespace
 }  // namespace semrec::usd
+
+#include "semrec/usd/usda_reader.h"
+
+namespace semrec::usd {
+namespace {
+
+TEST(Usda, RoundTripThroughOurReader) {
+  testing::TempDir dir;
+  const std::vector<MeshPrim> meshes = {
+      Tetrahedron("chair", 5, true), Tetrahedron("potted \"plant\"", 7, false)};
+  WriteScene(dir.path(), meshes, {});
+  const std::vector<MeshPrim> back =
+      ReadScene(dir / "scene.usda");  // follows subLayers
+  ASSERT_EQ(back.size(), 2u);
+  for (size_t i = 0; i < 2; ++i) {
+    EXPECT_EQ(back[i].label, meshes[i].label);
+    EXPECT_EQ(back[i].instance_id, meshes[i].instance_id);
+    EXPECT_EQ(back[i].points, meshes[i].points);
+    EXPECT_EQ(back[i].triangles, meshes[i].triangles);
+    EXPECT_EQ(back[i].point_count, 1234u);
+    EXPECT_EQ(back[i].last_seen_frame, 9u);
+  }
+  testing::WriteText(dir / "x.usda", "hello");
+  EXPECT_THROW(ReadScene(dir / "x.usda"), FormatError);
+}
+
+}  // namespace
+}  // namespace semrec::usd
