@@ -22,6 +22,11 @@ struct ObjectMeshingOptions {
   TsdfOptions tsdf = {0.02, 0.08, 4.0, true};
   /// Objects integrated in fewer frames are not meshed (spurious segments).
   size_t min_observations = 1;
+  /// Mask pixels within this many pixels of another label are not integrated:
+  /// depth at mask borders often belongs to the neighbour (mixed pixels,
+  /// lateral noise, imprecise masks) and would add stray surfaces to the
+  /// object.
+  int mask_erosion_px = 1;
   void Check() const;
 };
 

@@ -36,5 +36,29 @@ TEST(ObjectMesher, MasksAndRemeshesOnlyChangedObjects) {
   EXPECT_EQ(mesher.remeshed_last_update(), 0u);
 }
 
+// A thin stray label inside another object (4 px) is eroded away entirely with
+// a 2-px erosion.
+TEST(ObjectMesher, ErosionDropsThinMaskFringes) {
+  Frame frame;
+  frame.intrinsics = {64, 48, 50.0, 50.0, 31.5, 23.5};
+  frame.color = ColorImage(64, 48, 3, 100);
+  frame.depth = DepthImage(64, 48, 1, 1.0f);
+  LabelMap labels(64, 48, 1, 1);
+  for (int v = 0; v < 48; ++v) {
+    for (int u = 40; u < 44; ++u) labels(u, v) = 2;
+  }
+  ObjectMeshingOptions erode2;
+  erode2.mask_erosion_px = 2;
+  ObjectMesher eroded(erode2);
+  eroded.Integrate(frame, labels, {{1, 1}, {2, 2}});
+  const auto meshes = eroded.UpdateMeshes();
+  EXPECT_TRUE(meshes.count(2) == 0 || meshes.at(2)->vertices_.empty());
+  ObjectMeshingOptions no_erosion;
+  no_erosion.mask_erosion_px = 0;
+  ObjectMesher raw(no_erosion);
+  raw.Integrate(frame, labels, {{2, 2}});
+  EXPECT_FALSE(raw.UpdateMeshes().at(2)->vertices_.empty());
+}
+
 }  // namespace
 }  // namespace semrec::mesh
