@@ -3,6 +3,7 @@
 #include <unistd.h>
 
 #include <atomic>
+#include <cstdlib>
 #include <fstream>
 #include <iterator>
 #include <sstream>
@@ -85,6 +86,18 @@ void RequireDirectory(const fs::path& path, const std::string& what) {
   if (!fs::is_directory(path, ec)) {
     throw IoError(path, what + " is not a folder");
   }
+}
+
+std::filesystem::path ProjectDataDir() {
+  if (const char* env = std::getenv("SEMREC_DATA_DIR"); env && *env) {
+    return env;
+  }
+  return SEMREC_DEFAULT_DATA_DIR;
+}
+
+std::filesystem::path DefaultModelDir() {
+  if (const char* env = std::getenv("SEMREC_MODELS"); env && *env) return env;
+  return SEMREC_DEFAULT_MODEL_DIR;
 }
 
 }  // namespace semrec

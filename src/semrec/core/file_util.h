@@ -34,4 +34,13 @@ void RequireFile(const std::filesystem::path& path,
 void RequireDirectory(const std::filesystem::path& path,
                       const std::string& what = "folder");
 
+/// The folder of the project's data files (label sets, model registry):
+/// $SEMREC_DATA_DIR when set, else the `data/` folder of the source tree this
+/// library was built from.
+std::filesystem::path ProjectDataDir();
+
+/// The model cache filled by scripts/setup: $SEMREC_MODELS when set, else
+/// `.deps/models` in the source tree this library was built from.
+std::filesystem::path DefaultModelDir();
+
 }  // namespace semrec

@@ -1,5 +1,6 @@
 #include "semrec/infer/onnx_session.h"
 
+#include <dlfcn.h>
 #include <onnxruntime_cxx_api.h>
 
 #include <algorithm>
@@ -7,6 +8,7 @@
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 
+#include <spdlog/spdlog.h>
 #include "semrec/core/error.h"
 #include "semrec/core/file_util.h"
 
@@ -15,6 +17,8 @@ namespace semrec::infer {
 void OnnxSessionOptions::Check() const {
   CheckArgument(intra_op_threads >= 0,
                 "onnx session: intra_op_threads must be >= 0");
+  CheckArgument(provider == "auto" || provider == "cpu" || provider == "cuda",
+                "onnx session: provider must be auto, cpu or cuda");
 }
 
 size_t Tensor::NumElements(const std::vector<int64_t>& shape) {
@@ -52,6 +56,21 @@ TensorInfo Describe(const std::string& name, const Ort::TypeInfo& type) {
   return info;
 }
 
+// ONNX Runtime loads its CUDA provider from a library beside its own; looking
+// first avoids an error log on every CPU-only machine.
+bool CudaProviderInstalled() {
+  static const bool installed = [] {
+    Dl_info info{};
+    if (dladdr(reinterpret_cast<void*>(&OrtGetApiBase), &info) == 0 ||
+        info.dli_fname == nullptr) {
+      return false;
+    }
+    const auto dir = std::filesystem::path(info.dli_fname).parent_path();
+    return std::filesystem::exists(dir / "libonnxruntime_providers_cuda.so");
+  }();
+  return installed;
+}
+
 }  // namespace
 
 OnnxSession::OnnxSession(const std::filesystem::path& model_path,
@@ -64,6 +83,24 @@ OnnxSession::OnnxSession(const std::filesystem::path& model_path,
   session_options.SetGraphOptimizationLevel(
       options.optimize ? GraphOptimizationLevel::ORT_ENABLE_ALL
                        : GraphOptimizationLevel::ORT_DISABLE_ALL);
+  if (options.provider == "cuda" ||
+      (options.provider == "auto" && CudaProviderInstalled())) {
+    // The CUDA provider is a separate shared library that needs a GPU and the
+    // CUDA runtime; appending it fails cleanly when either is missing.
+    try {
+      OrtCUDAProviderOptions cuda;
+      session_options.AppendExecutionProvider_CUDA(cuda);
+      provider_ = "cuda";
+    } catch (const Ort::Exception& e) {
+      if (options.provider == "cuda") {
+        throw Error(
+            model_path.string() +
+            ": the CUDA execution provider is unavailable: " + e.what());
+      }
+      spdlog::debug("{}: CUDA unavailable ({}), running on the CPU",
+                    model_path.filename().string(), e.what());
+    }
+  }
   try {
     impl_->session =
         Ort::Session(impl_->env, model_path.c_str(), session_options);

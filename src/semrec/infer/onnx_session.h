@@ -18,6 +18,9 @@ struct OnnxSessionOptions {
   int intra_op_threads = 0;
   /// Enable all graph optimisations (slower load, faster runs).
   bool optimize = true;
+  /// "auto": CUDA when ONNX Runtime can use it at run time, else CPU; "cpu";
+  /// "cuda": fail when CUDA is unavailable.
+  std::string provider = "auto";
   void Check() const;
 };
 
@@ -51,6 +54,8 @@ class OnnxSession {
   const std::vector<TensorInfo>& inputs() const { return inputs_; }
   const std::vector<TensorInfo>& outputs() const { return outputs_; }
   const std::filesystem::path& model_path() const { return model_path_; }
+  /// The execution provider in use: "cpu" or "cuda".
+  const std::string& provider() const { return provider_; }
 
   /// Runs the model. Every model input must be given, with a matching rank and
   /// fixed dims. Returns all outputs by name. Throws InvalidArgument for
@@ -64,6 +69,7 @@ class OnnxSession {
  private:
   struct Impl;
   std::filesystem::path model_path_;
+  std::string provider_ = "cpu";
   std::unique_ptr<Impl> impl_;
   std::vector<TensorInfo> inputs_;
   std::vector<TensorInfo> outputs_;

@@ -1,6 +1,5 @@
 #include "semrec/io/label_set_io.h"
 
-#include <cstdlib>
 #include <map>
 
 #include <nlohmann/json.hpp>
@@ -37,21 +36,19 @@ LabelSet ReadLabelSetJson(const std::filesystem::path& path) {
   return labels;
 }
 
-std::filesystem::path ProjectDataDir() {
-  if (const char* env = std::getenv("SEMREC_DATA_DIR"); env && *env) {
-    return env;
-  }
-  return SEMREC_DEFAULT_DATA_DIR;
-}
-
 LabelSet LoadLabelSet(const std::string& name_or_path) {
   static const std::map<std::string, std::string> kAliases = {
-      {"voc", "voc21"},           {"voc21", "voc21"},
-      {"ade20k", "ade20k150"},    {"ade20k150", "ade20k150"},
-      {"coco", "coco80"},         {"coco80", "coco80"},
-      {"cityscapes", "cityscapes19"}, {"cityscapes19", "cityscapes19"}};
+      {"voc", "voc21"},
+      {"voc21", "voc21"},
+      {"ade20k", "ade20k150"},
+      {"ade20k150", "ade20k150"},
+      {"coco", "coco80"},
+      {"coco80", "coco80"},
+      {"cityscapes", "cityscapes19"},
+      {"cityscapes19", "cityscapes19"}};
   if (auto it = kAliases.find(name_or_path); it != kAliases.end()) {
-    return ReadLabelSetJson(ProjectDataDir() / "labels" / (it->second + ".json"));
+    return ReadLabelSetJson(ProjectDataDir() / "labels" /
+                            (it->second + ".json"));
   }
   if (std::filesystem::is_regular_file(name_or_path)) {
     return ReadLabelSetJson(name_or_path);

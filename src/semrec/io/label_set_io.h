@@ -12,13 +12,9 @@ namespace semrec::io {
 /// duplicates.
 LabelSet ReadLabelSetJson(const std::filesystem::path& path);
 
-/// The folder of the project's data files (label sets, model registry):
-/// $SEMREC_DATA_DIR when set, else the `data/` folder of the source tree this
-/// library was built from.
-std::filesystem::path ProjectDataDir();
-
 /// A label set by name ("voc"/"voc21", "ade20k"/"ade20k150", "coco"/"coco80",
-/// "cityscapes"/"cityscapes19"; files in ProjectDataDir()/labels) or by the
+/// "cityscapes"/"cityscapes19"; files in ProjectDataDir()/labels, see
+/// core/file_util.h) or by the
 /// path of a JSON file in the ReadLabelSetJson format. Throws InvalidArgument
 /// for an unknown name that is not a file either.
 LabelSet LoadLabelSet(const std::string& name_or_path);

@@ -1,0 +1,96 @@
+// The model registry: a data file (data/models.yaml, or a user's own) saying
+// what each model file is and how to feed it, so a new export needs a registry
+// entry, not code.
+#pragma once
+
+#include <array>
+#include <filesystem>
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace semrec::infer {
+
+enum class TensorLayout { kNCHW, kNHWC };
+enum class ColorOrder { kRGB, kBGR };
+enum class ResizePolicy {
+  /// Resize to the input size, ignoring the aspect ratio.
+  kStretch,
+  /// Scale to fit keeping the aspect ratio, image at the top-left, the rest
+  /// padded.
+  kLetterbox,
+};
+
+/// How an image becomes the model's input tensor.
+struct ImageInputSpec {
+  std::string name;
+  TensorLayout layout = TensorLayout::kNCHW;
+  int width = 0;
+  int height = 0;
+  ColorOrder color = ColorOrder::kRGB;
+  ResizePolicy resize = ResizePolicy::kStretch;
+  /// Letterbox padding: `pad_value` in 0..255 before normalising
+  /// (pad_normalized = false), or 0 after normalising (pad_normalized = true,
+  /// as SAM does).
+  float pad_value = 0.0f;
+  bool pad_normalized = false;
+  /// Per channel in the model's colour order: (x - mean) / std, x in 0..255.
+  std::array<float, 3> mean = {0, 0, 0};
+  std::array<float, 3> std = {1, 1, 1};
+};
+
+struct OutputSpec {
+  std::string name;
+  TensorLayout layout = TensorLayout::kNCHW;
+};
+
+/// A tensor name and shape; -1 = any size.
+struct TensorSignature {
+  std::string name;
+  std::vector<int64_t> shape;
+};
+
+struct ModelEntry {
+  std::string name;
+  std::string file;
+  /// Lower-case hex; empty = not checked.
+  std::string sha256;
+  /// semantic | mask_encoder | mask_decoder | detector
+  std::string role;
+  std::string label_set;
+  int label_offset = 0;
+  std::optional<ImageInputSpec> input;
+  std::optional<OutputSpec> output;
+  std::vector<TensorSignature> inputs;
+  std::vector<TensorSignature> outputs;
+};
+
+class ModelRegistry {
+ public:
+  /// Parses a registry file. Throws IoError / FormatError naming the file and
+  /// the model whose entry is wrong.
+  static ModelRegistry Load(const std::filesystem::path& path);
+  /// data/models.yaml of the project (see ProjectDataDir()).
+  static ModelRegistry LoadDefault();
+  /// The default registry's path.
+  static std::filesystem::path DefaultPath();
+
+  const std::filesystem::path& path() const { return path_; }
+  bool Contains(const std::string& name) const {
+    return entries_.count(name) != 0;
+  }
+  /// Throws InvalidArgument listing the known names.
+  const ModelEntry& Get(const std::string& name) const;
+  std::vector<std::string> Names() const;
+  /// Adds or replaces an entry (e.g. from a user's registry).
+  void Add(const ModelEntry& entry);
+  /// Adds all entries of `other`, replacing same-named ones.
+  void Merge(const ModelRegistry& other);
+
+ private:
+  std::filesystem::path path_;
+  std::map<std::string, ModelEntry> entries_;
+};
+
+}  // namespace semrec::infer
