@@ -1,0 +1,40 @@
+#include "semrec/segment/hybrid_segmenter.h"
+
+#include <chrono>
+
+namespace semrec::segment {
+
+void HybridSegmenterOptions::Check() const {
+  semantic.Check();
+  if (use_masks) masks.Check();
+}
+
+HybridSegmenter::HybridSegmenter(const infer::ModelRegistry& registry,
+                                 const HybridSegmenterOptions& options)
+    : options_(options) {
+  options_.Check();
+  semantic_ = std::make_unique<SemanticSegmenter>(registry, options_.semantic);
+  if (options_.use_masks) {
+    masks_ = MaskGenerator::Create(registry, options_.masks);
+  }
+}
+
+HybridResult HybridSegmenter::Segment(const ColorImage& rgb) {
+  using Clock = std::chrono::steady_clock;
+  HybridResult result;
+  const auto t0 = Clock::now();
+  result.semantic_branch = semantic_->Segment(rgb);
+  const auto t1 = Clock::now();
+  result.semantic_seconds = std::chrono::duration<double>(t1 - t0).count();
+  if (masks_) {
+    result.masks = masks_->Generate(rgb);
+    result.mask_stats = masks_->stats();
+  }
+  const auto t2 = Clock::now();
+  result.vote = Vote(result.semantic_branch.labels, result.masks);
+  result.vote_seconds =
+      std::chrono::duration<double>(Clock::now() - t2).count();
+  return result;
+}
+
+}  // namespace semrec::segment

@@ -1,0 +1,307 @@
+#include "semrec/segment/mask_generator.h"
+
+#include <algorithm>
+#include <chrono>
+#include <numeric>
+
+#include <tbb/parallel_for.h>
+#include <opencv2/imgproc.hpp>
+
+#include "semrec/core/error.h"
+
+namespace semrec::segment {
+
+void MaskGeneratorOptions::Check() const {
+  model.Check();
+  CheckArgument(points_per_side >= 1 && points_per_side <= 256,
+                "mask generator: points_per_side must be in 1..256");
+  CheckArgument(pred_iou_threshold >= 0 && pred_iou_threshold <= 1,
+                "mask generator: pred_iou_threshold must be in [0, 1]");
+  CheckArgument(stability_threshold >= 0 && stability_threshold <= 1,
+                "mask generator: stability_threshold must be in [0, 1]");
+  CheckArgument(stability_offset >= 0,
+                "mask generator: stability_offset must be >= 0");
+  CheckArgument(box_nms_threshold > 0 && box_nms_threshold <= 1,
+                "mask generator: box_nms_threshold must be in (0, 1]");
+  CheckArgument(min_region_area_px >= 0,
+                "mask generator: min_region_area_px must be >= 0");
+  CheckArgument(prompts_per_wave >= 1,
+                "mask generator: prompts_per_wave must be >= 1");
+}
+
+float StabilityScore(const std::vector<float>& logits, float threshold,
+                     float offset) {
+  int64_t inter = 0, uni = 0;
+  for (float v : logits) {
+    inter += v > threshold + offset;
+    uni += v > threshold - offset;
+  }
+  return uni > 0 ? float(inter) / float(uni) : 1.0f;
+}
+
+namespace {
+
+// Components of `bin` (0/255, padded crop) with area < min_area are set to
+// `fill`; returns whether anything changed. When every foreground component
+// is small the largest is kept (as SAM does), so a small object is not erased.
+bool RemoveSmall(cv::Mat* bin, int min_area, bool holes) {
+  cv::Mat target = holes ? (*bin == 0) : (*bin != 0);
+  cv::Mat labels, stats, centroids;
+  const int n = cv::connectedComponentsWithStats(target, labels, stats,
+                                                 centroids, holes ? 4 : 8);
+  std::vector<uint8_t> small(n, 0);
+  int largest = 0, kept = 0;
+  for (int i = 1; i < n; ++i) {
+    const int area = stats.at<int>(i, cv::CC_STAT_AREA);
+    small[i] = area < min_area;
+    kept += !small[i];
+    if (largest == 0 || area > stats.at<int>(largest, cv::CC_STAT_AREA)) {
+      largest = i;
+    }
+  }
+  if (!holes && kept == 0 && largest > 0) small[largest] = 0;
+  bool changed = false;
+  for (int y = 0; y < labels.rows; ++y) {
+    const int* row = labels.ptr<int>(y);
+    uint8_t* out = bin->ptr<uint8_t>(y);
+    for (int x = 0; x < labels.cols; ++x) {
+      if (row[x] > 0 && small[row[x]]) {
+        out[x] = holes ? 255 : 0;
+        changed = true;
+      }
+    }
+  }
+  return changed;
+}
+
+}  // namespace
+
+void RemoveSmallRegions(Mask* mask, int min_area_px) {
+  if (min_area_px <= 0 || mask->area == 0) return;
+  // Pad by one pixel so the background around the mask is one component and
+  // is never mistaken for a hole.
+  const Box b = mask->box;
+  cv::Mat bin = cv::Mat::zeros(b.height() + 2, b.width() + 2, CV_8U);
+  for (int y = 0; y < b.height(); ++y) {
+    for (int x = 0; x < b.width(); ++x) {
+      bin.at<uint8_t>(y + 1, x + 1) =
+          mask->bits[size_t(y) * b.width() + x] ? 255 : 0;
+    }
+  }
+  bool changed = RemoveSmall(&bin, min_area_px, /*holes=*/true);
+  changed |= RemoveSmall(&bin, min_area_px, /*holes=*/false);
+  if (!changed) return;
+  for (int y = 0; y < b.height(); ++y) {
+    for (int x = 0; x < b.width(); ++x) {
+      mask->bits[size_t(y) * b.width() + x] =
+          bin.at<uint8_t>(y + 1, x + 1) != 0;
+    }
+  }
+  Tighten(mask);
+}
+
+std::vector<Mask> BoxNms(std::vector<Mask> masks, float threshold) {
+  std::vector<size_t> order(masks.size());
+  std::iota(order.begin(), order.end(), 0);
+  std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) {
+    return masks[a].predicted_iou > masks[b].predicted_iou;
+  });
+  std::vector<Mask> kept;
+  for (size_t i : order) {
+    const bool suppressed = std::any_of(
+        kept.begin(), kept.end(),
+        [&](const Mask& k) { return BoxIoU(k.box, masks[i].box) > threshold; });
+    if (!suppressed) kept.push_back(std::move(masks[i]));
+  }
+  return kept;
+}
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double Seconds(Clock::time_point a, Clock::time_point b) {
+  return std::chrono::duration<double>(b - a).count();
+}
+
+// Grid points, coarse to fine: points on every 16th row/column first, then
+// every 8th, ..., so that large objects are found by the first prompts and
+// the covered-point skip removes most of the rest.
+std::vector<std::array<float, 2>> GridPoints(int n, int width, int height) {
+  struct P {
+    int level, i, j;
+  };
+  std::vector<P> points;
+  for (int j = 0; j < n; ++j) {
+    for (int i = 0; i < n; ++i) {
+      int level = 0;
+      while (level < 16 && ((i | j) & (1 << level)) == 0) ++level;
+      points.push_back({level, i, j});
+    }
+  }
+  std::stable_sort(points.begin(), points.end(),
+                   [](const P& a, const P& b) { return a.level > b.level; });
+  std::vector<std::array<float, 2>> out;
+  for (const P& p : points) {
+    out.push_back(
+        {float((p.i + 0.5) / n * width), float((p.j + 0.5) / n * height)});
+  }
+  return out;
+}
+
+class AutomaticMaskGenerator : public MaskGenerator {
+ public:
+  AutomaticMaskGenerator(const infer::ModelRegistry& registry,
+                         const MaskGeneratorOptions& options, bool reference)
+      : options_(options), reference_(reference) {
+    options_.Check();
+    model_ = PromptableSegmenter::Create(registry, options_.model);
+  }
+
+  std::vector<Mask> Generate(const ColorImage& rgb) override {
+    stats_ = {};
+    const auto t0 = Clock::now();
+    model_->SetImage(rgb);
+    const auto t1 = Clock::now();
+    const auto points =
+        GridPoints(options_.points_per_side, rgb.width(), rgb.height());
+    stats_.prompts_total = int(points.size());
+    std::vector<Mask> candidates =
+        reference_ ? DecodeAll(points) : DecodeSkippingCovered(points);
+    const auto t2 = Clock::now();
+    stats_.candidates = int(candidates.size());
+    std::vector<Mask> kept =
+        BoxNms(std::move(candidates), options_.box_nms_threshold);
+    tbb::parallel_for(size_t(0), kept.size(), [&](size_t i) {
+      RemoveSmallRegions(&kept[i], options_.min_region_area_px);
+    });
+    std::erase_if(kept, [](const Mask& m) { return m.area == 0; });
+    std::stable_sort(
+        kept.begin(), kept.end(),
+        [](const Mask& a, const Mask& b) { return a.area > b.area; });
+    stats_.kept = int(kept.size());
+    stats_.encode_seconds = Seconds(t0, t1);
+    stats_.decode_seconds = Seconds(t1, t2);
+    stats_.postprocess_seconds = Seconds(t2, Clock::now());
+    return kept;
+  }
+
+  const MaskGeneratorStats& stats() const override { return stats_; }
+  PromptableSegmenter& model() override { return *model_; }
+
+ private:
+  bool Passes(const LowResMask& m, float stability) const {
+    return m.predicted_iou >= options_.pred_iou_threshold &&
+           stability >= options_.stability_threshold;
+  }
+
+  LowResMask DecodePoint(const std::array<float, 2>& p) const {
+    Prompt prompt;
+    prompt.points = {p};
+    prompt.labels = {1};
+    return model_->Decode(prompt);
+  }
+
+  // The fast path: low-res filtering, full resolution only for survivors,
+  // points inside accepted masks skipped.
+  std::vector<Mask> DecodeSkippingCovered(
+      const std::vector<std::array<float, 2>>& points) {
+    std::vector<Mask> candidates;
+    std::vector<uint8_t> covered;
+    int cw = 0, ch = 0;
+    const auto is_covered = [&](const std::array<float, 2>& p) {
+      if (covered.empty()) return false;
+      LowResMask dims;
+      dims.width = cw;
+      dims.height = ch;
+      const auto [u, v] =
+          ImageToLowRes(model_->transform(), dims, p[0] - 0.5, p[1] - 0.5);
+      const int iu = std::clamp(int(std::lround(u)), 0, cw - 1);
+      const int iv = std::clamp(int(std::lround(v)), 0, ch - 1);
+      return covered[size_t(iv) * cw + iu] != 0;
+    };
+    size_t next = 0;
+    while (next < points.size()) {
+      std::vector<size_t> wave;
+      while (next < points.size() &&
+             int(wave.size()) < options_.prompts_per_wave) {
+        if (!options_.skip_covered_points || !is_covered(points[next])) {
+          wave.push_back(next);
+        }
+        ++next;
+      }
+      std::vector<LowResMask> decoded(wave.size());
+      tbb::parallel_for(size_t(0), wave.size(), [&](size_t k) {
+        decoded[k] = DecodePoint(points[wave[k]]);
+      });
+      stats_.prompts_decoded += int(wave.size());
+      for (size_t k = 0; k < wave.size(); ++k) {
+        const LowResMask& m = decoded[k];
+        const float stability =
+            StabilityScore(m.logits, 0.0f, options_.stability_offset);
+        if (!Passes(m, stability)) continue;
+        Mask mask = model_->Upsample(m);
+        if (mask.area == 0) continue;
+        mask.stability = stability;
+        mask.point_x = points[wave[k]][0];
+        mask.point_y = points[wave[k]][1];
+        if (!m.object_pointer.empty()) mask.embedding = m.object_pointer;
+        candidates.push_back(std::move(mask));
+        if (covered.empty()) {
+          cw = m.width;
+          ch = m.height;
+          covered.assign(size_t(cw) * ch, 0);
+        }
+        for (size_t i = 0; i < covered.size(); ++i) {
+          covered[i] |= m.logits[i] > 0.0f;
+        }
+      }
+    }
+    return candidates;
+  }
+
+  // The straightforward algorithm: every prompt, logits upsampled to full
+  // resolution, stability on the full-resolution logits.
+  std::vector<Mask> DecodeAll(const std::vector<std::array<float, 2>>& points) {
+    std::vector<Mask> masks(points.size());
+    std::vector<uint8_t> ok(points.size(), 0);
+    tbb::parallel_for(size_t(0), points.size(), [&](size_t k) {
+      const LowResMask m = DecodePoint(points[k]);
+      const Image<float> logits = model_->UpsampleLogits(m);
+      const float stability =
+          StabilityScore(logits.values(), 0.0f, options_.stability_offset);
+      if (!Passes(m, stability)) return;
+      Image<uint8_t> bin(logits.width(), logits.height());
+      for (size_t i = 0; i < bin.NumPixels(); ++i) {
+        bin.values()[i] = logits.values()[i] > 0.0f;
+      }
+      masks[k] = MaskFromImage(bin);
+      masks[k].predicted_iou = m.predicted_iou;
+      masks[k].stability = stability;
+      masks[k].point_x = points[k][0];
+      masks[k].point_y = points[k][1];
+      if (!m.object_pointer.empty()) masks[k].embedding = m.object_pointer;
+      ok[k] = masks[k].area > 0;
+    });
+    stats_.prompts_decoded = int(points.size());
+    std::vector<Mask> out;
+    for (size_t k = 0; k < points.size(); ++k) {
+      if (ok[k]) out.push_back(std::move(masks[k]));
+    }
+    return out;
+  }
+
+  MaskGeneratorOptions options_;
+  bool reference_;
+  std::unique_ptr<PromptableSegmenter> model_;
+  MaskGeneratorStats stats_;
+};
+
+}  // namespace
+
+std::unique_ptr<MaskGenerator> MaskGenerator::Create(
+    const infer::ModelRegistry& registry, const MaskGeneratorOptions& options,
+    bool reference) {
+  return std::make_unique<AutomaticMaskGenerator>(registry, options, reference);
+}
+
+}  // namespace semrec::segment

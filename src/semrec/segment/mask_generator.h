@@ -1,0 +1,85 @@
+// The mask branch: automatic mask generation (SAM's "segment everything")
+// over a promptable model, plus the straightforward reference
+// implementation the fast one is measured against.
+#pragma once
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "semrec/core/image.h"
+#include "semrec/infer/model_registry.h"
+#include "semrec/segment/mask.h"
+#include "semrec/segment/promptable.h"
+
+namespace semrec::segment {
+
+struct MaskGeneratorOptions {
+  /// The promptable model (SAM or SAM2 backend, registry names, threads).
+  PromptableOptions model;
+  /// Point prompts on a points_per_side x points_per_side grid (SAM: 32).
+  int points_per_side = 32;
+  /// Keep masks whose predicted IoU >= this (SAM: 0.88).
+  float pred_iou_threshold = 0.88f;
+  /// Stability score = IoU of the masks thresholded at +offset and -offset
+  /// (on the low-res logits); keep >= this (SAM: 0.95, offset 1.0).
+  float stability_threshold = 0.95f;
+  float stability_offset = 1.0f;
+  /// Box NMS between kept masks, highest predicted IoU first (SAM: 0.7).
+  float box_nms_threshold = 0.7f;
+  /// Remove disconnected regions and fill holes smaller than this many pixels
+  /// (SAM's min_mask_region_area, off there by default; 100 px here removes
+  /// the speckle that upsampling 256x256 logits leaves at 640x480).
+  int min_region_area_px = 100;
+  /// Skip a grid point when an already accepted mask covers it: most of the
+  /// 1024 prompts land on objects that are already segmented, and their
+  /// masks would be removed by NMS anyway. The speed lever (see bench/).
+  bool skip_covered_points = true;
+  /// Prompts decoded in parallel before the covered set is updated. Fixed
+  /// (not the core count) so results do not depend on the machine.
+  int prompts_per_wave = 8;
+  void Check() const;
+};
+
+struct MaskGeneratorStats {
+  int prompts_total = 0;
+  int prompts_decoded = 0;
+  int candidates = 0;  // passed the IoU and stability filters
+  int kept = 0;        // after NMS and clean-up
+  double encode_seconds = 0;
+  double decode_seconds = 0;
+  double postprocess_seconds = 0;
+};
+
+class MaskGenerator {
+ public:
+  virtual ~MaskGenerator() = default;
+  /// "sam" / "sam2" backends (options.model.backend) or "reference" (the
+  /// straightforward algorithm: every prompt, full-resolution masks).
+  static std::unique_ptr<MaskGenerator> Create(
+      const infer::ModelRegistry& registry, const MaskGeneratorOptions& options,
+      bool reference = false);
+
+  /// Masks of `rgb`, sorted by area (largest first), non-empty, each with its
+  /// predicted IoU, stability and prompt point.
+  virtual std::vector<Mask> Generate(const ColorImage& rgb) = 0;
+  virtual const MaskGeneratorStats& stats() const = 0;
+  /// The underlying promptable model (for box prompts, embeddings).
+  virtual PromptableSegmenter& model() = 0;
+};
+
+/// SAM's stability score of logits: |logits > t + offset| / |logits > t -
+/// offset| (1 when both are empty).
+float StabilityScore(const std::vector<float>& logits, float threshold,
+                     float offset);
+
+/// Removes connected regions (8-connected) and fills holes (4-connected
+/// background not touching the box border... see .cc) smaller than
+/// `min_area_px`; re-tightens the mask.
+void RemoveSmallRegions(Mask* mask, int min_area_px);
+
+/// Greedy NMS on boxes: masks sorted by `predicted_iou` (then prompt order);
+/// a mask is dropped when its box IoU with a kept one exceeds `threshold`.
+std::vector<Mask> BoxNms(std::vector<Mask> masks, float threshold);
+
+}  // namespace semrec::segment

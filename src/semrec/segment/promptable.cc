@@ -1,0 +1,313 @@
+#include "semrec/segment/promptable.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include <fmt/format.h>
+
+#include "semrec/core/error.h"
+
+namespace semrec::segment {
+
+void PromptableOptions::Check() const {
+  CheckArgument(
+      backend == "sam" || backend == "sam2",
+      "mask model: backend must be sam or sam2, not '" + backend + "'");
+  CheckArgument(!encoder.empty() && !decoder.empty(),
+                "mask model: encoder and decoder names are required");
+  CheckArgument(decoder_threads >= 0,
+                "mask model: decoder_threads must be >= 0");
+  runtime.Check();
+}
+
+std::array<double, 2> ImageToLowRes(const infer::InputTransform& transform,
+                                    const LowResMask& low_res, double x,
+                                    double y) {
+  return {
+      (x + 0.5) * transform.scale_x * low_res.width / transform.input_width -
+          0.5,
+      (y + 0.5) * transform.scale_y * low_res.height / transform.input_height -
+          0.5};
+}
+
+Mask PromptableSegmenter::Upsample(const LowResMask& low_res,
+                                   float threshold) const {
+  const int w = transform_.image_width, h = transform_.image_height;
+  Mask mask;
+  mask.image_width = w;
+  mask.image_height = h;
+  mask.predicted_iou = low_res.predicted_iou;
+  // Bounding box of the positive low-res cells, grown by one cell: outside it
+  // every bilinear sample is <= threshold, so only the box is upsampled.
+  int u0 = low_res.width, v0 = low_res.height, u1 = -1, v1 = -1;
+  for (int v = 0; v < low_res.height; ++v) {
+    for (int u = 0; u < low_res.width; ++u) {
+      if (low_res.logits[size_t(v) * low_res.width + u] > threshold) {
+        u0 = std::min(u0, u);
+        v0 = std::min(v0, v);
+        u1 = std::max(u1, u);
+        v1 = std::max(v1, v);
+      }
+    }
+  }
+  if (u1 < 0) return mask;
+  const double cell_x = double(transform_.input_width) / low_res.width /
+                        transform_.scale_x;  // image pixels per cell
+  const double cell_y =
+      double(transform_.input_height) / low_res.height / transform_.scale_y;
+  const Box box{std::clamp(int(std::floor((u0 - 0.5) * cell_x)), 0, w),
+                std::clamp(int(std::floor((v0 - 0.5) * cell_y)), 0, h),
+                std::clamp(int(std::ceil((u1 + 1.5) * cell_x)), 0, w),
+                std::clamp(int(std::ceil((v1 + 1.5) * cell_y)), 0, h)};
+  mask.box = box;
+  mask.bits.assign(size_t(box.width()) * box.height(), 0);
+  const auto at = [&](int u, int v) {
+    u = std::clamp(u, 0, low_res.width - 1);
+    v = std::clamp(v, 0, low_res.height - 1);
+    return low_res.logits[size_t(v) * low_res.width + u];
+  };
+  for (int y = box.y0; y < box.y1; ++y) {
+    for (int x = box.x0; x < box.x1; ++x) {
+      auto [s, t] = ImageToLowRes(transform_, low_res, x, y);
+      s = std::clamp(s, 0.0, double(low_res.width - 1));
+      t = std::clamp(t, 0.0, double(low_res.height - 1));
+      const int i = int(std::floor(s)), j = int(std::floor(t));
+      const float a = float(s - i), b = float(t - j);
+      const float value = (1 - a) * (1 - b) * at(i, j) +
+                          a * (1 - b) * at(i + 1, j) +
+                          (1 - a) * b * at(i, j + 1) + a * b * at(i + 1, j + 1);
+      mask.bits[size_t(y - box.y0) * box.width() + (x - box.x0)] =
+          value > threshold;
+    }
+  }
+  Tighten(&mask);
+  return mask;
+}
+
+Image<float> PromptableSegmenter::UpsampleLogits(
+    const LowResMask& low_res) const {
+  const int w = transform_.image_width, h = transform_.image_height;
+  Image<float> out(w, h);
+  const auto at = [&](int u, int v) {
+    u = std::clamp(u, 0, low_res.width - 1);
+    v = std::clamp(v, 0, low_res.height - 1);
+    return low_res.logits[size_t(v) * low_res.width + u];
+  };
+  for (int y = 0; y < h; ++y) {
+    for (int x = 0; x < w; ++x) {
+      auto [s, t] = ImageToLowRes(transform_, low_res, x, y);
+      s = std::clamp(s, 0.0, double(low_res.width - 1));
+      t = std::clamp(t, 0.0, double(low_res.height - 1));
+      const int i = int(std::floor(s)), j = int(std::floor(t));
+      const float a = float(s - i), b = float(t - j);
+      out(x, y) = (1 - a) * (1 - b) * at(i, j) + a * (1 - b) * at(i + 1, j) +
+                  (1 - a) * b * at(i, j + 1) + a * b * at(i + 1, j + 1);
+    }
+  }
+  return out;
+}
+
+std::vector<float> PromptableSegmenter::PooledEmbedding(
+    const Mask& mask) const {
+  CheckArgument(embedding_.shape.size() == 4,
+                "PooledEmbedding: no image has been encoded");
+  const int c = int(embedding_.shape[1]), h = int(embedding_.shape[2]),
+            w = int(embedding_.shape[3]);
+  // Count mask pixels per embedding cell, then a weighted mean of the cells.
+  std::vector<int64_t> counts(size_t(w) * h, 0);
+  const double sx = transform_.scale_x * w / transform_.input_width;
+  const double sy = transform_.scale_y * h / transform_.input_height;
+  for (int y = mask.box.y0; y < mask.box.y1; ++y) {
+    for (int x = mask.box.x0; x < mask.box.x1; ++x) {
+      if (!mask.Contains(x, y)) continue;
+      const int u = std::min(int((x + 0.5) * sx), w - 1);
+      const int v = std::min(int((y + 0.5) * sy), h - 1);
+      ++counts[size_t(v) * w + u];
+    }
+  }
+  std::vector<float> mean(c, 0.0f);
+  if (mask.area == 0) return mean;
+  for (size_t cell = 0; cell < counts.size(); ++cell) {
+    if (counts[cell] == 0) continue;
+    const float weight = float(counts[cell]) / float(mask.area);
+    for (int k = 0; k < c; ++k) {
+      mean[k] += weight * embedding_.data[size_t(k) * w * h + cell];
+    }
+  }
+  return mean;
+}
+
+namespace {
+
+// SAM's ONNX prompt encoding: points then box corners (labels 2, 3); without
+// a box a padding point (label -1) is appended, as the exporter expects.
+void EncodePrompt(const Prompt& prompt, const infer::InputTransform& t,
+                  infer::Tensor* coords, infer::Tensor* labels) {
+  CheckArgument(prompt.points.size() == prompt.labels.size(),
+                "prompt: one label per point is required");
+  CheckArgument(!prompt.points.empty() || prompt.box,
+                "prompt: needs at least one point or a box");
+  std::vector<float> xy, l;
+  for (size_t i = 0; i < prompt.points.size(); ++i) {
+    xy.push_back(float(prompt.points[i][0] * t.scale_x));
+    xy.push_back(float(prompt.points[i][1] * t.scale_y));
+    l.push_back(float(prompt.labels[i]));
+  }
+  if (prompt.box) {
+    const Box& b = *prompt.box;
+    xy.insert(xy.end(), {float(b.x0 * t.scale_x), float(b.y0 * t.scale_y),
+                         float(b.x1 * t.scale_x), float(b.y1 * t.scale_y)});
+    l.insert(l.end(), {2.0f, 3.0f});
+  } else {
+    xy.insert(xy.end(), {0.0f, 0.0f});
+    l.push_back(-1.0f);
+  }
+  const int64_t n = int64_t(l.size());
+  *coords = infer::Tensor{{1, n, 2}, std::move(xy)};
+  *labels = infer::Tensor{{1, n}, std::move(l)};
+}
+
+const infer::Tensor& Output(const std::map<std::string, infer::Tensor>& out,
+                            const std::string& name, const std::string& model) {
+  auto it = out.find(name);
+  if (it == out.end()) {
+    throw Error(
+        fmt::format("mask decoder '{}' has no output '{}'", model, name));
+  }
+  return it->second;
+}
+
+// Picks the candidate with the highest predicted IoU from [1, M, h, w] masks.
+LowResMask BestOf(const infer::Tensor& masks, const infer::Tensor& ious,
+                  const std::string& model) {
+  if (masks.shape.size() != 4 || masks.shape[0] != 1 || masks.shape[1] < 1 ||
+      ious.data.size() != size_t(masks.shape[1])) {
+    throw Error(
+        fmt::format("mask decoder '{}': unexpected mask/IoU shapes", model));
+  }
+  const int m = int(masks.shape[1]);
+  const int best = int(std::max_element(ious.data.begin(), ious.data.end()) -
+                       ious.data.begin());
+  LowResMask out;
+  out.height = int(masks.shape[2]);
+  out.width = int(masks.shape[3]);
+  const size_t plane = size_t(out.width) * out.height;
+  out.logits.assign(masks.data.begin() + best * plane,
+                    masks.data.begin() + (best + 1) * plane);
+  out.predicted_iou = ious.data[best];
+  (void)m;
+  return out;
+}
+
+class SamSegmenter : public PromptableSegmenter {
+ public:
+  SamSegmenter(const infer::ModelRegistry& registry,
+               const PromptableOptions& options) {
+    encoder_ = std::make_unique<infer::OnnxModel>(registry.Get(options.encoder),
+                                                  options.runtime);
+    infer::OnnxModelOptions dec = options.runtime;
+    dec.intra_op_threads = options.decoder_threads;
+    decoder_ =
+        std::make_unique<infer::OnnxModel>(registry.Get(options.decoder), dec);
+    CheckArgument(encoder_->entry().input.has_value(),
+                  "mask encoder '" + options.encoder + "' has no input spec");
+  }
+
+  void SetImage(const ColorImage& rgb) override {
+    const auto& spec = *encoder_->entry().input;
+    auto out = encoder_->Run(
+        {{spec.name, infer::ImageToTensor(rgb, spec, &transform_)}});
+    const std::string name =
+        encoder_->entry().output ? encoder_->entry().output->name : "output";
+    embedding_ = Output(out, name, encoder_->entry().name);
+  }
+
+  LowResMask Decode(const Prompt& prompt) const override {
+    CheckArgument(!embedding_.shape.empty(), "SAM: SetImage() was not called");
+    infer::Tensor coords, labels;
+    EncodePrompt(prompt, transform_, &coords, &labels);
+    std::map<std::string, infer::Tensor> in;
+    in["image_embeddings"] = embedding_;
+    in["point_coords"] = std::move(coords);
+    in["point_labels"] = std::move(labels);
+    in["mask_input"] = infer::Tensor::Zeros({1, 1, 256, 256});
+    in["has_mask_input"] = infer::Tensor::Zeros({1});
+    // The decoder also upsamples to orig_im_size; ask for the model frame's
+    // low-res size so that step costs nothing (we upsample kept masks only).
+    in["orig_im_size"] = infer::Tensor{{2}, {64.0f, 64.0f}};
+    const auto out = decoder_->Run(in);
+    const std::string& name = decoder_->entry().name;
+    return BestOf(Output(out, "low_res_masks", name),
+                  Output(out, "iou_predictions", name), name);
+  }
+
+ private:
+  std::unique_ptr<infer::OnnxModel> encoder_, decoder_;
+};
+
+class Sam2Segmenter : public PromptableSegmenter {
+ public:
+  Sam2Segmenter(const infer::ModelRegistry& registry,
+                const PromptableOptions& options) {
+    encoder_ = std::make_unique<infer::OnnxModel>(registry.Get(options.encoder),
+                                                  options.runtime);
+    infer::OnnxModelOptions dec = options.runtime;
+    dec.intra_op_threads = options.decoder_threads;
+    decoder_ =
+        std::make_unique<infer::OnnxModel>(registry.Get(options.decoder), dec);
+    CheckArgument(encoder_->entry().input.has_value(),
+                  "mask encoder '" + options.encoder + "' has no input spec");
+    for (const auto& info : decoder_->session().inputs()) {
+      if (info.name == "orig_im_size") wants_size_ = true;
+    }
+  }
+
+  void SetImage(const ColorImage& rgb) override {
+    const auto& spec = *encoder_->entry().input;
+    features_ = encoder_->Run(
+        {{spec.name, infer::ImageToTensor(rgb, spec, &transform_)}});
+    embedding_ = Output(features_, "image_embed", encoder_->entry().name);
+  }
+
+  LowResMask Decode(const Prompt& prompt) const override {
+    CheckArgument(!features_.empty(), "SAM2: SetImage() was not called");
+    infer::Tensor coords, labels;
+    EncodePrompt(prompt, transform_, &coords, &labels);
+    const std::string& enc = encoder_->entry().name;
+    std::map<std::string, infer::Tensor> in;
+    in["image_embed"] = Output(features_, "image_embed", enc);
+    in["high_res_feats_0"] = Output(features_, "high_res_feats_0", enc);
+    in["high_res_feats_1"] = Output(features_, "high_res_feats_1", enc);
+    in["point_coords"] = std::move(coords);
+    in["point_labels"] = std::move(labels);
+    in["mask_input"] = infer::Tensor::Zeros({1, 1, 256, 256});
+    in["has_mask_input"] = infer::Tensor::Zeros({1});
+    if (wants_size_) in["orig_im_size"] = infer::Tensor{{2}, {64.0f, 64.0f}};
+    const auto out = decoder_->Run(in);
+    const std::string& name = decoder_->entry().name;
+    LowResMask best = BestOf(Output(out, "masks", name),
+                             Output(out, "iou_predictions", name), name);
+    if (auto it = out.find("obj_ptr"); it != out.end()) {
+      best.object_pointer = it->second.data;
+    }
+    return best;
+  }
+
+ private:
+  std::unique_ptr<infer::OnnxModel> encoder_, decoder_;
+  std::map<std::string, infer::Tensor> features_;
+  bool wants_size_ = false;
+};
+
+}  // namespace
+
+std::unique_ptr<PromptableSegmenter> PromptableSegmenter::Create(
+    const infer::ModelRegistry& registry, const PromptableOptions& options) {
+  options.Check();
+  if (options.backend == "sam") {
+    return std::make_unique<SamSegmenter>(registry, options);
+  }
+  return std::make_unique<Sam2Segmenter>(registry, options);
+}
+
+}  // namespace semrec::segment

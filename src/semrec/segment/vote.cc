@@ -1,0 +1,63 @@
+#include "semrec/segment/vote.h"
+
+#include <algorithm>
+#include <unordered_map>
+
+#include "semrec/core/error.h"
+
+namespace semrec::segment {
+
+VoteResult Vote(const LabelMap& semantic, const std::vector<Mask>& masks) {
+  const int w = semantic.width(), h = semantic.height();
+  CheckArgument(masks.size() <= 65535, "vote: more than 65535 masks");
+  VoteResult result;
+  result.semantic = semantic;
+  result.instance = LabelMap(w, h);
+  result.mask_labels.resize(masks.size());
+  result.mask_agreement.resize(masks.size());
+  std::unordered_map<uint16_t, int64_t> counts;
+  for (size_t m = 0; m < masks.size(); ++m) {
+    const Mask& mask = masks[m];
+    CheckArgument(mask.image_width == w && mask.image_height == h,
+                  "vote: mask " + std::to_string(m) +
+                      " belongs to an image of another size");
+    counts.clear();
+    const Box& b = mask.box;
+    for (int y = b.y0; y < b.y1; ++y) {
+      const uint8_t* bits = &mask.bits[size_t(y - b.y0) * b.width()];
+      const uint16_t* labels = &semantic(0, y);
+      for (int x = b.x0; x < b.x1; ++x) {
+        if (bits[x - b.x0]) ++counts[labels[x]];
+      }
+    }
+    uint16_t best = 0;
+    int64_t best_count = -1, total = 0;
+    for (const auto& [label, count] : counts) {
+      total += count;
+      if (count > best_count || (count == best_count && label < best)) {
+        best = label;
+        best_count = count;
+      }
+    }
+    result.mask_labels[m] = best;
+    result.mask_agreement[m] = total > 0 ? float(best_count) / float(total) : 0;
+    // Painting in order: later masks own the overlap.
+    const uint16_t id = uint16_t(m + 1);
+    for (int y = b.y0; y < b.y1; ++y) {
+      const uint8_t* bits = &mask.bits[size_t(y - b.y0) * b.width()];
+      uint16_t* inst = &result.instance(0, y);
+      for (int x = b.x0; x < b.x1; ++x) {
+        if (bits[x - b.x0]) inst[x] = id;
+      }
+    }
+  }
+  // One pass: each owned pixel takes its owner's class.
+  const uint16_t* inst = result.instance.data();
+  uint16_t* out = result.semantic.data();
+  for (size_t i = 0; i < result.semantic.NumPixels(); ++i) {
+    if (inst[i]) out[i] = result.mask_labels[inst[i] - 1];
+  }
+  return result;
+}
+
+}  // namespace semrec::segment

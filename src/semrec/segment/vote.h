@@ -1,0 +1,37 @@
+// The vote that fuses the two branches (the paper's Fig. 4): inside each
+// class-agnostic mask the majority semantic class wins and the whole mask
+// takes it; pixels in no mask keep the semantic branch's label.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "semrec/core/label_map.h"
+#include "semrec/segment/mask.h"
+
+namespace semrec::segment {
+
+struct VoteResult {
+  /// Final classes: each mask's pixels carry its winning class; pixels in no
+  /// mask keep the semantic label. One "mask per class" is the set of pixels
+  /// with that label.
+  LabelMap semantic;
+  /// Instance ids: mask i (in the given order) is instance i + 1; 0 = no mask.
+  LabelMap instance;
+  /// Winning class per mask and the share of the mask's pixels that voted for
+  /// it (in [0, 1]).
+  std::vector<uint16_t> mask_labels;
+  std::vector<float> mask_agreement;
+};
+
+/// Votes each mask's class from `semantic` over all of the mask's pixels
+/// (ties: the smaller class id), then paints the masks in the given order so
+/// later masks own overlapping pixels. Pass masks sorted large to small (as
+/// MaskGenerator returns them): a small mask lying on a large one (a cup on a
+/// table) keeps its own class. Cost: one pass over each mask's box plus one
+/// pass over the image; no per-mask full-image scans. Throws InvalidArgument
+/// when a mask belongs to an image of another size or there are more than
+/// 65535 masks.
+VoteResult Vote(const LabelMap& semantic, const std::vector<Mask>& masks);
+
+}  // namespace semrec::segment
