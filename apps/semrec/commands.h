@@ -31,5 +31,6 @@ void RegisterEval(CLI::App& app);
 void RegisterTrack(CLI::App& app);
 void RegisterMesh(CLI::App& app);
 void RegisterQuery(CLI::App& app);
+void RegisterSegment(CLI::App& app);
 
 }  // namespace semrec::cli

@@ -30,6 +30,7 @@ int main(int argc, char** argv) {
   semrec::cli::RegisterTrack(app);
   semrec::cli::RegisterMesh(app);
   semrec::cli::RegisterQuery(app);
+  semrec::cli::RegisterSegment(app);
   app.parse_complete_callback([&] { semrec::InitLogging(log_level); });
   try {
     app.parse(argc, argv);

@@ -118,6 +118,10 @@ ModelEntry ParseEntry(const std::string& name, const YAML::Node& node) {
   }
   e.label_set = ScalarOr<std::string>(node, "label_set", "");
   e.label_offset = ScalarOr<int>(node, "label_offset", 0);
+  e.backend = ScalarOr<std::string>(node, "backend", "sam");
+  if (e.backend != "sam" && e.backend != "sam2") {
+    throw EntryError{"backend must be sam or sam2, not '" + e.backend + "'"};
+  }
   if (node["input"]) e.input = ParseInput(node["input"]);
   if (node["output"]) {
     e.output = OutputSpec{Scalar<std::string>(node["output"], "name"),

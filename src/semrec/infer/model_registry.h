@@ -60,6 +60,8 @@ struct ModelEntry {
   std::string role;
   std::string label_set;
   int label_offset = 0;
+  /// Mask decoders: "sam" (SAM ONNX export) or "sam2".
+  std::string backend = "sam";
   std::optional<ImageInputSpec> input;
   std::optional<OutputSpec> output;
   std::vector<TensorSignature> inputs;

@@ -1,6 +1,9 @@
 #include "semrec/segment/hybrid_segmenter.h"
 
 #include <chrono>
+#include <string>
+
+#include "semrec/core/error.h"
 
 namespace semrec::segment {
 
@@ -21,6 +24,13 @@ HybridSegmenter::HybridSegmenter(const infer::ModelRegistry& registry,
 
 HybridResult HybridSegmenter::Segment(const ColorImage& rgb) {
   using Clock = std::chrono::steady_clock;
+  // Below this the models see a few pixels blown up to their input size and
+  // return noise; say so instead.
+  constexpr int kMinSide = 16;
+  CheckArgument(rgb.width() >= kMinSide && rgb.height() >= kMinSide,
+                "image is " + std::to_string(rgb.width()) + "x" +
+                    std::to_string(rgb.height()) +
+                    " pixels; segmentation needs at least 16x16");
   HybridResult result;
   const auto t0 = Clock::now();
   result.semantic_branch = semantic_->Segment(rgb);

@@ -25,6 +25,8 @@ void MaskGeneratorOptions::Check() const {
                 "mask generator: box_nms_threshold must be in (0, 1]");
   CheckArgument(min_region_area_px >= 0,
                 "mask generator: min_region_area_px must be >= 0");
+  CheckArgument(dense_stride >= 1 && (dense_stride & (dense_stride - 1)) == 0,
+                "mask generator: dense_stride must be a power of 2");
   CheckArgument(prompts_per_wave >= 1,
                 "mask generator: prompts_per_wave must be >= 1");
 }
@@ -126,7 +128,9 @@ double Seconds(Clock::time_point a, Clock::time_point b) {
 // Grid points, coarse to fine: points on every 16th row/column first, then
 // every 8th, ..., so that large objects are found by the first prompts and
 // the covered-point skip removes most of the rest.
-std::vector<std::array<float, 2>> GridPoints(int n, int width, int height) {
+std::vector<std::array<float, 2>> GridPoints(
+    int n, int width, int height, std::vector<int>* levels,
+    std::vector<std::array<int, 2>>* cells) {
   struct P {
     int level, i, j;
   };
@@ -141,7 +145,11 @@ std::vector<std::array<float, 2>> GridPoints(int n, int width, int height) {
   std::stable_sort(points.begin(), points.end(),
                    [](const P& a, const P& b) { return a.level > b.level; });
   std::vector<std::array<float, 2>> out;
+  levels->clear();
+  cells->clear();
   for (const P& p : points) {
+    levels->push_back(p.level);
+    cells->push_back({p.i, p.j});
     out.push_back(
         {float((p.i + 0.5) / n * width), float((p.j + 0.5) / n * height)});
   }
@@ -162,8 +170,8 @@ class AutomaticMaskGenerator : public MaskGenerator {
     const auto t0 = Clock::now();
     model_->SetImage(rgb);
     const auto t1 = Clock::now();
-    const auto points =
-        GridPoints(options_.points_per_side, rgb.width(), rgb.height());
+    const auto points = GridPoints(options_.points_per_side, rgb.width(),
+                                   rgb.height(), &levels_, &cells_);
     stats_.prompts_total = int(points.size());
     std::vector<Mask> candidates =
         reference_ ? DecodeAll(points) : DecodeSkippingCovered(points);
@@ -205,6 +213,7 @@ class AutomaticMaskGenerator : public MaskGenerator {
   // points inside accepted masks skipped.
   std::vector<Mask> DecodeSkippingCovered(
       const std::vector<std::array<float, 2>>& points) {
+    const std::vector<int>& levels = levels_;
     std::vector<Mask> candidates;
     std::vector<uint8_t> covered;
     int cw = 0, ch = 0;
@@ -219,12 +228,36 @@ class AutomaticMaskGenerator : public MaskGenerator {
       const int iv = std::clamp(int(std::lround(v)), 0, ch - 1);
       return covered[size_t(iv) * cw + iu] != 0;
     };
+    int dense_level = 0;
+    while ((1 << dense_level) < options_.dense_stride) ++dense_level;
+    // Outcome per grid cell: 0 not decoded, 1 rejected, 2 accepted. A fine
+    // point whose surrounding dense points were all rejected lies in a region
+    // where SAM finds no good mask; decoding it again rarely helps.
+    const int n = options_.points_per_side, stride = options_.dense_stride;
+    std::vector<uint8_t> outcome(size_t(n) * n, 0);
+    const auto between_rejected = [&](size_t p) {
+      if (!options_.skip_between_rejected) return false;
+      const auto [i, j] = cells_[p];
+      const auto neighbours = [&](int v) {
+        const int lo = v / stride * stride;
+        return v % stride == 0 || lo + stride >= n
+                   ? std::vector<int>{lo}
+                   : std::vector<int>{lo, lo + stride};
+      };
+      for (int u : neighbours(i)) {
+        for (int v : neighbours(j)) {
+          if (outcome[size_t(v) * n + u] != 1) return false;
+        }
+      }
+      return true;
+    };
     size_t next = 0;
     while (next < points.size()) {
       std::vector<size_t> wave;
       while (next < points.size() &&
              int(wave.size()) < options_.prompts_per_wave) {
-        if (!options_.skip_covered_points || !is_covered(points[next])) {
+        if (!options_.skip_covered_points || levels[next] >= dense_level ||
+            (!is_covered(points[next]) && !between_rejected(next))) {
           wave.push_back(next);
         }
         ++next;
@@ -238,7 +271,18 @@ class AutomaticMaskGenerator : public MaskGenerator {
         const LowResMask& m = decoded[k];
         const float stability =
             StabilityScore(m.logits, 0.0f, options_.stability_offset);
-        if (!Passes(m, stability)) continue;
+        if (covered.empty()) {
+          cw = m.width;
+          ch = m.height;
+          covered.assign(size_t(cw) * ch, 0);
+        }
+        const auto [gi, gj] = cells_[wave[k]];
+        const bool passes = Passes(m, stability);
+        outcome[size_t(gj) * n + gi] = passes ? 2 : 1;
+        if (!passes) continue;
+        for (size_t i = 0; i < covered.size(); ++i) {
+          covered[i] |= m.logits[i] > 0.0f;
+        }
         Mask mask = model_->Upsample(m);
         if (mask.area == 0) continue;
         mask.stability = stability;
@@ -246,14 +290,6 @@ class AutomaticMaskGenerator : public MaskGenerator {
         mask.point_y = points[wave[k]][1];
         if (!m.object_pointer.empty()) mask.embedding = m.object_pointer;
         candidates.push_back(std::move(mask));
-        if (covered.empty()) {
-          cw = m.width;
-          ch = m.height;
-          covered.assign(size_t(cw) * ch, 0);
-        }
-        for (size_t i = 0; i < covered.size(); ++i) {
-          covered[i] |= m.logits[i] > 0.0f;
-        }
       }
     }
     return candidates;
@@ -294,6 +330,8 @@ class AutomaticMaskGenerator : public MaskGenerator {
   bool reference_;
   std::unique_ptr<PromptableSegmenter> model_;
   MaskGeneratorStats stats_;
+  std::vector<int> levels_;  // grid level per point (see GridPoints)
+  std::vector<std::array<int, 2>> cells_;  // grid column and row per point
 };
 
 }  // namespace

