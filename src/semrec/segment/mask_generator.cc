@@ -270,7 +270,7 @@ class AutomaticMaskGenerator : public MaskGenerator {
       for (size_t k = 0; k < wave.size(); ++k) {
         const LowResMask& m = decoded[k];
         const float stability =
-            StabilityScore(m.logits, 0.0f, options_.stability_offset);
+            model_->StabilityScore(m, 0.0f, options_.stability_offset);
         if (covered.empty()) {
           cw = m.width;
           ch = m.height;

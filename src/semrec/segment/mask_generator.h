@@ -22,7 +22,8 @@ struct MaskGeneratorOptions {
   /// Keep masks whose predicted IoU >= this (SAM: 0.88).
   float pred_iou_threshold = 0.88f;
   /// Stability score = IoU of the masks thresholded at +offset and -offset
-  /// (on the low-res logits); keep >= this (SAM: 0.95, offset 1.0).
+  /// (at image resolution, as SAM; see PromptableSegmenter::StabilityScore);
+  /// keep >= this (SAM: 0.95, offset 1.0).
   float stability_threshold = 0.95f;
   float stability_offset = 1.0f;
   /// Box NMS between kept masks, highest predicted IoU first (SAM: 0.7).

@@ -107,6 +107,53 @@ Image<float> PromptableSegmenter::UpsampleLogits(
   return out;
 }
 
+float PromptableSegmenter::StabilityScore(const LowResMask& low_res,
+                                          float threshold, float offset) const {
+  const int w = transform_.image_width, h = transform_.image_height;
+  const float low = threshold - offset, high = threshold + offset;
+  int u0 = low_res.width, v0 = low_res.height, u1 = -1, v1 = -1;
+  for (int v = 0; v < low_res.height; ++v) {
+    for (int u = 0; u < low_res.width; ++u) {
+      if (low_res.logits[size_t(v) * low_res.width + u] > low) {
+        u0 = std::min(u0, u);
+        v0 = std::min(v0, v);
+        u1 = std::max(u1, u);
+        v1 = std::max(v1, v);
+      }
+    }
+  }
+  if (u1 < 0) return 1.0f;
+  const double cell_x =
+      double(transform_.input_width) / low_res.width / transform_.scale_x;
+  const double cell_y =
+      double(transform_.input_height) / low_res.height / transform_.scale_y;
+  const int x0 = std::clamp(int(std::floor((u0 - 0.5) * cell_x)), 0, w);
+  const int y0 = std::clamp(int(std::floor((v0 - 0.5) * cell_y)), 0, h);
+  const int x1 = std::clamp(int(std::ceil((u1 + 1.5) * cell_x)), 0, w);
+  const int y1 = std::clamp(int(std::ceil((v1 + 1.5) * cell_y)), 0, h);
+  const auto at = [&](int u, int v) {
+    u = std::clamp(u, 0, low_res.width - 1);
+    v = std::clamp(v, 0, low_res.height - 1);
+    return low_res.logits[size_t(v) * low_res.width + u];
+  };
+  int64_t inter = 0, uni = 0;
+  for (int y = y0; y < y1; ++y) {
+    for (int x = x0; x < x1; ++x) {
+      auto [s, t] = ImageToLowRes(transform_, low_res, x, y);
+      s = std::clamp(s, 0.0, double(low_res.width - 1));
+      t = std::clamp(t, 0.0, double(low_res.height - 1));
+      const int i = int(std::floor(s)), j = int(std::floor(t));
+      const float a = float(s - i), b = float(t - j);
+      const float value = (1 - a) * (1 - b) * at(i, j) +
+                          a * (1 - b) * at(i + 1, j) +
+                          (1 - a) * b * at(i, j + 1) + a * b * at(i + 1, j + 1);
+      inter += value > high;
+      uni += value > low;
+    }
+  }
+  return uni > 0 ? float(inter) / float(uni) : 1.0f;
+}
+
 std::vector<float> PromptableSegmenter::PooledEmbedding(
     const Mask& mask) const {
   CheckArgument(embedding_.shape.size() == 4,

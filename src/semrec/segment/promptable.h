@@ -78,6 +78,15 @@ class PromptableSegmenter {
   /// own post-processing does for every prompt; the reference path uses it).
   Image<float> UpsampleLogits(const LowResMask& low_res) const;
 
+  /// SAM's stability score of the mask at the image's resolution: |up >
+  /// threshold + offset| / |up > threshold - offset| with `up` the bilinearly
+  /// upsampled logits, evaluated only inside the box of low-res cells above
+  /// threshold - offset (everything outside counts for neither). Equals the
+  /// score on the full upsampled image; computing it on the low-res cells
+  /// instead underrates sharp masks (a whole boundary cell falls in the band).
+  float StabilityScore(const LowResMask& low_res, float threshold,
+                       float offset) const;
+
   /// Mean of the image embedding under `mask` (one vector of the encoder's
   /// channels): an appearance descriptor for re-identification.
   std::vector<float> PooledEmbedding(const Mask& mask) const;

@@ -51,11 +51,31 @@ VoteResult Vote(const LabelMap& semantic, const std::vector<Mask>& masks) {
       }
     }
   }
-  // One pass: each owned pixel takes its owner's class.
-  const uint16_t* inst = result.instance.data();
+  // One pass: each owned pixel takes its owner's class; pixels in no mask
+  // keep their class and note which classes occur there.
+  uint16_t* inst = result.instance.data();
   uint16_t* out = result.semantic.data();
+  std::vector<uint8_t> unmasked_class(65536, 0);
   for (size_t i = 0; i < result.semantic.NumPixels(); ++i) {
-    if (inst[i]) out[i] = result.mask_labels[inst[i] - 1];
+    if (inst[i]) {
+      out[i] = result.mask_labels[inst[i] - 1];
+    } else {
+      unmasked_class[out[i]] = 1;
+    }
+  }
+  // Pixels in no mask form one instance per class (ids after the masks', in
+  // class order), so downstream fusion still sees them.
+  std::vector<uint16_t> extra_id(65536, 0);
+  size_t next = masks.size() + 1;
+  for (size_t c = 0; c < extra_id.size(); ++c) {
+    if (unmasked_class[c]) {
+      CheckArgument(next <= 65535, "vote: more than 65535 instances");
+      extra_id[c] = uint16_t(next++);
+      result.unmasked_classes.push_back(uint16_t(c));
+    }
+  }
+  for (size_t i = 0; i < result.semantic.NumPixels(); ++i) {
+    if (!inst[i]) inst[i] = extra_id[out[i]];
   }
   return result;
 }

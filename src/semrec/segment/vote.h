@@ -16,12 +16,16 @@ struct VoteResult {
   /// mask keep the semantic label. One "mask per class" is the set of pixels
   /// with that label.
   LabelMap semantic;
-  /// Instance ids: mask i (in the given order) is instance i + 1; 0 = no mask.
+  /// Instance ids: mask i (in the given order) is instance i + 1; pixels in
+  /// no mask form one instance per class, ids masks + 1, masks + 2, ... in
+  /// the order of `unmasked_classes`.
   LabelMap instance;
   /// Winning class per mask and the share of the mask's pixels that voted for
   /// it (in [0, 1]).
   std::vector<uint16_t> mask_labels;
   std::vector<float> mask_agreement;
+  /// Classes of the pixels in no mask, ascending.
+  std::vector<uint16_t> unmasked_classes;
 };
 
 /// Votes each mask's class from `semantic` over all of the mask's pixels

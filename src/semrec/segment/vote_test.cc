@@ -1,5 +1,8 @@
 #include "semrec/segment/vote.h"
 
+#include <map>
+#include <set>
+
 #include <gtest/gtest.h>
 
 #include "semrec/core/error.h"
@@ -31,7 +34,8 @@ TEST(Vote, MajorityClassTakesTheWholeMask) {
     for (int x = 0; x < 10; ++x) {
       const bool inside = x >= 2 && x < 9;
       EXPECT_EQ(r.semantic(x, y), inside ? 3 : semantic(x, y)) << x << "," << y;
-      EXPECT_EQ(r.instance(x, y), inside ? 1 : 0);
+      // Outside the mask: one instance per class (3 -> 2, 5 -> 3).
+      EXPECT_EQ(r.instance(x, y), inside ? 1 : (x < 2 ? 2 : 3));
     }
   }
 }
@@ -54,6 +58,8 @@ TEST(Vote, LaterSmallerMasksKeepTheirClassOnOverlaps) {
   EXPECT_EQ(r.instance(10, 10), 2);
   EXPECT_EQ(r.instance(2, 10), 1);
   EXPECT_EQ(r.semantic(2, 2), 0);  // in no mask: the semantic label
+  EXPECT_EQ(r.instance(2, 2), 3);  // ... and the instance of class 0
+  EXPECT_EQ(r.unmasked_classes, (std::vector<uint16_t>{0}));
 }
 
 TEST(Vote, TiesGoToTheSmallerClassId) {
@@ -86,6 +92,17 @@ VoteResult NaiveVote(const LabelMap& semantic, const std::vector<Mask>& masks) {
   for (size_t i = 0; i < r.instance.NumPixels(); ++i) {
     if (r.instance.values()[i]) {
       r.semantic.values()[i] = r.mask_labels[r.instance.values()[i] - 1];
+    }
+  }
+  std::set<uint16_t> classes;
+  for (size_t i = 0; i < r.instance.NumPixels(); ++i) {
+    if (!r.instance.values()[i]) classes.insert(r.semantic.values()[i]);
+  }
+  std::map<uint16_t, uint16_t> ids;
+  for (uint16_t c : classes) ids[c] = uint16_t(masks.size() + 1 + ids.size());
+  for (size_t i = 0; i < r.instance.NumPixels(); ++i) {
+    if (!r.instance.values()[i]) {
+      r.instance.values()[i] = ids.at(r.semantic.values()[i]);
     }
   }
   return r;

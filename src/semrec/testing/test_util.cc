@@ -5,6 +5,8 @@
 #include <atomic>
 #include <cstdlib>
 #include <fstream>
+#include <iostream>
+#include <mutex>
 #include <random>
 
 namespace fs = std::filesystem;
@@ -39,6 +41,30 @@ std::optional<fs::path> SampleDataDir() {
   const fs::path beside = SourceDir() / ".." / "shared" / "data";
   if (fs::is_directory(beside)) return fs::canonical(beside);
   return std::nullopt;
+}
+
+fs::path TinyModelDir() {
+  static fs::path dir;
+  static std::once_flag once;
+  std::call_once(once, [] {
+    const fs::path out = fs::temp_directory_path() /
+                         ("semrec-tiny-models-" + std::to_string(::getpid()));
+    const fs::path script =
+        SourceDir() / "tests" / "models" / "make_tiny_models.py";
+    const std::string cmd =
+        "/usr/bin/python3 " + script.string() + " " + out.string() + " 2>&1";
+    if (std::system(cmd.c_str()) == 0) {
+      dir = out;
+      // Removed when the test process ends.
+      std::atexit([] {
+        std::error_code ec;
+        fs::remove_all(dir, ec);
+      });
+    } else {
+      std::cerr << "building the tiny test models failed: " << cmd << "\n";
+    }
+  });
+  return dir;
 }
 
 fs::path ModelDir() {

