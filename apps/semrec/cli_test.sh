@@ -85,4 +85,33 @@ grep -q "MOTA 0.5265" "$tmp/mot" && grep -q "HOTA 0.3914" "$tmp/mot" || fail "ev
 printf '1,1,0,0,10\n' >"$tmp/bad_mot.txt"
 "$SEMREC" eval mot "$tmp/bad_mot.txt" "$tmp/bad_mot.txt" 2>"$tmp/err"; rc=$?
 [ "$rc" -eq 1 ] && grep -q "bad_mot.txt: line 1" "$tmp/err" || fail "eval mot: malformed file: exit $rc"
+# Segmentation with the installed models (part of scripts/setup; skipped when absent).
+models="${SEMREC_MODELS:-$SEMREC_SOURCE_DIR/.deps/models}"
+if [ -f "$models/deeplab_v3.onnx" ]; then
+  "$SEMREC" segment "$data/ade20k_val_3/images/ADE_val_00000003.jpg" --masks none --out "$tmp/seg" \
+    >"$tmp/seg.out" 2>"$tmp/seg.err" || fail "segment failed: $(cat "$tmp/seg.err")"
+  for f in semantic/ADE_val_00000003.png instance/ADE_val_00000003.png overlay/ADE_val_00000003.png \
+    masks/ADE_val_00000003.json classes.json summary.json; do
+    [ -s "$tmp/seg/$f" ] || fail "segment: $f missing"
+  done
+  grep -q "1 images" "$tmp/seg.out" || fail "segment: summary: $(cat "$tmp/seg.out")"
+  grep -q "segmenting 1/1" "$tmp/seg.err" || fail "segment: no progress report"
+  "$SEMREC" segment "$tmp/syn" --masks none --out "$tmp/seglabels" >/dev/null 2>&1 || fail "segment on a sequence"
+  "$SEMREC" fuse "$tmp/syn" --labels "$tmp/seglabels" --out "$tmp/segfused" >/dev/null 2>"$tmp/err" ||
+    fail "fuse with segment's labels: $(cat "$tmp/err")"
+  printf 'hello' >"$tmp/notes.txt"
+  "$SEMREC" segment "$tmp/notes.txt" --masks none --out "$tmp/s3" 2>"$tmp/err"; rc=$?
+  [ "$rc" -eq 1 ] && grep -q "notes.txt: not an image" "$tmp/err" || fail "segment: text input: $(cat "$tmp/err")"
+  mkdir -p "$tmp/badmodels" && printf 'not onnx' >"$tmp/badmodels/deeplab_v3.onnx"
+  SEMREC_MODELS="$tmp/badmodels" "$SEMREC" segment "$data/ade20k_val_3/images" --masks none \
+    --out "$tmp/s4" 2>"$tmp/err"; rc=$?
+  [ "$rc" -eq 1 ] && grep -q "re-run scripts/setup" "$tmp/err" || fail "segment: corrupt model: $(cat "$tmp/err")"
+  SEMREC_MODELS="$tmp/nomodels" "$SEMREC" segment "$data/ade20k_val_3/images" --masks none \
+    --out "$tmp/s5" 2>"$tmp/err"; rc=$?
+  [ "$rc" -eq 1 ] && grep -q "not installed: run scripts/setup" "$tmp/err" || fail "segment: missing model: $(cat "$tmp/err")"
+  "$SEMREC" segment "$data/ade20k_val_3/images" --semantic nosuchmodel --out "$tmp/s6" 2>"$tmp/err"; rc=$?
+  [ "$rc" -eq 1 ] && grep -q "unknown model 'nosuchmodel'" "$tmp/err" || fail "segment: unknown model"
+else
+  echo "segment checks skipped: models not installed in $models (run scripts/setup)"
+fi
 echo "cli end-to-end: all checks passed"
