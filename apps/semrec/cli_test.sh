@@ -111,7 +111,15 @@ if [ -f "$models/deeplab_v3.onnx" ]; then
   [ "$rc" -eq 1 ] && grep -q "not installed: run scripts/setup" "$tmp/err" || fail "segment: missing model: $(cat "$tmp/err")"
   "$SEMREC" segment "$data/ade20k_val_3/images" --semantic nosuchmodel --out "$tmp/s6" 2>"$tmp/err"; rc=$?
   [ "$rc" -eq 1 ] && grep -q "unknown model 'nosuchmodel'" "$tmp/err" || fail "segment: unknown model"
+  "$SEMREC" eval seg "$tmp/seg" "$data/ade20k_val_3/annotations" --labels voc 2>"$tmp/err"; rc=$?
+  [ "$rc" -eq 1 ] && grep -q "no prediction" "$tmp/err" || fail "eval seg: missing prediction: $(cat "$tmp/err")"
 else
   echo "segment checks skipped: models not installed in $models (run scripts/setup)"
 fi
+"$SEMREC" eval seg "$data/ade20k_val_3/annotations" "$data/ade20k_val_3/annotations" --labels ade20k \
+  >"$tmp/seg_eval" || fail "eval seg failed"
+grep -q "mIoU 100.00" "$tmp/seg_eval" && grep -q "boundary IoU 100.00" "$tmp/seg_eval" && grep -q "wall" "$tmp/seg_eval" ||
+  fail "eval seg: $(cat "$tmp/seg_eval")"
+"$SEMREC" eval seg "$tmp" "$data/ade20k_val_3/annotations" --labels kitti 2>"$tmp/err"; rc=$?
+[ "$rc" -eq 1 ] && grep -q "unknown label set 'kitti'" "$tmp/err" || fail "eval seg: bad labels: $(cat "$tmp/err")"
 echo "cli end-to-end: all checks passed"

@@ -1,4 +1,5 @@
-// `semrec eval c2c <estimate.ply> <reference.ply>`: cloud-to-cloud distance.
+// `semrec eval c2c|mot|seg`: cloud-to-cloud distance, tracking and
+// segmentation metrics.
 #include <cstdio>
 
 #include <fmt/format.h>
@@ -8,6 +9,9 @@
 #include "semrec/core/file_util.h"
 #include "semrec/eval/c2c.h"
 #include "semrec/eval/mot.h"
+#include "semrec/eval/seg_metrics.h"
+#include "semrec/io/image_io.h"
+#include "semrec/io/label_set_io.h"
 #include "semrec/io/mot_io.h"
 #include "semrec/io/ply_io.h"
 
@@ -111,6 +115,73 @@ void RunMot(const MotArgs& args) {
           .c_str());
 }
 
+struct SegArgs {
+  std::string pred;
+  std::string gt;
+  std::string labels = "ade20k";
+  bool json = false;
+  eval::SegEvalOptions options;
+};
+
+void RunSeg(const SegArgs& args) {
+  args.options.Check();
+  const LabelSet labels = io::LoadLabelSet(args.labels);
+  eval::SegEvaluator evaluator(args.options);
+  for (const auto& [pred_file, gt_file] :
+       eval::MatchSegFiles(args.pred, args.gt)) {
+    const LabelMap pred = io::ReadLabelImage(pred_file);
+    const LabelMap gt = io::ReadLabelImage(gt_file);
+    if (!pred.SameSize(gt)) {
+      throw FormatError(
+          pred_file, fmt::format("is {}x{} but the ground truth {} is {}x{}",
+                                 pred.width(), pred.height(), gt_file.string(),
+                                 gt.width(), gt.height()));
+    }
+    evaluator.Add(pred, gt);
+  }
+  const eval::SegMetrics m = evaluator.Result();
+  const auto name = [&](uint16_t id) {
+    return labels.Contains(id) ? labels.Get(id).name
+                               : "(not in " + labels.name() + ")";
+  };
+  if (args.json) {
+    nlohmann::json classes = nlohmann::json::array();
+    for (const auto& c : m.classes) {
+      classes.push_back({{"id", c.id},
+                         {"name", name(c.id)},
+                         {"iou", c.iou},
+                         {"accuracy", c.accuracy},
+                         {"gt_pixels", c.gt_pixels},
+                         {"pred_pixels", c.pred_pixels},
+                         {"boundary_iou", c.boundary_iou},
+                         {"boundary_f", c.boundary_f}});
+    }
+    const nlohmann::json j = {{"images", m.images},
+                              {"pixel_accuracy", m.pixel_accuracy},
+                              {"mean_iou", m.mean_iou},
+                              {"mean_accuracy", m.mean_accuracy},
+                              {"mean_boundary_iou", m.mean_boundary_iou},
+                              {"mean_boundary_f", m.mean_boundary_f},
+                              {"classes", classes}};
+    std::printf("%s\n", j.dump(2).c_str());
+    return;
+  }
+  std::string text = fmt::format(
+      "{} images, {} labelled pixels\npAcc {:.2f}  mIoU {:.2f}  mAcc {:.2f}  "
+      "boundary IoU {:.2f}  boundary F@{}px {:.2f}  (percent)\n\n"
+      "{:>5}  {:<24} {:>7} {:>7} {:>8} {:>7}\n",
+      m.images, m.valid_pixels, 100 * m.pixel_accuracy, 100 * m.mean_iou,
+      100 * m.mean_accuracy, 100 * m.mean_boundary_iou,
+      args.options.boundary_tolerance_px, 100 * m.mean_boundary_f, "id",
+      "class", "IoU", "Acc", "bIoU", "bF");
+  for (const auto& c : m.classes) {
+    text += fmt::format("{:>5}  {:<24} {:>7.2f} {:>7.2f} {:>8.2f} {:>7.2f}\n",
+                        c.id, name(c.id), 100 * c.iou, 100 * c.accuracy,
+                        100 * c.boundary_iou, 100 * c.boundary_f);
+  }
+  std::printf("%s", text.c_str());
+}
+
 }  // namespace
 
 void RegisterEval(CLI::App& app) {
@@ -148,6 +219,35 @@ void RegisterEval(CLI::App& app) {
       ->required();
   mot->add_flag("--json", mot_args->json, "Print JSON");
   mot->callback([mot_args] { RunMot(*mot_args); });
+
+  auto seg_args = std::make_shared<SegArgs>();
+  CLI::App* seg = eval->add_subcommand(
+      "seg",
+      "Semantic segmentation metrics over label PNGs matched by file name "
+      "(ADE20K conventions: ground-truth 0 and 255 are ignored): pAcc, mIoU, "
+      "mAcc, Boundary IoU (Cheng et al. 2021) and boundary F-score, plus a "
+      "per-class table.");
+  seg->add_option("pred", seg_args->pred,
+                  "Predicted label PNGs (or a `semrec segment` output folder)")
+      ->required();
+  seg->add_option("gt", seg_args->gt, "Ground-truth label PNGs")->required();
+  seg->add_option("--labels", seg_args->labels,
+                  "Label set: voc, ade20k, coco, cityscapes or a JSON file")
+      ->capture_default_str();
+  seg->add_option("--boundary-tolerance-px",
+                  seg_args->options.boundary_tolerance_px,
+                  "Boundary F-score tolerance (pixels)")
+      ->capture_default_str();
+  seg->add_option("--boundary-dilation-ratio",
+                  seg_args->options.boundary_dilation_ratio,
+                  "Boundary IoU band width as a fraction of the diagonal")
+      ->capture_default_str();
+  seg->add_flag(
+      "--no-ignore-zero",
+      [seg_args](int64_t) { seg_args->options.ignore_zero = false; },
+      "Count label 0 as a class (VOC background)");
+  seg->add_flag("--json", seg_args->json, "Print JSON");
+  seg->callback([seg_args] { RunSeg(*seg_args); });
 }
 
 }  // namespace semrec::cli
