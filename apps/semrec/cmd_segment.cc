@@ -104,6 +104,7 @@ void RunSegment(SegmentArgs args) {
       {"stability_threshold", options.masks.stability_threshold},
       {"box_nms_threshold", options.masks.box_nms_threshold},
       {"min_region_area_px", options.masks.min_region_area_px},
+      {"crop_layers", options.masks.crop_layers},
       {"skip_covered_points", options.masks.skip_covered_points},
       {"seconds_per_image", inputs.empty() ? 0.0 : seconds / inputs.size()}};
   WriteTextFileAtomic(fs::path(args.out) / "summary.json",
@@ -155,6 +156,9 @@ void RegisterSegment(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--min-region-px", args->amg.min_region_area_px,
                   "Remove islands / fill holes smaller than this")
+      ->capture_default_str();
+  cmd->add_option("--crop-layers", args->amg.crop_layers,
+                  "SAM crop layers (0 = off; 1 adds 2x2 overlapping crops)")
       ->capture_default_str();
   cmd->add_flag("--no-skip-covered", args->no_skip_covered,
                 "Decode every grid prompt (slower; see bench/)");

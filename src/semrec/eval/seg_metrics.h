@@ -1,10 +1,24 @@
 // Semantic segmentation metrics: mIoU / mAcc / pAcc with ADE20K's conventions,
 // and boundary quality (Boundary IoU, Cheng et al. 2021; boundary F-score).
+//
+// Region metrics follow the ADE20K scene-parsing evaluation
+// (`intersectionAndUnion` / `pixelAccuracy` of CSAILVision/sceneparsing):
+// ground-truth 0 is unlabelled and the prediction there is not scored; a
+// predicted 0 on a labelled pixel is wrong and is not a class. Ground-truth
+// `ignore_label` (255) is treated like 0. Differences from that script:
+//  - means are over the classes that occur (ground-truth or predicted pixels;
+//    mmsegmentation's nanmean). The ADE20K script averages over all 150
+//    classes, which is the same on the full validation set but counts absent
+//    classes as 0 on a subset.
+//  - any other predicted value is a class of its own (the script's histogram
+//    drops values above 150); a prediction outside the label set thus costs
+//    IoU instead of being silently lost.
 #pragma once
 
 #include <cstdint>
 #include <filesystem>
 #include <map>
+#include <utility>
 #include <vector>
 
 #include "semrec/core/label_map.h"
@@ -12,52 +26,73 @@
 namespace semrec::eval {
 
 struct SegEvalOptions {
-  /// ADE20K: ground-truth 0 = unlabelled, ignored (predictions there too).
+  /// Ground-truth 0 = unlabelled, ignored (ADE20K). Off: 0 is a class (VOC
+  /// background).
   bool ignore_zero = true;
-  /// Ground-truth value ignored as well (-1 = none).
+  /// Ground-truth value ignored as well; -1 = none.
   int ignore_label = 255;
-  /// Boundary IoU band width d = round(ratio * image diagonal), >= 1 (the
-  /// paper's default 0.02).
+  /// Boundary IoU band width d = round(ratio * image diagonal), at least 1
+  /// (the paper's 0.02).
   double boundary_dilation_ratio = 0.02;
-  /// Boundary F-score: a boundary pixel matches when the other boundary is
-  /// within this many pixels.
+  /// Boundary F-score: a contour pixel matches when the other mask's contour
+  /// is within this Euclidean distance (pixels).
   int boundary_tolerance_px = 2;
+  /// Throws InvalidArgument for a ratio outside (0, 1), a negative tolerance
+  /// or an ignore label outside -1..65535.
   void Check() const;
 };
 
+/// Metrics of one class, from counts summed over all images.
 struct ClassSegMetrics {
   uint16_t id = 0;
-  int64_t intersection = 0;  // pixels labelled id in both
+  int64_t intersection = 0;  // Labelled id in both.
+  int64_t union_pixels = 0;  // Labelled id in either.
   int64_t gt_pixels = 0;
-  int64_t pred_pixels = 0;  // over non-ignored ground-truth pixels
-  double iou = 0, accuracy = 0;
+  int64_t pred_pixels = 0;  // Predicted id on scored (labelled) pixels.
+  double iou = 0;
+  double accuracy = 0;  // intersection / gt_pixels; 0 without gt pixels.
   int64_t boundary_intersection = 0, boundary_union = 0;
   double boundary_iou = 0;
   double boundary_precision = 0, boundary_recall = 0, boundary_f = 0;
 };
 
 struct SegMetrics {
-  /// Per class with gt_pixels + pred_pixels > 0, by id.
+  /// Classes with ground-truth or predicted pixels, by id.
   std::vector<ClassSegMetrics> classes;
-  /// Correct / valid pixels over all images.
+  /// Correct / scored pixels over all images.
   double pixel_accuracy = 0;
-  /// Means over the classes present (union > 0 for IoUs, gt > 0 for mAcc,
-  /// boundary pixels present for F): absent classes are left out, as
-  /// mmsegmentation's nanmean does. ADE20K's own script averages over all 150
-  /// classes, which only equals this when every class occurs (the full
-  /// validation set); on subsets it would count absent classes as 0.
+  /// Means over `classes` (mAcc over those with ground-truth pixels).
   double mean_iou = 0;
   double mean_accuracy = 0;
   double mean_boundary_iou = 0;
   double mean_boundary_f = 0;
-  int64_t valid_pixels = 0;
+  int64_t valid_pixels = 0;  // Scored (labelled, not ignored) pixels.
   int images = 0;
 };
 
-/// Accumulates over images (a dataset's metrics are ratios of sums, not means
-/// of per-image values).
+/// Boundary IoU's band width for an image: round(ratio * diagonal), >= 1.
+int BoundaryBandWidth(double dilation_ratio, int width, int height);
+
+/// Accumulates over images: dataset metrics are ratios of summed counts, not
+/// means of per-image values.
+///
+/// Boundaries are computed per class on binary masks restricted to scored
+/// pixels (an unlabelled region cuts both masks alike):
+///  - Boundary IoU: band = mask minus its erosion by a (2d+1)^2 square, with
+///    pixels outside the image counting as outside the mask, as the
+///    reference implementation's zero padding does (a mask cut by the image
+///    border has a contour there). Per class |G_d & P_d| / |G_d | P_d|, both
+///    summed over images.
+///  - Boundary F: contours are the d = 1 bands (same border convention);
+///    precision = predicted contour pixels within the tolerance of a
+///    ground-truth contour pixel / predicted contour pixels, recall the other
+///    way round, F = 2PR / (P + R), counts summed over images. A class with
+///    only one side present has F = 0.
+/// Each image costs one pass over the pixels plus, per class present, work on
+/// the class's bounding box only.
 class SegEvaluator {
  public:
+  /// Throws InvalidArgument when the options are invalid.
   explicit SegEvaluator(const SegEvalOptions& options = {});
   /// Throws InvalidArgument when the sizes differ.
   void Add(const LabelMap& prediction, const LabelMap& ground_truth);
@@ -66,26 +101,28 @@ class SegEvaluator {
  private:
   struct Counts {
     int64_t intersection = 0, gt = 0, pred = 0;
-    int64_t b_inter = 0, b_union = 0;
-    int64_t pred_b = 0, pred_b_matched = 0, gt_b = 0, gt_b_matched = 0;
+    int64_t band_intersection = 0, band_union = 0;
+    int64_t pred_contour = 0, pred_contour_matched = 0;
+    int64_t gt_contour = 0, gt_contour_matched = 0;
   };
+  bool IsClass(uint16_t label) const;
+
   SegEvalOptions options_;
   std::map<uint16_t, Counts> counts_;
   int64_t correct_ = 0, valid_ = 0;
   int images_ = 0;
 };
 
-/// The Boundary IoU band of a 0/1 mask as in the reference implementation:
-/// pad one pixel of 0, erode `d` times with a 3x3 kernel, subtract (so the
-/// image border counts as a contour).
+/// The Boundary IoU band of a 0/1 mask (1 = band), as above; `d` >= 1.
 Image<uint8_t> BoundaryBand(const Image<uint8_t>& mask, int d);
 
-/// Pairs of files for `semrec eval seg`: every PNG of `gt_dir` with the
-/// prediction of the same stem in `pred_dir` (also accepted: <stem>_semantic
-/// .png, or pred_dir/semantic/<stem>.png as `semrec segment` writes). Throws
-/// IoError naming the missing prediction.
+/// Pairs (prediction, ground truth) for `semrec eval seg`: every PNG of
+/// `gt_dir`, sorted, with the prediction of the same stem in `pred_dir`
+/// (<stem>.png, <stem>_semantic.png, or semantic/<stem>.png as `semrec
+/// segment` writes). Throws IoError naming the missing prediction, or with
+/// `allow_missing` skips it (IoError when nothing matches at all).
 std::vector<std::pair<std::filesystem::path, std::filesystem::path>>
 MatchSegFiles(const std::filesystem::path& pred_dir,
-              const std::filesystem::path& gt_dir);
+              const std::filesystem::path& gt_dir, bool allow_missing = false);
 
 }  // namespace semrec::eval

@@ -27,6 +27,12 @@ void MaskGeneratorOptions::Check() const {
                 "mask generator: min_region_area_px must be >= 0");
   CheckArgument(dense_stride >= 1 && (dense_stride & (dense_stride - 1)) == 0,
                 "mask generator: dense_stride must be a power of 2");
+  CheckArgument(crop_layers >= 0 && crop_layers <= 4,
+                "mask generator: crop_layers must be in 0..4");
+  CheckArgument(crop_overlap_ratio >= 0 && crop_overlap_ratio < 1,
+                "mask generator: crop_overlap_ratio must be in [0, 1)");
+  CheckArgument(crop_points_downscale >= 1,
+                "mask generator: crop_points_downscale must be >= 1");
   CheckArgument(prompts_per_wave >= 1,
                 "mask generator: prompts_per_wave must be >= 1");
 }
@@ -102,12 +108,14 @@ void RemoveSmallRegions(Mask* mask, int min_area_px) {
   Tighten(mask);
 }
 
-std::vector<Mask> BoxNms(std::vector<Mask> masks, float threshold) {
+// Greedy box NMS, highest score first (ties: input order).
+std::vector<Mask> NmsByScore(std::vector<Mask> masks,
+                             const std::vector<float>& scores,
+                             float threshold) {
   std::vector<size_t> order(masks.size());
   std::iota(order.begin(), order.end(), 0);
-  std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) {
-    return masks[a].predicted_iou > masks[b].predicted_iou;
-  });
+  std::stable_sort(order.begin(), order.end(),
+                   [&](size_t a, size_t b) { return scores[a] > scores[b]; });
   std::vector<Mask> kept;
   for (size_t i : order) {
     const bool suppressed = std::any_of(
@@ -116,6 +124,12 @@ std::vector<Mask> BoxNms(std::vector<Mask> masks, float threshold) {
     if (!suppressed) kept.push_back(std::move(masks[i]));
   }
   return kept;
+}
+
+std::vector<Mask> BoxNms(std::vector<Mask> masks, float threshold) {
+  std::vector<float> scores;
+  for (const Mask& m : masks) scores.push_back(m.predicted_iou);
+  return NmsByScore(std::move(masks), scores, threshold);
 }
 
 namespace {
@@ -156,6 +170,53 @@ std::vector<std::array<float, 2>> GridPoints(
   return out;
 }
 
+// SAM's crop boxes: the whole image, then per layer l a 2^l x 2^l grid of
+// overlapping crops.
+std::vector<Box> CropBoxes(int w, int h, int layers, float overlap_ratio,
+                           std::vector<int>* layer_of) {
+  std::vector<Box> boxes = {Box{0, 0, w, h}};
+  *layer_of = {0};
+  for (int l = 1; l <= layers; ++l) {
+    const int n = 1 << l;
+    const int overlap = int(overlap_ratio * std::min(w, h) * (2.0 / n));
+    const int cw = int(std::ceil(double(overlap * (n - 1) + w) / n));
+    const int ch = int(std::ceil(double(overlap * (n - 1) + h) / n));
+    for (int j = 0; j < n; ++j) {
+      for (int i = 0; i < n; ++i) {
+        const int x0 = (cw - overlap) * i, y0 = (ch - overlap) * j;
+        boxes.push_back(
+            Box{x0, y0, std::min(x0 + cw, w), std::min(y0 + ch, h)});
+        layer_of->push_back(l);
+      }
+    }
+  }
+  return boxes;
+}
+
+ColorImage CropImage(const ColorImage& rgb, const Box& b) {
+  if (b.x0 == 0 && b.y0 == 0 && b.width() == rgb.width() &&
+      b.height() == rgb.height()) {
+    return rgb;
+  }
+  ColorImage out(b.width(), b.height(), 3);
+  for (int y = 0; y < b.height(); ++y) {
+    std::copy_n(&rgb(b.x0, b.y0 + y), size_t(b.width()) * 3, &out(0, y));
+  }
+  return out;
+}
+
+// SAM's is_box_near_crop_edge (20 px): the mask box (crop coordinates) touches
+// a crop edge that is not an image edge.
+bool NearCropEdge(const Box& m, const Box& crop, int w, int h) {
+  constexpr int kTol = 20;
+  const auto near = [](int a, int b) { return std::abs(a - b) <= kTol; };
+  const Box g{m.x0 + crop.x0, m.y0 + crop.y0, m.x1 + crop.x0, m.y1 + crop.y0};
+  return (near(g.x0, crop.x0) && !near(g.x0, 0)) ||
+         (near(g.y0, crop.y0) && !near(g.y0, 0)) ||
+         (near(g.x1, crop.x1) && !near(g.x1, w)) ||
+         (near(g.y1, crop.y1) && !near(g.y1, h));
+}
+
 class AutomaticMaskGenerator : public MaskGenerator {
  public:
   AutomaticMaskGenerator(const infer::ModelRegistry& registry,
@@ -167,18 +228,42 @@ class AutomaticMaskGenerator : public MaskGenerator {
 
   std::vector<Mask> Generate(const ColorImage& rgb) override {
     stats_ = {};
-    const auto t0 = Clock::now();
-    model_->SetImage(rgb);
-    const auto t1 = Clock::now();
-    const auto points = GridPoints(options_.points_per_side, rgb.width(),
-                                   rgb.height(), &levels_, &cells_);
-    stats_.prompts_total = int(points.size());
-    std::vector<Mask> candidates =
-        reference_ ? DecodeAll(points) : DecodeSkippingCovered(points);
+    std::vector<int> layers;
+    const std::vector<Box> crops =
+        CropBoxes(rgb.width(), rgb.height(), options_.crop_layers,
+                  options_.crop_overlap_ratio, &layers);
+    std::vector<Mask> all;
+    std::vector<float> scores;
+    for (size_t k = 0; k < crops.size(); ++k) {
+      const Box& crop = crops[k];
+      int n = options_.points_per_side;
+      for (int l = 0; l < layers[k]; ++l) {
+        n = std::max(1, n / options_.crop_points_downscale);
+      }
+      std::vector<Mask> masks = GenerateInCrop(CropImage(rgb, crop), n);
+      for (Mask& m : masks) {
+        if (layers[k] > 0 &&
+            NearCropEdge(m.box, crop, rgb.width(), rgb.height())) {
+          continue;  // cut by the crop: the full mask comes from another crop
+        }
+        m.box = Box{m.box.x0 + crop.x0, m.box.y0 + crop.y0, m.box.x1 + crop.x0,
+                    m.box.y1 + crop.y0};
+        m.point_x += float(crop.x0);
+        m.point_y += float(crop.y0);
+        m.image_width = rgb.width();
+        m.image_height = rgb.height();
+        // Across crops SAM prefers masks from smaller crops (more pixels per
+        // object); within one crop the predicted IoU decides.
+        scores.push_back(crops.size() > 1 ? 1.0f / float(crop.area())
+                                          : m.predicted_iou);
+        all.push_back(std::move(m));
+      }
+    }
     const auto t2 = Clock::now();
-    stats_.candidates = int(candidates.size());
     std::vector<Mask> kept =
-        BoxNms(std::move(candidates), options_.box_nms_threshold);
+        crops.size() > 1
+            ? NmsByScore(std::move(all), scores, options_.box_nms_threshold)
+            : std::move(all);
     tbb::parallel_for(size_t(0), kept.size(), [&](size_t i) {
       RemoveSmallRegions(&kept[i], options_.min_region_area_px);
     });
@@ -187,8 +272,6 @@ class AutomaticMaskGenerator : public MaskGenerator {
         kept.begin(), kept.end(),
         [](const Mask& a, const Mask& b) { return a.area > b.area; });
     stats_.kept = int(kept.size());
-    stats_.encode_seconds = Seconds(t0, t1);
-    stats_.decode_seconds = Seconds(t1, t2);
     stats_.postprocess_seconds = Seconds(t2, Clock::now());
     return kept;
   }
@@ -197,6 +280,23 @@ class AutomaticMaskGenerator : public MaskGenerator {
   PromptableSegmenter& model() override { return *model_; }
 
  private:
+  // Encode, decode the grid, filter and NMS within one image (or crop).
+  std::vector<Mask> GenerateInCrop(const ColorImage& rgb, int points_per_side) {
+    const auto t0 = Clock::now();
+    model_->SetImage(rgb);
+    const auto t1 = Clock::now();
+    const auto points = GridPoints(points_per_side, rgb.width(), rgb.height(),
+                                   &levels_, &cells_);
+    grid_side_ = points_per_side;
+    stats_.prompts_total += int(points.size());
+    std::vector<Mask> candidates =
+        reference_ ? DecodeAll(points) : DecodeSkippingCovered(points);
+    stats_.candidates += int(candidates.size());
+    stats_.encode_seconds += Seconds(t0, t1);
+    stats_.decode_seconds += Seconds(t1, Clock::now());
+    return BoxNms(std::move(candidates), options_.box_nms_threshold);
+  }
+
   bool Passes(const LowResMask& m, float stability) const {
     return m.predicted_iou >= options_.pred_iou_threshold &&
            stability >= options_.stability_threshold;
@@ -233,7 +333,7 @@ class AutomaticMaskGenerator : public MaskGenerator {
     // Outcome per grid cell: 0 not decoded, 1 rejected, 2 accepted. A fine
     // point whose surrounding dense points were all rejected lies in a region
     // where SAM finds no good mask; decoding it again rarely helps.
-    const int n = options_.points_per_side, stride = options_.dense_stride;
+    const int n = grid_side_, stride = options_.dense_stride;
     std::vector<uint8_t> outcome(size_t(n) * n, 0);
     const auto between_rejected = [&](size_t p) {
       if (!options_.skip_between_rejected) return false;
@@ -331,6 +431,7 @@ class AutomaticMaskGenerator : public MaskGenerator {
   std::unique_ptr<PromptableSegmenter> model_;
   MaskGeneratorStats stats_;
   std::vector<int> levels_;  // grid level per point (see GridPoints)
+  int grid_side_ = 0;        // points per side of the current grid
   std::vector<std::array<int, 2>> cells_;  // grid column and row per point
 };
 

@@ -45,6 +45,13 @@ struct MaskGeneratorOptions {
   /// rejected mask: SAM's quality varies smoothly, so such a point mostly
   /// yields another rejected mask.
   bool skip_between_rejected = true;
+  /// SAM's crop layers (off by default, as in SAM): layer l adds a 2^l x 2^l
+  /// grid of overlapping crops, each encoded and prompted with
+  /// points_per_side / crop_points_downscale^l points per side; masks cut by
+  /// a crop edge are dropped and NMS across crops prefers smaller crops.
+  int crop_layers = 0;
+  float crop_overlap_ratio = 512.0f / 1500.0f;
+  int crop_points_downscale = 1;
   /// Prompts decoded in parallel before the covered set is updated. Fixed
   /// (not the core count) so results do not depend on the machine.
   int prompts_per_wave = 8;

@@ -74,6 +74,12 @@ TEST(MaskGenerator, OptionsAreChecked) {
   o = {};
   o.box_nms_threshold = 0;
   EXPECT_THROW(o.Check(), InvalidArgument);
+  o = {};
+  o.crop_layers = -1;
+  EXPECT_THROW(o.Check(), InvalidArgument);
+  o = {};
+  o.dense_stride = 3;
+  EXPECT_THROW(o.Check(), InvalidArgument);
 }
 
 }  // namespace

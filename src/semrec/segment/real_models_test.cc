@@ -12,10 +12,10 @@ namespace fs = std::filesystem;
 namespace semrec::segment {
 namespace {
 
-#define SEMREC_REQUIRE_MODEL(file)                                          \
-  if (!fs::exists(semrec::testing::ModelDir() / (file))) {                 \
-    GTEST_SKIP() << "model " << (file) << " not installed in "             \
-                 << semrec::testing::ModelDir() << ": run scripts/setup";  \
+#define SEMREC_REQUIRE_MODEL(file)                                        \
+  if (!fs::exists(semrec::testing::ModelDir() / (file))) {                \
+    GTEST_SKIP() << "model " << (file) << " not installed in "            \
+                 << semrec::testing::ModelDir() << ": run scripts/setup"; \
   }
 
 TEST(RealModels, DeeplabLabelsARedwoodFrameWithVocClasses) {
@@ -24,7 +24,8 @@ TEST(RealModels, DeeplabLabelsARedwoodFrameWithVocClasses) {
   const ColorImage rgb = io::ReadColorImage(redwood / "color" / "00000.jpg");
   SemanticSegmenterOptions options;
   options.runtime.model_dir = semrec::testing::ModelDir();
-  const SemanticSegmenter segmenter(infer::ModelRegistry::LoadDefault(), options);
+  const SemanticSegmenter segmenter(infer::ModelRegistry::LoadDefault(),
+                                    options);
   const SemanticResult a = segmenter.Segment(rgb);
   const SemanticResult b = segmenter.Segment(rgb);
   EXPECT_EQ(a.labels, b.labels);  // deterministic

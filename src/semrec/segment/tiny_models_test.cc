@@ -23,43 +23,9 @@ std::vector<std::array<uint8_t, 3>> Palette() {
 }
 
 infer::ModelRegistry TinyRegistry() {
-  const fs::path dir = semrec::testing::TinyModelDir();
-  const fs::path file = dir / "registry.yaml";
-  semrec::testing::WriteText(file, R"(models:
-  tiny_segformer:
-    file: tiny_segformer.onnx
-    role: semantic
-    label_set: ade20k
-    label_offset: 1
-    input: {name: pixel_values, layout: NCHW, width: 512, height: 512, color: RGB,
-            resize: stretch, mean: [123.675, 116.28, 103.53], std: [58.395, 57.12, 57.375]}
-    output: {name: logits, layout: NCHW}
-    signature:
-      inputs: {pixel_values: [1, 3, 512, 512]}
-      outputs: {logits: [1, 150, 128, 128]}
-  tiny_sam_encoder: &enc
-    file: tiny_sam_encoder.onnx
-    role: mask_encoder
-    input: {name: input, layout: NCHW, width: 1024, height: 1024, color: RGB,
-            resize: letterbox, pad_space: normalized,
-            mean: [123.675, 116.28, 103.53], std: [58.395, 57.12, 57.375]}
-    output: {name: output, layout: NCHW}
-  tiny_sam_decoder:
-    file: tiny_sam_decoder.onnx
-    role: mask_decoder
-    backend: sam
-  tiny_sam2_encoder:
-    file: tiny_sam2_encoder.onnx
-    role: mask_encoder
-    input: {name: image, layout: NCHW, width: 1024, height: 1024, color: RGB,
-            resize: letterbox, pad_space: normalized,
-            mean: [123.675, 116.28, 103.53], std: [58.395, 57.12, 57.375]}
-  tiny_sam2_decoder:
-    file: tiny_sam2_decoder.onnx
-    role: mask_decoder
-    backend: sam2
-)");
-  return infer::ModelRegistry::Load(file);
+  // Written by make_tiny_models.py beside the models.
+  return infer::ModelRegistry::Load(semrec::testing::TinyModelDir() /
+                                    "registry.yaml");
 }
 
 infer::OnnxModelOptions Runtime() {
@@ -205,6 +171,36 @@ TEST_P(TinyAmg, FindsEveryColourRegionLikeTheReference) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Backends, TinyAmg, ::testing::Values("sam", "sam2"));
+
+TEST(TinyModels, CropLayersStillFindEveryRegionOnce) {
+  ASSERT_FALSE(semrec::testing::TinyModelDir().empty());
+  MaskGeneratorOptions options;
+  options.model.encoder = "tiny_sam_encoder";
+  options.model.decoder = "tiny_sam_decoder";
+  options.model.runtime = Runtime();
+  options.points_per_side = 16;
+  options.crop_layers = 1;  // the image + 2 x 2 overlapping crops
+  options.crop_points_downscale = 2;
+  auto generator = MaskGenerator::Create(TinyRegistry(), options);
+  const Scene s = MakeScene();
+  const std::vector<Mask> masks = generator->Generate(s.rgb);
+  // 16^2 prompts on the image, 8^2 on each of the 4 crops.
+  EXPECT_EQ(generator->stats().prompts_total, 256 + 4 * 64);
+  for (const Box& b : s.boxes) {
+    EXPECT_GT(BestIou(BoxMask(320, 240, b), masks), 0.9);
+  }
+  // No rectangle twice: crop duplicates are removed by the cross-crop NMS.
+  for (const Box& b : s.boxes) {
+    int copies = 0;
+    for (const Mask& m : masks)
+      copies += MaskIoU(BoxMask(320, 240, b), m) > 0.5;
+    EXPECT_EQ(copies, 1);
+  }
+  for (const Mask& m : masks) {
+    EXPECT_EQ(m.image_width, 320);
+    EXPECT_LE(m.box.x1, 320);
+  }
+}
 
 TEST(TinyModels, BoxPromptsAndPooledEmbeddings) {
   ASSERT_FALSE(semrec::testing::TinyModelDir().empty());
