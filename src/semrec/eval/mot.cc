@@ -32,7 +32,8 @@ Eigen::MatrixXd IouMatrix(const FrameBoxes& f) {
 }  // namespace
 
 double BoxIou(const io::MotBox& a, const io::MotBox& b) {
-  return track::Iou({a.left, a.top, a.width, a.height}, {b.left, b.top, b.width, b.height});
+  return track::Iou({a.left, a.top, a.width, a.height},
+                    {b.left, b.top, b.width, b.height});
 }
 
 MotMetrics EvaluateMot(const std::vector<io::MotBox>& gt,

@@ -1,6 +1,7 @@
-// Multi-object tracking metrics with MOTChallenge conventions: CLEAR MOT (Bernardin &
-// Stiefelhagen 2008, as py-motmetrics computes it), identity metrics (Ristani et al. 2016) and
-// HOTA (Luiten et al. 2021, as TrackEval computes it). Boxes match when IoU >= 0.5.
+// Multi-object tracking metrics with MOTChallenge conventions: CLEAR MOT
+// (Bernardin & Stiefelhagen 2008, as py-motmetrics computes it), identity
+// metrics (Ristani et al. 2016) and HOTA (Luiten et al. 2021, as TrackEval
+// computes it). Boxes match when IoU >= 0.5.
 #pragma once
 
 #include <cstddef>

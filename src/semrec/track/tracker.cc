@@ -36,6 +36,7 @@ void TrackerOptions::Check() const {
                 "tracker: min_iou must be in (0, 1]");
   CheckArgument(max_lost_frames >= 0, "tracker: max_lost_frames must be >= 0");
   CheckArgument(min_hits >= 1, "tracker: min_hits must be >= 1");
+  reid.Check();
 }
 
 TrackerOptions TrackerOptions::Paper() {
@@ -53,7 +54,25 @@ TrackerOptions TrackerOptions::Improved() {
   return o;
 }
 
-Tracker::Tracker(const TrackerOptions& options) : options_(options) {
+namespace {
+
+void UpdateEmbedding(const std::vector<float>& observed, double weight,
+                     std::vector<float>* running) {
+  if (observed.empty()) return;
+  if (running->size() != observed.size()) {
+    *running = observed;
+    return;
+  }
+  for (size_t i = 0; i < observed.size(); ++i) {
+    (*running)[i] =
+        float((1.0 - weight) * (*running)[i] + weight * observed[i]);
+  }
+}
+
+}  // namespace
+
+Tracker::Tracker(const TrackerOptions& options, PcaProjection pca)
+    : options_(options), memory_(options.reid, std::move(pca)) {
   options_.Check();
 }
 
@@ -91,6 +110,22 @@ std::vector<TrackedBox> Tracker::Update(
   std::vector<int> track_of(detections.size(), -1);
   for (const auto& [d, t] : SolveAssignment(cost).pairs) track_of[d] = t;
 
+  // Re-identification of the detections geometry left unmatched.
+  std::vector<int> reid_of(detections.size(), -1);
+  if (options_.reid.enabled) {
+    std::vector<size_t> unmatched;
+    std::vector<std::vector<float>> queries;
+    for (size_t d = 0; d < detections.size(); ++d) {
+      if (track_of[d] < 0 && !detections[d].embedding.empty()) {
+        unmatched.push_back(d);
+        queries.push_back(detections[d].embedding);
+      }
+    }
+    const std::vector<int> ids = memory_.Match(queries);
+    for (size_t k = 0; k < unmatched.size(); ++k)
+      reid_of[unmatched[k]] = ids[k];
+  }
+
   std::vector<char> matched(tracks_.size(), 0);
   std::vector<TrackedBox> out;
   std::vector<Track> born;
@@ -109,20 +144,32 @@ std::vector<TrackedBox> Tracker::Update(
       track.vy = track.age > 0 ? 0.5 * track.vy + 0.5 * vy : vy;
       track.box = b;
       track.lost_frames = 0;
+      UpdateEmbedding(detections[d].embedding, options_.reid.embedding_update,
+                      &track.embedding);
       ++track.age;
       out.push_back({track.id, b, detections[d].score,
-                     track.age + 1 >= options_.min_hits});
+                     track.age + 1 >= options_.min_hits, false});
     } else {
-      born.push_back({next_id_++, b});
-      out.push_back(
-          {born.back().id, b, detections[d].score, options_.min_hits <= 1});
+      // A re-identified person continues the old track (confirmed already).
+      const bool known = reid_of[d] >= 0;
+      Track track;
+      track.id = known ? reid_of[d] : next_id_++;
+      track.box = b;
+      track.embedding = detections[d].embedding;
+      if (known) track.age = options_.min_hits;
+      born.push_back(track);
+      out.push_back({track.id, b, detections[d].score,
+                     known || options_.min_hits <= 1, known});
     }
   }
   std::vector<Track> next;
   for (size_t t = 0; t < tracks_.size(); ++t) {
     if (!matched[t]) {
       ++tracks_[t].lost_frames;
-      if (tracks_[t].lost_frames > options_.max_lost_frames) continue;
+      if (tracks_[t].lost_frames > options_.max_lost_frames) {
+        memory_.Remember(tracks_[t].id, tracks_[t].embedding);
+        continue;
+      }
     }
     next.push_back(tracks_[t]);
   }

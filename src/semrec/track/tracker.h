@@ -9,6 +9,8 @@
 #include <cstdint>
 #include <vector>
 
+#include "semrec/track/reid.h"
+
 namespace semrec::track {
 
 /// An axis-aligned box in pixels: left, top, width, height.
@@ -22,6 +24,8 @@ struct Box {
 struct Detection {
   Box box;
   double score = 1.0;
+  /// Appearance embedding for re-identification (empty: none).
+  std::vector<float> embedding;
 };
 
 struct TrackedBox {
@@ -31,6 +35,8 @@ struct TrackedBox {
   /// The track has been matched at least min_hits times (SORT's rule against
   /// spurious one-frame tracks); results usually report confirmed boxes only.
   bool confirmed = true;
+  /// The id was recovered from the re-identification memory in this frame.
+  bool reidentified = false;
 };
 
 /// Sum of the distances between corresponding corners (the paper's c_ij).
@@ -61,6 +67,9 @@ struct TrackerOptions {
   /// A track is confirmed once it has been seen in this many frames (1 = at
   /// once, the paper).
   int min_hits = 1;
+  /// Re-identification of unmatched detections against dropped tracks (only
+  /// detections with an embedding take part).
+  ReidOptions reid;
 
   void Check() const;
 
@@ -74,11 +83,14 @@ struct TrackerOptions {
 
 class Tracker {
  public:
-  explicit Tracker(const TrackerOptions& options = {});
+  /// `pca` projects embeddings for re-identification (identity by default).
+  explicit Tracker(const TrackerOptions& options = {}, PcaProjection pca = {});
 
-  /// Associates one frame's detections; returns the boxes with track ids (new
-  /// ids for unmatched detections), in detection order (ignored low-score
-  /// detections left out).
+  /// Associates one frame's detections; returns the boxes with track ids, in
+  /// detection order (ignored low-score detections left out). Detections
+  /// without a geometric match are compared with the re-identification memory
+  /// (the paper applies it when I > J, the only case leaving detections
+  /// unmatched without a gate) and take a remembered id or a new one.
   std::vector<TrackedBox> Update(const std::vector<Detection>& detections);
 
   /// Tracks that found no detection in the last Update() (candidates for
@@ -87,13 +99,15 @@ class Tracker {
 
  private:
   struct Track {
-    int id;
+    int id = 0;
     Box box;
     double vx = 0, vy = 0;  // box centre velocity (px per frame)
     int lost_frames = 0;
-    int age = 0;  // matches after the first detection
+    int age = 0;                   // matches after the first detection
+    std::vector<float> embedding;  // running appearance embedding
   };
   TrackerOptions options_;
+  ReidMemory memory_;
   std::vector<Track> tracks_;
   int next_id_ = 1;
 };

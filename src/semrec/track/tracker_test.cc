@@ -22,8 +22,8 @@ TEST(Tracker, CornerDistanceIsTheSumOfFourCorners) {
 
 TEST(Tracker, KeepsIdsOfMovingBoxesAndHandlesGaps) {
   auto frame = [](int f, bool show_b) {
-    std::vector<Detection> d = {{{10.0 + 5 * f, 50, 40, 100}, 0.9}};
-    if (show_b) d.push_back({{400.0 - 5 * f, 60, 40, 100}, 0.9});
+    std::vector<Detection> d = {{{10.0 + 5 * f, 50, 40, 100}, 0.9, {}}};
+    if (show_b) d.push_back({{400.0 - 5 * f, 60, 40, 100}, 0.9, {}});
     return d;
   };
   for (const TrackerOptions& options :
@@ -55,7 +55,7 @@ TEST(Tracker, TudCampusPublicDetections) {
     std::map<int, std::vector<Detection>> by_frame;
     for (const auto& b : det)
       by_frame[b.frame].push_back(
-          {{b.left, b.top, b.width, b.height}, b.confidence});
+          {{b.left, b.top, b.width, b.height}, b.confidence, {}});
     Tracker tracker(options);
     std::vector<io::MotBox> out;
     for (int f = 1; f <= 71; ++f) {
