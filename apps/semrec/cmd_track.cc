@@ -31,7 +31,7 @@ struct TrackArgs {
   std::string config = "improved";
   std::string cost;
   std::optional<int> max_lost;
-  std::optional<bool> velocity;
+  std::string motion;
   std::optional<double> min_score;
   std::optional<int> min_hits;
   // Images mode.
@@ -72,7 +72,17 @@ track::TrackerOptions TrackerOptionsFrom(const TrackArgs& args) {
                           args.cost + "'");
   }
   if (args.max_lost) options.max_lost_frames = *args.max_lost;
-  if (args.velocity) options.constant_velocity = *args.velocity;
+  if (args.motion == "static") {
+    options.motion = track::TrackerOptions::Motion::kStatic;
+  } else if (args.motion == "velocity") {
+    options.motion = track::TrackerOptions::Motion::kVelocity;
+  } else if (args.motion == "kalman") {
+    options.motion = track::TrackerOptions::Motion::kKalman;
+  } else if (!args.motion.empty()) {
+    throw InvalidArgument(
+        "--motion must be 'static', 'velocity' or 'kalman', got '" +
+        args.motion + "'");
+  }
   if (args.min_score) options.min_score = *args.min_score;
   if (args.min_hits) options.min_hits = *args.min_hits;
   options.reid.enabled = args.reid;
@@ -290,13 +300,14 @@ void RegisterTrack(CLI::App& app) {
   cmd->add_option(
          "--config", args->config,
          "paper (corner cost, no gate, previous frame only) or improved (IoU "
-         "cost, constant velocity, lost tracks kept 10 frames, scores >= 0.7)")
+         "cost, Kalman prediction, lost tracks kept 10 frames, scores >= 0.7)")
       ->capture_default_str();
   cmd->add_option("--cost", args->cost, "Override the cost: corners or iou");
   cmd->add_option("--max-lost", args->max_lost,
                   "Override: frames a lost track stays matchable");
-  cmd->add_option("--velocity", args->velocity,
-                  "Override: constant-velocity prediction (true/false)");
+  cmd->add_option("--motion", args->motion,
+                  "Override the box prediction: static (last box), velocity "
+                  "(smoothed centre velocity) or kalman (SORT's filter)");
   cmd->add_option("--min-score", args->min_score,
                   "Override: ignore detections below this score");
   cmd->add_option(

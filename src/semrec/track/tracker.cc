@@ -10,25 +10,6 @@
 
 namespace semrec::track {
 
-double CornerDistance(const Box& a, const Box& b) {
-  const double dl = a.left - b.left, dt = a.top - b.top;
-  const double dr = (a.left + a.width) - (b.left + b.width);
-  const double db = (a.top + a.height) - (b.top + b.height);
-  return std::hypot(dl, dt) + std::hypot(dr, dt) + std::hypot(dl, db) +
-         std::hypot(dr, db);
-}
-
-double Iou(const Box& a, const Box& b) {
-  const double w =
-      std::min(a.left + a.width, b.left + b.width) - std::max(a.left, b.left);
-  const double h =
-      std::min(a.top + a.height, b.top + b.height) - std::max(a.top, b.top);
-  if (w <= 0 || h <= 0) return 0.0;
-  const double inter = w * h;
-  const double uni = a.width * a.height + b.width * b.height - inter;
-  return uni > 0.0 ? inter / uni : 0.0;
-}
-
 void TrackerOptions::Check() const {
   CheckArgument(max_corner_cost_px >= 0.0,
                 "tracker: max_corner_cost_px must be >= 0");
@@ -48,7 +29,7 @@ TrackerOptions TrackerOptions::Paper() {
 TrackerOptions TrackerOptions::Improved() {
   TrackerOptions o;
   o.cost = Cost::kIou;
-  o.constant_velocity = true;
+  o.motion = Motion::kKalman;
   o.max_lost_frames = 10;
   o.min_score = 0.7;
   return o;
@@ -87,7 +68,9 @@ std::vector<TrackedBox> Tracker::Update(
   std::vector<Box> predicted(tracks_.size());
   for (size_t t = 0; t < tracks_.size(); ++t) {
     predicted[t] = tracks_[t].box;
-    if (options_.constant_velocity) {
+    if (options_.motion == TrackerOptions::Motion::kKalman) {
+      predicted[t] = tracks_[t].filter.Predict();
+    } else if (options_.motion == TrackerOptions::Motion::kVelocity) {
       const double steps = tracks_[t].lost_frames + 1;
       predicted[t].left += tracks_[t].vx * steps;
       predicted[t].top += tracks_[t].vy * steps;
@@ -143,6 +126,7 @@ std::vector<TrackedBox> Tracker::Update(
       track.vx = track.age > 0 ? 0.5 * track.vx + 0.5 * vx : vx;
       track.vy = track.age > 0 ? 0.5 * track.vy + 0.5 * vy : vy;
       track.box = b;
+      track.filter.Update(b);
       track.lost_frames = 0;
       UpdateEmbedding(detections[d].embedding, options_.reid.embedding_update,
                       &track.embedding);
@@ -155,6 +139,7 @@ std::vector<TrackedBox> Tracker::Update(
       Track track;
       track.id = known ? reid_of[d] : next_id_++;
       track.box = b;
+      track.filter = BoxFilter(b);
       track.embedding = detections[d].embedding;
       if (known) track.age = options_.min_hits;
       born.push_back(track);

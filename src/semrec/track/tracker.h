@@ -2,24 +2,17 @@
 // part): Hungarian assignment between the current detections and the tracks
 // seen in the previous frame, with cost = sum of the Euclidean distances
 // between the four corresponding box corners. Options beyond the paper, off by
-// default in the paper configuration: IoU cost, constant-velocity prediction,
-// keeping lost tracks matchable for a few frames.
+// default in the paper configuration: IoU cost, motion prediction (velocity or
+// Kalman), keeping lost tracks matchable for a few frames.
 #pragma once
 
 #include <cstdint>
 #include <vector>
 
+#include "semrec/track/box.h"
 #include "semrec/track/reid.h"
 
 namespace semrec::track {
-
-/// An axis-aligned box in pixels: left, top, width, height.
-struct Box {
-  double left = 0.0;
-  double top = 0.0;
-  double width = 0.0;
-  double height = 0.0;
-};
 
 struct Detection {
   Box box;
@@ -39,10 +32,6 @@ struct TrackedBox {
   bool reidentified = false;
 };
 
-/// Sum of the distances between corresponding corners (the paper's c_ij).
-double CornerDistance(const Box& a, const Box& b);
-double Iou(const Box& a, const Box& b);
-
 struct TrackerOptions {
   enum class Cost {
     /// The paper: sum of the four corner distances (pixels).
@@ -57,8 +46,17 @@ struct TrackerOptions {
   double max_corner_cost_px = 200.0;
   /// IoU cost: pairs below this IoU are no match.
   double min_iou = 0.3;
-  /// Predict each track's box with its last velocity before matching.
-  bool constant_velocity = false;
+  enum class Motion {
+    /// Match against the last box (the paper).
+    kStatic,
+    /// Move the last box by its smoothed centre velocity.
+    kVelocity,
+    /// Constant-velocity Kalman filter over centre, area and aspect (SORT's
+    /// model); reported boxes stay the detections.
+    kKalman,
+  };
+  /// How a track's box is predicted before matching.
+  Motion motion = Motion::kStatic;
   /// A track that found no detection stays matchable this many frames (0 = the
   /// paper: only the previous frame's detections are candidates).
   int max_lost_frames = 0;
@@ -75,9 +73,10 @@ struct TrackerOptions {
 
   /// The paper's configuration (corner cost, no gate, previous frame only).
   static TrackerOptions Paper();
-  /// The improved configuration (IoU cost, constant velocity, tracks kept 10
+  /// The improved configuration (IoU cost, Kalman prediction, tracks kept 10
   /// frames, detections scored >= 0.7). min_hits stays 1: on TUD-Campus, 2-4
-  /// lowered MOTA.
+  /// lowered MOTA; Kalman instead of the smoothed velocity raised IDF1 from
+  /// 0.58 to 0.70 at equal MOTA.
   static TrackerOptions Improved();
 };
 
@@ -102,6 +101,7 @@ class Tracker {
     int id = 0;
     Box box;
     double vx = 0, vy = 0;  // box centre velocity (px per frame)
+    BoxFilter filter;       // Motion::kKalman
     int lost_frames = 0;
     int age = 0;                   // matches after the first detection
     std::vector<float> embedding;  // running appearance embedding
