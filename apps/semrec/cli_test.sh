@@ -49,6 +49,9 @@ grep -q '"class": "chair"' "$tmp/q.json" || fail "query: no chair: $(cat "$tmp/q
 grep -q "objects" "$tmp/q.txt" || fail "query: no table"
 "$SEMREC" mesh "$tmp/syn" --out "$tmp/scene" 2>"$tmp/err"; rc=$?
 [ "$rc" -eq 1 ] && grep -q "not empty" "$tmp/err" || fail "mesh overwrote a non-empty folder"
+grep -q "dynamic.usda" "$tmp/scene/scene.usda" && [ -s "$tmp/scene/dynamic.usda" ] || fail "mesh: no dynamic layer"
+"$SEMREC" mesh "$tmp/syn" --people "$tmp/nopeople" --out "$tmp/scene2" 2>"$tmp/err"; rc=$?
+[ "$rc" -eq 1 ] && grep -q "nopeople: people folder does not exist" "$tmp/err" || fail "mesh: bad --people: $(cat "$tmp/err")"
 "$SEMREC" eval c2c "$tmp/fused/fused.ply" "$tmp/syn/gt/surface_points.ply" --json >"$tmp/c2c.json" ||
   fail "eval c2c failed"
 grep -q '"mean_mm"' "$tmp/c2c.json" || fail "eval c2c: no mean"
@@ -143,6 +146,12 @@ if [ -f "$models/deeplab_v3.onnx" ]; then
   [ -s "$tmp/pca.json" ] && grep -q '"output_dims": 3' "$tmp/pca.json" || fail "track: PCA not written"
   "$SEMREC" eval mot "$tmp/ppl/gt/people/gt.txt" "$tmp/trk/result.txt" >"$tmp/mot" &&
     grep -q "FP 0  FN 0" "$tmp/mot" || fail "track images: result differs from the boxes: $(cat "$tmp/mot")"
+  # The tracked people into the scene as time-sampled prims.
+  "$SEMREC" mesh "$tmp/ppl" --people "$tmp/trk/persons" --out "$tmp/pplscene" >"$tmp/mesh.out" 2>/dev/null ||
+    fail "mesh --people failed"
+  grep -q "objects (.*), [1-9][0-9]* people" "$tmp/mesh.out" || fail "mesh --people: $(cat "$tmp/mesh.out")"
+  grep -q 'def Xform "person_' "$tmp/pplscene/dynamic.usda" && grep -q "timeSamples" "$tmp/pplscene/dynamic.usda" ||
+    fail "mesh --people: no person prims"
   "$SEMREC" track "$tmp/ppl" --max-frames 2 --masks none --out "$tmp/trk2" >/dev/null 2>"$tmp/err" ||
     fail "track with the detector: $(cat "$tmp/err")"
   [ -s "$tmp/trk2/result.txt" ] || [ -e "$tmp/trk2/result.txt" ] || fail "track detector: no result file"

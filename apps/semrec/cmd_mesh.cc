@@ -30,9 +30,9 @@ void RunMesh(MeshArgs args) {
       pipeline::Reconstruct(reader, *source, args.options, args.out);
   std::printf(
       "%s", fmt::format(
-                "{} frames -> {} objects ({} triangles){}; wrote {}/scene.usda "
-                "in {:.1f} s\n",
-                r.frames, r.objects, r.triangles,
+                "{} frames -> {} objects ({} triangles), {} people{}; wrote "
+                "{}/scene.usda in {:.1f} s\n",
+                r.frames, r.objects, r.triangles, r.people,
                 r.skipped_empty_objects > 0
                     ? fmt::format(", {} empty skipped", r.skipped_empty_objects)
                     : "",
@@ -51,7 +51,9 @@ void RegisterMesh(CLI::App& app) {
                          "objects, each object's pixels go into its own TSDF "
                          "volume, meshes are written as USD "
                          "Mesh prims with class labels (scene.usda -> "
-                         "static.usda) and as PLY per object.");
+                         "static.usda) and as PLY per object; tracked people "
+                         "(--people) become time-sampled prims in "
+                         "dynamic.usda.");
   AddSequenceArgs(cmd, &args->sequence);
   cmd->add_option("--labels", args->labels,
                   "Segmentation: 'gt', a folder with instance/, semantic/ and "
@@ -59,6 +61,10 @@ void RegisterMesh(CLI::App& app) {
                   "'single:<class>'")
       ->capture_default_str();
   cmd->add_option("--out,-o", args->out, "Output folder")->required();
+  cmd->add_option("--people", args->options.people,
+                  "Tracked people for dynamic.usda (time-sampled prims): "
+                  "'gt' (the sequence's person layer) or the persons/ folder "
+                  "written by 'semrec track <sequence> --out DIR'");
   cmd->add_option("--voxel-size-m", args->options.meshing.tsdf.voxel_size_m,
                   "Voxel size of each object's TSDF (m)")
       ->capture_default_str();

@@ -2,6 +2,7 @@
 
 #include <chrono>
 #include <map>
+#include <optional>
 
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
@@ -16,6 +17,7 @@ namespace fs = std::filesystem;
 namespace semrec::pipeline {
 
 void ReconstructOptions::Check() const {
+  people_3d.Check();
   fusion.Check();
   extraction.Check();
   meshing.Check();
@@ -42,14 +44,20 @@ ReconstructResult Reconstruct(const io::SequenceReader& reader,
 
   // Pass 1: fusion; remember which frame label went into which segment.
   fuse::SceneFusion fusion(options.fusion);
+  std::optional<PersonMapSource> person_maps;
+  if (!options.people.empty()) person_maps.emplace(options.people, reader);
+  People3d people(options.people_3d);
   std::vector<std::vector<std::pair<uint16_t, uint32_t>>> assignments(
       reader.size());
   {
     Progress progress("fusing", reader.size(), progress_options);
     for (size_t i = 0; i < reader.size(); ++i) {
-      const auto segments =
-          fuse::ExtractFrameSegments(reader.Read(i), source.Get(reader, i),
-                                     source.classes(), options.extraction);
+      const Frame frame = reader.Read(i);
+      const auto segments = fuse::ExtractFrameSegments(
+          frame, source.Get(reader, i), source.classes(), options.extraction);
+      if (person_maps) {
+        if (const auto ids = person_maps->Get(i)) people.Add(frame, *ids);
+      }
       const fuse::FrameFusionStats stats = fusion.Integrate(segments, i);
       for (size_t k = 0; k < segments.size(); ++k) {
         assignments[i].emplace_back(segments[k].source_label,
@@ -144,7 +152,19 @@ ReconstructResult Reconstruct(const io::SequenceReader& reader,
       "label_gating {}; tsdf: voxel_size_m {} sdf_trunc_m {} max_depth_m {}",
       f.alpha, f.corr_voxel_size_m, f.store_voxel_size_m, f.max_corr_dist_m,
       f.label_gating, t.voxel_size_m, t.sdf_trunc_m, t.max_depth_m);
-  usd::WriteScene(out_dir, prims, stage);
+  const std::vector<usd::PersonTrack> tracks = people.Tracks();
+  result.people = tracks.size();
+  if (person_maps) {
+    // Time codes are frame indices, played at the sequence's frame rate.
+    const auto& frames = reader.index().frames;
+    const double span = frames.back().timestamp_s - frames.front().timestamp_s;
+    stage.time_codes_per_second =
+        frames.size() > 1 && span > 0 ? double(frames.size() - 1) / span : 30.0;
+    stage.start_time_code = 0;
+    stage.end_time_code = double(frames.size() - 1);
+    stage.custom_layer_data["people"] = options.people;
+  }
+  usd::WriteScene(out_dir, prims, stage, tracks);
   result.seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start)
           .count();
@@ -153,6 +173,7 @@ ReconstructResult Reconstruct(const io::SequenceReader& reader,
       nlohmann::json({{"input", stage.custom_layer_data["input"]},
                       {"options", stage.custom_layer_data["options"]},
                       {"objects", objects},
+                      {"people", result.people},
                       {"skipped_empty_objects", result.skipped_empty_objects},
                       {"seconds", result.seconds}})
               .dump(2) +

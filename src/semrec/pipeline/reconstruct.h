@@ -17,6 +17,7 @@
 #include "semrec/fuse/segments.h"
 #include "semrec/io/sequence_reader.h"
 #include "semrec/mesh/object_mesher.h"
+#include "semrec/pipeline/people_3d.h"
 #include "semrec/usd/usda_writer.h"
 
 namespace semrec::pipeline {
@@ -26,6 +27,10 @@ struct ReconstructOptions {
   fuse::SegmentExtractionOptions extraction;
   mesh::ObjectMeshingOptions meshing;
   usd::StageOptions stage;
+  /// Tracked people for dynamic.usda: "" (none), "gt" (the sequence's person
+  /// layer) or a folder of person id maps (semrec track's persons/).
+  std::string people;
+  People3dOptions people_3d;
   /// Also write objects/<id>_<class>.ply for tools that do not read USD.
   bool write_ply = true;
   /// Write into a non-empty output folder.
@@ -38,10 +43,12 @@ struct ReconstructResult {
   size_t objects = 0;
   size_t skipped_empty_objects = 0;
   size_t triangles = 0;
+  size_t people = 0;
   double seconds = 0.0;
 };
 
-/// Writes `out_dir`/scene.usda, static.usda, objects/*.ply and summary.json.
+/// Writes `out_dir`/scene.usda, static.usda, dynamic.usda, objects/*.ply and
+/// summary.json.
 ReconstructResult Reconstruct(const io::SequenceReader& reader,
                               const fuse::SegmentationSource& source,
                               const ReconstructOptions& options,

@@ -1,12 +1,15 @@
 #include "semrec/pipeline/reconstruct.h"
 
+#include <algorithm>
 #include <map>
 
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include "semrec/core/error.h"
 #include "semrec/core/file_util.h"
 #include "semrec/synth/generator.h"
+#include "semrec/synth/scene.h"
 #include "semrec/testing/test_util.h"
 
 namespace fs = std::filesystem;
@@ -59,6 +62,80 @@ TEST(Reconstruct, SixObjectsBecomeSixLabelledMeshPrims) {
             std::string::npos);
   // Refuses to overwrite.
   EXPECT_THROW(Reconstruct(reader, *source, {}, dir / "out", Quiet()), IoError);
+}
+
+// Synthetic people: each person id becomes a time-sampled prim whose
+// translation follows the ground-truth walking position, and the stage plays
+// at the sequence's frame rate.
+TEST(Reconstruct, PeopleBecomeTimeSampledPrimsOnTheirGroundTruthPaths) {
+  testing::TempDir dir;
+  synth::SynthOptions o = synth::SynthOptions::Preset("people");
+  o.frames = 40;
+  o.width = 320;
+  o.height = 240;
+  o.fx = o.fy = 262.5;
+  o.noise.enabled = false;
+  o.gt_object_spacing_m = 0.05;
+  o.gt_structure_spacing_m = 0.2;
+  synth::WriteSyntheticSequence(o, dir / "seq", Quiet());
+  const io::SequenceReader reader = io::SequenceReader::Open(dir / "seq");
+  const auto source = fuse::SegmentationSource::Create("gt", reader);
+  ReconstructOptions options;
+  options.people = "gt";
+  const ReconstructResult r =
+      Reconstruct(reader, *source, options, dir / "out", Quiet());
+  ASSERT_GE(r.people, 2u);
+
+  // Positions: the centroid of the visible points is within a body's width of
+  // the person's floor position (partly visible people pull it sideways).
+  const synth::Scene scene = synth::GenerateScene(o.scene);
+  People3d people;
+  PersonMapSource maps("gt", reader);
+  for (size_t i = 0; i < reader.size(); ++i) {
+    if (const auto ids = maps.Get(i)) people.Add(reader.Read(i), *ids);
+  }
+  const auto tracks = people.Tracks();
+  ASSERT_EQ(tracks.size(), r.people);
+  std::vector<double> errors;
+  for (const auto& track : tracks) {
+    const synth::Person* truth = nullptr;
+    for (const auto& p : scene.people)
+      if (p.person_id == track.track_id) truth = &p;
+    ASSERT_NE(truth, nullptr) << track.track_id;
+    for (const auto& sample : track.samples) {
+      const Eigen::Vector2d at =
+          synth::PoseAt(*truth, double(sample.frame) / o.fps).position;
+      errors.push_back(
+          (sample.centroid_world.head<2>().cast<double>() - at).norm());
+      EXPECT_GT(sample.centroid_world.z(), 0.2);
+      EXPECT_LT(sample.centroid_world.z(), truth->height_m);
+    }
+  }
+  std::sort(errors.begin(), errors.end());
+  EXPECT_LT(errors[errors.size() / 2], 0.12) << "median floor error (m)";
+  EXPECT_LT(errors.back(), 0.4) << "worst floor error (m)";
+
+  const std::string text = ReadTextFile(dir / "out/dynamic.usda");
+  EXPECT_NE(text.find(fmt::format("timeCodesPerSecond = {}", o.fps)),
+            std::string::npos);
+  EXPECT_NE(text.find("endTimeCode = 39"), std::string::npos);
+  const auto report = testing::ValidateUsd(dir / "out/scene.usda", dir.path());
+  if (!report)
+    GTEST_SKIP() << "tinyusdz (npm) or node missing: run scripts/setup";
+  ASSERT_TRUE((*report)["ok"].get<bool>()) << (*report)["error"];
+  const auto dynamic =
+      testing::ValidateUsd(dir / "out/dynamic.usda", dir.path());
+  ASSERT_TRUE((*dynamic)["ok"].get<bool>()) << (*dynamic)["error"];
+  const std::string layer = (*dynamic)["layer"];
+  for (const auto& track : tracks) {
+    EXPECT_NE(layer.find("person_" + std::to_string(track.track_id)),
+              std::string::npos);
+  }
+  // A people folder that does not exist is an error naming it.
+  options.people = (dir / "nopeople").string();
+  options.overwrite = true;
+  EXPECT_THROW(Reconstruct(reader, *source, options, dir / "out2", Quiet()),
+               IoError);
 }
 
 }  // namespace

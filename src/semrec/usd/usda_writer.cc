@@ -8,12 +8,11 @@
 
 #include "semrec/core/error.h"
 #include "semrec/core/file_util.h"
+#include "semrec/usd/usda_text.h"
 
 namespace semrec::usd {
-namespace {
+namespace detail {
 
-// A USDA string literal: quotes and backslashes escaped, control characters
-// dropped.
 std::string Quote(const std::string& s) {
   std::string out = "\"";
   for (char c : s) {
@@ -23,7 +22,6 @@ std::string Quote(const std::string& s) {
   return out + "\"";
 }
 
-// Shortest float text that reads back to the same float.
 std::string Num(float x) { return fmt::format("{}", x); }
 
 std::string Header(const StageOptions& o, const std::string& extra) {
@@ -32,21 +30,52 @@ std::string Header(const StageOptions& o, const std::string& extra) {
     data += fmt::format("        string {} = {}\n", SanitizeName(key),
                         Quote(value));
   }
+  std::string time;
+  if (o.time_codes_per_second > 0.0) {
+    time = fmt::format(
+        "    startTimeCode = {}\n    endTimeCode = {}\n    "
+        "timeCodesPerSecond = {}\n",
+        o.start_time_code, o.end_time_code, o.time_codes_per_second);
+  }
   return fmt::format(
       "#usda 1.0\n(\n    defaultPrim = \"World\"\n    metersPerUnit = {}\n    "
       "upAxis = \"{}\"\n"
-      "{}{})\n\n",
-      o.meters_per_unit, o.up_axis,
+      "{}{}{})\n\n",
+      o.meters_per_unit, o.up_axis, time,
       data.empty() ? "" : "    customLayerData = {\n" + data + "    }\n",
       extra);
 }
 
-}  // namespace
+std::string Color3(const std::array<uint8_t, 3>& c) {
+  return fmt::format("({}, {}, {})", Num(c[0] / 255.0f), Num(c[1] / 255.0f),
+                     Num(c[2] / 255.0f));
+}
+
+std::string SemanticsAttributes(const std::string& label,
+                                const std::string& indent) {
+  const std::string q = Quote(label);
+  return fmt::format(
+      "{0}token[] semantics:labels:class = [{1}]\n"
+      "{0}string semantic:Semantics:params:semanticData = {1}\n"
+      "{0}string semantic:Semantics:params:semanticType = \"class\"\n",
+      indent, q);
+}
+
+}  // namespace detail
+
+using detail::Color3;
+using detail::Header;
+using detail::Num;
+using detail::Quote;
 
 void StageOptions::Check() const {
   CheckArgument(up_axis == "Z" || up_axis == "Y",
                 "usd: up_axis must be \"Z\" or \"Y\"");
   CheckArgument(meters_per_unit > 0.0, "usd: meters_per_unit must be > 0");
+  CheckArgument(time_codes_per_second >= 0.0,
+                "usd: time_codes_per_second must be >= 0");
+  CheckArgument(end_time_code >= start_time_code,
+                "usd: end_time_code must be >= start_time_code");
 }
 
 std::string SanitizeName(const std::string& label) {
@@ -99,12 +128,8 @@ std::string StaticLayerText(const std::vector<MeshPrim>& meshes,
       normals += fmt::format("{}({}, {}, {})", i ? ", " : "", Num(n.x()),
                              Num(n.y()), Num(n.z()));
     }
-    auto color3 = [](const std::array<uint8_t, 3>& c) {
-      return fmt::format("({}, {}, {})", Num(c[0] / 255.0f), Num(c[1] / 255.0f),
-                         Num(c[2] / 255.0f));
-    };
     for (size_t i = 0; i < m.vertex_colors.size(); ++i) {
-      colors += (i ? ", " : "") + color3(m.vertex_colors[i]);
+      colors += (i ? ", " : "") + Color3(m.vertex_colors[i]);
     }
     const std::string label = Quote(m.label);
     text += fmt::format(
@@ -135,14 +160,11 @@ std::string StaticLayerText(const std::vector<MeshPrim>& meshes,
       text += fmt::format(
           "            color3f[] primvars:displayColor = [{}] (\n"
           "                interpolation = \"constant\"\n            )\n",
-          color3(m.color));
+          Color3(m.color));
     }
     text += fmt::format(
         "            uniform token subdivisionScheme = \"none\"\n"
-        "            token[] semantics:labels:class = [{}]\n"
-        "            string semantic:Semantics:params:semanticData = {}\n"
-        "            string semantic:Semantics:params:semanticType = "
-        "\"class\"\n"
+        "{}"
         "            custom int semrec:instanceId = {}\n"
         "            custom string semrec:label = {}\n"
         "            custom int semrec:pointCount = {}\n"
@@ -150,8 +172,9 @@ std::string StaticLayerText(const std::vector<MeshPrim>& meshes,
         "            custom int semrec:lastSeenFrame = {}\n"
         "            custom float semrec:confidence = {}\n"
         "        }}\n",
-        label, label, m.instance_id, label, m.point_count, m.first_seen_frame,
-        m.last_seen_frame, Num(static_cast<float>(m.confidence)));
+        detail::SemanticsAttributes(m.label, "            "), m.instance_id,
+        label, m.point_count, m.first_seen_frame, m.last_seen_frame,
+        Num(static_cast<float>(m.confidence)));
   }
   text += "    }\n}\n";
   return text;
@@ -170,11 +193,17 @@ std::string RootLayerText(const std::vector<std::string>& sublayers,
 
 void WriteScene(const std::filesystem::path& dir,
                 const std::vector<MeshPrim>& meshes,
-                const StageOptions& options) {
+                const StageOptions& options,
+                const std::vector<PersonTrack>& people) {
+  // Both texts first: bad input throws before anything is written.
   const std::string static_text = StaticLayerText(meshes, options);
+  const std::string dynamic_text = DynamicLayerText(people, options);
   WriteTextFileAtomic(dir / "static.usda", static_text);
-  WriteTextFileAtomic(dir / "scene.usda",
-                      RootLayerText({"./static.usda"}, options));
+  WriteTextFileAtomic(dir / "dynamic.usda", dynamic_text);
+  // The stronger layer first; people and objects never share prims anyway.
+  WriteTextFileAtomic(
+      dir / "scene.usda",
+      RootLayerText({"./dynamic.usda", "./static.usda"}, options));
 }
 
 }  // namespace semrec::usd

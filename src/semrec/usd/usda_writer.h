@@ -45,7 +45,33 @@ struct StageOptions {
   /// Free-form provenance stored in the layer's customLayerData (options,
   /// inputs).
   std::map<std::string, std::string> custom_layer_data;
+  /// Time codes are frame indices; > 0 writes startTimeCode, endTimeCode and
+  /// timeCodesPerSecond (the sequence's frame rate) so viewers play people's
+  /// motion at the recorded speed. 0: a static stage.
+  double time_codes_per_second = 0.0;
+  double start_time_code = 0.0;
+  double end_time_code = 0.0;
   void Check() const;
+};
+
+/// One observation of a tracked person: where their points were in one frame.
+struct PersonSample {
+  size_t frame = 0;
+  /// Centroid of the person's points (world frame): the prim's translation.
+  Eigen::Vector3f centroid_world = Eigen::Vector3f::Zero();
+  /// The person's points in the world frame (downsampled); may be empty when
+  /// only the position is known.
+  std::vector<Eigen::Vector3f> points_world;
+};
+
+/// A tracked person over time (one prim in dynamic.usda).
+struct PersonTrack {
+  uint32_t track_id = 0;
+  std::string label = "person";
+  std::array<uint8_t, 3> color = {220, 40, 40};
+  /// Observations in increasing frame order; frames without one are "out of
+  /// view" (the prim is invisible there).
+  std::vector<PersonSample> samples;
 };
 
 /// A valid USD prim name for `label`: [A-Za-z_][A-Za-z0-9_]*, other characters
@@ -57,14 +83,25 @@ std::string SanitizeName(const std::string& label);
 std::string StaticLayerText(const std::vector<MeshPrim>& meshes,
                             const StageOptions& options);
 
+/// Text of a USDA layer with /World/People/<label>_<track id> Xforms: a
+/// time-sampled translation (the centroid), visibility ("invisible" at frames
+/// without an observation) and a child Points prim "Cloud" with time-sampled
+/// points relative to the centroid and extent. Needs
+/// options.time_codes_per_second > 0 when there are people.
+std::string DynamicLayerText(const std::vector<PersonTrack>& people,
+                             const StageOptions& options);
+
 /// Text of a root layer that sublayers the given files (relative paths).
 std::string RootLayerText(const std::vector<std::string>& sublayers,
                           const StageOptions& options);
 
-/// Writes `dir`/scene.usda (root, sublayering static.usda) and
-/// `dir`/static.usda, atomically. Throws IoError for an unwritable folder.
+/// Writes `dir`/scene.usda (root, sublayering dynamic.usda and static.usda),
+/// `dir`/static.usda (objects) and `dir`/dynamic.usda (people; an empty
+/// People scope when there are none), each atomically. Throws IoError for an
+/// unwritable folder.
 void WriteScene(const std::filesystem::path& dir,
                 const std::vector<MeshPrim>& meshes,
-                const StageOptions& options);
+                const StageOptions& options,
+                const std::vector<PersonTrack>& people = {});
 
 }  // namespace semrec::usd

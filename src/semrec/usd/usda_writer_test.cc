@@ -1,4 +1,5 @@
 #include "semrec/usd/usda_writer.h"
+#include "semrec/usd/usda_reader.h"
 
 #include <cstdlib>
 #include <fstream>
@@ -76,6 +77,83 @@ TEST(Usda, IndependentParserReadsWhatWeWrite) {
 
   SEMREC_REQUIRE_VALIDATOR(root, dir / "scene.usda", dir.path());
   EXPECT_TRUE((*root)["ok"].get<bool>()) << (*root)["error"];
+}
+
+PersonTrack Walker(uint32_t id, const std::vector<size_t>& frames) {
+  PersonTrack p;
+  p.track_id = id;
+  for (size_t f : frames) {
+    PersonSample s;
+    s.frame = f;
+    // Exactly representable values, so the text is predictable.
+    s.centroid_world = {0.5f * f, 1.0f, 1.0f};
+    s.points_world = {{0.5f * f - 0.25f, 1.0f, 0.0f},
+                      {0.5f * f + 0.25f, 1.125f, 2.0f}};
+    p.samples.push_back(s);
+  }
+  return p;
+}
+
+TEST(Usda, PeopleAreTimeSampledPrimsTheParserReads) {
+  testing::TempDir dir;
+  StageOptions options;
+  options.time_codes_per_second = 10.0;
+  options.end_time_code = 20.0;
+  // Person 3 leaves after frame 4 and comes back at frame 9; person 8 enters
+  // at frame 2.
+  const std::vector<PersonTrack> people = {Walker(3, {0, 1, 2, 3, 4, 9, 10}),
+                                           Walker(8, {2, 3})};
+  WriteScene(dir.path(), {Tetrahedron("chair", 5, false)}, options, people);
+  const std::string text = ReadTextFile(dir / "dynamic.usda");
+  EXPECT_NE(text.find("timeCodesPerSecond = 10"), std::string::npos);
+  EXPECT_NE(text.find("endTimeCode = 20"), std::string::npos);
+
+  SEMREC_REQUIRE_VALIDATOR(result, dir / "dynamic.usda", dir.path());
+  ASSERT_TRUE((*result)["ok"].get<bool>()) << (*result)["error"];
+  const std::string layer = (*result)["layer"];
+  // The parser's own serialisation: prims, samples and labels survived.
+  for (const char* expected :
+       {"def Xform \"person_3\"", "def Xform \"person_8\"",
+        "def Points \"Cloud\"", "semrec:trackId = 8",
+        "semantics:labels:class = [\"person\"]", "xformOp:translate"}) {
+    EXPECT_NE(layer.find(expected), std::string::npos)
+        << expected << " missing in\n"
+        << layer;
+  }
+  // Person 3: visible 0-4, invisible from 5, visible again at 9, invisible
+  // after 10; person 8: invisible at 0, visible 2-3, invisible from 4.
+  auto visibility_of = [&](const std::string& prim) {
+    const size_t at = text.find("def Xform \"" + prim + "\"");
+    const size_t from = text.find("visibility.timeSamples", at);
+    return text.substr(from, text.find('}', from) - from);
+  };
+  const std::string v3 = visibility_of("person_3");
+  EXPECT_NE(v3.find("5: \"invisible\""), std::string::npos) << v3;
+  EXPECT_NE(v3.find("9: \"inherited\""), std::string::npos) << v3;
+  EXPECT_NE(v3.find("11: \"invisible\""), std::string::npos) << v3;
+  EXPECT_EQ(v3.find("0: \"invisible\""), std::string::npos) << v3;
+  const std::string v8 = visibility_of("person_8");
+  EXPECT_NE(v8.find("0: \"invisible\""), std::string::npos) << v8;
+  EXPECT_NE(v8.find("2: \"inherited\""), std::string::npos) << v8;
+  EXPECT_NE(v8.find("4: \"invisible\""), std::string::npos) << v8;
+  // Points are stored relative to the translation.
+  EXPECT_NE(text.find("9: (4.5, 1, 1)"), std::string::npos);
+  EXPECT_NE(text.find("9: [(-0.25, 0, -1), (0.25, 0.125, 1)]"),
+            std::string::npos);
+
+  SEMREC_REQUIRE_VALIDATOR(root, dir / "scene.usda", dir.path());
+  EXPECT_TRUE((*root)["ok"].get<bool>()) << (*root)["error"];
+  // Our reader follows both sublayers and still finds the one mesh.
+  EXPECT_EQ(ReadScene(dir / "scene.usda").size(), 1u);
+
+  // Bad input: samples out of order, no frame rate, duplicates.
+  PersonTrack backwards = Walker(1, {3, 2});
+  EXPECT_THROW(DynamicLayerText({backwards}, options), InvalidArgument);
+  EXPECT_THROW(DynamicLayerText({Walker(1, {0})}, StageOptions{}),
+               InvalidArgument);
+  EXPECT_THROW(DynamicLayerText({Walker(1, {0}), Walker(1, {1})}, options),
+               InvalidArgument);
+  EXPECT_NO_THROW(DynamicLayerText({}, StageOptions{}));
 }
 
 // The validator must bite: a truncated file and a misspelt type are rejected.
