@@ -147,11 +147,12 @@ if [ -f "$models/deeplab_v3.onnx" ]; then
   "$SEMREC" eval mot "$tmp/ppl/gt/people/gt.txt" "$tmp/trk/result.txt" >"$tmp/mot" &&
     grep -q "FP 0  FN 0" "$tmp/mot" || fail "track images: result differs from the boxes: $(cat "$tmp/mot")"
   # The tracked people into the scene as time-sampled prims.
-  "$SEMREC" mesh "$tmp/ppl" --people "$tmp/trk/persons" --out "$tmp/pplscene" >"$tmp/mesh.out" 2>/dev/null ||
+  "$SEMREC" mesh "$tmp/ppl" --people "$tmp/trk/persons" --usdz --out "$tmp/pplscene" >"$tmp/mesh.out" 2>/dev/null ||
     fail "mesh --people failed"
   grep -q "objects (.*), [1-9][0-9]* people" "$tmp/mesh.out" || fail "mesh --people: $(cat "$tmp/mesh.out")"
   grep -q 'def Xform "person_' "$tmp/pplscene/dynamic.usda" && grep -q "timeSamples" "$tmp/pplscene/dynamic.usda" ||
     fail "mesh --people: no person prims"
+  [ -s "$tmp/pplscene/scene.usdz" ] || fail "mesh --usdz: no package"
   "$SEMREC" track "$tmp/ppl" --max-frames 2 --masks none --out "$tmp/trk2" >/dev/null 2>"$tmp/err" ||
     fail "track with the detector: $(cat "$tmp/err")"
   [ -s "$tmp/trk2/result.txt" ] || [ -e "$tmp/trk2/result.txt" ] || fail "track detector: no result file"

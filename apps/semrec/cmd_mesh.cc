@@ -84,6 +84,9 @@ void RegisterMesh(CLI::App& app) {
                   "USD up axis: Z or Y")
       ->capture_default_str();
   cmd->add_flag("--no-ply", args->no_ply, "Do not write PLY per object");
+  cmd->add_flag("--usdz", args->options.usdz,
+                "Also write scene.usdz: objects and people in one layer, "
+                "packaged per the USDZ spec (stored, 64-byte aligned)");
   cmd->add_flag("--overwrite", args->options.overwrite,
                 "Write into a non-empty output folder");
   cmd->callback([args] { RunMesh(*args); });

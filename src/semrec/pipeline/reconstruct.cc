@@ -165,6 +165,8 @@ ReconstructResult Reconstruct(const io::SequenceReader& reader,
     stage.custom_layer_data["people"] = options.people;
   }
   usd::WriteScene(out_dir, prims, stage, tracks);
+  if (options.usdz)
+    usd::WriteSceneUsdz(out_dir / "scene.usdz", prims, stage, tracks);
   result.seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start)
           .count();

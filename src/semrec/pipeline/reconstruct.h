@@ -33,6 +33,8 @@ struct ReconstructOptions {
   People3dOptions people_3d;
   /// Also write objects/<id>_<class>.ply for tools that do not read USD.
   bool write_ply = true;
+  /// Also package the scene as scene.usdz (one flattened layer).
+  bool usdz = false;
   /// Write into a non-empty output folder.
   bool overwrite = false;
   void Check() const;

@@ -82,6 +82,7 @@ TEST(Reconstruct, PeopleBecomeTimeSampledPrimsOnTheirGroundTruthPaths) {
   const auto source = fuse::SegmentationSource::Create("gt", reader);
   ReconstructOptions options;
   options.people = "gt";
+  options.usdz = true;
   const ReconstructResult r =
       Reconstruct(reader, *source, options, dir / "out", Quiet());
   ASSERT_GE(r.people, 2u);
@@ -126,6 +127,9 @@ TEST(Reconstruct, PeopleBecomeTimeSampledPrimsOnTheirGroundTruthPaths) {
   const auto dynamic =
       testing::ValidateUsd(dir / "out/dynamic.usda", dir.path());
   ASSERT_TRUE((*dynamic)["ok"].get<bool>()) << (*dynamic)["error"];
+  const auto package = testing::ValidateUsd(dir / "out/scene.usdz", dir.path());
+  ASSERT_TRUE((*package)["ok"].get<bool>()) << (*package)["error"];
+  EXPECT_EQ((*package)["meshes"].size(), r.objects);
   const std::string layer = (*dynamic)["layer"];
   for (const auto& track : tracks) {
     EXPECT_NE(layer.find("person_" + std::to_string(track.track_id)),

@@ -107,13 +107,13 @@ std::string PersonPrim(const PersonTrack& person) {
 
 }  // namespace
 
-std::string DynamicLayerText(const std::vector<PersonTrack>& people,
-                             const StageOptions& options) {
-  options.Check();
+namespace detail {
+
+std::string PeopleScopeText(const std::vector<PersonTrack>& people,
+                            const StageOptions& options) {
   CheckArgument(people.empty() || options.time_codes_per_second > 0.0,
                 "usd: people need time_codes_per_second > 0 (the frame rate)");
-  std::string text = detail::Header(options, "");
-  text += "def Xform \"World\"\n{\n    def Scope \"People\"\n    {\n";
+  std::string text = "    def Scope \"People\"\n    {\n";
   std::set<std::string> names;
   for (const PersonTrack& person : people) {
     const std::string name =
@@ -125,8 +125,17 @@ std::string DynamicLayerText(const std::vector<PersonTrack>& people,
         fmt::format("usd: person {} has no observations", person.track_id));
     text += PersonPrim(person);
   }
-  text += "    }\n}\n";
+  text += "    }\n";
   return text;
+}
+
+}  // namespace detail
+
+std::string DynamicLayerText(const std::vector<PersonTrack>& people,
+                             const StageOptions& options) {
+  options.Check();
+  return detail::Header(options, "") + "def Xform \"World\"\n{\n" +
+         detail::PeopleScopeText(people, options) + "}\n";
 }
 
 }  // namespace semrec::usd

@@ -2,6 +2,7 @@
 #pragma once
 
 #include <string>
+#include <vector>
 
 #include "semrec/usd/usda_writer.h"
 
@@ -20,5 +21,10 @@ std::string Color3(const std::array<uint8_t, 3>& c);
 /// The semantics labels of a prim, both conventions (see usda_writer.h).
 std::string SemanticsAttributes(const std::string& label,
                                 const std::string& indent);
+
+/// The `Objects` / `People` scopes (indented for /World).
+std::string ObjectsScopeText(const std::vector<MeshPrim>& meshes);
+std::string PeopleScopeText(const std::vector<PersonTrack>& people,
+                            const StageOptions& options);
 
 }  // namespace semrec::usd::detail

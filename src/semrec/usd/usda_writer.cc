@@ -9,6 +9,7 @@
 #include "semrec/core/error.h"
 #include "semrec/core/file_util.h"
 #include "semrec/usd/usda_text.h"
+#include "semrec/usd/usdz.h"
 
 namespace semrec::usd {
 namespace detail {
@@ -87,11 +88,10 @@ std::string SanitizeName(const std::string& label) {
   return out;
 }
 
-std::string StaticLayerText(const std::vector<MeshPrim>& meshes,
-                            const StageOptions& options) {
-  options.Check();
-  std::string text = Header(options, "");
-  text += "def Xform \"World\"\n{\n    def Scope \"Objects\"\n    {\n";
+namespace detail {
+
+std::string ObjectsScopeText(const std::vector<MeshPrim>& meshes) {
+  std::string text = "    def Scope \"Objects\"\n    {\n";
   std::set<std::string> names;
   for (const MeshPrim& m : meshes) {
     for (const auto& t : m.triangles) {
@@ -176,8 +176,26 @@ std::string StaticLayerText(const std::vector<MeshPrim>& meshes,
         label, m.point_count, m.first_seen_frame, m.last_seen_frame,
         Num(static_cast<float>(m.confidence)));
   }
-  text += "    }\n}\n";
+  text += "    }\n";
   return text;
+}
+
+}  // namespace detail
+
+std::string StaticLayerText(const std::vector<MeshPrim>& meshes,
+                            const StageOptions& options) {
+  options.Check();
+  return Header(options, "") + "def Xform \"World\"\n{\n" +
+         detail::ObjectsScopeText(meshes) + "}\n";
+}
+
+std::string FlatLayerText(const std::vector<MeshPrim>& meshes,
+                          const std::vector<PersonTrack>& people,
+                          const StageOptions& options) {
+  options.Check();
+  return Header(options, "") + "def Xform \"World\"\n{\n" +
+         detail::ObjectsScopeText(meshes) +
+         detail::PeopleScopeText(people, options) + "}\n";
 }
 
 std::string RootLayerText(const std::vector<std::string>& sublayers,
@@ -204,6 +222,13 @@ void WriteScene(const std::filesystem::path& dir,
   WriteTextFileAtomic(
       dir / "scene.usda",
       RootLayerText({"./dynamic.usda", "./static.usda"}, options));
+}
+
+void WriteSceneUsdz(const std::filesystem::path& path,
+                    const std::vector<MeshPrim>& meshes,
+                    const StageOptions& options,
+                    const std::vector<PersonTrack>& people) {
+  WriteUsdz(path, {{"scene.usda", FlatLayerText(meshes, people, options)}});
 }
 
 }  // namespace semrec::usd

@@ -91,6 +91,12 @@ std::string StaticLayerText(const std::vector<MeshPrim>& meshes,
 std::string DynamicLayerText(const std::vector<PersonTrack>& people,
                              const StageOptions& options);
 
+/// One self-contained layer with both scopes (objects and people): what the
+/// USDZ package holds, for viewers that do not compose sublayers.
+std::string FlatLayerText(const std::vector<MeshPrim>& meshes,
+                          const std::vector<PersonTrack>& people,
+                          const StageOptions& options);
+
 /// Text of a root layer that sublayers the given files (relative paths).
 std::string RootLayerText(const std::vector<std::string>& sublayers,
                           const StageOptions& options);
@@ -103,5 +109,12 @@ void WriteScene(const std::filesystem::path& dir,
                 const std::vector<MeshPrim>& meshes,
                 const StageOptions& options,
                 const std::vector<PersonTrack>& people = {});
+
+/// Writes FlatLayerText as `path` (a .usdz package holding scene.usda),
+/// atomically.
+void WriteSceneUsdz(const std::filesystem::path& path,
+                    const std::vector<MeshPrim>& meshes,
+                    const StageOptions& options,
+                    const std::vector<PersonTrack>& people = {});
 
 }  // namespace semrec::usd
