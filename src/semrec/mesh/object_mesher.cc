@@ -1,5 +1,8 @@
 #include "semrec/mesh/object_mesher.h"
 
+#include <algorithm>
+#include <limits>
+
 #include "semrec/core/error.h"
 
 namespace semrec::mesh {
@@ -59,19 +62,56 @@ void ObjectMesher::Integrate(
                 "ObjectMesher: labels and depth sizes differ");
   const std::vector<uint8_t> interior =
       InteriorMask(labels, options_.mask_erosion_px);
-  for (const auto& [label, object_id] : label_to_object) {
-    Frame masked = frame;  // colour, pose, intrinsics; depth masked below
-    for (size_t i = 0; i < masked.depth.NumPixels(); ++i) {
-      if (labels.values()[i] != label || !interior[i]) {
-        masked.depth.values()[i] = 0.0f;
-      }
+  // Each object's volume sees only the bounding box of its pixels (the
+  // principal point shifted accordingly): integration then costs in proportion
+  // to the object's image area, not the whole frame per object. Voxels that
+  // project outside the crop are skipped exactly like masked-out pixels.
+  struct PixelBox {
+    int x0 = std::numeric_limits<int>::max(), y0 = x0, x1 = -1, y1 = -1;
+  };
+  std::map<uint16_t, PixelBox> boxes;
+  const int w = labels.width(), h = labels.height();
+  for (int y = 0; y < h; ++y) {
+    for (int x = 0; x < w; ++x) {
+      if (!interior[static_cast<size_t>(y) * w + x]) continue;
+      PixelBox& b = boxes[labels(x, y)];
+      b.x0 = std::min(b.x0, x);
+      b.y0 = std::min(b.y0, y);
+      b.x1 = std::max(b.x1, x);
+      b.y1 = std::max(b.y1, y);
     }
+  }
+  for (const auto& [label, object_id] : label_to_object) {
     Object& object = objects_[object_id];
     if (!object.volume)
       object.volume = std::make_unique<TsdfIntegrator>(options_.tsdf);
-    object.volume->Integrate(masked);
     ++object.observations;
     object.changed = true;
+    const auto it = boxes.find(label);
+    if (it == boxes.end()) continue;  // no interior pixel: nothing to add
+    const PixelBox& b = it->second;
+    const int cw = b.x1 - b.x0 + 1, ch = b.y1 - b.y0 + 1;
+    Frame crop;
+    crop.index = frame.index;
+    crop.timestamp_s = frame.timestamp_s;
+    crop.T_world_camera = frame.T_world_camera;
+    crop.intrinsics = frame.intrinsics;
+    crop.intrinsics.width = cw;
+    crop.intrinsics.height = ch;
+    crop.intrinsics.cx -= b.x0;
+    crop.intrinsics.cy -= b.y0;
+    crop.depth = DepthImage(cw, ch);
+    crop.color = ColorImage(cw, ch, 3);
+    for (int y = 0; y < ch; ++y) {
+      for (int x = 0; x < cw; ++x) {
+        const int u = b.x0 + x, v = b.y0 + y;
+        const size_t i = static_cast<size_t>(v) * w + u;
+        if (labels(u, v) == label && interior[i])
+          crop.depth(x, y) = frame.depth(u, v);
+        for (int c = 0; c < 3; ++c) crop.color(x, y, c) = frame.color(u, v, c);
+      }
+    }
+    object.volume->Integrate(crop);
   }
 }
 
