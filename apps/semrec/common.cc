@@ -22,4 +22,28 @@ void AddSequenceArgs(CLI::App* cmd, SequenceArgs* args) {
                   "Override intrinsics: Open3D JSON or 3x3 K matrix text file");
 }
 
+infer::ModelRegistry ModelArgs::LoadRegistry() const {
+  infer::ModelRegistry r = infer::ModelRegistry::LoadDefault();
+  if (!registry.empty()) r.Merge(infer::ModelRegistry::Load(registry));
+  return r;
+}
+
+infer::OnnxModelOptions ModelArgs::Runtime() const {
+  infer::OnnxModelOptions runtime;
+  runtime.intra_op_threads = threads;
+  runtime.provider = provider;
+  return runtime;
+}
+
+void AddModelArgs(CLI::App* cmd, ModelArgs* args) {
+  cmd->add_option("--registry", args->registry,
+                  "Extra model registry file (your own exports; see "
+                  "docs/models.md)");
+  cmd->add_option("--threads", args->threads,
+                  "Inference threads (0 = all cores)")
+      ->capture_default_str();
+  cmd->add_option("--provider", args->provider, "auto, cpu or cuda")
+      ->capture_default_str();
+}
+
 }  // namespace semrec::cli

@@ -88,6 +88,15 @@ void RequireDirectory(const fs::path& path, const std::string& what) {
   }
 }
 
+void RequireEmptyOrOverwrite(const fs::path& dir, bool overwrite) {
+  std::error_code ec;
+  if (fs::exists(dir, ec) && !fs::is_empty(dir, ec) && !overwrite) {
+    throw IoError(
+        dir,
+        "output folder is not empty (use --overwrite to replace its files)");
+  }
+}
+
 std::filesystem::path ProjectDataDir() {
   if (const char* env = std::getenv("SEMREC_DATA_DIR"); env && *env) {
     return env;

@@ -34,6 +34,10 @@ void RequireFile(const std::filesystem::path& path,
 void RequireDirectory(const std::filesystem::path& path,
                       const std::string& what = "folder");
 
+/// Throws IoError when `dir` exists and is not empty, unless `overwrite`: the
+/// rule every command that writes an output folder follows.
+void RequireEmptyOrOverwrite(const std::filesystem::path& dir, bool overwrite);
+
 /// The folder of the project's data files (label sets, model registry):
 /// $SEMREC_DATA_DIR when set, else the `data/` folder of the source tree this
 /// library was built from.

@@ -50,12 +50,7 @@ void WriteFusionResult(const fs::path& out_dir, const SceneFusion& fusion,
                        const LabelSet& classes,
                        const FuseSequenceResult& result,
                        const std::string& input_description, bool overwrite) {
-  std::error_code ec;
-  if (fs::exists(out_dir, ec) && !fs::is_empty(out_dir, ec) && !overwrite) {
-    throw IoError(
-        out_dir,
-        "output folder is not empty (use --overwrite to replace its files)");
-  }
+  RequireEmptyOrOverwrite(out_dir, overwrite);
   io::PlyData all;
   nlohmann::json segments = nlohmann::json::array();
   for (const SceneSegment& s : fusion.segments()) {

@@ -12,7 +12,7 @@ namespace semrec::pipeline {
 
 PersonMapSource::PersonMapSource(const std::string& spec,
                                  const io::SequenceReader& reader)
-    : reader_(reader), spec_(spec), paths_(reader.size()) {
+    : reader_(reader), paths_(reader.size()) {
   const auto& frames = reader.index().frames;
   size_t found = 0;
   if (spec == "gt") {

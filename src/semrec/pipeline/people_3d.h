@@ -36,7 +36,6 @@ class PersonMapSource {
 
  private:
   const io::SequenceReader& reader_;
-  std::string spec_;
   std::vector<std::filesystem::path> paths_;  // empty path: none
 };
 

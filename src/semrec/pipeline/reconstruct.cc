@@ -31,13 +31,8 @@ ReconstructResult Reconstruct(const io::SequenceReader& reader,
                               const ProgressOptions& progress_options) {
   options.Check();
   const auto start = std::chrono::steady_clock::now();
+  RequireEmptyOrOverwrite(out_dir, options.overwrite);
   std::error_code ec;
-  if (fs::exists(out_dir, ec) && !fs::is_empty(out_dir, ec) &&
-      !options.overwrite) {
-    throw IoError(
-        out_dir,
-        "output folder is not empty (use --overwrite to replace its files)");
-  }
   fs::create_directories(out_dir, ec);
   if (ec)
     throw IoError(out_dir, "cannot create output folder: " + ec.message());

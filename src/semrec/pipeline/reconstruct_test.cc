@@ -23,19 +23,26 @@ ProgressOptions Quiet() {
   return p;
 }
 
-// Synthetic six-objects scene -> one USD Mesh prim per object with the right
-// class, valid for the independent parser; meshes lie on the ground-truth
-// surfaces.
-TEST(Reconstruct, SixObjectsBecomeSixLabelledMeshPrims) {
-  testing::TempDir dir;
-  synth::SynthOptions o = synth::SynthOptions::Preset("six-objects");
-  o.frames = 12;
+// A quarter-size (320x240) noiseless synthetic sequence with sparse ground
+// truth: fast enough for unit tests.
+synth::SynthOptions SmallNoiselessScene(const std::string& preset, int frames) {
+  synth::SynthOptions o = synth::SynthOptions::Preset(preset);
+  o.frames = frames;
   o.width = 320;
   o.height = 240;
   o.fx = o.fy = 262.5;
   o.noise.enabled = false;
   o.gt_object_spacing_m = 0.05;
   o.gt_structure_spacing_m = 0.2;
+  return o;
+}
+
+// Synthetic six-objects scene -> one USD Mesh prim per object with the right
+// class, valid for the independent parser; meshes lie on the ground-truth
+// surfaces.
+TEST(Reconstruct, SixObjectsBecomeSixLabelledMeshPrims) {
+  testing::TempDir dir;
+  const synth::SynthOptions o = SmallNoiselessScene("six-objects", 12);
   synth::WriteSyntheticSequence(o, dir / "seq", Quiet());
   const io::SequenceReader reader = io::SequenceReader::Open(dir / "seq");
   const auto source = fuse::SegmentationSource::Create("gt", reader);
@@ -69,14 +76,7 @@ TEST(Reconstruct, SixObjectsBecomeSixLabelledMeshPrims) {
 // at the sequence's frame rate.
 TEST(Reconstruct, PeopleBecomeTimeSampledPrimsOnTheirGroundTruthPaths) {
   testing::TempDir dir;
-  synth::SynthOptions o = synth::SynthOptions::Preset("people");
-  o.frames = 40;
-  o.width = 320;
-  o.height = 240;
-  o.fx = o.fy = 262.5;
-  o.noise.enabled = false;
-  o.gt_object_spacing_m = 0.05;
-  o.gt_structure_spacing_m = 0.2;
+  const synth::SynthOptions o = SmallNoiselessScene("people", 40);
   synth::WriteSyntheticSequence(o, dir / "seq", Quiet());
   const io::SequenceReader reader = io::SequenceReader::Open(dir / "seq");
   const auto source = fuse::SegmentationSource::Create("gt", reader);

@@ -9,6 +9,17 @@
 
 namespace semrec::segment {
 
+PromptableOptions PromptableOptions::FromRegistry(
+    const infer::ModelRegistry& registry, const std::string& prefix,
+    const infer::OnnxModelOptions& runtime) {
+  PromptableOptions o;
+  o.encoder = prefix + "_encoder";
+  o.decoder = prefix + "_decoder";
+  o.backend = registry.Get(o.decoder).backend;
+  o.runtime = runtime;
+  return o;
+}
+
 void PromptableOptions::Check() const {
   CheckArgument(
       backend == "sam" || backend == "sam2",

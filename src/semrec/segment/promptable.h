@@ -31,6 +31,13 @@ struct PromptableOptions {
   /// ~21 ms/prompt vs 25 ms for one 2-thread call on 2 cores).
   int decoder_threads = 1;
   void Check() const;
+
+  /// The registry's `<prefix>_encoder` and `<prefix>_decoder` (backend as the
+  /// decoder's entry says), with `runtime`. Throws like registry.Get() for an
+  /// unknown name.
+  static PromptableOptions FromRegistry(const infer::ModelRegistry& registry,
+                                        const std::string& prefix,
+                                        const infer::OnnxModelOptions& runtime);
 };
 
 /// Prompts in image pixels.

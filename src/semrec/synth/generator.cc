@@ -247,11 +247,7 @@ SynthSummary WriteSyntheticSequence(const SynthOptions& options_in,
     if (!fs::is_directory(out_dir)) {
       throw IoError(out_dir, "output exists and is not a folder");
     }
-    if (!fs::is_empty(out_dir) && !options.overwrite) {
-      throw IoError(
-          out_dir,
-          "output folder is not empty (use --overwrite to replace its files)");
-    }
+    RequireEmptyOrOverwrite(out_dir, options.overwrite);
   }
   fs::create_directories(out_dir, ec);
   if (ec) {

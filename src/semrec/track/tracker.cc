@@ -109,6 +109,8 @@ std::vector<TrackedBox> Tracker::Update(
       reid_of[unmatched[k]] = ids[k];
   }
 
+  // Only the Kalman motion model reads the filter: skip its updates otherwise.
+  const bool kalman = options_.motion == TrackerOptions::Motion::kKalman;
   std::vector<char> matched(tracks_.size(), 0);
   std::vector<TrackedBox> out;
   std::vector<Track> born;
@@ -126,7 +128,7 @@ std::vector<TrackedBox> Tracker::Update(
       track.vx = track.age > 0 ? 0.5 * track.vx + 0.5 * vx : vx;
       track.vy = track.age > 0 ? 0.5 * track.vy + 0.5 * vy : vy;
       track.box = b;
-      track.filter.Update(b);
+      if (kalman) track.filter.Update(b);
       track.lost_frames = 0;
       UpdateEmbedding(detections[d].embedding, options_.reid.embedding_update,
                       &track.embedding);
@@ -139,7 +141,7 @@ std::vector<TrackedBox> Tracker::Update(
       Track track;
       track.id = known ? reid_of[d] : next_id_++;
       track.box = b;
-      track.filter = BoxFilter(b);
+      if (kalman) track.filter = BoxFilter(b);
       track.embedding = detections[d].embedding;
       if (known) track.age = options_.min_hits;
       born.push_back(track);

@@ -18,9 +18,7 @@ std::string Vec3(const Eigen::Vector3f& v) {
   return fmt::format("({}, {}, {})", Num(v.x()), Num(v.y()), Num(v.z()));
 }
 
-std::string PersonPrim(const PersonTrack& person) {
-  const std::string name =
-      fmt::format("{}_{}", SanitizeName(person.label), person.track_id);
+std::string PersonPrim(const std::string& name, const PersonTrack& person) {
   // Time samples: one per observation; visibility switches off on the first
   // frame without one and back on at the next observation. Before the first
   // and after the last observation the person is invisible too.
@@ -123,7 +121,7 @@ std::string PeopleScopeText(const std::vector<PersonTrack>& people,
     CheckArgument(
         !person.samples.empty(),
         fmt::format("usd: person {} has no observations", person.track_id));
-    text += PersonPrim(person);
+    text += PersonPrim(name, person);
   }
   text += "    }\n";
   return text;
