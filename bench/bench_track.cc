@@ -18,6 +18,7 @@
 #include "semrec/core/random.h"
 #include "semrec/eval/mot.h"
 #include "semrec/io/mot_io.h"
+#include "semrec/track/sequence.h"
 #include "semrec/track/tracker.h"
 
 namespace fs = std::filesystem;
@@ -30,6 +31,8 @@ struct Config {
   std::string name;
   track::TrackerOptions options;
   bool embeddings = false;
+  /// Offline steps on the finished tracks (TUD-Campus only).
+  track::OfflineOptions offline = {};
 };
 
 std::vector<Config> Configs() {
@@ -47,6 +50,13 @@ std::vector<Config> Configs() {
   configs.push_back({"improved (kalman)", track::TrackerOptions::Improved()});
   configs.push_back(
       {"improved + re-ID (256-d)", track::TrackerOptions::Improved(), true});
+  track::OfflineOptions gaps;
+  gaps.max_gap_frames = 10;
+  configs.push_back({"improved + gap filling",
+                     track::TrackerOptions::Improved(), false, gaps});
+  configs.push_back({"improved + offline steps",
+                     track::TrackerOptions::Improved(), false,
+                     track::OfflineOptions::Improved()});
   return configs;
 }
 
@@ -91,21 +101,11 @@ std::vector<std::vector<track::Detection>> Walkers(int people, int frames) {
 }
 
 std::vector<io::MotBox> Run(
-    const track::TrackerOptions& options,
+    const Config& config,
     const std::map<int, std::vector<track::Detection>>& by_frame, int frames) {
-  track::Tracker tracker(options);
-  std::vector<io::MotBox> result;
-  for (int f = 1; f <= frames; ++f) {
-    const auto it = by_frame.find(f);
-    for (const auto& t :
-         tracker.Update(it == by_frame.end() ? std::vector<track::Detection>{}
-                                             : it->second)) {
-      if (!t.confirmed) continue;
-      result.push_back({f, t.track_id, t.box.left, t.box.top, t.box.width,
-                        t.box.height, t.score});
-    }
-  }
-  return result;
+  track::Tracker tracker(config.options);
+  return track::ToMotBoxes(track::FinishTracks(
+      track::TrackSequence(&tracker, by_frame, frames), config.offline));
 }
 
 }  // namespace
@@ -126,6 +126,7 @@ int main(int argc, char** argv) {
               "tracks");
   double reference_us = 0;
   for (const Config& config : Configs()) {
+    if (!config.offline.Off()) continue;  // same association as without
     track::Tracker tracker(config.options);
     std::vector<std::vector<track::Detection>> input = walkers;
     if (!config.embeddings) {
@@ -155,20 +156,16 @@ int main(int argc, char** argv) {
     return 0;
   }
   const auto gt = io::ReadMotFile(tud / "gt/gt.txt");
-  std::map<int, std::vector<track::Detection>> by_frame;
-  int last = 0;
-  for (const io::MotBox& b : io::ReadMotFile(tud / "det/det.txt")) {
-    by_frame[b.frame].push_back(
-        {{b.left, b.top, b.width, b.height}, b.confidence, {}});
-    last = std::max(last, b.frame);
-  }
+  const auto by_frame =
+      track::DetectionsByFrame(io::ReadMotFile(tud / "det/det.txt"));
+  const int last = by_frame.empty() ? 0 : by_frame.rbegin()->first;
   std::printf("\nTUD-Campus public detections (%s)\n", tud.c_str());
   std::printf("%-28s %7s %7s %7s %5s %5s %5s\n", "configuration", "MOTA",
               "IDF1", "HOTA", "FP", "FN", "IDsw");
   for (const Config& config : Configs()) {
     if (config.embeddings) continue;
     const eval::MotMetrics m =
-        eval::EvaluateMot(gt, Run(config.options, by_frame, last));
+        eval::EvaluateMot(gt, Run(config, by_frame, last));
     std::printf("%-28s %7.4f %7.4f %7.4f %5zu %5zu %5zu\n", config.name.c_str(),
                 m.mota, m.idf1, m.hota, m.false_positives, m.false_negatives,
                 m.id_switches);

@@ -17,6 +17,7 @@
 #include "semrec/io/mot_io.h"
 #include "semrec/pipeline/people_tracker.h"
 #include "semrec/segment/segment_io.h"
+#include "semrec/track/sequence.h"
 #include "semrec/track/tracker.h"
 
 namespace fs = std::filesystem;
@@ -34,6 +35,9 @@ struct TrackArgs {
   std::string motion;
   std::optional<double> min_score;
   std::optional<int> min_hits;
+  std::optional<bool> backfill;
+  std::optional<int> max_gap;
+  std::optional<int> min_track_frames;
   // Images mode.
   std::string detector = "yolox_nano";
   float detector_score = 0.3f;
@@ -97,40 +101,32 @@ track::TrackerOptions TrackerOptionsFrom(const TrackArgs& args) {
   return options;
 }
 
-std::map<int, std::vector<track::Detection>> DetectionsByFrame(
-    const std::string& path) {
-  std::map<int, std::vector<track::Detection>> by_frame;
-  for (const io::MotBox& b : io::ReadMotFile(path)) {
-    track::Detection d;
-    d.box = {b.left, b.top, b.width, b.height};
-    d.score = b.confidence;
-    by_frame[b.frame].push_back(d);
-  }
-  return by_frame;
+track::OfflineOptions OfflineOptionsFrom(const TrackArgs& args) {
+  track::OfflineOptions options;
+  if (args.config == "improved") options = track::OfflineOptions::Improved();
+  if (args.backfill) options.backfill_tentative = *args.backfill;
+  if (args.max_gap) options.max_gap_frames = *args.max_gap;
+  if (args.min_track_frames) options.min_track_frames = *args.min_track_frames;
+  options.Check();
+  return options;
 }
 
 // --detections only: geometry tracking of MOTChallenge boxes.
 void RunTrackDetections(const TrackArgs& args) {
   const track::TrackerOptions options = TrackerOptionsFrom(args);
-  const auto by_frame = DetectionsByFrame(args.detections);
+  const track::OfflineOptions offline = OfflineOptionsFrom(args);
+  const auto by_frame =
+      track::DetectionsByFrame(io::ReadMotFile(args.detections));
   size_t detections = 0;
   for (const auto& [f, d] : by_frame) detections += d.size();
   const int frames = by_frame.empty() ? 0 : by_frame.rbegin()->first;
   track::Tracker tracker(options);
-  std::vector<io::MotBox> result;
   Progress progress("tracking", frames);
-  for (int f = 1; f <= frames; ++f) {
-    const auto it = by_frame.find(f);
-    const auto tracked = tracker.Update(
-        it == by_frame.end() ? std::vector<track::Detection>{} : it->second);
-    for (const auto& t : tracked) {
-      if (!t.confirmed) continue;
-      result.push_back({f, t.track_id, t.box.left, t.box.top, t.box.width,
-                        t.box.height, t.score});
-    }
-    progress.Tick();
-  }
+  const auto points = track::TrackSequence(&tracker, by_frame, frames,
+                                           [&] { progress.Tick(); });
   progress.Finish();
+  const std::vector<io::MotBox> result =
+      track::ToMotBoxes(track::FinishTracks(points, offline));
   io::WriteMotFile(args.out, result);
   std::printf("%s",
               fmt::format("{} frames, {} detections -> {} boxes; wrote {}\n",
@@ -164,10 +160,12 @@ void RunTrackImages(const TrackArgs& args) {
   const auto inputs =
       segment::ListSegmentInputs(args.input, args.stride, args.max_frames);
   std::map<int, std::vector<track::Detection>> given;
-  if (!args.detections.empty()) given = DetectionsByFrame(args.detections);
+  if (!args.detections.empty())
+    given = track::DetectionsByFrame(io::ReadMotFile(args.detections));
   RequireEmptyOrOverwrite(args.out, args.overwrite);
+  const track::OfflineOptions offline = OfflineOptionsFrom(args);
   pipeline::PeopleTracker tracker(registry, options, pca);
-  std::vector<io::MotBox> result;
+  std::vector<track::TrackPoint> points;
   std::vector<std::vector<float>> embeddings;
   std::map<int, int> frames_per_track;
   int reidentified = 0;
@@ -192,11 +190,7 @@ void RunTrackImages(const TrackArgs& args) {
     mask_s += frame.mask_seconds;
     for (const auto& p : frame.people) {
       if (!p.embedding.empty()) embeddings.push_back(p.embedding);
-      if (!p.box.confirmed) continue;
-      const auto& b = p.box.box;
-      result.push_back({frame_number, p.box.track_id, b.left, b.top, b.width,
-                        b.height, p.box.score});
-      ++frames_per_track[p.box.track_id];
+      points.push_back({frame_number, p.box, false});
       reidentified += p.box.reidentified;
     }
     const fs::path name = inputs[i].name;
@@ -208,6 +202,11 @@ void RunTrackImages(const TrackArgs& args) {
     progress.Tick();
   }
   progress.Finish();
+  // The per-frame images show the online state; the result file gets the
+  // offline steps on the finished tracks.
+  const std::vector<io::MotBox> result =
+      track::ToMotBoxes(track::FinishTracks(points, offline));
+  for (const io::MotBox& b : result) ++frames_per_track[b.id];
   io::WriteMotFile(fs::path(args.out) / "result.txt", result);
   nlohmann::json summary = {
       {"input", args.input},
@@ -285,7 +284,9 @@ void RegisterTrack(CLI::App& app) {
   cmd->add_option(
          "--config", args->config,
          "paper (corner cost, no gate, previous frame only) or improved (IoU "
-         "cost, Kalman prediction, lost tracks kept 10 frames, scores >= 0.7)")
+         "cost, Kalman prediction, lost tracks kept 10 frames, scores >= 0.7; "
+         "in the result file gaps up to 10 frames interpolated and tracks "
+         "shorter than 3 frames dropped)")
       ->capture_default_str();
   cmd->add_option("--cost", args->cost, "Override the cost: corners or iou");
   cmd->add_option("--max-lost", args->max_lost,
@@ -298,6 +299,14 @@ void RegisterTrack(CLI::App& app) {
   cmd->add_option(
       "--min-hits", args->min_hits,
       "Override: report a track once it was seen in this many frames");
+  cmd->add_option("--backfill", args->backfill,
+                  "Override (result file): also report the boxes a track had "
+                  "before --min-hits confirmed it (true/false)");
+  cmd->add_option("--max-gap", args->max_gap,
+                  "Override (result file): fill a track's gaps of up to this "
+                  "many frames by interpolation (0 = off)");
+  cmd->add_option("--min-track-frames", args->min_track_frames,
+                  "Override (result file): drop tracks seen in fewer frames");
   cmd->add_option("--detector", args->detector,
                   "Detector registry name (images mode)")
       ->capture_default_str();
