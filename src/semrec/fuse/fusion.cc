@@ -101,61 +101,71 @@ FrameFusionStats SceneFusion::Integrate(
     }
   }
 
-  // Matches of every frame segment against the scene before this frame.
+  // Matches of every frame segment against the scene before this frame. The
+  // candidate pairs (same class; for `fast`, bounding boxes within reach) are
+  // listed first and compared in parallel pair by pair: one large segment
+  // (floor, wall) would otherwise keep a core busy alone.
   const auto compare_start = std::chrono::steady_clock::now();
-  std::vector<std::vector<size_t>> matches(frame_segments.size());
-  std::vector<uint64_t> computations(frame_segments.size(), 0);
-  std::vector<size_t> compared(frame_segments.size(), 0);
+  struct Candidate {
+    size_t frame_segment;
+    size_t scene_segment;
+    OverlapResult overlap;
+    bool exceeds = false;
+  };
+  std::vector<Candidate> candidates;
   const float margin = static_cast<float>(options_.max_corr_dist_m);
-  auto compare = [&](size_t f) {
+  for (size_t f = 0; f < frame_segments.size(); ++f) {
     for (size_t s = 0; s < segments_.size(); ++s) {
-      const SceneSegment& scene = segments_[s];
       if (options_.label_gating &&
-          scene.class_id != frame_segments[f].class_id) {
+          segments_[s].class_id != frame_segments[f].class_id) {
         continue;
       }
-      ++compared[f];
-      OverlapResult overlap;
-      bool exceeds = false;
-      if (fast) {
-        if (!Near(frame_bounds[f], scene.bounds, margin)) {
-          continue;  // no pair can be close
-        }
-        // Stops as soon as the decision is settled (same decision as the full
-        // sigma).
-        const OverlapDecision d = MutualOverlapExceeds(
-            frame_corr[f], frame_grids[f], scene.corr_points, scene.corr_grid,
-            options_.max_corr_dist_m, options_.alpha);
-        overlap = d.partial;
-        exceeds = d.exceeds;
-      } else {
-        overlap = MutualOverlapBruteForce(frame_corr[f], scene.corr_points,
-                                          options_.max_corr_dist_m);
-        exceeds = overlap.sigma > options_.alpha;
-      }
-      computations[f] += overlap.distance_computations;
-      SPDLOG_TRACE(
-          "frame {} segment {} (class {}, {} pts) vs scene {} ({} pts): "
-          "|M|{}{} "
-          "sigma{}{:.3f} -> {}",
-          frame_index, f, frame_segments[f].class_id, frame_corr[f].size(),
-          scene.id, scene.corr_points.size(), fast ? ">=" : "=",
-          overlap.mutual_pairs, fast ? ">=" : "=", overlap.sigma,
-          exceeds ? "merge" : "no");
-      if (exceeds) matches[f].push_back(s);
+      ++stats.compared_pairs;
+      // No pair can be close.
+      if (fast && !Near(frame_bounds[f], segments_[s].bounds, margin)) continue;
+      candidates.push_back({f, s, {}, false});
+    }
+  }
+  auto compare = [&](size_t k) {
+    Candidate& c = candidates[k];
+    const SceneSegment& scene = segments_[c.scene_segment];
+    if (fast) {
+      // Stops as soon as the decision is settled (same decision as the full
+      // sigma).
+      const OverlapDecision d = MutualOverlapExceeds(
+          frame_corr[c.frame_segment], frame_grids[c.frame_segment],
+          scene.corr_points, scene.corr_grid, options_.max_corr_dist_m,
+          options_.alpha);
+      c.overlap = d.partial;
+      c.exceeds = d.exceeds;
+    } else {
+      c.overlap =
+          MutualOverlapBruteForce(frame_corr[c.frame_segment],
+                                  scene.corr_points, options_.max_corr_dist_m);
+      c.exceeds = c.overlap.sigma > options_.alpha;
     }
   };
   if (fast) {
-    tbb::parallel_for(size_t{0}, frame_segments.size(), compare);
+    tbb::parallel_for(size_t{0}, candidates.size(), compare);
   } else {
-    for (size_t f = 0; f < frame_segments.size(); ++f) compare(f);
+    for (size_t k = 0; k < candidates.size(); ++k) compare(k);
   }
   stats.compare_seconds = std::chrono::duration<double>(
                               std::chrono::steady_clock::now() - compare_start)
                               .count();
-  for (size_t f = 0; f < frame_segments.size(); ++f) {
-    stats.distance_computations_done += computations[f];
-    stats.compared_pairs += compared[f];
+  std::vector<std::vector<size_t>> matches(frame_segments.size());
+  for (const Candidate& c : candidates) {
+    stats.distance_computations_done += c.overlap.distance_computations;
+    SPDLOG_TRACE(
+        "frame {} segment {} (class {}, {} pts) vs scene {} ({} pts): "
+        "|M|{}{} sigma{}{:.3f} -> {}",
+        frame_index, c.frame_segment, frame_segments[c.frame_segment].class_id,
+        frame_corr[c.frame_segment].size(), segments_[c.scene_segment].id,
+        segments_[c.scene_segment].corr_points.size(), fast ? ">=" : "=",
+        c.overlap.mutual_pairs, fast ? ">=" : "=", c.overlap.sigma,
+        c.exceeds ? "merge" : "no");
+    // In increasing scene order per frame segment (the list's order).
+    if (c.exceeds) matches[c.frame_segment].push_back(c.scene_segment);
   }
 
   // Apply: union scene segments linked through a frame segment, attach the

@@ -7,14 +7,6 @@
 namespace semrec::fuse {
 namespace {
 
-// The same float expression in both implementations, so that ties and
-// thresholds agree bit for bit.
-inline float SquaredDistance(const Eigen::Vector3f& p,
-                             const Eigen::Vector3f& q) {
-  const float dx = p.x() - q.x(), dy = p.y() - q.y(), dz = p.z() - q.z();
-  return dx * dx + dy * dy + dz * dz;
-}
-
 struct Nearest {
   float d2 = std::numeric_limits<float>::infinity();
   int64_t index = -1;
@@ -66,13 +58,7 @@ OverlapResult MutualOverlapGrid(const Cloud& a, const Cloud& b,
   std::vector<int64_t> nn_of_a(a.size(), -1);
   uint64_t computations = 0;
   for (size_t i = 0; i < a.size(); ++i) {
-    Nearest best;
-    grid_b.ForEachNear(a[i], [&](uint32_t j) {
-      const float d2 = SquaredDistance(a[i], b[j]);
-      ++computations;
-      if (d2 <= max_d2) best.Offer(d2, j);
-    });
-    nn_of_a[i] = best.index;
+    nn_of_a[i] = grid_b.Nearest(b, a[i], max_d2, &computations).index;
   }
   const VoxelGrid grid_a(a, max_dist_m);
   std::vector<uint8_t> checked(b.size(), 0);
@@ -80,15 +66,10 @@ OverlapResult MutualOverlapGrid(const Cloud& a, const Cloud& b,
     const int64_t j = nn_of_a[i];
     if (j < 0 || checked[j]) continue;
     checked[j] = 1;
-    Nearest best;
-    grid_a.ForEachNear(b[j], [&](uint32_t k) {
-      const float d2 = SquaredDistance(a[k], b[j]);
-      ++computations;
-      if (d2 <= max_d2) best.Offer(d2, k);
-    });
     // b_j's nearest a point must have b_j as its nearest: then the pair is
     // mutual.
-    if (best.index >= 0 && nn_of_a[best.index] == j) ++result.mutual_pairs;
+    const int64_t k = grid_a.Nearest(a, b[j], max_d2, &computations).index;
+    if (k >= 0 && nn_of_a[k] == j) ++result.mutual_pairs;
   }
   result.distance_computations = computations;
   result.sigma = Sigma(result.mutual_pairs, a.size(), b.size());
@@ -113,23 +94,13 @@ OverlapDecision MutualOverlapExceeds(const Cloud& a, const VoxelGrid& grid_a,
   size_t pairs = 0;
   for (size_t i = 0; i < a.size(); ++i) {
     if (pairs + (a.size() - i) < need) break;  // cannot reach `need` any more
-    Nearest to_b;
-    grid_b.ForEachNear(a[i], [&](uint32_t j) {
-      const float d2 = SquaredDistance(a[i], b[j]);
-      ++computations;
-      if (d2 <= max_d2) to_b.Offer(d2, j);
-    });
+    const Neighbor to_b = grid_b.Nearest(b, a[i], max_d2, &computations);
     if (to_b.index < 0) continue;
     // Mutual when a_i is also b_j's nearest. (Recomputed rather than cached: a
     // per-pair cache over b costs an allocation that dominates for large scene
     // segments.)
-    Nearest to_a;
-    const Eigen::Vector3f& q = b[to_b.index];
-    grid_a.ForEachNear(q, [&](uint32_t k) {
-      const float d2 = SquaredDistance(a[k], q);
-      ++computations;
-      if (d2 <= max_d2) to_a.Offer(d2, k);
-    });
+    const Neighbor to_a =
+        grid_a.Nearest(a, b[to_b.index], max_d2, &computations);
     if (to_a.index == static_cast<int64_t>(i) && ++pairs >= need) break;
   }
   decision.exceeds = pairs >= need;

@@ -123,4 +123,80 @@ const VoxelGrid::Cell* VoxelGrid::Find(uint64_t key) const {
   return it != cells_.end() && it->key == key ? &*it : nullptr;
 }
 
+Neighbor VoxelGrid::Nearest(const Cloud& points, const Eigen::Vector3f& p,
+                            float max_d2, uint64_t* computations) const {
+  Neighbor best;
+  best.d2 = max_d2;
+  if (order_.empty()) return best;
+  const float fx = p.x() * inv_cell_, fy = p.y() * inv_cell_,
+              fz = p.z() * inv_cell_;
+  const int64_t cell[3] = {static_cast<int64_t>(std::floor(fx)),
+                           static_cast<int64_t>(std::floor(fy)),
+                           static_cast<int64_t>(std::floor(fz))};
+  if (dense_) {
+    for (int d = 0; d < 3; ++d) {
+      const int64_t r = cell[d] - lo_[d];
+      if (r < -1 || r > n_[d]) return best;  // nowhere near the cloud
+    }
+  }
+  // Per axis, the gap from p to the neighbour cells below and above, shrunk
+  // by 0.1% of a cell so that float rounding of the boundaries can never skip
+  // a cell holding a point within the best distance.
+  const float cell_size = 1.0f / inv_cell_;
+  const float slack = 1e-3f;
+  float gap[3][3];
+  const float frac[3] = {fx - static_cast<float>(cell[0]),
+                         fy - static_cast<float>(cell[1]),
+                         fz - static_cast<float>(cell[2])};
+  for (int d = 0; d < 3; ++d) {
+    const float below = std::max(0.0f, frac[d] - slack) * cell_size;
+    const float above = std::max(0.0f, 1.0f - frac[d] - slack) * cell_size;
+    gap[d][0] = below * below;
+    gap[d][1] = 0.0f;
+    gap[d][2] = above * above;
+  }
+  uint64_t evaluated = 0;
+  auto visit = [&](int64_t x, int64_t y, int64_t z) {
+    const uint32_t* first = nullptr;
+    const uint32_t* last = nullptr;
+    if (dense_) {
+      x -= lo_[0], y -= lo_[1], z -= lo_[2];
+      if (x < 0 || y < 0 || z < 0 || x >= n_[0] || y >= n_[1] || z >= n_[2]) {
+        return;
+      }
+      const size_t c = static_cast<size_t>((x * n_[1] + y) * n_[2] + z);
+      first = order_.data() + dense_first_[c];
+      last = order_.data() + dense_first_[c + 1];
+    } else {
+      const Cell* found = Find(PackVoxel(x, y, z));
+      if (found == nullptr) return;
+      first = order_.data() + found->first;
+      last = first + found->count;
+    }
+    for (const uint32_t* k = first; k != last; ++k) {
+      const float d2 = SquaredDistance(p, points[*k]);
+      ++evaluated;
+      if (d2 < best.d2 ||
+          (d2 == best.d2 && (best.index < 0 || *k < best.index))) {
+        best.d2 = d2;
+        best.index = *k;
+      }
+    }
+  };
+  visit(cell[0], cell[1], cell[2]);
+  for (int dx = 0; dx < 3; ++dx) {
+    for (int dy = 0; dy < 3; ++dy) {
+      const float gxy = gap[0][dx] + gap[1][dy];
+      for (int dz = 0; dz < 3; ++dz) {
+        if (dx == 1 && dy == 1 && dz == 1) continue;  // own cell, done
+        if (gxy + gap[2][dz] > best.d2) continue;
+        visit(cell[0] + dx - 1, cell[1] + dy - 1, cell[2] + dz - 1);
+      }
+    }
+  }
+  *computations += evaluated;
+  if (best.index < 0) best.d2 = 0.0f;
+  return best;
+}
+
 }  // namespace semrec::fuse

@@ -2,6 +2,7 @@
 // a hashed grid for exact fixed-radius neighbour search.
 #pragma once
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <utility>
@@ -23,18 +24,35 @@ uint64_t PackVoxel(int64_t x, int64_t y, int64_t z);
 /// on the input order.
 Cloud VoxelDownsample(const Cloud& points, double voxel_size_m);
 
+/// Squared Euclidean distance; every exact search uses this one float
+/// expression, so that ties and thresholds agree bit for bit.
+inline float SquaredDistance(const Eigen::Vector3f& p,
+                             const Eigen::Vector3f& q) {
+  const float dx = p.x() - q.x(), dy = p.y() - q.y(), dz = p.z() - q.z();
+  return dx * dx + dy * dy + dz * dz;
+}
+
+/// A nearest-neighbour result: index -1 when none was within reach.
+struct Neighbor {
+  int64_t index = -1;
+  float d2 = 0.0f;
+};
+
 /// Points bucketed by cells of `cell_size_m`: every point within cell_size_m of
-/// a query lies in the 27 cells around the query's cell.
+/// a query lies in the 27 cells around the query's cell. Exact nearest
+/// neighbour search within that radius.
 class VoxelGrid {
  public:
   VoxelGrid() = default;
   VoxelGrid(const Cloud& points, double cell_size_m);
 
-  /// Calls fn(index) for every point in the 27 cells around p (a superset of
-  /// the points within cell_size of p), in increasing index order within each
-  /// cell.
-  template <typename Fn>
-  void ForEachNear(const Eigen::Vector3f& p, Fn&& fn) const;
+  /// The nearest of `points` (the cloud this grid was built from) to p with
+  /// squared distance <= max_d2 (max_d2 <= cell_size^2); ties go to the lower
+  /// index, as in a brute-force scan. Searches p's own cell first and skips
+  /// neighbour cells farther away than the best point so far; adds the
+  /// distances it evaluated to *computations.
+  Neighbor Nearest(const Cloud& points, const Eigen::Vector3f& p, float max_d2,
+                   uint64_t* computations) const;
 
   bool empty() const { return order_.empty(); }
 
@@ -50,10 +68,6 @@ class VoxelGrid {
     uint32_t count;
   };
   const Cell* Find(uint64_t key) const;
-  // Calls fn for the points of cell (x, y, z).
-  template <typename Fn>
-  void ForEachInCell(int64_t x, int64_t y, int64_t z, Fn&& fn) const;
-
   float inv_cell_ = 1.0f;
   std::vector<Cell> cells_;
   std::vector<uint32_t> order_;
@@ -64,43 +78,5 @@ class VoxelGrid {
   int64_t n_[3] = {0, 0, 0};
   std::vector<uint32_t> dense_first_;
 };
-
-template <typename Fn>
-void VoxelGrid::ForEachInCell(int64_t x, int64_t y, int64_t z, Fn&& fn) const {
-  if (dense_) {
-    x -= lo_[0], y -= lo_[1], z -= lo_[2];
-    if (x < 0 || y < 0 || z < 0 || x >= n_[0] || y >= n_[1] || z >= n_[2]) {
-      return;
-    }
-    const size_t c = static_cast<size_t>((x * n_[1] + y) * n_[2] + z);
-    for (uint32_t k = dense_first_[c]; k < dense_first_[c + 1]; ++k) {
-      fn(order_[k]);
-    }
-    return;
-  }
-  const Cell* cell = Find(PackVoxel(x, y, z));
-  if (cell == nullptr) return;
-  for (uint32_t k = 0; k < cell->count; ++k) fn(order_[cell->first + k]);
-}
-
-template <typename Fn>
-void VoxelGrid::ForEachNear(const Eigen::Vector3f& p, Fn&& fn) const {
-  const int64_t x = static_cast<int64_t>(std::floor(p.x() * inv_cell_));
-  const int64_t y = static_cast<int64_t>(std::floor(p.y() * inv_cell_));
-  const int64_t z = static_cast<int64_t>(std::floor(p.z() * inv_cell_));
-  // Most queries of a large cloud against a small one are nowhere near it.
-  if (dense_ &&
-      (x < lo_[0] - 1 || y < lo_[1] - 1 || z < lo_[2] - 1 ||
-       x > lo_[0] + n_[0] || y > lo_[1] + n_[1] || z > lo_[2] + n_[2])) {
-    return;
-  }
-  for (int64_t dx = -1; dx <= 1; ++dx) {
-    for (int64_t dy = -1; dy <= 1; ++dy) {
-      for (int64_t dz = -1; dz <= 1; ++dz) {
-        ForEachInCell(x + dx, y + dy, z + dz, fn);
-      }
-    }
-  }
-}
 
 }  // namespace semrec::fuse

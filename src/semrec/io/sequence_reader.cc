@@ -88,6 +88,23 @@ SequenceReader SequenceReader::Open(const fs::path& path,
   return SequenceReader(std::move(*index), options);
 }
 
+bool SequenceReader::IsSequence(const fs::path& path) {
+  std::error_code ec;
+  if (!fs::exists(path, ec)) return false;
+  const SequenceReaderOptions options;
+  try {
+    if (internal::IndexManifest(path, options)) return true;
+    if (!fs::is_directory(path, ec)) return false;
+    for (auto detect : {internal::IndexTum, internal::IndexRedwood,
+                        internal::IndexSevenScenes}) {
+      if (detect(path, options)) return true;
+    }
+  } catch (const std::exception&) {
+    return true;  // in a layout, but broken
+  }
+  return false;
+}
+
 SequenceReader::SequenceReader(SequenceIndex index,
                                const SequenceReaderOptions& options)
     : index_(std::move(index)), options_(options) {

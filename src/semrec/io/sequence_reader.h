@@ -75,6 +75,10 @@ class SequenceReader {
   static SequenceReader Open(const std::filesystem::path& path,
                              const SequenceReaderOptions& options = {});
 
+  /// Whether `path` looks like a sequence in a known layout (a broken one
+  /// too: Open then says what is wrong). Never throws.
+  static bool IsSequence(const std::filesystem::path& path);
+
   /// Wraps an index built elsewhere (validated here: non-empty, consistent).
   SequenceReader(SequenceIndex index, const SequenceReaderOptions& options);
 

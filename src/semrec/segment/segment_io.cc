@@ -35,14 +35,9 @@ std::vector<SegmentInput> ListSegmentInputs(const fs::path& path, int stride,
     return inputs;
   }
   RequireDirectory(path, "input");
-  std::vector<fs::path> images;
-  for (const auto& e : fs::directory_iterator(path)) {
-    if (e.is_regular_file() && IsImageFile(e.path()))
-      images.push_back(e.path());
-  }
-  if (images.empty()) {
-    // Not a plain image folder: an RGB-D sequence (its errors explain what
-    // is missing).
+  // An RGB-D sequence first: 7-Scenes and 3DMatch keep colour and depth
+  // images side by side in one folder, which is not an image folder.
+  if (io::SequenceReader::IsSequence(path)) {
     io::SequenceReaderOptions options;
     options.stride = stride;
     options.max_frames = max_frames;
@@ -52,6 +47,16 @@ std::vector<SegmentInput> ListSegmentInputs(const fs::path& path, int stride,
           {frame.depth_path.filename().string(), frame.color_path});
     }
     return inputs;
+  }
+  std::vector<fs::path> images;
+  for (const auto& e : fs::directory_iterator(path)) {
+    if (e.is_regular_file() && IsImageFile(e.path()))
+      images.push_back(e.path());
+  }
+  if (images.empty()) {
+    throw IoError(path,
+                  "no images (.png, .jpg, .jpeg) and no known RGB-D sequence "
+                  "layout in this folder");
   }
   std::sort(images.begin(), images.end());
   for (size_t i = 0; i < images.size(); i += size_t(stride)) {
