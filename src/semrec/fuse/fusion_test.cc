@@ -214,6 +214,33 @@ TEST(Fusion, SyntheticSixObjectsEndAsOneSegmentEach) {
   }
 }
 
+TEST(Segments, SemanticZeroIsAClassOnlyWhenTheTableNamesIt) {
+  Frame frame;
+  frame.intrinsics = {4, 3, 2, 2, 1.5, 1};
+  frame.depth = DepthImage(4, 3, 1, 1.0f);
+  // Instance 1 voted 0 (6 of 8 pixels), instance 2 voted class 1.
+  FrameLabels labels{LabelMap(4, 3, 1, 1), LabelMap(4, 3, 1, 0), "labels"};
+  for (int u = 0; u < 4; ++u) labels.instance(u, 2) = 2;
+  for (int u = 0; u < 4; ++u) labels.semantic(u, 2) = 1;
+  labels.semantic(0, 0) = labels.semantic(1, 0) = 1;
+  SegmentExtractionOptions options;
+  options.min_points = 1;
+  LabelSet ade("ade-like");
+  ade.Add({1, "wall", {}});
+  auto segments = ExtractFrameSegments(frame, labels, ade, options);
+  ASSERT_EQ(segments.size(), 1u);
+  EXPECT_EQ(segments[0].source_label, 2);
+  LabelSet voc("voc-like");
+  voc.Add({0, "background", {}});
+  voc.Add({1, "chair", {}});
+  segments = ExtractFrameSegments(frame, labels, voc, options);
+  ASSERT_EQ(segments.size(), 2u);
+  EXPECT_EQ(segments[0].source_label, 1);
+  EXPECT_EQ(segments[0].class_id, 0);
+  EXPECT_EQ(segments[0].points_world.size(), 8u);
+  EXPECT_EQ(segments[1].class_id, 1);
+}
+
 TEST(Segments, BadLabelsGiveClearErrors) {
   Frame frame;
   frame.intrinsics = {4, 3, 2, 2, 1.5, 1};

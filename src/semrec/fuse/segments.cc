@@ -150,7 +150,10 @@ std::vector<FrameSegment> ExtractFrameSegments(
     for (const auto& [label, count] : acc.votes) {
       if (count > best) best = count, cls = label;
     }
-    if (cls == 0) continue;  // unlabelled
+    // 0 is "unlabelled" unless the class table names it (PASCAL VOC's
+    // "background": a mask voted background is still a surface, a wall or a
+    // floor, worth fusing as its own class).
+    if (cls == 0 && !classes.Contains(0)) continue;
     if (!classes.Contains(cls)) {
       throw FormatError(
           labels.source,

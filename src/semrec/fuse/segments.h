@@ -72,7 +72,8 @@ struct SegmentExtractionOptions {
 };
 
 /// Segments of `frame` per its labels. Pixels without depth are ignored;
-/// instance 0 and semantic 0 are "unlabelled". Throws FormatError when a
+/// instance 0 is "unlabelled", and so is semantic 0 unless `classes` has an
+/// entry for it (VOC's "background"). Throws FormatError when a
 /// semantic label is not in `classes`, or when label and depth sizes differ.
 std::vector<FrameSegment> ExtractFrameSegments(
     const Frame& frame, const FrameLabels& labels, const LabelSet& classes,
