@@ -31,7 +31,8 @@ class OnnxModel {
   /// Loads `entry` from the model cache. Throws IoError when the file is
   /// missing, FormatError for a checksum mismatch or a signature that differs
   /// from the registry's, each naming the model, the file and how to fix it.
-  OnnxModel(const ModelEntry& entry, const OnnxModelOptions& options = {});
+  explicit OnnxModel(const ModelEntry& entry,
+                     const OnnxModelOptions& options = {});
   /// Same, for an explicit file (checksum and signature still checked).
   OnnxModel(const ModelEntry& entry, const std::filesystem::path& file,
             const OnnxModelOptions& options);

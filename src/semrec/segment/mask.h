@@ -15,7 +15,7 @@ struct Box {
   int width() const { return x1 - x0; }
   int height() const { return y1 - y0; }
   int64_t area() const {
-    return x1 > x0 && y1 > y0 ? int64_t(x1 - x0) * (y1 - y0) : 0;
+    return x1 > x0 && y1 > y0 ? static_cast<int64_t>(x1 - x0) * (y1 - y0) : 0;
   }
 };
 
@@ -41,7 +41,8 @@ struct Mask {
 
   bool Contains(int x, int y) const {
     return x >= box.x0 && x < box.x1 && y >= box.y0 && y < box.y1 &&
-           bits[size_t(y - box.y0) * box.width() + (x - box.x0)] != 0;
+           bits[static_cast<size_t>(y - box.y0) * box.width() + (x - box.x0)] !=
+               0;
   }
   /// The mask as a full-size 0/1 image.
   Image<uint8_t> ToImage() const;

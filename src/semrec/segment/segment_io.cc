@@ -50,8 +50,9 @@ std::vector<SegmentInput> ListSegmentInputs(const fs::path& path, int stride,
   }
   std::vector<fs::path> images;
   for (const auto& e : fs::directory_iterator(path)) {
-    if (e.is_regular_file() && IsImageFile(e.path()))
+    if (e.is_regular_file() && IsImageFile(e.path())) {
       images.push_back(e.path());
+    }
   }
   if (images.empty()) {
     throw IoError(path,
@@ -59,7 +60,7 @@ std::vector<SegmentInput> ListSegmentInputs(const fs::path& path, int stride,
                   "layout in this folder");
   }
   std::sort(images.begin(), images.end());
-  for (size_t i = 0; i < images.size(); i += size_t(stride)) {
+  for (size_t i = 0; i < images.size(); i += static_cast<size_t>(stride)) {
     inputs.push_back({images[i].stem().string() + ".png", images[i]});
     if (max_frames && inputs.size() >= max_frames) break;
   }
@@ -83,7 +84,8 @@ ColorImage RenderOverlay(const ColorImage& rgb, const HybridResult& result,
       const bool edge = (x + 1 < w && instance(x + 1, y) != inst) ||
                         (y + 1 < h && instance(x, y + 1) != inst);
       for (int c = 0; c < 3; ++c) {
-        out(x, y, c) = edge ? 255 : uint8_t((rgb(x, y, c) + color[c]) / 2);
+        out(x, y, c) =
+            edge ? 255 : static_cast<uint8_t>((rgb(x, y, c) + color[c]) / 2);
       }
     }
   }
@@ -100,7 +102,8 @@ ColorImage RenderOverlay(const ColorImage& rgb, const HybridResult& result,
     int baseline = 0;
     const cv::Size size =
         cv::getTextSize(name, cv::FONT_HERSHEY_SIMPLEX, scale, 1, &baseline);
-    const cv::Point at(int(cx) - size.width / 2, int(cy) + size.height / 2);
+    const cv::Point at(static_cast<int>(cx) - size.width / 2,
+                       static_cast<int>(cy) + size.height / 2);
     cv::putText(canvas, name, at, cv::FONT_HERSHEY_SIMPLEX, scale,
                 cv::Scalar(0, 0, 0), 3, cv::LINE_AA);
     cv::putText(canvas, name, at, cv::FONT_HERSHEY_SIMPLEX, scale,

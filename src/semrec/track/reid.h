@@ -33,8 +33,8 @@ class PcaProjection {
   void Save(const std::string& path) const;
 
   bool identity() const { return components_.size() == 0; }
-  int input_dims() const { return int(mean_.size()); }
-  int output_dims() const { return int(components_.rows()); }
+  int input_dims() const { return static_cast<int>(mean_.size()); }
+  int output_dims() const { return static_cast<int>(components_.rows()); }
   /// Fraction of the calibration variance the kept components explain.
   double explained_variance() const { return explained_; }
 

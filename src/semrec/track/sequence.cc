@@ -85,7 +85,7 @@ std::vector<TrackPoint> FinishTracks(const std::vector<TrackPoint>& points,
   std::vector<TrackPoint> out;
   for (auto& [id, track] : tracks) {
     if (!confirmed.count(id)) continue;
-    if (int(track.size()) < options.min_track_frames) continue;
+    if (static_cast<int>(track.size()) < options.min_track_frames) continue;
     std::stable_sort(track.begin(), track.end(),
                      [](const TrackPoint& a, const TrackPoint& b) {
                        return a.frame < b.frame;
@@ -100,7 +100,8 @@ std::vector<TrackPoint> FinishTracks(const std::vector<TrackPoint>& points,
           for (int g = 1; g <= gap; ++g) {
             TrackPoint fill = p;
             fill.frame = prev.frame + g;
-            fill.box.box = Lerp(prev.box.box, p.box.box, double(g) / (gap + 1));
+            fill.box.box = Lerp(prev.box.box, p.box.box,
+                                static_cast<double>(g) / (gap + 1));
             fill.box.score = std::min(prev.box.score, p.box.score);
             fill.box.confirmed = true;
             fill.box.reidentified = false;
