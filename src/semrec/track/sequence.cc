@@ -90,11 +90,14 @@ std::vector<TrackPoint> FinishTracks(const std::vector<TrackPoint>& points,
                      [](const TrackPoint& a, const TrackPoint& b) {
                        return a.frame < b.frame;
                      });
-    for (size_t k = 0; k < track.size(); ++k) {
-      const TrackPoint& p = track[k];
+    const TrackPoint* reported = nullptr;  // the last box output
+    for (const TrackPoint& p : track) {
       if (!p.box.confirmed && !options.backfill_tentative) continue;
-      if (k > 0 && options.max_gap_frames > 0) {
-        const TrackPoint& prev = track[k - 1];
+      // Gaps are filled between reported boxes only, and never across a
+      // re-identification (the person left the view and came back).
+      if (reported != nullptr && options.max_gap_frames > 0 &&
+          !p.box.reidentified) {
+        const TrackPoint& prev = *reported;
         const int gap = p.frame - prev.frame - 1;
         if (gap > 0 && gap <= options.max_gap_frames) {
           for (int g = 1; g <= gap; ++g) {
@@ -104,7 +107,6 @@ std::vector<TrackPoint> FinishTracks(const std::vector<TrackPoint>& points,
                                 static_cast<double>(g) / (gap + 1));
             fill.box.score = std::min(prev.box.score, p.box.score);
             fill.box.confirmed = true;
-            fill.box.reidentified = false;
             fill.interpolated = true;
             out.push_back(fill);
           }
@@ -113,6 +115,7 @@ std::vector<TrackPoint> FinishTracks(const std::vector<TrackPoint>& points,
       TrackPoint kept = p;
       kept.box.confirmed = true;
       out.push_back(kept);
+      reported = &p;
     }
   }
   std::stable_sort(

@@ -28,7 +28,8 @@ struct OfflineOptions {
   /// (tracks that never did are still dropped).
   bool backfill_tentative = false;
   /// Fill a track's gaps of up to this many frames by linear interpolation
-  /// between the boxes on either side (0 = off).
+  /// between the reported boxes on either side (0 = off); not across a
+  /// re-identification.
   int max_gap_frames = 0;
   /// Tracks observed in fewer frames are dropped (1 = keep all).
   int min_track_frames = 1;

@@ -102,6 +102,30 @@ TEST(FinishTracks, InterpolatesGapsUpToTheLimit) {
   }
 }
 
+TEST(FinishTracks, NoFillingAcrossReidentificationOrFromUnreportedBoxes) {
+  // Hand-made points: track 1 seen in frames 1-2, re-identified in frame 5.
+  std::vector<TrackPoint> points;
+  for (int f : {1, 2, 5}) {
+    TrackPoint p;
+    p.frame = f;
+    p.box.track_id = 1;
+    p.box.box = {10.0 * f, 0, 10, 10};
+    p.box.reidentified = f == 5;
+    points.push_back(p);
+  }
+  OfflineOptions o;
+  o.max_gap_frames = 10;
+  EXPECT_EQ(FinishTracks(points, o).size(), 3u);
+  points[2].box.reidentified = false;
+  EXPECT_EQ(FinishTracks(points, o).size(), 5u);
+  // Frame 2 tentative and not backfilled: the fill starts at frame 1.
+  points[1].box.confirmed = false;
+  const auto out = FinishTracks(points, o);
+  ASSERT_EQ(out.size(), 5u);
+  EXPECT_TRUE(out[1].interpolated);
+  EXPECT_NEAR(out[1].box.box.left, 20.0, 1e-9);
+}
+
 TEST(FinishTracks, DropsShortTracksCountingObservedFramesOnly) {
   Tracker tracker(Lenient());
   auto by_frame = Walk({1, 2, 3, 4});
