@@ -127,6 +127,14 @@ if [ -f "$models/deeplab_v3.onnx" ]; then
   "$SEMREC" segment "$tmp/syn" --masks none --out "$tmp/seglabels" >/dev/null 2>&1 || fail "segment on a sequence"
   "$SEMREC" fuse "$tmp/syn" --labels "$tmp/seglabels" --out "$tmp/segfused" >/dev/null 2>"$tmp/err" ||
     fail "fuse with segment's labels: $(cat "$tmp/err")"
+  # Labels for every 2nd frame: fusing needs the same stride, and says so.
+  "$SEMREC" segment "$tmp/syn" --masks none --stride 2 --out "$tmp/seglabels2" >/dev/null 2>&1 ||
+    fail "segment --stride 2 on a sequence"
+  "$SEMREC" fuse "$tmp/syn" --labels "$tmp/seglabels2" --out "$tmp/segfused2" 2>"$tmp/err"; rc=$?
+  [ "$rc" -eq 1 ] && grep -q "no labels for frame 1 .*same --stride" "$tmp/err" ||
+    fail "fuse: labels for every 2nd frame: exit $rc $(cat "$tmp/err")"
+  "$SEMREC" fuse "$tmp/syn" --stride 2 --labels "$tmp/seglabels2" --out "$tmp/segfused3" >/dev/null 2>"$tmp/err" ||
+    fail "fuse --stride 2 with segment --stride 2 labels: $(cat "$tmp/err")"
   printf 'hello' >"$tmp/notes.txt"
   "$SEMREC" segment "$tmp/notes.txt" --masks none --out "$tmp/s3" 2>"$tmp/err"; rc=$?
   [ "$rc" -eq 1 ] && grep -q "notes.txt: not an image" "$tmp/err" || fail "segment: text input: $(cat "$tmp/err")"

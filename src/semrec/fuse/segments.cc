@@ -62,6 +62,15 @@ class FolderSource : public SegmentationSource {
   }
   FrameLabels Get(const io::SequenceReader& reader, size_t i) const override {
     const fs::path name = reader.index().frames.at(i).depth_path.filename();
+    std::error_code ec;
+    if (!fs::exists(folder_ / "instance" / name, ec)) {
+      // Usually labels made for every n-th frame (`semrec segment --stride`).
+      throw IoError(folder_ / "instance" / name,
+                    fmt::format("no labels for frame {} of the sequence ({}); "
+                                "if {} was made with `semrec segment "
+                                "--stride N`, fuse with the same --stride",
+                                i, name.string(), folder_.string()));
+    }
     return {ReadChecked(folder_ / "instance" / name, reader.intrinsics()),
             ReadChecked(folder_ / "semantic" / name, reader.intrinsics()),
             (folder_ / "instance" / name).string()};
