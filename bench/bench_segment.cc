@@ -66,13 +66,14 @@ void BenchVote() {
   // 640 x 480, 200 random disc masks, 21 classes.
   Rng rng(1);
   LabelMap semantic(640, 480);
-  for (auto& v : semantic.values()) v = uint16_t(rng.UniformInt(0, 20));
+  for (auto& v : semantic.values())
+    v = static_cast<uint16_t>(rng.UniformInt(0, 20));
   std::vector<segment::Mask> masks;
   for (int m = 0; m < 200; ++m) {
     Image<uint8_t> img(640, 480);
-    const int cx = int(rng.UniformInt(0, 639)),
-              cy = int(rng.UniformInt(0, 479));
-    const int r = int(rng.UniformInt(5, 80));
+    const int cx = static_cast<int>(rng.UniformInt(0, 639)),
+              cy = static_cast<int>(rng.UniformInt(0, 479));
+    const int r = static_cast<int>(rng.UniformInt(5, 80));
     for (int y = std::max(0, cy - r); y < std::min(480, cy + r); ++y) {
       for (int x = std::max(0, cx - r); x < std::min(640, cx + r); ++x) {
         img(x, y) = (x - cx) * (x - cx) + (y - cy) * (y - cy) <= r * r;

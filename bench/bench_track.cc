@@ -78,7 +78,7 @@ std::vector<std::vector<track::Detection>> Walkers(int people, int frames) {
          rng.Uniform(80, 160),
          {}};
     p.look.resize(256);
-    for (float& v : p.look) v = float(rng.Normal());
+    for (float& v : p.look) v = static_cast<float>(rng.Normal());
   }
   std::vector<std::vector<track::Detection>> out(frames);
   for (int f = 0; f < frames; ++f) {
@@ -93,7 +93,7 @@ std::vector<std::vector<track::Detection>> Walkers(int people, int frames) {
       d.box = {p.x + 2 * rng.Normal(), p.y + 2 * rng.Normal(), p.w, p.h};
       d.score = rng.Uniform(0.7, 1.0);
       d.embedding = p.look;
-      for (float& v : d.embedding) v += float(0.1 * rng.Normal());
+      for (float& v : d.embedding) v += static_cast<float>(0.1 * rng.Normal());
       out[f].push_back(std::move(d));
     }
   }
@@ -121,7 +121,7 @@ int main(int argc, char** argv) {
   const auto walkers = Walkers(people, frames);
   std::printf(
       "Association cost, %d walkers (~%d detections/frame), %d frames\n",
-      people, int(std::lround(people * 0.95)), frames);
+      people, static_cast<int>(std::lround(people * 0.95)), frames);
   std::printf("%-28s %12s %10s %8s\n", "configuration", "us/frame", "vs paper",
               "tracks");
   double reference_us = 0;

@@ -172,7 +172,8 @@ void RunTrackImages(const TrackArgs& args) {
   double detect_s = 0, encode_s = 0, mask_s = 0;
   Progress progress("tracking", inputs.size());
   for (size_t i = 0; i < inputs.size(); ++i) {
-    const int frame_number = int(i) + 1;  // MOTChallenge frames start at 1
+    const int frame_number =
+        static_cast<int>(i) + 1;  // MOTChallenge frames start at 1
     const ColorImage rgb = io::ReadColorImage(inputs[i].image);
     std::optional<std::vector<track::Detection>> boxes;
     if (!args.detections.empty()) {
@@ -224,7 +225,7 @@ void RunTrackImages(const TrackArgs& args) {
         {"encode", inputs.empty() ? 0.0 : encode_s / inputs.size()},
         {"masks", inputs.empty() ? 0.0 : mask_s / inputs.size()}}}};
   if (!args.fit_pca.empty()) {
-    if (embeddings.size() < size_t(args.pca_dims) + 1) {
+    if (embeddings.size() < static_cast<size_t>(args.pca_dims) + 1) {
       throw InvalidArgument(fmt::format(
           "--fit-pca: only {} person embeddings in {}, need more than {}",
           embeddings.size(), args.input, args.pca_dims));

@@ -106,7 +106,8 @@ std::string Sha256::HexDigest() {
   const uint8_t zero = 0;
   while (buffered_ != 56) Update(&zero, 1);
   uint8_t length[8];
-  for (int i = 0; i < 8; ++i) length[i] = uint8_t(bits >> (56 - 8 * i));
+  for (int i = 0; i < 8; ++i)
+    length[i] = static_cast<uint8_t>(bits >> (56 - 8 * i));
   Update(length, 8);
   std::string hex;
   for (uint32_t v : state_) hex += fmt::format("{:08x}", v);

@@ -30,7 +30,7 @@ TEST(Sha256, MatchesFips180Vectors) {
 
 TEST(Sha256, ChunkingDoesNotChangeTheDigest) {
   std::string text;
-  for (int i = 0; i < 1000; ++i) text += char('a' + (i * 7) % 26);
+  for (int i = 0; i < 1000; ++i) text += static_cast<char>('a' + (i * 7) % 26);
   for (size_t chunk : {1u, 3u, 63u, 64u, 65u, 500u}) {
     Sha256 sha;
     for (size_t i = 0; i < text.size(); i += chunk) {
@@ -45,7 +45,8 @@ TEST(Sha256, FileDigestAgreesWithSha256sum) {
   const auto file = dir.path() / "data.bin";
   {
     std::ofstream out(file, std::ios::binary);
-    for (int i = 0; i < 3'000'000; ++i) out.put(char(i * 31 + (i >> 9)));
+    for (int i = 0; i < 3'000'000; ++i)
+      out.put(static_cast<char>(i * 31 + (i >> 9)));
   }
   const std::string cmd =
       "sha256sum " + file.string() + " > " + (dir.path() / "sum.txt").string();

@@ -23,8 +23,9 @@ void SegEvalOptions::Check() const {
 }
 
 int BoundaryBandWidth(double dilation_ratio, int width, int height) {
-  const double diagonal = std::hypot(double(width), double(height));
-  return std::max(1, int(std::lround(dilation_ratio * diagonal)));
+  const double diagonal =
+      std::hypot(static_cast<double>(width), static_cast<double>(height));
+  return std::max(1, static_cast<int>(std::lround(dilation_ratio * diagonal)));
 }
 
 namespace {
@@ -112,7 +113,7 @@ void SegEvaluator::Add(const LabelMap& pred, const LabelMap& gt) {
   std::vector<ImageClass> local;
   const auto get = [&](uint16_t label) -> ImageClass& {
     if (slot[label] < 0) {
-      slot[label] = int(local.size());
+      slot[label] = static_cast<int>(local.size());
       labels.push_back(label);
       local.emplace_back();
     }
@@ -192,7 +193,9 @@ SegMetrics SegEvaluator::Result() const {
   SegMetrics m;
   m.images = images_;
   m.valid_pixels = valid_;
-  m.pixel_accuracy = valid_ ? double(correct_) / double(valid_) : 0.0;
+  m.pixel_accuracy =
+      valid_ ? static_cast<double>(correct_) / static_cast<double>(valid_)
+             : 0.0;
   int n_iou = 0, n_acc = 0, n_biou = 0, n_bf = 0;
   for (const auto& [id, k] : counts_) {
     ClassSegMetrics c;
@@ -202,27 +205,31 @@ SegMetrics SegEvaluator::Result() const {
     c.pred_pixels = k.pred;
     c.union_pixels = k.gt + k.pred - k.intersection;
     if (c.union_pixels == 0) continue;
-    c.iou = double(k.intersection) / double(c.union_pixels);
+    c.iou = static_cast<double>(k.intersection) /
+            static_cast<double>(c.union_pixels);
     m.mean_iou += c.iou;
     ++n_iou;
     if (k.gt > 0) {
-      c.accuracy = double(k.intersection) / double(k.gt);
+      c.accuracy =
+          static_cast<double>(k.intersection) / static_cast<double>(k.gt);
       m.mean_accuracy += c.accuracy;
       ++n_acc;
     }
     c.boundary_intersection = k.band_intersection;
     c.boundary_union = k.band_union;
     if (k.band_union > 0) {
-      c.boundary_iou = double(k.band_intersection) / double(k.band_union);
+      c.boundary_iou = static_cast<double>(k.band_intersection) /
+                       static_cast<double>(k.band_union);
       m.mean_boundary_iou += c.boundary_iou;
       ++n_biou;
     }
     if (k.pred_contour > 0) {
-      c.boundary_precision =
-          double(k.pred_contour_matched) / double(k.pred_contour);
+      c.boundary_precision = static_cast<double>(k.pred_contour_matched) /
+                             static_cast<double>(k.pred_contour);
     }
     if (k.gt_contour > 0) {
-      c.boundary_recall = double(k.gt_contour_matched) / double(k.gt_contour);
+      c.boundary_recall = static_cast<double>(k.gt_contour_matched) /
+                          static_cast<double>(k.gt_contour);
     }
     if (k.pred_contour + k.gt_contour > 0) {
       const double s = c.boundary_precision + c.boundary_recall;

@@ -15,9 +15,10 @@ namespace semrec::eval {
 namespace {
 
 LabelMap FromRows(const std::vector<std::vector<uint16_t>>& rows) {
-  LabelMap m(int(rows[0].size()), int(rows.size()));
+  LabelMap m(static_cast<int>(rows[0].size()), static_cast<int>(rows.size()));
   for (size_t y = 0; y < rows.size(); ++y) {
-    for (size_t x = 0; x < rows[y].size(); ++x) m(int(x), int(y)) = rows[y][x];
+    for (size_t x = 0; x < rows[y].size(); ++x)
+      m(static_cast<int>(x), static_cast<int>(y)) = rows[y][x];
   }
   return m;
 }
@@ -169,7 +170,8 @@ TEST(SegMetrics, BoundaryIouOfShiftedSquaresMatchesBruteForce) {
         inter += gb.values()[i] && pb.values()[i];
         uni += gb.values()[i] || pb.values()[i];
       }
-      EXPECT_DOUBLE_EQ(Find(m, c)->boundary_iou, double(inter) / uni)
+      EXPECT_DOUBLE_EQ(Find(m, c)->boundary_iou,
+                       static_cast<double>(inter) / uni)
           << "shift " << shift << " class " << c;
     }
     if (shift == 0) {
@@ -197,12 +199,14 @@ struct RefCounts {
 std::vector<int> ChessDistance(const std::vector<uint8_t>& mask, int w, int h) {
   std::vector<int> dist(mask.size());
   const auto at = [&](int x, int y) {
-    return x < 0 || y < 0 || x >= w || y >= h ? 0 : dist[size_t(y) * w + x];
+    return x < 0 || y < 0 || x >= w || y >= h
+               ? 0
+               : dist[static_cast<size_t>(y) * w + x];
   };
   for (int y = 0; y < h; ++y) {
     for (int x = 0; x < w; ++x) {
-      int& v = dist[size_t(y) * w + x];
-      v = mask[size_t(y) * w + x]
+      int& v = dist[static_cast<size_t>(y) * w + x];
+      v = mask[static_cast<size_t>(y) * w + x]
               ? 1 + std::min({at(x - 1, y), at(x - 1, y - 1), at(x, y - 1),
                               at(x + 1, y - 1)})
               : 0;
@@ -210,7 +214,7 @@ std::vector<int> ChessDistance(const std::vector<uint8_t>& mask, int w, int h) {
   }
   for (int y = h - 1; y >= 0; --y) {
     for (int x = w - 1; x >= 0; --x) {
-      int& v = dist[size_t(y) * w + x];
+      int& v = dist[static_cast<size_t>(y) * w + x];
       if (v) {
         v = std::min(v, 1 + std::min({at(x + 1, y), at(x + 1, y + 1),
                                       at(x, y + 1), at(x - 1, y + 1)}));
@@ -225,11 +229,11 @@ int64_t CountMatched(const std::vector<int>& contour_dist,
   int64_t matched = 0;
   for (int y = 0; y < h; ++y) {
     for (int x = 0; x < w; ++x) {
-      if (contour_dist[size_t(y) * w + x] != 1) continue;
+      if (contour_dist[static_cast<size_t>(y) * w + x] != 1) continue;
       bool found = false;
       for (int v = std::max(0, y - t); v <= std::min(h - 1, y + t); ++v) {
         for (int u = std::max(0, x - t); u <= std::min(w - 1, x + t); ++u) {
-          found |= other_dist[size_t(v) * w + u] == 1 &&
+          found |= other_dist[static_cast<size_t>(v) * w + u] == 1 &&
                    (u - x) * (u - x) + (v - y) * (v - y) <= t * t;
         }
       }
@@ -244,7 +248,8 @@ std::map<int, RefCounts> ReferenceCounts(
   std::map<int, RefCounts> out;
   for (const auto& [pred, gt] : pairs) {
     const int w = gt.width(), h = gt.height();
-    const int d = int(std::lround(0.02 * std::sqrt(double(w * w + h * h))));
+    const int d = static_cast<int>(
+        std::lround(0.02 * std::sqrt(static_cast<double>(w * w + h * h))));
     std::set<int> classes;
     for (size_t i = 0; i < gt.NumPixels(); ++i) {
       const int g = gt.values()[i], p = pred.values()[i];
@@ -291,21 +296,22 @@ void ExpectMatchesReference(
   double miou = 0, biou = 0, bf = 0, macc = 0;
   int n_acc = 0;
   for (const auto& [c, r] : ref) {
-    const ClassSegMetrics* k = Find(m, uint16_t(c));
+    const ClassSegMetrics* k = Find(m, static_cast<uint16_t>(c));
     ASSERT_NE(k, nullptr) << c;
     EXPECT_EQ(k->intersection, r.inter) << c;
     EXPECT_EQ(k->gt_pixels, r.gt) << c;
     EXPECT_EQ(k->pred_pixels, r.pred) << c;
     EXPECT_EQ(k->boundary_intersection, r.b_inter) << c;
     EXPECT_EQ(k->boundary_union, r.b_union) << c;
-    miou += double(r.inter) / double(r.gt + r.pred - r.inter);
+    miou += static_cast<double>(r.inter) /
+            static_cast<double>(r.gt + r.pred - r.inter);
     if (r.gt) {
-      macc += double(r.inter) / double(r.gt);
+      macc += static_cast<double>(r.inter) / static_cast<double>(r.gt);
       ++n_acc;
     }
-    biou += double(r.b_inter) / double(r.b_union);
-    const double p = r.p_c ? double(r.p_matched) / r.p_c : 0.0;
-    const double rc = r.g_c ? double(r.g_matched) / r.g_c : 0.0;
+    biou += static_cast<double>(r.b_inter) / static_cast<double>(r.b_union);
+    const double p = r.p_c ? static_cast<double>(r.p_matched) / r.p_c : 0.0;
+    const double rc = r.g_c ? static_cast<double>(r.g_matched) / r.g_c : 0.0;
     EXPECT_NEAR(k->boundary_precision, p, 1e-12) << c;
     EXPECT_NEAR(k->boundary_recall, rc, 1e-12) << c;
     bf += p + rc > 0 ? 2 * p * rc / (p + rc) : 0.0;
@@ -381,11 +387,13 @@ TEST(SegMetrics, Ade20kPerturbedPredictionsMatchAnIndependentComputation) {
     for (const auto& [p, g] : relabelled) e.Add(p, g);
     const SegMetrics m = e.Result();
     EXPECT_EQ(m.valid_pixels, labelled);
-    EXPECT_NEAR(m.pixel_accuracy, 1.0 - double(freq[a]) / labelled, 1e-12);
+    EXPECT_NEAR(m.pixel_accuracy, 1.0 - static_cast<double>(freq[a]) / labelled,
+                1e-12);
     EXPECT_DOUBLE_EQ(Find(m, a)->iou, 0.0);
-    const double iou_b = double(freq[b]) / double(freq[a] + freq[b]);
+    const double iou_b =
+        static_cast<double>(freq[b]) / static_cast<double>(freq[a] + freq[b]);
     EXPECT_NEAR(Find(m, b)->iou, iou_b, 1e-12);
-    const double n = double(m.classes.size());
+    const double n = static_cast<double>(m.classes.size());
     EXPECT_NEAR(m.mean_iou, (n - 2 + iou_b) / n, 1e-12);
   }
   ExpectMatchesReference(relabelled, "relabel");
@@ -408,7 +416,8 @@ TEST(SegMetrics, Ade20kPerturbedPredictionsMatchAnIndependentComputation) {
     SegEvaluator e;
     for (const auto& [p, g] : blanked) e.Add(p, g);
     const SegMetrics m = e.Result();
-    EXPECT_NEAR(m.pixel_accuracy, 1.0 - double(lost) / labelled, 1e-12);
+    EXPECT_NEAR(m.pixel_accuracy, 1.0 - static_cast<double>(lost) / labelled,
+                1e-12);
     EXPECT_EQ(Find(m, 0), nullptr);
   }
   ExpectMatchesReference(blanked, "blank");

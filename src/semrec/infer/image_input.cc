@@ -24,15 +24,16 @@ InputTransform ComputeInputTransform(int image_width, int image_height,
     t.resized_width = spec.width;
     t.resized_height = spec.height;
   } else {
-    const double scale = std::min(double(spec.width) / image_width,
-                                  double(spec.height) / image_height);
-    t.resized_width =
-        std::clamp(int(std::lround(image_width * scale)), 1, spec.width);
-    t.resized_height =
-        std::clamp(int(std::lround(image_height * scale)), 1, spec.height);
+    const double scale =
+        std::min(static_cast<double>(spec.width) / image_width,
+                 static_cast<double>(spec.height) / image_height);
+    t.resized_width = std::clamp(
+        static_cast<int>(std::lround(image_width * scale)), 1, spec.width);
+    t.resized_height = std::clamp(
+        static_cast<int>(std::lround(image_height * scale)), 1, spec.height);
   }
-  t.scale_x = double(t.resized_width) / image_width;
-  t.scale_y = double(t.resized_height) / image_height;
+  t.scale_x = static_cast<double>(t.resized_width) / image_width;
+  t.scale_y = static_cast<double>(t.resized_height) / image_height;
   return t;
 }
 
@@ -63,7 +64,7 @@ Tensor ImageToTensor(const ColorImage& rgb, const ImageInputSpec& spec,
   tensor.shape = spec.layout == TensorLayout::kNCHW
                      ? std::vector<int64_t>{1, 3, h, w}
                      : std::vector<int64_t>{1, h, w, 3};
-  tensor.data.assign(size_t(w) * h * 3, 0.0f);
+  tensor.data.assign(static_cast<size_t>(w) * h * 3, 0.0f);
   std::array<float, 3> pad;
   std::array<float, 3> inv_std;
   for (int c = 0; c < 3; ++c) {
@@ -73,7 +74,7 @@ Tensor ImageToTensor(const ColorImage& rgb, const ImageInputSpec& spec,
   }
   const bool bgr = spec.color == ColorOrder::kBGR;
   const bool nchw = spec.layout == TensorLayout::kNCHW;
-  const size_t plane = size_t(w) * h;
+  const size_t plane = static_cast<size_t>(w) * h;
   for (int y = 0; y < h; ++y) {
     const uint8_t* row =
         y < t.resized_height ? resized.ptr<uint8_t>(y) : nullptr;
@@ -83,9 +84,10 @@ Tensor ImageToTensor(const ColorImage& rgb, const ImageInputSpec& spec,
         float v = pad[c];
         if (inside) {
           const int src_c = bgr ? 2 - c : c;
-          v = (float(row[3 * x + src_c]) - spec.mean[c]) * inv_std[c];
+          v = (static_cast<float>(row[3 * x + src_c]) - spec.mean[c]) *
+              inv_std[c];
         }
-        const size_t i = size_t(y) * w + x;
+        const size_t i = static_cast<size_t>(y) * w + x;
         tensor.data[nchw ? c * plane + i : 3 * i + c] = v;
       }
     }

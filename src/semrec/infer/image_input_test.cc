@@ -11,8 +11,8 @@ ColorImage Gradient(int w, int h) {
   ColorImage img(w, h, 3);
   for (int y = 0; y < h; ++y) {
     for (int x = 0; x < w; ++x) {
-      img(x, y, 0) = uint8_t(10 + x);
-      img(x, y, 1) = uint8_t(20 + y);
+      img(x, y, 0) = static_cast<uint8_t>(10 + x);
+      img(x, y, 1) = static_cast<uint8_t>(20 + y);
       img(x, y, 2) = 200;
     }
   }

@@ -97,7 +97,8 @@ void People3d::Add(const Frame& frame, const LabelMap& person_ids) {
     if (sample.points_world.size() < options_.min_points) continue;
     Eigen::Vector3d sum = Eigen::Vector3d::Zero();
     for (const auto& p : cloud) sum += p.cast<double>();
-    sample.centroid_world = (sum / double(cloud.size())).cast<float>();
+    sample.centroid_world =
+        (sum / static_cast<double>(cloud.size())).cast<float>();
     samples_[id].push_back(std::move(sample));
   }
 }

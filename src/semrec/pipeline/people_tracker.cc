@@ -22,7 +22,7 @@ double Seconds(Clock::time_point a, Clock::time_point b) {
 // The detection box clipped to the image, as a SAM box prompt.
 segment::Box PromptBox(const track::Box& b, int width, int height) {
   const auto clip = [](double v, int hi) {
-    return std::clamp(int(std::lround(v)), 0, hi);
+    return std::clamp(static_cast<int>(std::lround(v)), 0, hi);
   };
   return {clip(b.left, width), clip(b.top, height),
           clip(b.left + b.width, width), clip(b.top + b.height, height)};
@@ -79,7 +79,7 @@ PeopleFrame PeopleTracker::Process(
     masks_->SetImage(rgb);
     const auto t2 = Clock::now();
     frame.encode_seconds = Seconds(t1, t2);
-    tbb::parallel_for(size_t(0), detections.size(), [&](size_t i) {
+    tbb::parallel_for(static_cast<size_t>(0), detections.size(), [&](size_t i) {
       segment::Prompt prompt;
       prompt.box = PromptBox(detections[i].box, rgb.width(), rgb.height());
       const segment::LowResMask low = masks_->Decode(prompt);
@@ -120,14 +120,15 @@ LabelMap PersonInstanceMap(const std::vector<PersonObservation>& people,
   std::iota(order.begin(), order.end(), 0);
   const auto area = [&](size_t i) {
     const auto& p = people[i];
-    return p.mask.area > 0 ? double(p.mask.area)
+    return p.mask.area > 0 ? static_cast<double>(p.mask.area)
                            : p.box.box.width * p.box.box.height;
   };
   std::stable_sort(order.begin(), order.end(),
                    [&](size_t a, size_t b) { return area(a) > area(b); });
   for (size_t i : order) {
     const PersonObservation& p = people[i];
-    const uint16_t id = uint16_t(std::clamp(p.box.track_id, 1, 65535));
+    const uint16_t id =
+        static_cast<uint16_t>(std::clamp(p.box.track_id, 1, 65535));
     if (p.mask.area > 0) {
       const segment::Box& b = p.mask.box;
       for (int y = b.y0; y < b.y1; ++y) {
@@ -154,21 +155,24 @@ ColorImage RenderPeopleOverlay(const ColorImage& rgb,
       if (ids(x, y) == 0) continue;
       const auto color = LabelColor(ids(x, y));
       for (int c = 0; c < 3; ++c) {
-        out(x, y, c) = uint8_t((rgb(x, y, c) + color[c]) / 2);
+        out(x, y, c) = static_cast<uint8_t>((rgb(x, y, c) + color[c]) / 2);
       }
     }
   }
   cv::Mat canvas(rgb.height(), rgb.width(), CV_8UC3, out.data());
   const double scale = std::clamp(rgb.width() / 1200.0, 0.4, 1.0);
   for (const PersonObservation& p : people) {
-    const auto color = LabelColor(uint32_t(p.box.track_id));
+    const auto color = LabelColor(static_cast<uint32_t>(p.box.track_id));
     const cv::Scalar c(color[0], color[1], color[2]);  // RGB buffer
     const track::Box& b = p.box.box;
-    cv::rectangle(canvas, cv::Point(int(b.left), int(b.top)),
-                  cv::Point(int(b.left + b.width), int(b.top + b.height)), c,
-                  2);
+    cv::rectangle(canvas,
+                  cv::Point(static_cast<int>(b.left), static_cast<int>(b.top)),
+                  cv::Point(static_cast<int>(b.left + b.width),
+                            static_cast<int>(b.top + b.height)),
+                  c, 2);
     const std::string text = std::to_string(p.box.track_id);
-    const cv::Point at(int(b.left), std::max(12, int(b.top) - 4));
+    const cv::Point at(static_cast<int>(b.left),
+                       std::max(12, static_cast<int>(b.top) - 4));
     cv::putText(canvas, text, at, cv::FONT_HERSHEY_SIMPLEX, scale,
                 cv::Scalar(0, 0, 0), 3, cv::LINE_AA);
     cv::putText(canvas, text, at, cv::FONT_HERSHEY_SIMPLEX, scale, c, 1,

@@ -81,7 +81,7 @@ WalkResult Walk(const std::string& backend, bool reid) {
     truth.image_width = 320;
     truth.image_height = 240;
     truth.box = {red.x, red.y, red.x + red.w, red.y + red.h};
-    truth.bits.assign(size_t(red.w) * red.h, 1);
+    truth.bits.assign(static_cast<size_t>(red.w) * red.h, 1);
     truth.area = red.w * red.h;
     EXPECT_GT(segment::MaskIoU(frame.people[0].mask, truth), 0.9);
     EXPECT_FALSE(frame.people[0].embedding.empty());

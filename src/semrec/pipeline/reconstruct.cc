@@ -154,9 +154,11 @@ ReconstructResult Reconstruct(const io::SequenceReader& reader,
     const auto& frames = reader.index().frames;
     const double span = frames.back().timestamp_s - frames.front().timestamp_s;
     stage.time_codes_per_second =
-        frames.size() > 1 && span > 0 ? double(frames.size() - 1) / span : 30.0;
+        frames.size() > 1 && span > 0
+            ? static_cast<double>(frames.size() - 1) / span
+            : 30.0;
     stage.start_time_code = 0;
-    stage.end_time_code = double(frames.size() - 1);
+    stage.end_time_code = static_cast<double>(frames.size() - 1);
     stage.custom_layer_data["people"] = options.people;
   }
   usd::WriteScene(out_dir, prims, stage, tracks);

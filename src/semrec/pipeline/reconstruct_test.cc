@@ -105,7 +105,8 @@ TEST(Reconstruct, PeopleBecomeTimeSampledPrimsOnTheirGroundTruthPaths) {
     ASSERT_NE(truth, nullptr) << track.track_id;
     for (const auto& sample : track.samples) {
       const Eigen::Vector2d at =
-          synth::PoseAt(*truth, double(sample.frame) / o.fps).position;
+          synth::PoseAt(*truth, static_cast<double>(sample.frame) / o.fps)
+              .position;
       errors.push_back(
           (sample.centroid_world.head<2>().cast<double>() - at).norm());
       EXPECT_GT(sample.centroid_world.z(), 0.2);

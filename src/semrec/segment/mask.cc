@@ -11,14 +11,15 @@ double BoxIoU(const Box& a, const Box& b) {
                   std::min(a.x1, b.x1), std::min(a.y1, b.y1)};
   const int64_t i = inter.area();
   const int64_t u = a.area() + b.area() - i;
-  return u > 0 ? double(i) / double(u) : 0.0;
+  return u > 0 ? static_cast<double>(i) / static_cast<double>(u) : 0.0;
 }
 
 Image<uint8_t> Mask::ToImage() const {
   Image<uint8_t> out(image_width, image_height);
   for (int y = box.y0; y < box.y1; ++y) {
     for (int x = box.x0; x < box.x1; ++x) {
-      out(x, y) = bits[size_t(y - box.y0) * box.width() + (x - box.x0)];
+      out(x, y) =
+          bits[static_cast<size_t>(y - box.y0) * box.width() + (x - box.x0)];
     }
   }
   return out;
@@ -29,7 +30,7 @@ void Mask::Centroid(double* x, double* y) const {
   int64_t n = 0;
   for (int v = box.y0; v < box.y1; ++v) {
     for (int u = box.x0; u < box.x1; ++u) {
-      if (bits[size_t(v - box.y0) * box.width() + (u - box.x0)]) {
+      if (bits[static_cast<size_t>(v - box.y0) * box.width() + (u - box.x0)]) {
         sx += u + 0.5;
         sy += v + 0.5;
         ++n;
@@ -46,7 +47,8 @@ void Tighten(Mask* mask) {
   int64_t area = 0;
   for (int y = old.y0; y < old.y1; ++y) {
     for (int x = old.x0; x < old.x1; ++x) {
-      if (mask->bits[size_t(y - old.y0) * old.width() + (x - old.x0)]) {
+      if (mask->bits[static_cast<size_t>(y - old.y0) * old.width() +
+                     (x - old.x0)]) {
         tight.x0 = std::min(tight.x0, x);
         tight.y0 = std::min(tight.y0, y);
         tight.x1 = std::max(tight.x1, x + 1);
@@ -61,11 +63,15 @@ void Tighten(Mask* mask) {
     mask->bits.clear();
     return;
   }
-  std::vector<uint8_t> bits(size_t(tight.width()) * tight.height());
+  std::vector<uint8_t> bits(static_cast<size_t>(tight.width()) *
+                            tight.height());
   for (int y = tight.y0; y < tight.y1; ++y) {
     for (int x = tight.x0; x < tight.x1; ++x) {
-      bits[size_t(y - tight.y0) * tight.width() + (x - tight.x0)] =
-          mask->bits[size_t(y - old.y0) * old.width() + (x - old.x0)] ? 1 : 0;
+      bits[static_cast<size_t>(y - tight.y0) * tight.width() + (x - tight.x0)] =
+          mask->bits[static_cast<size_t>(y - old.y0) * old.width() +
+                     (x - old.x0)]
+              ? 1
+              : 0;
     }
   }
   mask->box = tight;
@@ -93,7 +99,7 @@ double MaskIoU(const Mask& a, const Mask& b) {
     }
   }
   const int64_t u = a.area + b.area - i;
-  return u > 0 ? double(i) / double(u) : 0.0;
+  return u > 0 ? static_cast<double>(i) / static_cast<double>(u) : 0.0;
 }
 
 }  // namespace semrec::segment

@@ -44,7 +44,7 @@ float StabilityScore(const std::vector<float>& logits, float threshold,
     inter += v > threshold + offset;
     uni += v > threshold - offset;
   }
-  return uni > 0 ? float(inter) / float(uni) : 1.0f;
+  return uni > 0 ? static_cast<float>(inter) / static_cast<float>(uni) : 1.0f;
 }
 
 namespace {
@@ -93,7 +93,7 @@ void RemoveSmallRegions(Mask* mask, int min_area_px) {
   for (int y = 0; y < b.height(); ++y) {
     for (int x = 0; x < b.width(); ++x) {
       bin.at<uint8_t>(y + 1, x + 1) =
-          mask->bits[size_t(y) * b.width() + x] ? 255 : 0;
+          mask->bits[static_cast<size_t>(y) * b.width() + x] ? 255 : 0;
     }
   }
   bool changed = RemoveSmall(&bin, min_area_px, /*holes=*/true);
@@ -101,7 +101,7 @@ void RemoveSmallRegions(Mask* mask, int min_area_px) {
   if (!changed) return;
   for (int y = 0; y < b.height(); ++y) {
     for (int x = 0; x < b.width(); ++x) {
-      mask->bits[size_t(y) * b.width() + x] =
+      mask->bits[static_cast<size_t>(y) * b.width() + x] =
           bin.at<uint8_t>(y + 1, x + 1) != 0;
     }
   }
@@ -164,8 +164,8 @@ std::vector<std::array<float, 2>> GridPoints(
   for (const P& p : points) {
     levels->push_back(p.level);
     cells->push_back({p.i, p.j});
-    out.push_back(
-        {float((p.i + 0.5) / n * width), float((p.j + 0.5) / n * height)});
+    out.push_back({static_cast<float>((p.i + 0.5) / n * width),
+                   static_cast<float>((p.j + 0.5) / n * height)});
   }
   return out;
 }
@@ -178,9 +178,12 @@ std::vector<Box> CropBoxes(int w, int h, int layers, float overlap_ratio,
   *layer_of = {0};
   for (int l = 1; l <= layers; ++l) {
     const int n = 1 << l;
-    const int overlap = int(overlap_ratio * std::min(w, h) * (2.0 / n));
-    const int cw = int(std::ceil(double(overlap * (n - 1) + w) / n));
-    const int ch = int(std::ceil(double(overlap * (n - 1) + h) / n));
+    const int overlap =
+        static_cast<int>(overlap_ratio * std::min(w, h) * (2.0 / n));
+    const int cw = static_cast<int>(
+        std::ceil(static_cast<double>(overlap * (n - 1) + w) / n));
+    const int ch = static_cast<int>(
+        std::ceil(static_cast<double>(overlap * (n - 1) + h) / n));
     for (int j = 0; j < n; ++j) {
       for (int i = 0; i < n; ++i) {
         const int x0 = (cw - overlap) * i, y0 = (ch - overlap) * j;
@@ -200,7 +203,8 @@ ColorImage CropImage(const ColorImage& rgb, const Box& b) {
   }
   ColorImage out(b.width(), b.height(), 3);
   for (int y = 0; y < b.height(); ++y) {
-    std::copy_n(&rgb(b.x0, b.y0 + y), size_t(b.width()) * 3, &out(0, y));
+    std::copy_n(&rgb(b.x0, b.y0 + y), static_cast<size_t>(b.width()) * 3,
+                &out(0, y));
   }
   return out;
 }
@@ -248,14 +252,15 @@ class AutomaticMaskGenerator : public MaskGenerator {
         }
         m.box = Box{m.box.x0 + crop.x0, m.box.y0 + crop.y0, m.box.x1 + crop.x0,
                     m.box.y1 + crop.y0};
-        m.point_x += float(crop.x0);
-        m.point_y += float(crop.y0);
+        m.point_x += static_cast<float>(crop.x0);
+        m.point_y += static_cast<float>(crop.y0);
         m.image_width = rgb.width();
         m.image_height = rgb.height();
         // Across crops SAM prefers masks from smaller crops (more pixels per
         // object); within one crop the predicted IoU decides.
-        scores.push_back(crops.size() > 1 ? 1.0f / float(crop.area())
-                                          : m.predicted_iou);
+        scores.push_back(crops.size() > 1
+                             ? 1.0f / static_cast<float>(crop.area())
+                             : m.predicted_iou);
         all.push_back(std::move(m));
       }
     }
@@ -264,14 +269,14 @@ class AutomaticMaskGenerator : public MaskGenerator {
         crops.size() > 1
             ? NmsByScore(std::move(all), scores, options_.box_nms_threshold)
             : std::move(all);
-    tbb::parallel_for(size_t(0), kept.size(), [&](size_t i) {
+    tbb::parallel_for(static_cast<size_t>(0), kept.size(), [&](size_t i) {
       RemoveSmallRegions(&kept[i], options_.min_region_area_px);
     });
     std::erase_if(kept, [](const Mask& m) { return m.area == 0; });
     std::stable_sort(
         kept.begin(), kept.end(),
         [](const Mask& a, const Mask& b) { return a.area > b.area; });
-    stats_.kept = int(kept.size());
+    stats_.kept = static_cast<int>(kept.size());
     stats_.postprocess_seconds = Seconds(t2, Clock::now());
     return kept;
   }
@@ -288,10 +293,10 @@ class AutomaticMaskGenerator : public MaskGenerator {
     const auto points = GridPoints(points_per_side, rgb.width(), rgb.height(),
                                    &levels_, &cells_);
     grid_side_ = points_per_side;
-    stats_.prompts_total += int(points.size());
+    stats_.prompts_total += static_cast<int>(points.size());
     std::vector<Mask> candidates =
         reference_ ? DecodeAll(points) : DecodeSkippingCovered(points);
-    stats_.candidates += int(candidates.size());
+    stats_.candidates += static_cast<int>(candidates.size());
     stats_.encode_seconds += Seconds(t0, t1);
     stats_.decode_seconds += Seconds(t1, Clock::now());
     return BoxNms(std::move(candidates), options_.box_nms_threshold);
@@ -324,9 +329,9 @@ class AutomaticMaskGenerator : public MaskGenerator {
       dims.height = ch;
       const auto [u, v] =
           ImageToLowRes(model_->transform(), dims, p[0] - 0.5, p[1] - 0.5);
-      const int iu = std::clamp(int(std::lround(u)), 0, cw - 1);
-      const int iv = std::clamp(int(std::lround(v)), 0, ch - 1);
-      return covered[size_t(iv) * cw + iu] != 0;
+      const int iu = std::clamp(static_cast<int>(std::lround(u)), 0, cw - 1);
+      const int iv = std::clamp(static_cast<int>(std::lround(v)), 0, ch - 1);
+      return covered[static_cast<size_t>(iv) * cw + iu] != 0;
     };
     int dense_level = 0;
     while ((1 << dense_level) < options_.dense_stride) ++dense_level;
@@ -334,7 +339,7 @@ class AutomaticMaskGenerator : public MaskGenerator {
     // point whose surrounding dense points were all rejected lies in a region
     // where SAM finds no good mask; decoding it again rarely helps.
     const int n = grid_side_, stride = options_.dense_stride;
-    std::vector<uint8_t> outcome(size_t(n) * n, 0);
+    std::vector<uint8_t> outcome(static_cast<size_t>(n) * n, 0);
     const auto between_rejected = [&](size_t p) {
       if (!options_.skip_between_rejected) return false;
       const auto [i, j] = cells_[p];
@@ -346,7 +351,7 @@ class AutomaticMaskGenerator : public MaskGenerator {
       };
       for (int u : neighbours(i)) {
         for (int v : neighbours(j)) {
-          if (outcome[size_t(v) * n + u] != 1) return false;
+          if (outcome[static_cast<size_t>(v) * n + u] != 1) return false;
         }
       }
       return true;
@@ -355,7 +360,7 @@ class AutomaticMaskGenerator : public MaskGenerator {
     while (next < points.size()) {
       std::vector<size_t> wave;
       while (next < points.size() &&
-             int(wave.size()) < options_.prompts_per_wave) {
+             static_cast<int>(wave.size()) < options_.prompts_per_wave) {
         if (!options_.skip_covered_points || levels[next] >= dense_level ||
             (!is_covered(points[next]) && !between_rejected(next))) {
           wave.push_back(next);
@@ -363,10 +368,10 @@ class AutomaticMaskGenerator : public MaskGenerator {
         ++next;
       }
       std::vector<LowResMask> decoded(wave.size());
-      tbb::parallel_for(size_t(0), wave.size(), [&](size_t k) {
+      tbb::parallel_for(static_cast<size_t>(0), wave.size(), [&](size_t k) {
         decoded[k] = DecodePoint(points[wave[k]]);
       });
-      stats_.prompts_decoded += int(wave.size());
+      stats_.prompts_decoded += static_cast<int>(wave.size());
       for (size_t k = 0; k < wave.size(); ++k) {
         const LowResMask& m = decoded[k];
         const float stability =
@@ -374,11 +379,11 @@ class AutomaticMaskGenerator : public MaskGenerator {
         if (covered.empty()) {
           cw = m.width;
           ch = m.height;
-          covered.assign(size_t(cw) * ch, 0);
+          covered.assign(static_cast<size_t>(cw) * ch, 0);
         }
         const auto [gi, gj] = cells_[wave[k]];
         const bool passes = Passes(m, stability);
-        outcome[size_t(gj) * n + gi] = passes ? 2 : 1;
+        outcome[static_cast<size_t>(gj) * n + gi] = passes ? 2 : 1;
         if (!passes) continue;
         for (size_t i = 0; i < covered.size(); ++i) {
           covered[i] |= m.logits[i] > 0.0f;
@@ -400,7 +405,7 @@ class AutomaticMaskGenerator : public MaskGenerator {
   std::vector<Mask> DecodeAll(const std::vector<std::array<float, 2>>& points) {
     std::vector<Mask> masks(points.size());
     std::vector<uint8_t> ok(points.size(), 0);
-    tbb::parallel_for(size_t(0), points.size(), [&](size_t k) {
+    tbb::parallel_for(static_cast<size_t>(0), points.size(), [&](size_t k) {
       const LowResMask m = DecodePoint(points[k]);
       const Image<float> logits = model_->UpsampleLogits(m);
       const float stability =
@@ -418,7 +423,7 @@ class AutomaticMaskGenerator : public MaskGenerator {
       if (!m.object_pointer.empty()) masks[k].embedding = m.object_pointer;
       ok[k] = masks[k].area > 0;
     });
-    stats_.prompts_decoded = int(points.size());
+    stats_.prompts_decoded = static_cast<int>(points.size());
     std::vector<Mask> out;
     for (size_t k = 0; k < points.size(); ++k) {
       if (ok[k]) out.push_back(std::move(masks[k]));

@@ -53,7 +53,8 @@ Mask PromptableSegmenter::Upsample(const LowResMask& low_res,
   int u0 = low_res.width, v0 = low_res.height, u1 = -1, v1 = -1;
   for (int v = 0; v < low_res.height; ++v) {
     for (int u = 0; u < low_res.width; ++u) {
-      if (low_res.logits[size_t(v) * low_res.width + u] > threshold) {
+      if (low_res.logits[static_cast<size_t>(v) * low_res.width + u] >
+          threshold) {
         u0 = std::min(u0, u);
         v0 = std::min(v0, v);
         u1 = std::max(u1, u);
@@ -62,32 +63,35 @@ Mask PromptableSegmenter::Upsample(const LowResMask& low_res,
     }
   }
   if (u1 < 0) return mask;
-  const double cell_x = double(transform_.input_width) / low_res.width /
+  const double cell_x = static_cast<double>(transform_.input_width) /
+                        low_res.width /
                         transform_.scale_x;  // image pixels per cell
-  const double cell_y =
-      double(transform_.input_height) / low_res.height / transform_.scale_y;
-  const Box box{std::clamp(int(std::floor((u0 - 0.5) * cell_x)), 0, w),
-                std::clamp(int(std::floor((v0 - 0.5) * cell_y)), 0, h),
-                std::clamp(int(std::ceil((u1 + 1.5) * cell_x)), 0, w),
-                std::clamp(int(std::ceil((v1 + 1.5) * cell_y)), 0, h)};
+  const double cell_y = static_cast<double>(transform_.input_height) /
+                        low_res.height / transform_.scale_y;
+  const Box box{
+      std::clamp(static_cast<int>(std::floor((u0 - 0.5) * cell_x)), 0, w),
+      std::clamp(static_cast<int>(std::floor((v0 - 0.5) * cell_y)), 0, h),
+      std::clamp(static_cast<int>(std::ceil((u1 + 1.5) * cell_x)), 0, w),
+      std::clamp(static_cast<int>(std::ceil((v1 + 1.5) * cell_y)), 0, h)};
   mask.box = box;
-  mask.bits.assign(size_t(box.width()) * box.height(), 0);
+  mask.bits.assign(static_cast<size_t>(box.width()) * box.height(), 0);
   const auto at = [&](int u, int v) {
     u = std::clamp(u, 0, low_res.width - 1);
     v = std::clamp(v, 0, low_res.height - 1);
-    return low_res.logits[size_t(v) * low_res.width + u];
+    return low_res.logits[static_cast<size_t>(v) * low_res.width + u];
   };
   for (int y = box.y0; y < box.y1; ++y) {
     for (int x = box.x0; x < box.x1; ++x) {
       auto [s, t] = ImageToLowRes(transform_, low_res, x, y);
-      s = std::clamp(s, 0.0, double(low_res.width - 1));
-      t = std::clamp(t, 0.0, double(low_res.height - 1));
-      const int i = int(std::floor(s)), j = int(std::floor(t));
-      const float a = float(s - i), b = float(t - j);
+      s = std::clamp(s, 0.0, static_cast<double>(low_res.width - 1));
+      t = std::clamp(t, 0.0, static_cast<double>(low_res.height - 1));
+      const int i = static_cast<int>(std::floor(s)),
+                j = static_cast<int>(std::floor(t));
+      const float a = static_cast<float>(s - i), b = static_cast<float>(t - j);
       const float value = (1 - a) * (1 - b) * at(i, j) +
                           a * (1 - b) * at(i + 1, j) +
                           (1 - a) * b * at(i, j + 1) + a * b * at(i + 1, j + 1);
-      mask.bits[size_t(y - box.y0) * box.width() + (x - box.x0)] =
+      mask.bits[static_cast<size_t>(y - box.y0) * box.width() + (x - box.x0)] =
           value > threshold;
     }
   }
@@ -102,15 +106,16 @@ Image<float> PromptableSegmenter::UpsampleLogits(
   const auto at = [&](int u, int v) {
     u = std::clamp(u, 0, low_res.width - 1);
     v = std::clamp(v, 0, low_res.height - 1);
-    return low_res.logits[size_t(v) * low_res.width + u];
+    return low_res.logits[static_cast<size_t>(v) * low_res.width + u];
   };
   for (int y = 0; y < h; ++y) {
     for (int x = 0; x < w; ++x) {
       auto [s, t] = ImageToLowRes(transform_, low_res, x, y);
-      s = std::clamp(s, 0.0, double(low_res.width - 1));
-      t = std::clamp(t, 0.0, double(low_res.height - 1));
-      const int i = int(std::floor(s)), j = int(std::floor(t));
-      const float a = float(s - i), b = float(t - j);
+      s = std::clamp(s, 0.0, static_cast<double>(low_res.width - 1));
+      t = std::clamp(t, 0.0, static_cast<double>(low_res.height - 1));
+      const int i = static_cast<int>(std::floor(s)),
+                j = static_cast<int>(std::floor(t));
+      const float a = static_cast<float>(s - i), b = static_cast<float>(t - j);
       out(x, y) = (1 - a) * (1 - b) * at(i, j) + a * (1 - b) * at(i + 1, j) +
                   (1 - a) * b * at(i, j + 1) + a * b * at(i + 1, j + 1);
     }
@@ -125,7 +130,7 @@ float PromptableSegmenter::StabilityScore(const LowResMask& low_res,
   int u0 = low_res.width, v0 = low_res.height, u1 = -1, v1 = -1;
   for (int v = 0; v < low_res.height; ++v) {
     for (int u = 0; u < low_res.width; ++u) {
-      if (low_res.logits[size_t(v) * low_res.width + u] > low) {
+      if (low_res.logits[static_cast<size_t>(v) * low_res.width + u] > low) {
         u0 = std::min(u0, u);
         v0 = std::min(v0, v);
         u1 = std::max(u1, u);
@@ -134,27 +139,32 @@ float PromptableSegmenter::StabilityScore(const LowResMask& low_res,
     }
   }
   if (u1 < 0) return 1.0f;
-  const double cell_x =
-      double(transform_.input_width) / low_res.width / transform_.scale_x;
-  const double cell_y =
-      double(transform_.input_height) / low_res.height / transform_.scale_y;
-  const int x0 = std::clamp(int(std::floor((u0 - 0.5) * cell_x)), 0, w);
-  const int y0 = std::clamp(int(std::floor((v0 - 0.5) * cell_y)), 0, h);
-  const int x1 = std::clamp(int(std::ceil((u1 + 1.5) * cell_x)), 0, w);
-  const int y1 = std::clamp(int(std::ceil((v1 + 1.5) * cell_y)), 0, h);
+  const double cell_x = static_cast<double>(transform_.input_width) /
+                        low_res.width / transform_.scale_x;
+  const double cell_y = static_cast<double>(transform_.input_height) /
+                        low_res.height / transform_.scale_y;
+  const int x0 =
+      std::clamp(static_cast<int>(std::floor((u0 - 0.5) * cell_x)), 0, w);
+  const int y0 =
+      std::clamp(static_cast<int>(std::floor((v0 - 0.5) * cell_y)), 0, h);
+  const int x1 =
+      std::clamp(static_cast<int>(std::ceil((u1 + 1.5) * cell_x)), 0, w);
+  const int y1 =
+      std::clamp(static_cast<int>(std::ceil((v1 + 1.5) * cell_y)), 0, h);
   const auto at = [&](int u, int v) {
     u = std::clamp(u, 0, low_res.width - 1);
     v = std::clamp(v, 0, low_res.height - 1);
-    return low_res.logits[size_t(v) * low_res.width + u];
+    return low_res.logits[static_cast<size_t>(v) * low_res.width + u];
   };
   int64_t inter = 0, uni = 0;
   for (int y = y0; y < y1; ++y) {
     for (int x = x0; x < x1; ++x) {
       auto [s, t] = ImageToLowRes(transform_, low_res, x, y);
-      s = std::clamp(s, 0.0, double(low_res.width - 1));
-      t = std::clamp(t, 0.0, double(low_res.height - 1));
-      const int i = int(std::floor(s)), j = int(std::floor(t));
-      const float a = float(s - i), b = float(t - j);
+      s = std::clamp(s, 0.0, static_cast<double>(low_res.width - 1));
+      t = std::clamp(t, 0.0, static_cast<double>(low_res.height - 1));
+      const int i = static_cast<int>(std::floor(s)),
+                j = static_cast<int>(std::floor(t));
+      const float a = static_cast<float>(s - i), b = static_cast<float>(t - j);
       const float value = (1 - a) * (1 - b) * at(i, j) +
                           a * (1 - b) * at(i + 1, j) +
                           (1 - a) * b * at(i, j + 1) + a * b * at(i + 1, j + 1);
@@ -162,34 +172,37 @@ float PromptableSegmenter::StabilityScore(const LowResMask& low_res,
       uni += value > low;
     }
   }
-  return uni > 0 ? float(inter) / float(uni) : 1.0f;
+  return uni > 0 ? static_cast<float>(inter) / static_cast<float>(uni) : 1.0f;
 }
 
 std::vector<float> PromptableSegmenter::PooledEmbedding(
     const Mask& mask) const {
   CheckArgument(embedding_.shape.size() == 4,
                 "PooledEmbedding: no image has been encoded");
-  const int c = int(embedding_.shape[1]), h = int(embedding_.shape[2]),
-            w = int(embedding_.shape[3]);
+  const int c = static_cast<int>(embedding_.shape[1]),
+            h = static_cast<int>(embedding_.shape[2]),
+            w = static_cast<int>(embedding_.shape[3]);
   // Count mask pixels per embedding cell, then a weighted mean of the cells.
-  std::vector<int64_t> counts(size_t(w) * h, 0);
+  std::vector<int64_t> counts(static_cast<size_t>(w) * h, 0);
   const double sx = transform_.scale_x * w / transform_.input_width;
   const double sy = transform_.scale_y * h / transform_.input_height;
   for (int y = mask.box.y0; y < mask.box.y1; ++y) {
     for (int x = mask.box.x0; x < mask.box.x1; ++x) {
       if (!mask.Contains(x, y)) continue;
-      const int u = std::min(int((x + 0.5) * sx), w - 1);
-      const int v = std::min(int((y + 0.5) * sy), h - 1);
-      ++counts[size_t(v) * w + u];
+      const int u = std::min(static_cast<int>((x + 0.5) * sx), w - 1);
+      const int v = std::min(static_cast<int>((y + 0.5) * sy), h - 1);
+      ++counts[static_cast<size_t>(v) * w + u];
     }
   }
   std::vector<float> mean(c, 0.0f);
   if (mask.area == 0) return mean;
   for (size_t cell = 0; cell < counts.size(); ++cell) {
     if (counts[cell] == 0) continue;
-    const float weight = float(counts[cell]) / float(mask.area);
+    const float weight =
+        static_cast<float>(counts[cell]) / static_cast<float>(mask.area);
     for (int k = 0; k < c; ++k) {
-      mean[k] += weight * embedding_.data[size_t(k) * w * h + cell];
+      mean[k] +=
+          weight * embedding_.data[static_cast<size_t>(k) * w * h + cell];
     }
   }
   return mean;
@@ -207,20 +220,22 @@ void EncodePrompt(const Prompt& prompt, const infer::InputTransform& t,
                 "prompt: needs at least one point or a box");
   std::vector<float> xy, l;
   for (size_t i = 0; i < prompt.points.size(); ++i) {
-    xy.push_back(float(prompt.points[i][0] * t.scale_x));
-    xy.push_back(float(prompt.points[i][1] * t.scale_y));
-    l.push_back(float(prompt.labels[i]));
+    xy.push_back(static_cast<float>(prompt.points[i][0] * t.scale_x));
+    xy.push_back(static_cast<float>(prompt.points[i][1] * t.scale_y));
+    l.push_back(static_cast<float>(prompt.labels[i]));
   }
   if (prompt.box) {
     const Box& b = *prompt.box;
-    xy.insert(xy.end(), {float(b.x0 * t.scale_x), float(b.y0 * t.scale_y),
-                         float(b.x1 * t.scale_x), float(b.y1 * t.scale_y)});
+    xy.insert(xy.end(), {static_cast<float>(b.x0 * t.scale_x),
+                         static_cast<float>(b.y0 * t.scale_y),
+                         static_cast<float>(b.x1 * t.scale_x),
+                         static_cast<float>(b.y1 * t.scale_y)});
     l.insert(l.end(), {2.0f, 3.0f});
   } else {
     xy.insert(xy.end(), {0.0f, 0.0f});
     l.push_back(-1.0f);
   }
-  const int64_t n = int64_t(l.size());
+  const int64_t n = static_cast<int64_t>(l.size());
   *coords = infer::Tensor{{1, n, 2}, std::move(xy)};
   *labels = infer::Tensor{{1, n}, std::move(l)};
 }
@@ -239,17 +254,17 @@ const infer::Tensor& Output(const std::map<std::string, infer::Tensor>& out,
 LowResMask BestOf(const infer::Tensor& masks, const infer::Tensor& ious,
                   const std::string& model) {
   if (masks.shape.size() != 4 || masks.shape[0] != 1 || masks.shape[1] < 1 ||
-      ious.data.size() != size_t(masks.shape[1])) {
+      ious.data.size() != static_cast<size_t>(masks.shape[1])) {
     throw Error(
         fmt::format("mask decoder '{}': unexpected mask/IoU shapes", model));
   }
-  const int m = int(masks.shape[1]);
-  const int best = int(std::max_element(ious.data.begin(), ious.data.end()) -
-                       ious.data.begin());
+  const int m = static_cast<int>(masks.shape[1]);
+  const int best = static_cast<int>(
+      std::max_element(ious.data.begin(), ious.data.end()) - ious.data.begin());
   LowResMask out;
-  out.height = int(masks.shape[2]);
-  out.width = int(masks.shape[3]);
-  const size_t plane = size_t(out.width) * out.height;
+  out.height = static_cast<int>(masks.shape[2]);
+  out.width = static_cast<int>(masks.shape[3]);
+  const size_t plane = static_cast<size_t>(out.width) * out.height;
   out.logits.assign(masks.data.begin() + best * plane,
                     masks.data.begin() + (best + 1) * plane);
   out.predicted_iou = ious.data[best];

@@ -31,14 +31,14 @@ Taps ComputeTaps(int image_size, double scale, int input_size, int logit_size) {
   taps.i0.resize(image_size);
   taps.i1.resize(image_size);
   taps.t.resize(image_size);
-  const double to_logit = double(logit_size) / input_size;
+  const double to_logit = static_cast<double>(logit_size) / input_size;
   for (int i = 0; i < image_size; ++i) {
     const double s = std::clamp((i + 0.5) * scale * to_logit - 0.5, 0.0,
-                                double(logit_size - 1));
-    const int i0 = int(std::floor(s));
+                                static_cast<double>(logit_size - 1));
+    const int i0 = static_cast<int>(std::floor(s));
     taps.i0[i] = i0;
     taps.i1[i] = std::min(i0 + 1, logit_size - 1);
-    taps.t[i] = float(s - i0);
+    taps.t[i] = static_cast<float>(s - i0);
   }
   return taps;
 }
@@ -54,12 +54,12 @@ SemanticResult LogitsToLabels(const infer::Tensor& logits,
                             "[1,K,h,w] or [1,h,w,K], got [{}]",
                             fmt::join(logits.shape, ",")));
   const bool nchw = layout == infer::TensorLayout::kNCHW;
-  const int k = int(nchw ? logits.shape[1] : logits.shape[3]);
-  const int h = int(nchw ? logits.shape[2] : logits.shape[1]);
-  const int w = int(nchw ? logits.shape[3] : logits.shape[2]);
-  CheckArgument(
-      k >= 1 && h >= 1 && w >= 1 && logits.data.size() == size_t(k) * h * w,
-      "semantic model: logits tensor is empty or inconsistent");
+  const int k = static_cast<int>(nchw ? logits.shape[1] : logits.shape[3]);
+  const int h = static_cast<int>(nchw ? logits.shape[2] : logits.shape[1]);
+  const int w = static_cast<int>(nchw ? logits.shape[3] : logits.shape[2]);
+  CheckArgument(k >= 1 && h >= 1 && w >= 1 &&
+                    logits.data.size() == static_cast<size_t>(k) * h * w,
+                "semantic model: logits tensor is empty or inconsistent");
   CheckArgument(label_offset >= 0 && k - 1 + label_offset <= 65535,
                 "semantic model: labels do not fit 16 bits");
 
@@ -69,14 +69,14 @@ SemanticResult LogitsToLabels(const infer::Tensor& logits,
   std::vector<float> probs(logits.data.size());
   tbb::parallel_for(0, h, [&](int y) {
     for (int x = 0; x < w; ++x) {
-      float* cell = &cells[(size_t(y) * w + x) * k];
+      float* cell = &cells[(static_cast<size_t>(y) * w + x) * k];
       for (int c = 0; c < k; ++c) {
-        cell[c] = nchw ? logits.data[(size_t(c) * h + y) * w + x]
-                       : logits.data[(size_t(y) * w + x) * k + c];
+        cell[c] = nchw ? logits.data[(static_cast<size_t>(c) * h + y) * w + x]
+                       : logits.data[(static_cast<size_t>(y) * w + x) * k + c];
       }
       const float max = *std::max_element(cell, cell + k);
       float sum = 0.0f;
-      float* p = &probs[(size_t(y) * w + x) * k];
+      float* p = &probs[(static_cast<size_t>(y) * w + x) * k];
       for (int c = 0; c < k; ++c) sum += p[c] = std::exp(cell[c] - max);
       for (int c = 0; c < k; ++c) p[c] /= sum;
     }
@@ -92,7 +92,8 @@ SemanticResult LogitsToLabels(const infer::Tensor& logits,
   result.confidence = Image<float>(width, height);
   tbb::parallel_for(0, height, [&](int y) {
     std::vector<float> acc(k);
-    const size_t r0 = size_t(ty.i0[y]) * w, r1 = size_t(ty.i1[y]) * w;
+    const size_t r0 = static_cast<size_t>(ty.i0[y]) * w,
+                 r1 = static_cast<size_t>(ty.i1[y]) * w;
     const float wy = ty.t[y];
     for (int x = 0; x < width; ++x) {
       const float wx = tx.t[x];
@@ -106,12 +107,12 @@ SemanticResult LogitsToLabels(const infer::Tensor& logits,
         const float* cell = &cells[cells_at[n]];
         for (int c = 0; c < k; ++c) acc[c] += weight[n] * cell[c];
       }
-      const int best =
-          int(std::max_element(acc.begin(), acc.end()) - acc.begin());
+      const int best = static_cast<int>(
+          std::max_element(acc.begin(), acc.end()) - acc.begin());
       float confidence = 0.0f;
       for (int n = 0; n < 4; ++n)
         confidence += weight[n] * probs[cells_at[n] + best];
-      result.labels(x, y) = uint16_t(best + label_offset);
+      result.labels(x, y) = static_cast<uint16_t>(best + label_offset);
       result.confidence(x, y) = confidence;
     }
   });
@@ -158,11 +159,12 @@ SemanticResult SemanticSegmenter::Segment(const ColorImage& rgb) const {
       LogitsToLabels(it->second, e.output->layout, transform, e.label_offset);
   // A channel without a class in the label set means the registry entry and
   // the model disagree; catch it here rather than writing unknown labels.
-  const int channels =
-      int(e.output->layout == infer::TensorLayout::kNCHW ? it->second.shape[1]
-                                                         : it->second.shape[3]);
-  if (!label_set_.Contains(uint16_t(e.label_offset)) ||
-      !label_set_.Contains(uint16_t(channels - 1 + e.label_offset))) {
+  const int channels = static_cast<int>(
+      e.output->layout == infer::TensorLayout::kNCHW ? it->second.shape[1]
+                                                     : it->second.shape[3]);
+  if (!label_set_.Contains(static_cast<uint16_t>(e.label_offset)) ||
+      !label_set_.Contains(
+          static_cast<uint16_t>(channels - 1 + e.label_offset))) {
     throw Error(fmt::format(
         "model '{}' outputs {} classes (ids {}..{}), which label set '{}' does "
         "not cover",

@@ -22,12 +22,14 @@ infer::InputTransform Stretch(int image_w, int image_h, int input_w,
 // Reference: OpenCV's bilinear resize (half-pixel centres, clamped borders)
 // of every channel, then argmax.
 LabelMap ReferenceLabels(const infer::Tensor& nchw, int out_w, int out_h) {
-  const int k = int(nchw.shape[1]), h = int(nchw.shape[2]),
-            w = int(nchw.shape[3]);
+  const int k = static_cast<int>(nchw.shape[1]),
+            h = static_cast<int>(nchw.shape[2]),
+            w = static_cast<int>(nchw.shape[3]);
   std::vector<cv::Mat> up(k);
   for (int c = 0; c < k; ++c) {
-    const cv::Mat plane(h, w, CV_32F,
-                        const_cast<float*>(&nchw.data[size_t(c) * h * w]));
+    const cv::Mat plane(
+        h, w, CV_32F,
+        const_cast<float*>(&nchw.data[static_cast<size_t>(c) * h * w]));
     cv::resize(plane, up[c], cv::Size(out_w, out_h), 0, 0, cv::INTER_LINEAR);
   }
   LabelMap labels(out_w, out_h);
@@ -37,7 +39,7 @@ LabelMap ReferenceLabels(const infer::Tensor& nchw, int out_w, int out_h) {
       for (int c = 1; c < k; ++c) {
         if (up[c].at<float>(y, x) > up[best].at<float>(y, x)) best = c;
       }
-      labels(x, y) = uint16_t(best);
+      labels(x, y) = static_cast<uint16_t>(best);
     }
   }
   return labels;
@@ -47,7 +49,7 @@ TEST(LogitsToLabels, MatchesOpenCvBilinearUpsamplingThenArgmax) {
   Rng rng(3);
   infer::Tensor logits{{1, 5, 12, 16}, {}};
   for (int i = 0; i < 5 * 12 * 16; ++i)
-    logits.data.push_back(float(rng.Uniform(-3, 3)));
+    logits.data.push_back(static_cast<float>(rng.Uniform(-3, 3)));
   // Logits at 1/4 of a 64 x 48 input frame, image 128 x 96 (stretch).
   const SemanticResult r = LogitsToLabels(logits, infer::TensorLayout::kNCHW,
                                           Stretch(128, 96, 64, 48), 0);
@@ -77,7 +79,7 @@ TEST(LogitsToLabels, NhwcEqualsNchwAndOffsetShiftsIds) {
   for (int c = 0; c < k; ++c) {
     for (int y = 0; y < h; ++y) {
       for (int x = 0; x < w; ++x) {
-        const float v = float(rng.Uniform(-1, 1));
+        const float v = static_cast<float>(rng.Uniform(-1, 1));
         nchw.data[(c * h + y) * w + x] = v;
         nhwc.data[(y * w + x) * k + c] = v;
       }

@@ -162,7 +162,8 @@ TEST_P(TinyAmg, FindsEveryColourRegionLikeTheReference) {
     const auto palette = Palette();
     for (const Mask& m : masks) {
       ASSERT_EQ(m.embedding.size(), 256u);
-      const int x = int(m.point_x), y = int(m.point_y);
+      const int x = static_cast<int>(m.point_x),
+                y = static_cast<int>(m.point_y);
       for (int c = 0; c < 3; ++c) {
         EXPECT_NEAR(m.embedding[c], s.rgb(x, y, c) / 255.0, 0.02);
       }

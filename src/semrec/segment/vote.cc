@@ -24,7 +24,8 @@ VoteResult Vote(const LabelMap& semantic, const std::vector<Mask>& masks) {
     counts.clear();
     const Box& b = mask.box;
     for (int y = b.y0; y < b.y1; ++y) {
-      const uint8_t* bits = &mask.bits[size_t(y - b.y0) * b.width()];
+      const uint8_t* bits =
+          &mask.bits[static_cast<size_t>(y - b.y0) * b.width()];
       const uint16_t* labels = &semantic(0, y);
       for (int x = b.x0; x < b.x1; ++x) {
         if (bits[x - b.x0]) ++counts[labels[x]];
@@ -40,11 +41,14 @@ VoteResult Vote(const LabelMap& semantic, const std::vector<Mask>& masks) {
       }
     }
     result.mask_labels[m] = best;
-    result.mask_agreement[m] = total > 0 ? float(best_count) / float(total) : 0;
+    result.mask_agreement[m] =
+        total > 0 ? static_cast<float>(best_count) / static_cast<float>(total)
+                  : 0;
     // Painting in order: later masks own the overlap.
-    const uint16_t id = uint16_t(m + 1);
+    const uint16_t id = static_cast<uint16_t>(m + 1);
     for (int y = b.y0; y < b.y1; ++y) {
-      const uint8_t* bits = &mask.bits[size_t(y - b.y0) * b.width()];
+      const uint8_t* bits =
+          &mask.bits[static_cast<size_t>(y - b.y0) * b.width()];
       uint16_t* inst = &result.instance(0, y);
       for (int x = b.x0; x < b.x1; ++x) {
         if (bits[x - b.x0]) inst[x] = id;
@@ -70,8 +74,8 @@ VoteResult Vote(const LabelMap& semantic, const std::vector<Mask>& masks) {
   for (size_t c = 0; c < extra_id.size(); ++c) {
     if (unmasked_class[c]) {
       CheckArgument(next <= 65535, "vote: more than 65535 instances");
-      extra_id[c] = uint16_t(next++);
-      result.unmasked_classes.push_back(uint16_t(c));
+      extra_id[c] = static_cast<uint16_t>(next++);
+      result.unmasked_classes.push_back(static_cast<uint16_t>(c));
     }
   }
   for (size_t i = 0; i < result.semantic.NumPixels(); ++i) {

@@ -82,11 +82,12 @@ VoteResult NaiveVote(const LabelMap& semantic, const std::vector<Mask>& masks) {
     }
     uint16_t best = 0;
     for (int c = 1; c < 65536; ++c) {
-      if (counts[c] > counts[best]) best = uint16_t(c);
+      if (counts[c] > counts[best]) best = static_cast<uint16_t>(c);
     }
     r.mask_labels.push_back(best);
     for (size_t i = 0; i < full.NumPixels(); ++i) {
-      if (full.values()[i]) r.instance.values()[i] = uint16_t(m + 1);
+      if (full.values()[i])
+        r.instance.values()[i] = static_cast<uint16_t>(m + 1);
     }
   }
   for (size_t i = 0; i < r.instance.NumPixels(); ++i) {
@@ -99,7 +100,8 @@ VoteResult NaiveVote(const LabelMap& semantic, const std::vector<Mask>& masks) {
     if (!r.instance.values()[i]) classes.insert(r.semantic.values()[i]);
   }
   std::map<uint16_t, uint16_t> ids;
-  for (uint16_t c : classes) ids[c] = uint16_t(masks.size() + 1 + ids.size());
+  for (uint16_t c : classes)
+    ids[c] = static_cast<uint16_t>(masks.size() + 1 + ids.size());
   for (size_t i = 0; i < r.instance.NumPixels(); ++i) {
     if (!r.instance.values()[i]) {
       r.instance.values()[i] = ids.at(r.semantic.values()[i]);
@@ -113,7 +115,8 @@ TEST(Vote, AgreesWithTheStraightforwardImplementation) {
   for (int trial = 0; trial < 20; ++trial) {
     const int w = 64, h = 48;
     LabelMap semantic(w, h);
-    for (auto& v : semantic.values()) v = uint16_t(rng.UniformInt(0, 5));
+    for (auto& v : semantic.values())
+      v = static_cast<uint16_t>(rng.UniformInt(0, 5));
     std::vector<Mask> masks;
     for (int m = 0; m < 12; ++m) {
       Image<uint8_t> img(w, h);

@@ -18,7 +18,7 @@ PcaProjection PcaProjection::Fit(const std::vector<std::vector<float>>& samples,
                                          std::to_string(samples.size()));
   const size_t d = samples[0].size();
   CheckArgument(d >= 1, "PCA: embeddings are empty");
-  CheckArgument(dims >= 1 && size_t(dims) <= d,
+  CheckArgument(dims >= 1 && static_cast<size_t>(dims) <= d,
                 "PCA: dims must be in 1.." + std::to_string(d));
   Eigen::MatrixXd x(samples.size(), d);
   for (size_t i = 0; i < samples.size(); ++i) {
@@ -31,14 +31,15 @@ PcaProjection PcaProjection::Fit(const std::vector<std::vector<float>>& samples,
   PcaProjection pca;
   pca.mean_ = x.colwise().mean().transpose();
   x.rowwise() -= pca.mean_.transpose();
-  const Eigen::MatrixXd cov = x.transpose() * x / double(samples.size() - 1);
+  const Eigen::MatrixXd cov =
+      x.transpose() * x / static_cast<double>(samples.size() - 1);
   Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> solver(cov);
   // Eigenvalues ascending: the last `dims` are the principal components.
   const Eigen::VectorXd values = solver.eigenvalues().cwiseMax(0.0);
   pca.components_.resize(dims, d);
   double kept = 0.0;
   for (int k = 0; k < dims; ++k) {
-    const int col = int(d) - 1 - k;
+    const int col = static_cast<int>(d) - 1 - k;
     Eigen::VectorXd v = solver.eigenvectors().col(col);
     // Deterministic sign: the largest-magnitude entry is positive.
     Eigen::Index arg;
@@ -135,7 +136,8 @@ void ReidMemory::Remember(int track_id, const std::vector<float>& embedding) {
   if (embedding.empty()) return;
   Forget(track_id);
   entries_.push_back({track_id, pca_.Project(embedding)});
-  while (entries_.size() > size_t(options_.memory_size)) entries_.pop_front();
+  while (entries_.size() > static_cast<size_t>(options_.memory_size))
+    entries_.pop_front();
 }
 
 void ReidMemory::Forget(int track_id) {

@@ -24,7 +24,8 @@ std::vector<std::vector<float>> Samples(int n, const Eigen::VectorXd& mean,
   for (int i = 0; i < n; ++i) {
     Eigen::VectorXd x = mean + 3.0 * normal(rng) * u + 1.0 * normal(rng) * v;
     std::vector<float> s(x.size());
-    for (int k = 0; k < x.size(); ++k) s[k] = float(x(k) + 0.01 * normal(rng));
+    for (int k = 0; k < x.size(); ++k)
+      s[k] = static_cast<float>(x(k) + 0.01 * normal(rng));
     out.push_back(s);
   }
   return out;
@@ -55,14 +56,14 @@ TEST(Pca, MatchesSvdOfTheCentredData) {
     const Eigen::VectorXd ref = svd.matrixV().col(k);
     // Project a unit step along the reference component from the mean.
     std::vector<float> probe(6);
-    for (int i = 0; i < 6; ++i) probe[i] = float(m(i) + ref(i));
+    for (int i = 0; i < 6; ++i) probe[i] = static_cast<float>(m(i) + ref(i));
     const Eigen::VectorXd p = pca.Project(probe);
     EXPECT_NEAR(std::abs(p(k)), 1.0, 1e-4) << "component " << k;
     EXPECT_NEAR(p(1 - k), 0.0, 1e-4) << "component " << k;
   }
   // The first component is the 3-sigma direction u (sign free).
   std::vector<float> along_u(6);
-  for (int i = 0; i < 6; ++i) along_u[i] = float(m(i) + u(i));
+  for (int i = 0; i < 6; ++i) along_u[i] = static_cast<float>(m(i) + u(i));
   EXPECT_NEAR(std::abs(pca.Project(along_u)(0)), 1.0, 1e-3);
 }
 
@@ -78,7 +79,7 @@ TEST(Pca, WhitenedCoordinatesHaveUnitSpread) {
     sum += p;
     sq += p.cwiseProduct(p);
   }
-  const double n = double(samples.size());
+  const double n = static_cast<double>(samples.size());
   for (int k = 0; k < 2; ++k) {
     EXPECT_NEAR(sum(k) / n, 0.0, 1e-9);
     EXPECT_NEAR(std::sqrt(sq(k) / (n - 1)), 1.0, 1e-6);

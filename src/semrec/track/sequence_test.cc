@@ -67,7 +67,7 @@ TEST(FinishTracks, OffKeepsConfirmedBoxesOnly) {
   const auto all = FinishTracks(points, backfill);
   ASSERT_EQ(all.size(), 5u);  // the short track stays out
   for (size_t k = 0; k < all.size(); ++k) {
-    EXPECT_EQ(all[k].frame, int(k) + 1);
+    EXPECT_EQ(all[k].frame, static_cast<int>(k) + 1);
     EXPECT_TRUE(all[k].box.confirmed);
     EXPECT_FALSE(all[k].interpolated);
   }
@@ -97,7 +97,7 @@ TEST(FinishTracks, InterpolatesGapsUpToTheLimit) {
   out = FinishTracks(points, o);
   ASSERT_EQ(out.size(), 13u);
   for (size_t k = 0; k < out.size(); ++k) {
-    EXPECT_EQ(out[k].frame, int(k) + 1);
+    EXPECT_EQ(out[k].frame, static_cast<int>(k) + 1);
     EXPECT_NEAR(out[k].box.box.left, 10.0 * out[k].frame, 1e-9);
   }
 }

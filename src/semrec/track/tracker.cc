@@ -45,8 +45,8 @@ void UpdateEmbedding(const std::vector<float>& observed, double weight,
     return;
   }
   for (size_t i = 0; i < observed.size(); ++i) {
-    (*running)[i] =
-        float((1.0 - weight) * (*running)[i] + weight * observed[i]);
+    (*running)[i] = static_cast<float>((1.0 - weight) * (*running)[i] +
+                                       weight * observed[i]);
   }
 }
 

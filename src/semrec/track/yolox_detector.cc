@@ -29,10 +29,10 @@ std::vector<LabeledDetection> DecodeYolox(const infer::Tensor& output,
                   "classes], got [{}]",
                   fmt::join(output.shape, ",")));
   const int64_t anchors = output.shape[1], width = output.shape[2];
-  const int num_classes = int(width - 5);
+  const int num_classes = static_cast<int>(width - 5);
   int64_t expected = 0;
   for (int s : {8, 16, 32}) {
-    expected += int64_t(t.input_width / s) * (t.input_height / s);
+    expected += static_cast<int64_t>(t.input_width / s) * (t.input_height / s);
   }
   CheckArgument(anchors == expected,
                 fmt::format("detector: {} anchors, but a {}x{} input with "
@@ -44,9 +44,10 @@ std::vector<LabeledDetection> DecodeYolox(const infer::Tensor& output,
     const int gw = t.input_width / s, gh = t.input_height / s;
     for (int gy = 0; gy < gh; ++gy) {
       for (int gx = 0; gx < gw; ++gx, ++a) {
-        const float* p = &output.data[size_t(a) * width];
-        const int best = int(std::max_element(p + 5, p + width) - (p + 5));
-        const double score = double(p[4]) * p[5 + best];
+        const float* p = &output.data[static_cast<size_t>(a) * width];
+        const int best =
+            static_cast<int>(std::max_element(p + 5, p + width) - (p + 5));
+        const double score = static_cast<double>(p[4]) * p[5 + best];
         if (score < options.score_threshold) continue;
         const int id = best + label_offset;
         if (!options.classes.empty() &&

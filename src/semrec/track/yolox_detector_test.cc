@@ -32,7 +32,7 @@ struct Raw {
   }
   void Set(int s, int gx, int gy, float dx, float dy, float w_cells,
            float h_cells, float obj, int cls, float cls_score) {
-    float* p = &t.data[size_t(Anchor(s, gx, gy)) * 85];
+    float* p = &t.data[static_cast<size_t>(Anchor(s, gx, gy)) * 85];
     p[0] = dx;
     p[1] = dy;
     p[2] = std::log(w_cells);

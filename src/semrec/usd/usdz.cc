@@ -15,12 +15,13 @@ constexpr size_t kAlignment = 64;
 constexpr uint16_t kPaddingFieldId = 0x1986;
 
 void Put16(std::string* out, uint16_t v) {
-  out->push_back(char(v & 0xff));
-  out->push_back(char(v >> 8));
+  out->push_back(static_cast<char>(v & 0xff));
+  out->push_back(static_cast<char>(v >> 8));
 }
 
 void Put32(std::string* out, uint32_t v) {
-  for (int i = 0; i < 4; ++i) out->push_back(char((v >> (8 * i)) & 0xff));
+  for (int i = 0; i < 4; ++i)
+    out->push_back(static_cast<char>((v >> (8 * i)) & 0xff));
 }
 
 bool EndsWith(const std::string& s, const std::string& suffix) {
@@ -66,7 +67,7 @@ std::string UsdzBytes(
                       out.size() + content.size() < 0xffffffffu,
                   "usdz: archive over 4 GiB (zip64 is not supported)");
     const uint32_t crc = Crc32(content);
-    const uint32_t offset = uint32_t(out.size());
+    const uint32_t offset = static_cast<uint32_t>(out.size());
     // Padding so the data starts on a 64-byte boundary: an extra field of at
     // least its 4-byte header.
     const size_t base = out.size() + 30 + name.size();
@@ -79,14 +80,14 @@ std::string UsdzBytes(
     Put16(&out, 0);           // time
     Put16(&out, 0x21);        // date: 1980-01-01 (fixed: reproducible files)
     Put32(&out, crc);
-    Put32(&out, uint32_t(content.size()));
-    Put32(&out, uint32_t(content.size()));
-    Put16(&out, uint16_t(name.size()));
-    Put16(&out, uint16_t(extra));
+    Put32(&out, static_cast<uint32_t>(content.size()));
+    Put32(&out, static_cast<uint32_t>(content.size()));
+    Put16(&out, static_cast<uint16_t>(name.size()));
+    Put16(&out, static_cast<uint16_t>(extra));
     out += name;
     if (extra > 0) {
       Put16(&out, kPaddingFieldId);
-      Put16(&out, uint16_t(extra - 4));
+      Put16(&out, static_cast<uint16_t>(extra - 4));
       out.append(extra - 4, '\0');
     }
     out += content;
@@ -99,9 +100,9 @@ std::string UsdzBytes(
     Put16(&central, 0);
     Put16(&central, 0x21);
     Put32(&central, crc);
-    Put32(&central, uint32_t(content.size()));
-    Put32(&central, uint32_t(content.size()));
-    Put16(&central, uint16_t(name.size()));
+    Put32(&central, static_cast<uint32_t>(content.size()));
+    Put32(&central, static_cast<uint32_t>(content.size()));
+    Put16(&central, static_cast<uint16_t>(name.size()));
     Put16(&central, 0);  // no extra field here
     Put16(&central, 0);  // no comment
     Put16(&central, 0);  // disk
@@ -110,14 +111,14 @@ std::string UsdzBytes(
     Put32(&central, offset);
     central += name;
   }
-  const uint32_t central_offset = uint32_t(out.size());
+  const uint32_t central_offset = static_cast<uint32_t>(out.size());
   out += central;
   Put32(&out, 0x06054b50);  // end of central directory
   Put16(&out, 0);
   Put16(&out, 0);
-  Put16(&out, uint16_t(files.size()));
-  Put16(&out, uint16_t(files.size()));
-  Put32(&out, uint32_t(central.size()));
+  Put16(&out, static_cast<uint16_t>(files.size()));
+  Put16(&out, static_cast<uint16_t>(files.size()));
+  Put32(&out, static_cast<uint32_t>(central.size()));
   Put32(&out, central_offset);
   Put16(&out, 0);
   return out;

@@ -83,8 +83,9 @@ TEST(Usdz, TinyusdzLoadsTheScenePackage) {
   for (size_t f : {0, 1, 5}) {
     PersonSample s;
     s.frame = f;
-    s.centroid_world = {float(f), 0, 1};
-    s.points_world = {{float(f), 0, 0}, {float(f), 0, 2}};
+    s.centroid_world = {static_cast<float>(f), 0, 1};
+    s.points_world = {{static_cast<float>(f), 0, 0},
+                      {static_cast<float>(f), 0, 2}};
     person.samples.push_back(s);
   }
   StageOptions options;
