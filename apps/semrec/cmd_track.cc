@@ -160,8 +160,9 @@ void RunTrackImages(const TrackArgs& args) {
   const auto inputs =
       segment::ListSegmentInputs(args.input, args.stride, args.max_frames);
   std::map<int, std::vector<track::Detection>> given;
-  if (!args.detections.empty())
+  if (!args.detections.empty()) {
     given = track::DetectionsByFrame(io::ReadMotFile(args.detections));
+  }
   RequireEmptyOrOverwrite(args.out, args.overwrite);
   const track::OfflineOptions offline = OfflineOptionsFrom(args);
   pipeline::PeopleTracker tracker(registry, options, pca);

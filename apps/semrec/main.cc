@@ -9,7 +9,9 @@
 #include "semrec/core/error.h"
 #include "semrec/core/logging.h"
 
-int main(int argc, char** argv) {
+namespace {
+
+int Run(int argc, char** argv) {
   CLI::App app{
       "semrec - semantic 3D reconstruction from RGB-D sequences.\n"
       "Sequences: a folder in one of the layouts semrec detects "
@@ -44,4 +46,19 @@ int main(int argc, char** argv) {
     return 3;
   }
   return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  // Anything that escapes Run (e.g. while building the command line) still
+  // ends with a message, not std::terminate.
+  try {
+    return Run(argc, argv);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "internal error: %s\n", e.what());
+  } catch (...) {
+    std::fprintf(stderr, "internal error\n");
+  }
+  return 3;
 }

@@ -22,7 +22,7 @@ void ProgressOptions::Check() const {
 std::string FormatDuration(double seconds) {
   if (!std::isfinite(seconds) || seconds < 0) return "?";
   if (seconds < 60) return fmt::format("{:.1f}s", seconds);
-  const auto s = static_cast<long>(std::lround(seconds));
+  const int64_t s = std::lround(seconds);
   if (s < 3600) return fmt::format("{}m{:02}s", s / 60, s % 60);
   return fmt::format("{}h{:02}m", s / 3600, (s % 3600) / 60);
 }

@@ -38,7 +38,7 @@ Sha256::Sha256()
 
 void Sha256::Block(const uint8_t* block) {
   uint32_t w[64];
-  for (int i = 0; i < 16; ++i) {
+  for (size_t i = 0; i < 16; ++i) {
     w[i] = (uint32_t{block[4 * i]} << 24) | (uint32_t{block[4 * i + 1]} << 16) |
            (uint32_t{block[4 * i + 2]} << 8) | uint32_t{block[4 * i + 3]};
   }
@@ -106,8 +106,9 @@ std::string Sha256::HexDigest() {
   const uint8_t zero = 0;
   while (buffered_ != 56) Update(&zero, 1);
   uint8_t length[8];
-  for (int i = 0; i < 8; ++i)
+  for (int i = 0; i < 8; ++i) {
     length[i] = static_cast<uint8_t>(bits >> (56 - 8 * i));
+  }
   Update(length, 8);
   std::string hex;
   for (uint32_t v : state_) hex += fmt::format("{:08x}", v);

@@ -23,8 +23,9 @@ struct FrameBoxes {
 Eigen::MatrixXd IouMatrix(const FrameBoxes& f) {
   Eigen::MatrixXd iou(f.gt.size(), f.predicted.size());
   for (size_t i = 0; i < f.gt.size(); ++i) {
-    for (size_t j = 0; j < f.predicted.size(); ++j)
+    for (size_t j = 0; j < f.predicted.size(); ++j) {
       iou(i, j) = BoxIou(*f.gt[i], *f.predicted[j]);
+    }
   }
   return iou;
 }
@@ -109,8 +110,9 @@ MotMetrics EvaluateMot(const std::vector<io::MotBox>& gt,
       const int i = free_gt[a], j = free_pred[b];
       match_of_gt[i] = j;
       const int g = f.gt_index[i];
-      if (last_match[g] >= 0 && last_match[g] != f.predicted_index[j])
+      if (last_match[g] >= 0 && last_match[g] != f.predicted_index[j]) {
         ++m.id_switches;
+      }
     }
     size_t matched = 0;
     for (size_t i = 0; i < ng; ++i) {
@@ -129,8 +131,9 @@ MotMetrics EvaluateMot(const std::vector<io::MotBox>& gt,
     m.false_positives += np - matched;
     for (size_t i = 0; i < ng; ++i) {
       for (size_t j = 0; j < np; ++j) {
-        if (iou(i, j) >= iou_threshold)
+        if (iou(i, j) >= iou_threshold) {
           ++overlap_count(f.gt_index[i], f.predicted_index[j]);
+        }
       }
     }
   }
@@ -141,8 +144,9 @@ MotMetrics EvaluateMot(const std::vector<io::MotBox>& gt,
     const auto first = std::find(h.begin(), h.end(), 1);
     if (first == h.end()) continue;
     const auto last = std::find(h.rbegin(), h.rend(), 1).base();
-    for (auto it = first + 1; it != last; ++it)
+    for (auto it = first + 1; it != last; ++it) {
       m.fragmentations += (!*it && *(it - 1)) ? 1 : 0;
+    }
     const double ratio =
         static_cast<double>(frames_tracked[g]) / frames_present[g];
     if (ratio >= 0.8) {
@@ -174,8 +178,9 @@ MotMetrics EvaluateMot(const std::vector<io::MotBox>& gt,
   // co-tracked frames.
   if (G > 0 && P > 0) {
     const Eigen::MatrixXd cost = -overlap_count.cast<double>();
-    for (const auto& [g, p] : track::SolveAssignment(cost).pairs)
+    for (const auto& [g, p] : track::SolveAssignment(cost).pairs) {
       m.idtp += overlap_count(g, p);
+    }
   }
   m.idp =
       m.predicted_boxes ? static_cast<double>(m.idtp) / m.predicted_boxes : 0.0;
@@ -199,8 +204,9 @@ MotMetrics EvaluateMot(const std::vector<io::MotBox>& gt,
     for (int i = 0; i < s.rows(); ++i) {
       for (int j = 0; j < s.cols(); ++j) {
         const double denom = row_sum(i) + col_sum(j) - s(i, j);
-        if (denom > kEps)
+        if (denom > kEps) {
           potential(f.gt_index[i], f.predicted_index[j]) += s(i, j) / denom;
+        }
       }
     }
     for (int g : f.gt_index) gt_count(g) += 1;
@@ -247,8 +253,9 @@ MotMetrics EvaluateMot(const std::vector<io::MotBox>& gt,
     for (int g = 0; g < G; ++g) {
       for (int p = 0; p < P; ++p) {
         const double c = matches[a](g, p);
-        if (c > 0)
+        if (c > 0) {
           ass += c * c / std::max(1.0, gt_count(g) + pred_count(p) - c);
+        }
       }
     }
     const double assa = ass / std::max(1.0, tp[a]);

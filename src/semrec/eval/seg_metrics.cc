@@ -4,6 +4,7 @@
 #include <climits>
 #include <cmath>
 
+#include <fmt/format.h>
 #include <opencv2/imgproc.hpp>
 
 #include "semrec/core/error.h"
@@ -82,8 +83,9 @@ Image<uint8_t> BoundaryBand(const Image<uint8_t>& mask, int d) {
   const cv::Mat band = Band(m, d);
   Image<uint8_t> out(mask.width(), mask.height());
   for (int y = 0; y < mask.height(); ++y) {
-    for (int x = 0; x < mask.width(); ++x)
+    for (int x = 0; x < mask.width(); ++x) {
       out(x, y) = band.at<uint8_t>(y, x) ? 1 : 0;
+    }
   }
   return out;
 }
@@ -272,9 +274,10 @@ std::vector<std::pair<fs::path, fs::path>> MatchSegFiles(
       pairs.emplace_back(*it, g);
     } else if (!allow_missing) {
       throw IoError(pred_dir / (stem + ".png"),
-                    "no prediction for ground truth " + g.string() +
-                        " (also looked for " + stem + "_semantic.png and " +
-                        "semantic/" + stem + ".png)");
+                    fmt::format("no prediction for ground truth {} (also "
+                                "looked for {}_semantic.png and "
+                                "semantic/{}.png)",
+                                g.string(), stem, stem));
     }
   }
   if (pairs.empty()) {

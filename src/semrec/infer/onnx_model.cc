@@ -22,6 +22,7 @@ namespace {
 
 std::string Describe(const std::vector<TensorInfo>& infos) {
   std::vector<std::string> parts;
+  parts.reserve(infos.size());
   for (const auto& i : infos) {
     parts.push_back(fmt::format("{} [{}]", i.name, fmt::join(i.shape, ",")));
   }

@@ -26,8 +26,9 @@ std::vector<uint8_t> InteriorMask(const LabelMap& labels, int r) {
       const uint16_t l = labels(x, y);
       for (int d = -r; d <= r && rows[y * w + x]; ++d) {
         const int xx = x + d;
-        if (xx < 0 || xx >= w || labels(xx, y) != l)
+        if (xx < 0 || xx >= w || labels(xx, y) != l) {
           rows[static_cast<size_t>(y) * w + x] = 0;
+        }
       }
     }
   }
@@ -83,8 +84,9 @@ void ObjectMesher::Integrate(
   }
   for (const auto& [label, object_id] : label_to_object) {
     Object& object = objects_[object_id];
-    if (!object.volume)
+    if (!object.volume) {
       object.volume = std::make_unique<TsdfIntegrator>(options_.tsdf);
+    }
     ++object.observations;
     object.changed = true;
     const auto it = boxes.find(label);
@@ -106,8 +108,9 @@ void ObjectMesher::Integrate(
       for (int x = 0; x < cw; ++x) {
         const int u = b.x0 + x, v = b.y0 + y;
         const size_t i = static_cast<size_t>(v) * w + u;
-        if (labels(u, v) == label && interior[i])
+        if (labels(u, v) == label && interior[i]) {
           crop.depth(x, y) = frame.depth(u, v);
+        }
         for (int c = 0; c < 3; ++c) crop.color(x, y, c) = frame.color(u, v, c);
       }
     }

@@ -1,6 +1,7 @@
 #include "semrec/pipeline/reconstruct.h"
 
 #include <chrono>
+#include <cmath>
 #include <map>
 #include <optional>
 
@@ -34,8 +35,9 @@ ReconstructResult Reconstruct(const io::SequenceReader& reader,
   RequireEmptyOrOverwrite(out_dir, options.overwrite);
   std::error_code ec;
   fs::create_directories(out_dir, ec);
-  if (ec)
+  if (ec) {
     throw IoError(out_dir, "cannot create output folder: " + ec.message());
+  }
 
   // Pass 1: fusion; remember which frame label went into which segment.
   fuse::SceneFusion fusion(options.fusion);
@@ -99,14 +101,16 @@ ReconstructResult Reconstruct(const io::SequenceReader& reader,
     prim.last_seen_frame = s.last_seen_frame;
     for (size_t v = 0; v < m.vertices_.size(); ++v) {
       prim.points.push_back(m.vertices_[v].cast<float>());
-      if (m.HasVertexNormals())
+      if (m.HasVertexNormals()) {
         prim.normals.push_back(m.vertex_normals_[v].cast<float>());
+      }
       if (m.HasVertexColors()) {
         const Eigen::Vector3d c =
             (m.vertex_colors_[v] * 255.0).cwiseMax(0.0).cwiseMin(255.0);
-        prim.vertex_colors.push_back({static_cast<uint8_t>(c.x() + 0.5),
-                                      static_cast<uint8_t>(c.y() + 0.5),
-                                      static_cast<uint8_t>(c.z() + 0.5)});
+        prim.vertex_colors.push_back(
+            {static_cast<uint8_t>(std::lround(c.x())),
+             static_cast<uint8_t>(std::lround(c.y())),
+             static_cast<uint8_t>(std::lround(c.z()))});
       }
     }
     for (const auto& t : m.triangles_) {
@@ -162,8 +166,9 @@ ReconstructResult Reconstruct(const io::SequenceReader& reader,
     stage.custom_layer_data["people"] = options.people;
   }
   usd::WriteScene(out_dir, prims, stage, tracks);
-  if (options.usdz)
+  if (options.usdz) {
     usd::WriteSceneUsdz(out_dir / "scene.usdz", prims, stage, tracks);
+  }
   result.seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start)
           .count();

@@ -128,6 +128,7 @@ std::vector<Mask> NmsByScore(std::vector<Mask> masks,
 
 std::vector<Mask> BoxNms(std::vector<Mask> masks, float threshold) {
   std::vector<float> scores;
+  scores.reserve(masks.size());
   for (const Mask& m : masks) scores.push_back(m.predicted_iou);
   return NmsByScore(std::move(masks), scores, threshold);
 }

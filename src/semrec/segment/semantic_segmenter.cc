@@ -110,8 +110,9 @@ SemanticResult LogitsToLabels(const infer::Tensor& logits,
       const int best = static_cast<int>(
           std::max_element(acc.begin(), acc.end()) - acc.begin());
       float confidence = 0.0f;
-      for (int n = 0; n < 4; ++n)
+      for (int n = 0; n < 4; ++n) {
         confidence += weight[n] * probs[cells_at[n] + best];
+      }
       result.labels(x, y) = static_cast<uint16_t>(best + label_offset);
       result.confidence(x, y) = confidence;
     }

@@ -128,7 +128,7 @@ RenderedFrame Render(const Scene& scene, double time_s,
 
   const Transform T_camera_world = T_world_camera.Inverse();
   const Eigen::Matrix3d& R = T_world_camera.rotation();
-  const Eigen::Vector3d origin = T_world_camera.translation();
+  const Eigen::Vector3d& origin = T_world_camera.translation();
   const int w = k.width, h = k.height;
   const size_t n = static_cast<size_t>(w) * h;
   // World ray direction per pixel, with unit z in the camera frame so that the
@@ -221,8 +221,8 @@ RenderedFrame Render(const Scene& scene, double time_s,
         0.35 + 0.4 * std::max(0.0, n_world.dot(light)) + 0.25 * cos_view;
     const double gain = shade * (1.0 + 0.08 * Texture(origin + zbuf[i] * dir));
     for (int c = 0; c < 3; ++c) {
-      color[3 * i + c] =
-          static_cast<uint8_t>(std::min(dr.color[c] * gain, 255.0) + 0.5);
+      color[3 * i + c] = static_cast<uint8_t>(
+          std::lround(std::min(dr.color[c] * gain, 255.0)));
     }
   }
   return out;
@@ -240,7 +240,7 @@ Silhouette UnoccludedSilhouette(const Scene& scene, uint16_t person_id,
     for (const Primitive& p : body.parts) bounds.extend(Bounds(p));
     const Rect r = ScreenRect(bounds, T_world_camera.Inverse(), k);
     const Eigen::Matrix3d& R = T_world_camera.rotation();
-    const Eigen::Vector3d origin = T_world_camera.translation();
+    const Eigen::Vector3d& origin = T_world_camera.translation();
     for (int v = r.y0; v <= r.y1; ++v) {
       for (int u = r.x0; u <= r.x1; ++u) {
         const Eigen::Vector3d dir =

@@ -78,8 +78,9 @@ PcaProjection PcaProjection::Load(const std::string& path) {
                                     " values, the mean has " +
                                     std::to_string(mean.size()));
       }
-      for (size_t c = 0; c < mean.size(); ++c)
+      for (size_t c = 0; c < mean.size(); ++c) {
         pca.components_(r, c) = rows[r][c];
+      }
     }
     pca.explained_ = j.value("explained_variance", 1.0);
   } catch (const nlohmann::json::exception& e) {
@@ -136,8 +137,9 @@ void ReidMemory::Remember(int track_id, const std::vector<float>& embedding) {
   if (embedding.empty()) return;
   Forget(track_id);
   entries_.push_back({track_id, pca_.Project(embedding)});
-  while (entries_.size() > static_cast<size_t>(options_.memory_size))
+  while (entries_.size() > static_cast<size_t>(options_.memory_size)) {
     entries_.pop_front();
+  }
 }
 
 void ReidMemory::Forget(int track_id) {

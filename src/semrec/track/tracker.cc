@@ -105,8 +105,9 @@ std::vector<TrackedBox> Tracker::Update(
       }
     }
     const std::vector<int> ids = memory_.Match(queries);
-    for (size_t k = 0; k < unmatched.size(); ++k)
+    for (size_t k = 0; k < unmatched.size(); ++k) {
       reid_of[unmatched[k]] = ids[k];
+    }
   }
 
   // Only the Kalman motion model reads the filter: skip its updates otherwise.

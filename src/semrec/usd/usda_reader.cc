@@ -29,9 +29,10 @@ std::vector<double> Numbers(const std::string& line, const fs::path& path,
   std::vector<double> out;
   double x;
   while (in >> x) out.push_back(x);
-  if (!in.eof())
+  if (!in.eof()) {
     throw FormatError(path,
                       fmt::format("line {}: bad number in array", line_number));
+  }
   return out;
 }
 
@@ -45,8 +46,9 @@ std::string Unquote(const std::string& s) {
 }
 
 void ReadLayer(const fs::path& path, std::vector<MeshPrim>* meshes, int depth) {
-  if (depth > 8)
+  if (depth > 8) {
     throw FormatError(path, "subLayers nested too deeply (a cycle?)");
+  }
   std::istringstream in(ReadTextFile(path));
   std::string line;
   if (!std::getline(in, line) || line.rfind("#usda 1.0", 0) != 0) {
@@ -85,8 +87,9 @@ void ReadLayer(const fs::path& path, std::vector<MeshPrim>* meshes, int depth) {
     const std::string value = line.substr(eq + 3);
     if (name == "points") {
       const auto v = Numbers(value, path, line_number);
-      if (v.size() % 3 != 0)
+      if (v.size() % 3 != 0) {
         throw FormatError(path, fmt::format("line {}: points", line_number));
+      }
       for (size_t i = 0; i < v.size(); i += 3) {
         current->points.emplace_back(static_cast<float>(v[i]),
                                      static_cast<float>(v[i + 1]),

@@ -81,10 +81,12 @@ void StageOptions::Check() const {
 
 std::string SanitizeName(const std::string& label) {
   std::string out;
-  for (unsigned char c : label)
+  for (unsigned char c : label) {
     out += (std::isalnum(c) || c == '_') ? static_cast<char>(c) : '_';
-  if (out.empty() || std::isdigit(static_cast<unsigned char>(out[0])))
+  }
+  if (out.empty() || std::isdigit(static_cast<unsigned char>(out[0]))) {
     out = "_" + out;
+  }
   return out;
 }
 

@@ -20,8 +20,9 @@ void Put16(std::string* out, uint16_t v) {
 }
 
 void Put32(std::string* out, uint32_t v) {
-  for (int i = 0; i < 4; ++i)
+  for (int i = 0; i < 4; ++i) {
     out->push_back(static_cast<char>((v >> (8 * i)) & 0xff));
+  }
 }
 
 bool EndsWith(const std::string& s, const std::string& suffix) {
