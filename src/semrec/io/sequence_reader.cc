@@ -61,6 +61,23 @@ CameraIntrinsics ReadIntrinsicsFile(const fs::path& path, int width,
 
 }  // namespace internal
 
+std::optional<SequenceReader> SequenceReader::TryOpen(
+    const fs::path& path, const SequenceReaderOptions& options) {
+  options.Check();
+  std::error_code ec;
+  if (!fs::exists(path, ec)) return std::nullopt;
+  std::optional<SequenceIndex> index = internal::IndexManifest(path, options);
+  if (!index && fs::is_directory(path, ec)) {
+    for (auto detect : {internal::IndexTum, internal::IndexRedwood,
+                        internal::IndexSevenScenes}) {
+      index = detect(path, options);
+      if (index) break;
+    }
+  }
+  if (!index) return std::nullopt;
+  return SequenceReader(std::move(*index), options);
+}
+
 SequenceReader SequenceReader::Open(const fs::path& path,
                                     const SequenceReaderOptions& options) {
   options.Check();
@@ -68,15 +85,8 @@ SequenceReader SequenceReader::Open(const fs::path& path,
   if (!fs::exists(path, ec)) {
     throw IoError(path, "sequence path does not exist");
   }
-  std::optional<SequenceIndex> index = internal::IndexManifest(path, options);
-  if (!index && fs::is_directory(path)) {
-    for (auto detect : {internal::IndexTum, internal::IndexRedwood,
-                        internal::IndexSevenScenes}) {
-      index = detect(path, options);
-      if (index) break;
-    }
-  }
-  if (!index) {
+  std::optional<SequenceReader> reader = TryOpen(path, options);
+  if (!reader) {
     throw IoError(
         path,
         "no known RGB-D layout found. Expected one of: a semrec manifest "
@@ -85,24 +95,7 @@ SequenceReader SequenceReader::Open(const fs::path& path,
         "(color/ + depth/ + *.log), 7-Scenes/3DMatch (frame-XXXXXX.depth.png + "
         ".pose.txt). See README.md, 'Sequence layouts'.");
   }
-  return SequenceReader(std::move(*index), options);
-}
-
-bool SequenceReader::IsSequence(const fs::path& path) {
-  std::error_code ec;
-  if (!fs::exists(path, ec)) return false;
-  const SequenceReaderOptions options;
-  try {
-    if (internal::IndexManifest(path, options)) return true;
-    if (!fs::is_directory(path, ec)) return false;
-    for (auto detect : {internal::IndexTum, internal::IndexRedwood,
-                        internal::IndexSevenScenes}) {
-      if (detect(path, options)) return true;
-    }
-  } catch (const std::exception&) {
-    return true;  // in a layout, but broken
-  }
-  return false;
+  return std::move(*reader);
 }
 
 SequenceReader::SequenceReader(SequenceIndex index,

@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <map>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -75,9 +76,12 @@ class SequenceReader {
   static SequenceReader Open(const std::filesystem::path& path,
                              const SequenceReaderOptions& options = {});
 
-  /// Whether `path` looks like a sequence in a known layout (a broken one
-  /// too: Open then says what is wrong). Never throws.
-  static bool IsSequence(const std::filesystem::path& path);
+  /// Like Open, but nullopt (instead of an error) when `path` does not exist
+  /// or is in no known layout; a sequence in a known layout but broken still
+  /// throws, naming what is wrong.
+  static std::optional<SequenceReader> TryOpen(
+      const std::filesystem::path& path,
+      const SequenceReaderOptions& options = {});
 
   /// Wraps an index built elsewhere (validated here: non-empty, consistent).
   SequenceReader(SequenceIndex index, const SequenceReaderOptions& options);

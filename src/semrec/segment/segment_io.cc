@@ -37,12 +37,11 @@ std::vector<SegmentInput> ListSegmentInputs(const fs::path& path, int stride,
   RequireDirectory(path, "input");
   // An RGB-D sequence first: 7-Scenes and 3DMatch keep colour and depth
   // images side by side in one folder, which is not an image folder.
-  if (io::SequenceReader::IsSequence(path)) {
-    io::SequenceReaderOptions options;
-    options.stride = stride;
-    options.max_frames = max_frames;
-    const io::SequenceReader reader = io::SequenceReader::Open(path, options);
-    for (const auto& frame : reader.index().frames) {
+  io::SequenceReaderOptions options;
+  options.stride = stride;
+  options.max_frames = max_frames;
+  if (const auto reader = io::SequenceReader::TryOpen(path, options)) {
+    for (const auto& frame : reader->index().frames) {
       inputs.push_back(
           {frame.depth_path.filename().string(), frame.color_path});
     }

@@ -15,7 +15,7 @@ TEST(ListSegmentInputs, SevenScenesFolderIsASequenceNotAnImageFolder) {
   // Colour and depth images lie side by side: only the colour images are
   // inputs, named like the depth images (fusion's label folder source).
   SEMREC_REQUIRE_SAMPLE_DATA(chess, "7scenes_chess_0_99");
-  EXPECT_TRUE(io::SequenceReader::IsSequence(chess));
+  EXPECT_TRUE(io::SequenceReader::TryOpen(chess).has_value());
   const auto inputs = ListSegmentInputs(chess, 5);
   ASSERT_EQ(inputs.size(), 20u);
   EXPECT_EQ(inputs[0].name, "frame-000000.depth.png");
@@ -29,7 +29,7 @@ TEST(ListSegmentInputs, ImageFolderFileAndErrors) {
   for (const char* name : {"b.jpg", "a.png", "c.JPEG", "notes.txt"}) {
     testing::WriteText(dir / name, "x");
   }
-  EXPECT_FALSE(io::SequenceReader::IsSequence(dir.path()));
+  EXPECT_FALSE(io::SequenceReader::TryOpen(dir.path()).has_value());
   const auto inputs = ListSegmentInputs(dir.path());
   ASSERT_EQ(inputs.size(), 3u);
   EXPECT_EQ(inputs[0].name, "a.png");
@@ -51,7 +51,7 @@ TEST(ListSegmentInputs, ImageFolderFileAndErrors) {
         << e.what();
   }
   EXPECT_THROW(ListSegmentInputs(dir.path(), 0), InvalidArgument);
-  EXPECT_FALSE(io::SequenceReader::IsSequence(dir / "missing"));
+  EXPECT_FALSE(io::SequenceReader::TryOpen(dir / "missing").has_value());
 }
 
 }  // namespace
