@@ -7,11 +7,14 @@
 namespace semrec::fuse {
 namespace {
 
+// Neighbor's twin, local to this file: with the shared type the brute-force
+// reference loop compiles ~40% slower (measured), which would flatter the
+// fast method in the benchmark. Same rule: Nearer().
 struct Nearest {
   float d2 = std::numeric_limits<float>::infinity();
   int64_t index = -1;
   void Offer(float d, int64_t i) {
-    if (d < d2 || (d == d2 && i < index)) d2 = d, index = i;
+    if (Nearer(d, i, d2, index)) d2 = d, index = i;
   }
 };
 

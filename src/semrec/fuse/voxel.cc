@@ -126,7 +126,6 @@ const VoxelGrid::Cell* VoxelGrid::Find(uint64_t key) const {
 Neighbor VoxelGrid::Nearest(const Cloud& points, const Eigen::Vector3f& p,
                             float max_d2, uint64_t* computations) const {
   Neighbor best;
-  best.d2 = max_d2;
   if (order_.empty()) return best;
   const float fx = p.x() * inv_cell_, fy = p.y() * inv_cell_,
               fz = p.z() * inv_cell_;
@@ -176,11 +175,7 @@ Neighbor VoxelGrid::Nearest(const Cloud& points, const Eigen::Vector3f& p,
     for (const uint32_t* k = first; k != last; ++k) {
       const float d2 = SquaredDistance(p, points[*k]);
       ++evaluated;
-      if (d2 < best.d2 ||
-          (d2 == best.d2 && (best.index < 0 || *k < best.index))) {
-        best.d2 = d2;
-        best.index = *k;
-      }
+      if (d2 <= max_d2) best.Offer(d2, *k);
     }
   };
   visit(cell[0], cell[1], cell[2]);
@@ -189,13 +184,12 @@ Neighbor VoxelGrid::Nearest(const Cloud& points, const Eigen::Vector3f& p,
       const float gxy = gap[0][dx] + gap[1][dy];
       for (int dz = 0; dz < 3; ++dz) {
         if (dx == 1 && dy == 1 && dz == 1) continue;  // own cell, done
-        if (gxy + gap[2][dz] > best.d2) continue;
+        if (gxy + gap[2][dz] > std::min(best.d2, max_d2)) continue;
         visit(cell[0] + dx - 1, cell[1] + dy - 1, cell[2] + dz - 1);
       }
     }
   }
   *computations += evaluated;
-  if (best.index < 0) best.d2 = 0.0f;
   return best;
 }
 

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <utility>
 #include <vector>
 
@@ -32,10 +33,22 @@ inline float SquaredDistance(const Eigen::Vector3f& p,
   return dx * dx + dy * dy + dz * dz;
 }
 
-/// A nearest-neighbour result: index -1 when none was within reach.
+/// The one tie rule of every exact nearest-neighbour search (brute force and
+/// grid agree on it): candidate (d2, i) beats (best_d2, best_i) when nearer,
+/// or as near with a lower index.
+inline bool Nearer(float d2, int64_t i, float best_d2, int64_t best_i) {
+  return d2 < best_d2 || (d2 == best_d2 && i < best_i);
+}
+
+/// A nearest-neighbour result: index -1 (and d2 infinite) when none was within
+/// reach.
 struct Neighbor {
+  float d2 = std::numeric_limits<float>::infinity();
   int64_t index = -1;
-  float d2 = 0.0f;
+  /// Keeps candidate i when Nearer().
+  void Offer(float d, int64_t i) {
+    if (Nearer(d, i, d2, index)) d2 = d, index = i;
+  }
 };
 
 /// Points bucketed by cells of `cell_size_m`: every point within cell_size_m of

@@ -34,7 +34,7 @@ Neighbor BruteNearest(const Cloud& points, const Eigen::Vector3f& q,
   for (size_t i = 0; i < points.size(); ++i) {
     const float d2 = SquaredDistance(q, points[i]);
     if (d2 <= max_d2 && (best.index < 0 || d2 < best.d2)) {
-      best = {static_cast<int64_t>(i), d2};
+      best = {d2, static_cast<int64_t>(i)};
     }
   }
   return best;
