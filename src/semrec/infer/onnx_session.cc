@@ -2,6 +2,7 @@
 
 #include <dlfcn.h>
 #include <onnxruntime_cxx_api.h>
+#include <onnxruntime_session_options_config_keys.h>
 
 #include <algorithm>
 
@@ -83,6 +84,11 @@ OnnxSession::OnnxSession(const std::filesystem::path& model_path,
   session_options.SetGraphOptimizationLevel(
       options.optimize ? GraphOptimizationLevel::ORT_ENABLE_ALL
                        : GraphOptimizationLevel::ORT_DISABLE_ALL);
+  if (!options.disabled_optimizers.empty()) {
+    session_options.AddConfigEntry(
+        kOrtSessionOptionsDisableSpecifiedOptimizers,
+        fmt::format("{}", fmt::join(options.disabled_optimizers, ",")).c_str());
+  }
   if (options.provider == "cuda" ||
       (options.provider == "auto" && CudaProviderInstalled())) {
     // The CUDA provider is a separate shared library that needs a GPU and the
@@ -126,6 +132,13 @@ OnnxSession::~OnnxSession() = default;
 
 std::map<std::string, Tensor> OnnxSession::Run(
     const std::map<std::string, Tensor>& inputs) const {
+  TensorRefs refs;
+  for (const auto& [name, tensor] : inputs) refs.emplace(name, &tensor);
+  return RunRefs(refs);
+}
+
+std::map<std::string, Tensor> OnnxSession::RunRefs(
+    const TensorRefs& inputs) const {
   const std::string model = model_path_.filename().string();
   for (const auto& [name, tensor] : inputs) {
     const bool known =
@@ -143,7 +156,9 @@ std::map<std::string, Tensor> OnnxSession::Run(
     CheckArgument(info.is_float,
                   fmt::format("{}: input '{}' is not float32 (unsupported)",
                               model, info.name));
-    const Tensor& t = it->second;
+    CheckArgument(it->second != nullptr,
+                  fmt::format("{}: input '{}' is null", model, info.name));
+    const Tensor& t = *it->second;
     bool shape_ok = t.shape.size() == info.shape.size();
     for (size_t d = 0; shape_ok && d < t.shape.size(); ++d) {
       shape_ok =

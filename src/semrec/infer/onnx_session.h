@@ -21,6 +21,8 @@ struct OnnxSessionOptions {
   /// "auto": CUDA when ONNX Runtime can use it at run time, else CPU; "cpu";
   /// "cuda": fail when CUDA is unavailable.
   std::string provider = "auto";
+  /// ONNX Runtime graph optimisers to switch off (by name).
+  std::vector<std::string> disabled_optimizers;
   void Check() const;
 };
 
@@ -33,6 +35,9 @@ struct Tensor {
   /// A zero tensor of `shape` (all dims >= 0).
   static Tensor Zeros(const std::vector<int64_t>& shape);
 };
+
+/// Named input tensors by pointer (not owned).
+using TensorRefs = std::map<std::string, const Tensor*>;
 
 /// Shape of a model input/output; -1 marks a dynamic dimension.
 struct TensorInfo {
@@ -62,6 +67,9 @@ class OnnxSession {
   /// missing/extra/misshapen inputs.
   std::map<std::string, Tensor> Run(
       const std::map<std::string, Tensor>& inputs) const;
+  /// Same with the inputs by pointer: large tensors shared by many calls
+  /// (an image embedding) are not copied per call.
+  std::map<std::string, Tensor> RunRefs(const TensorRefs& inputs) const;
 
   /// Version string of the loaded ONNX Runtime library (e.g. "1.30.0").
   static std::string RuntimeVersion();

