@@ -14,6 +14,7 @@
 #include "semrec/core/random.h"
 #include "semrec/io/image_io.h"
 #include "semrec/segment/mask_generator.h"
+#include "semrec/segment/promptable.h"
 #include "semrec/segment/semantic_segmenter.h"
 #include "semrec/segment/vote.h"
 
@@ -91,6 +92,41 @@ void BenchVote() {
 
 }  // namespace
 
+// One decoder call per prompt on one thread: the SAM export as is vs the
+// image/prompt split made at setup (scripts/split_sam_decoder.py), on the
+// same prompts, alternating so that both see the same machine state.
+void BenchDecoder(const infer::ModelRegistry& registry, const ColorImage& rgb) {
+  segment::PromptableOptions options;
+  auto split = segment::PromptableSegmenter::Create(registry, options);
+  options.split_decoder = false;
+  auto whole = segment::PromptableSegmenter::Create(registry, options);
+  auto t = Clock::now();
+  whole->SetImage(rgb);
+  const double whole_image_s = Since(t);
+  t = Clock::now();
+  split->SetImage(rgb);
+  const double split_image_s = Since(t);
+  double whole_s = 0, split_s = 0;
+  const int n = 48;
+  for (int i = 0; i < n; ++i) {
+    segment::Prompt prompt;
+    prompt.points = {
+        {(i % 8 + 0.5f) * rgb.width() / 8, (i / 8 + 0.5f) * rgb.height() / 6}};
+    prompt.labels = {1};
+    t = Clock::now();
+    whole->Decode(prompt);
+    whole_s += Since(t);
+    t = Clock::now();
+    split->Decode(prompt);
+    split_s += Since(t);
+  }
+  std::printf(
+      "decoder, 1 thread, %d prompts: export %.1f ms/prompt, split %.1f "
+      "ms/prompt (%.2fx); per image: encode %.2f s, + image part %.3f s\n",
+      n, 1000 * whole_s / n, 1000 * split_s / n, whole_s / split_s,
+      whole_image_s, split_image_s - whole_image_s);
+}
+
 int main(int argc, char** argv) {
   std::vector<fs::path> images;
   for (int i = 1; i < argc; ++i) images.emplace_back(argv[i]);
@@ -103,6 +139,7 @@ int main(int argc, char** argv) {
   }
   BenchVote();
   const auto registry = infer::ModelRegistry::LoadDefault();
+  BenchDecoder(registry, io::ReadColorImage(images.front()));
   segment::SemanticSegmenter semantic(registry, {});
 
   segment::MaskGeneratorOptions fast_options;

