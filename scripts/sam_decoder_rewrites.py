@@ -1,0 +1,364 @@
+"""Rewrites of a SAM decoder's prompt part that keep its arithmetic (up to
+float rounding) but do far less work per prompt on a CPU; used by
+split_sam_decoder.py. Each returns without changing the model when the graph
+does not have the exact structure of the SAM export it was written for.
+"""
+import numpy as np
+from onnx import helper, numpy_helper
+
+
+def attr(node, name, default=None):
+    for a in node.attribute:
+        if a.name == name:
+            return helper.get_attribute_value(a)
+    return default
+
+
+def rewrite_upscaling(model):
+    """SAM's mask upscaling as GEMMs on the channel-last token layout.
+
+    The export runs two 2x2/stride-2 ConvTransposes with a LayerNorm2d and
+    GELUs between them on NCHW tensors, then multiplies the 32-channel result
+    by the hypernetwork outputs. A 2x2/stride-2 ConvTranspose writes each input
+    pixel's 2x2 output block from that pixel alone: a matrix product per pixel.
+    Kept channel-last, each step is one GEMM, the LayerNorm2d becomes a fused
+    LayerNormalization over the last axis, and only the final [masks x 65536]
+    logits are permuted into raster order (instead of the 8 MB feature maps).
+    Same arithmetic up to float rounding. Returns False (model unchanged) when
+    the decoder does not have this structure.
+    """
+    g = model.graph
+    if max((o.version for o in model.opset_import if o.domain in ("", "ai.onnx")),
+           default=0) < 17:
+        return False  # LayerNormalization needs opset 17
+    inits = {i.name: i for i in g.initializer}
+    consumers = {}
+    for n in g.node:
+        for i in n.input:
+            consumers.setdefault(i, []).append(n)
+    producer = {o: n for n in g.node for o in n.output}
+
+    def only_consumer(name, op):
+        users = consumers.get(name, [])
+        return users[0] if len(users) == 1 and users[0].op_type == op else None
+
+    def const(name):
+        if name in inits:
+            return numpy_helper.to_array(inits[name])
+        return None
+
+    convs = [n for n in g.node if n.op_type == "ConvTranspose"]
+    if len(convs) != 2:
+        return False
+    c1, c2 = convs
+    for c in convs:
+        if (attr(c, "kernel_shape") != [2, 2] or attr(c, "strides") != [2, 2]
+                or any(attr(c, "pads", [0, 0, 0, 0])) or attr(c, "group", 1) != 1
+                or len(c.input) < 3 or const(c.input[1]) is None or const(c.input[2]) is None):
+            return False
+    # Input: Reshape(Transpose(tokens [1, HW, C], perm 0 2 1)) -> [1, C, H, W].
+    reshape_in = producer.get(c1.input[0])
+    transpose_in = producer.get(reshape_in.input[0]) if reshape_in is not None else None
+    if (reshape_in is None or reshape_in.op_type != "Reshape" or transpose_in is None
+            or transpose_in.op_type != "Transpose" or attr(transpose_in, "perm") != [0, 2, 1]):
+        return False
+    nchw = const(reshape_in.input[1])
+    if nchw is None or len(nchw) != 4:
+        return False
+    _, channels, height, width = (int(d) for d in nchw)
+    tokens = transpose_in.input[0]
+
+    # LayerNorm2d: ReduceMean, Sub, Pow 2, ReduceMean, Add eps, Sqrt, Div, Mul w, Add b.
+    x = c1.output[0]
+    means = [n for n in consumers.get(x, []) if n.op_type == "ReduceMean"]
+    mean = means[0] if len(means) == 1 else None
+    chain = {}
+    try:
+        subs = [n for n in consumers[x] if n.op_type == "Sub"]
+        chain["sub"] = subs[0]
+        chain["pow"] = only_consumer(chain["sub"].output[0], "Pow") or [
+            n for n in consumers[chain["sub"].output[0]] if n.op_type == "Pow"][0]
+        chain["mean2"] = only_consumer(chain["pow"].output[0], "ReduceMean")
+        chain["eps"] = only_consumer(chain["mean2"].output[0], "Add")
+        chain["sqrt"] = only_consumer(chain["eps"].output[0], "Sqrt")
+        chain["div"] = only_consumer(chain["sqrt"].output[0], "Div")
+        chain["mul"] = only_consumer(chain["div"].output[0], "Mul")
+        chain["add"] = only_consumer(chain["mul"].output[0], "Add")
+    except (KeyError, IndexError):
+        return False
+    if mean is None or any(v is None for v in chain.values()):
+        return False
+    if attr(mean, "axes") != [1] or attr(chain["mean2"], "axes") != [1]:
+        return False
+    eps = [const(i) for i in chain["eps"].input if const(i) is not None]
+    gamma = [const(i) for i in chain["mul"].input if const(i) is not None]
+    beta = [const(i) for i in chain["add"].input if const(i) is not None]
+    if len(eps) != 1 or len(gamma) != 1 or len(beta) != 1:
+        return False
+
+    def gelu_after(name):
+        """The exact GELU x * 0.5 * (1 + erf(x / sqrt 2)) reading `name`: its output."""
+        div = [n for n in consumers.get(name, []) if n.op_type == "Div"]
+        if len(div) != 1:
+            return None
+        erf = only_consumer(div[0].output[0], "Erf")
+        add = erf and only_consumer(erf.output[0], "Add")
+        mul = add and only_consumer(add.output[0], "Mul")
+        half = mul and only_consumer(mul.output[0], "Mul")
+        if half is None or name not in mul.input:
+            return None
+        return half.output[0]
+
+    gelu1 = gelu_after(chain["add"].output[0])
+    if gelu1 is None or only_consumer(gelu1, "ConvTranspose") is not c2:
+        return False
+    gelu2 = gelu_after(c2.output[0])
+    flat = gelu2 and only_consumer(gelu2, "Reshape")
+    matmul = flat and only_consumer(flat.output[0], "MatMul")
+    if matmul is None or matmul.input[1] != flat.output[0]:
+        return False
+    hyper = matmul.input[0]  # [1, masks, 32]
+
+    w1, b1 = const(c1.input[1]), const(c1.input[2])  # [C, C1, 2, 2], [C1]
+    w2, b2 = const(c2.input[1]), const(c2.input[2])  # [C1, C2, 2, 2], [C2]
+    c_in, c_mid = w1.shape[:2]
+    c_out = w2.shape[1]
+    if c_in != channels or w2.shape[0] != c_mid:
+        return False
+    # Columns ordered (ky, kx, c): each pixel's 2x2 block, channels last.
+    w1g = np.ascontiguousarray(w1.transpose(0, 2, 3, 1).reshape(c_in, 4 * c_mid))
+    w2g = np.ascontiguousarray(w2.transpose(0, 2, 3, 1).reshape(c_mid, 4 * c_out))
+    prefix = "/semrec_upscaling/"
+    new_inits = {
+        prefix + "c_w1": w1g.astype(np.float32), prefix + "c_b1": np.tile(b1, 4).astype(np.float32),
+        prefix + "c_w2": w2g.astype(np.float32), prefix + "c_b2": np.tile(b2, 4).astype(np.float32),
+        prefix + "c_gamma": gamma[0].reshape(-1).astype(np.float32),
+        prefix + "c_beta": beta[0].reshape(-1).astype(np.float32),
+        prefix + "c_shape1": np.array([1, height * width * 4, c_mid], np.int64),
+        prefix + "c_shape2": np.array([1, height * width * 16, c_out], np.int64),
+        prefix + "c_blocks": np.array([height, width, 2, 2, 2, 2, -1], np.int64),
+        prefix + "c_raster": np.array([1, -1, height * width * 16], np.int64),
+        prefix + "c_sqrt2": np.array(np.sqrt(2.0), np.float32),
+        prefix + "c_one": np.array(1.0, np.float32), prefix + "c_half": np.array(0.5, np.float32),
+    }
+    nodes = []
+
+    def node(op, inputs, name, **attrs):
+        out = prefix + name
+        nodes.append(helper.make_node(op, inputs, [out], name=out, **attrs))
+        return out
+
+    def gelu(x, name):
+        e = node("Erf", [node("Div", [x, prefix + "c_sqrt2"], name + "_div")], name + "_erf")
+        y = node("Mul", [x, node("Add", [e, prefix + "c_one"], name + "_add")], name + "_mul")
+        return node("Mul", [y, prefix + "c_half"], name)
+
+    a1 = node("Add", [node("MatMul", [tokens, prefix + "c_w1"], "mm1"), prefix + "c_b1"], "up1")
+    ln = node("LayerNormalization", [node("Reshape", [a1, prefix + "c_shape1"], "up1_px"),
+                                     prefix + "c_gamma", prefix + "c_beta"],
+              "ln", axis=-1, epsilon=float(eps[0]))
+    a2 = node("Add", [node("MatMul", [gelu(ln, "gelu1"), prefix + "c_w2"], "mm2"), prefix + "c_b2"],
+              "up2")
+    features = node("Reshape", [gelu(a2, "gelu2"), prefix + "c_shape2"], "features")
+    logits = node("MatMul", [features, node("Transpose", [hyper], "hyper_t", perm=[0, 2, 1])],
+                  "logits")  # [1, 16 HW, masks], rows (y, x, ky, kx, ky2, kx2)
+    blocks = node("Reshape", [logits, prefix + "c_blocks"], "blocks")
+    raster = node("Transpose", [blocks], "raster_t", perm=[6, 0, 2, 4, 1, 3, 5])
+    nodes.append(helper.make_node("Reshape", [raster, prefix + "c_raster"], [matmul.output[0]],
+                                  name=prefix + "raster"))
+
+    # The new Reshape now defines the MatMul's output; the old path goes dead.
+    at = [k for k, n in enumerate(g.node) if n is matmul][0]
+    order = list(g.node[:at]) + nodes + list(g.node[at + 1:])
+    needed = set(o.name for o in g.output)
+    live = []
+    for n in reversed(order):
+        if any(o in needed for o in n.output):
+            live.append(n)
+            needed.update(i for i in n.input if i)
+    g.ClearField("node")
+    g.node.extend(reversed(live))
+    for name, value in new_inits.items():
+        g.initializer.append(numpy_helper.from_array(value, name))
+    used = set(i for n in g.node for i in n.input)
+    keep_inits = [i for i in g.initializer if i.name in used]
+    g.ClearField("initializer")
+    g.initializer.extend(keep_inits)
+    return True
+
+
+def rewrite_attention(model):
+    """SAM's cross-attention blocks reordered so that the 4096 image tokens go
+    through one 256-wide product per side instead of a projection.
+
+    Token-to-image attention (few queries, 4096 keys): the keys' projection
+    is folded into the queries (scores = (q W_k^T) X^T; the key bias adds a
+    constant per query, which softmax ignores) and the values' projection is
+    applied after averaging (A (X W_v) = (A X) W_v). Image-to-token attention
+    (4096 queries, few keys): the query projection is folded into the keys and
+    the output projection into the values (out = A (V W_o)). Each replaces a
+    [4096 x 256] x [256 x 128] product by one with 8 heads x few tokens
+    columns. Blocks whose image-side projections run in the image part are
+    left to it. Returns the number of blocks rewritten.
+    """
+    g = model.graph
+    inits = {i.name: i for i in g.initializer}
+    by_name = {n.name: n for n in g.node}
+
+    def const(name):
+        return numpy_helper.to_array(inits[name]) if name in inits else None
+
+    def linear(prefix):
+        """(input, W [in, out], b [out]) of the Linear `prefix`, or None."""
+        mm, add = by_name.get(prefix + "/MatMul"), by_name.get(prefix + "/Add")
+        if mm is None or add is None or mm.output[0] not in add.input:
+            return None
+        w = const(mm.input[1])
+        b = [const(i) for i in add.input if const(i) is not None]
+        if w is None or w.ndim != 2 or len(b) != 1:
+            return None
+        return mm.input[0], w.astype(np.float32), b[0].astype(np.float32)
+
+    prefixes = sorted(set(n.name[:-len("out_proj/MatMul")] for n in g.node
+                          if n.name.endswith("_to_image/out_proj/MatMul")
+                          or n.name.endswith("_to_token/out_proj/MatMul")))
+    new_inits, count = {}, 0
+    for prefix in prefixes:
+        out = by_name.get(prefix + "out_proj/Add")
+        o = linear(prefix + "out_proj")
+        softmax = by_name.get(prefix + "Softmax")
+        producer = {o: n for n in g.node for o in n.output}
+        scale_node = producer.get(softmax.input[0]) if softmax is not None else None
+        if scale_node is not None and scale_node.op_type != "Div":
+            scale_node = None
+        if out is None or o is None or scale_node is None or softmax is None:
+            continue
+        scale = [const(i) for i in scale_node.input if const(i) is not None]
+        # Heads and head size: the last two entries of a head-splitting
+        # Reshape's target (constant, or a Concat whose last two are).
+        split_shapes = []
+        for r in ("Reshape", "Reshape_1", "Reshape_2"):
+            target = by_name[prefix + r].input[1] if prefix + r in by_name else None
+            if target is None:
+                continue
+            value = const(target)
+            if value is None and target in producer and producer[target].op_type == "Concat":
+                parts = [const(i) for i in producer[target].input]
+                if len(parts) == 4 and all(p is not None for p in parts[2:]):
+                    value = [-1, -1, int(parts[2].reshape(-1)[0]), int(parts[3].reshape(-1)[0])]
+            if value is not None and len(value) == 4:
+                split_shapes.append([int(d) for d in value])
+        if len(scale) != 1 or not split_shapes:
+            continue
+        heads, dim = split_shapes[0][2], split_shapes[0][3]
+        image_length = max(s[1] for s in split_shapes)
+        scale = float(scale[0])
+        w_o, b_o = o[1], o[2]
+        width = heads * dim
+        if w_o.shape[0] != width:
+            continue
+        q, k, v = (linear(prefix + n) for n in ("q_proj", "k_proj", "v_proj"))
+        tag = "/semrec_attention/" + prefix.strip("/").replace("/", "_") + "/"
+        nodes = []
+
+        def node(op, inputs, name, **attrs):
+            name = tag + name
+            nodes.append(helper.make_node(op, inputs, [name], name=name, **attrs))
+            return name
+
+        def init(name, value):
+            new_inits[tag + name] = np.ascontiguousarray(value)
+            return tag + name
+
+        def shape(name, dims):
+            return init(name, np.array(dims, np.int64))
+
+        if prefix.endswith("_to_image/"):
+            if q is None or k is None or v is None:
+                continue  # keys/values projected in the image part already
+            embed = k[1].shape[0]
+            length = image_length
+            if length <= 0:
+                continue
+            qp = node("Add", [node("MatMul", [q[0], init("w_q", q[1])], "q_mm"),
+                              init("b_q", q[2])], "q")
+            qh = node("Transpose", [node("Reshape", [qp, shape("s_qh", [1, -1, heads, dim])],
+                                         "q_r")], "qh", perm=[0, 2, 1, 3])
+            wkt = k[1].reshape(embed, heads, dim).transpose(1, 2, 0)[None]  # [1,H,D,E]
+            qk = node("MatMul", [qh, init("w_k_t", wkt)], "qk")  # [1,H,T,E]
+            qk_t = node("Reshape", [node("Transpose", [qk], "qk_t0", perm=[0, 3, 1, 2]),
+                                    shape("s_qkt", [1, embed, -1])], "qk_t")  # [1,E,H*T]
+            scores_t = node("MatMul", [k[0], qk_t], "scores_t")  # [1,L,H*T]
+            scores = node("Reshape", [node("Transpose", [scores_t], "scores_t1", perm=[0, 2, 1]),
+                                      shape("s_scores", [1, heads, -1, length])], "scores")
+            attn = node("Softmax", [node("Div", [scores, init("scale", np.array(scale, np.float32))],
+                                         "scaled")], "attn", axis=-1)
+            ax = node("MatMul", [node("Reshape", [attn, shape("s_attn", [1, -1, length])],
+                                      "attn_flat"), v[0]], "ax")  # [1,H*T,E]
+            wv = v[1].reshape(embed, heads, dim).transpose(1, 0, 2)[None]  # [1,H,E,D]
+            oh = node("Add", [node("MatMul", [node("Reshape", [ax, shape("s_axh", [1, heads, -1, embed])],
+                                                   "axh"), init("w_v", wv)], "oh_mm"),
+                              init("b_v", v[2].reshape(1, heads, 1, dim))], "oh")
+            heads_out = node("Reshape", [node("Transpose", [oh], "o_t", perm=[0, 2, 1, 3]),
+                                         shape("s_o", [1, -1, width])], "o")
+            values = node("MatMul", [heads_out, init("w_o", w_o)], "out_mm")
+        else:
+            if k is None or v is None:
+                continue
+            embed = v[1].shape[0]
+            kp = node("Add", [node("MatMul", [k[0], init("w_k", k[1])], "k_mm"),
+                              init("b_k", k[2])], "k")
+            kh = node("Transpose", [node("Reshape", [kp, shape("s_kh", [1, -1, heads, dim])],
+                                         "k_r")], "kh", perm=[0, 2, 3, 1])  # [1,H,D,T]
+            if q is not None:
+                # scores = X (W_q k^T) / scale + b_q k^T / scale, [1, L, H*T]
+                wq = (q[1] / scale).reshape(embed, heads, dim).transpose(1, 0, 2)[None]
+                m = node("MatMul", [init("w_q", wq), kh], "m")  # [1,H,E,T]
+                m_flat = node("Reshape", [node("Transpose", [m], "m_t", perm=[0, 2, 1, 3]),
+                                          shape("s_m", [1, embed, -1])], "m_flat")
+                bq = (q[2] / scale).reshape(1, heads, 1, dim)
+                bias = node("Reshape", [node("MatMul", [init("b_q", bq), kh], "bias_h"),
+                                        shape("s_bias", [1, 1, -1])], "bias")
+                scores = node("Add", [node("MatMul", [q[0], m_flat], "scores_mm"), bias], "scores")
+                length_shape = shape("s_lht", [1, 0, heads, -1])
+                attn = node("Softmax", [node("Reshape", [scores, length_shape], "scores_h")],
+                            "attn", axis=-1)  # [1,L,H,T]
+                attn_flat = node("Reshape", [attn, shape("s_attn", [1, 0, -1])], "attn_flat")
+            else:
+                # The image part projected the queries: keep the scores, regroup.
+                attn_flat = node("Reshape", [node("Transpose", [softmax.output[0]], "attn_t",
+                                                  perm=[0, 2, 1, 3]),
+                                             shape("s_attn", [1, 0, -1])], "attn_flat")
+            vp = node("Add", [node("MatMul", [v[0], init("w_v", v[1])], "v_mm"),
+                              init("b_v", v[2])], "v")
+            vh = node("Transpose", [node("Reshape", [vp, shape("s_vh", [1, -1, heads, dim])],
+                                         "v_r")], "vh", perm=[0, 2, 1, 3])  # [1,H,T,D]
+            wo = w_o.reshape(heads, dim, w_o.shape[1])[None]  # [1,H,D,E']
+            u = node("Reshape", [node("MatMul", [vh, init("w_o", wo)], "u_h"),
+                                 shape("s_u", [1, -1, w_o.shape[1]])], "u")  # [1,H*T,E']
+            values = node("MatMul", [attn_flat, u], "out_mm")
+        nodes.append(helper.make_node("Add", [values, init("b_o", b_o)], [out.output[0]],
+                                      name=tag + "out"))
+        at = [i for i, n in enumerate(g.node) if n is out][0]
+        order = list(g.node[:at]) + nodes + list(g.node[at + 1:])
+        g.ClearField("node")
+        g.node.extend(order)
+        by_name = {n.name: n for n in g.node}
+        count += 1
+    if count:
+        for name, value in new_inits.items():
+            g.initializer.append(numpy_helper.from_array(value, name))
+        needed = set(o.name for o in g.output)
+        live = []
+        for n in reversed(list(g.node)):
+            if any(o in needed for o in n.output):
+                live.append(n)
+                needed.update(i for i in n.input if i)
+        g.ClearField("node")
+        g.node.extend(reversed(live))
+        used = set(i for n in g.node for i in n.input)
+        keep = [i for i in g.initializer if i.name in used]
+        g.ClearField("initializer")
+        g.initializer.extend(keep)
+    return count
+
