@@ -195,7 +195,11 @@ int main(int argc, char** argv) {
           "recall@0.75 %.2f, precision@0.5 %.2f\n",
           name, a.mean_best_iou, a.recall_50, a.recall_75, a.precision_50);
     }
-    std::printf("    encode %.2f s (in each)\n", fast->stats().encode_seconds);
+    std::printf(
+        "    encode %.2f s (in each); all prompts: decode %.2f s, candidates "
+        "%d, post-processing %.2f s\n",
+        fast->stats().encode_seconds, low_res->stats().decode_seconds,
+        low_res->stats().candidates, low_res->stats().postprocess_seconds);
   }
   return 0;
 }

@@ -370,30 +370,37 @@ class AutomaticMaskGenerator : public MaskGenerator {
         }
         ++next;
       }
+      // Decode, score and upsample in parallel (the wave was chosen before
+      // any of its results); book-keeping below in prompt order.
       std::vector<LowResMask> decoded(wave.size());
+      std::vector<float> stability(wave.size());
+      std::vector<Mask> upsampled(wave.size());
       tbb::parallel_for(static_cast<size_t>(0), wave.size(), [&](size_t k) {
         decoded[k] = DecodePoint(points[wave[k]]);
+        stability[k] =
+            model_->StabilityScore(decoded[k], 0.0f, options_.stability_offset);
+        if (Passes(decoded[k], stability[k])) {
+          upsampled[k] = model_->Upsample(decoded[k]);
+        }
       });
       stats_.prompts_decoded += static_cast<int>(wave.size());
       for (size_t k = 0; k < wave.size(); ++k) {
         const LowResMask& m = decoded[k];
-        const float stability =
-            model_->StabilityScore(m, 0.0f, options_.stability_offset);
         if (covered.empty()) {
           cw = m.width;
           ch = m.height;
           covered.assign(static_cast<size_t>(cw) * ch, 0);
         }
         const auto [gi, gj] = cells_[wave[k]];
-        const bool passes = Passes(m, stability);
+        const bool passes = Passes(m, stability[k]);
         outcome[static_cast<size_t>(gj) * n + gi] = passes ? 2 : 1;
         if (!passes) continue;
         for (size_t i = 0; i < covered.size(); ++i) {
           covered[i] |= m.logits[i] > 0.0f;
         }
-        Mask mask = model_->Upsample(m);
+        Mask& mask = upsampled[k];
         if (mask.area == 0) continue;
-        mask.stability = stability;
+        mask.stability = stability[k];
         mask.point_x = points[wave[k]][0];
         mask.point_y = points[wave[k]][1];
         if (!m.object_pointer.empty()) mask.embedding = m.object_pointer;
