@@ -91,6 +91,7 @@ void RunSegment(SegmentArgs args) {
       {"min_region_area_px", options.masks.min_region_area_px},
       {"crop_layers", options.masks.crop_layers},
       {"skip_covered_points", options.masks.skip_covered_points},
+      {"covered_similarity", options.masks.covered_similarity},
       {"seconds_per_image", inputs.empty() ? 0.0 : seconds / inputs.size()}};
   WriteTextFileAtomic(fs::path(args.out) / "summary.json",
                       summary.dump(2) + "\n");
@@ -145,6 +146,13 @@ void RegisterSegment(CLI::App& app) {
       ->capture_default_str();
   cmd->add_flag("--no-skip-covered", args->no_skip_covered,
                 "Decode every grid prompt (slower; see bench/)");
+  cmd->add_option("--covered-similarity", args->amg.covered_similarity,
+                  "Skip a prompt covered by an accepted mask (or between "
+                  "rejected ones) only where the image embedding is this "
+                  "similar (cosine) to there; 0 = skip all such prompts "
+                  "(faster, loses nested masks)")
+      ->check(CLI::Range(0.0, 1.0))
+      ->capture_default_str();
   cmd->add_option("--stride", args->stride, "Use every n-th image/frame")
       ->capture_default_str();
   cmd->add_option("--max-frames", args->max_frames,

@@ -27,6 +27,8 @@ void MaskGeneratorOptions::Check() const {
                 "mask generator: min_region_area_px must be >= 0");
   CheckArgument(dense_stride >= 1 && (dense_stride & (dense_stride - 1)) == 0,
                 "mask generator: dense_stride must be a power of 2");
+  CheckArgument(covered_similarity >= 0 && covered_similarity <= 1,
+                "mask generation: covered_similarity must be in [0, 1]");
   CheckArgument(crop_layers >= 0 && crop_layers <= 4,
                 "mask generator: crop_layers must be in 0..4");
   CheckArgument(crop_overlap_ratio >= 0 && crop_overlap_ratio < 1,
@@ -222,6 +224,17 @@ bool NearCropEdge(const Box& m, const Box& crop, int w, int h) {
          (near(g.y1, crop.y1) && !near(g.y1, h));
 }
 
+// Cosine similarity of two embedding vectors (1 when either is zero).
+double Cosine(const std::vector<float>& a, const std::vector<float>& b) {
+  double dot = 0, aa = 0, bb = 0;
+  for (size_t k = 0; k < a.size() && k < b.size(); ++k) {
+    dot += double{a[k]} * b[k];
+    aa += double{a[k]} * a[k];
+    bb += double{b[k]} * b[k];
+  }
+  return aa > 0 && bb > 0 ? dot / std::sqrt(aa * bb) : 1.0;
+}
+
 class AutomaticMaskGenerator : public MaskGenerator {
  public:
   AutomaticMaskGenerator(const infer::ModelRegistry& registry,
@@ -323,7 +336,10 @@ class AutomaticMaskGenerator : public MaskGenerator {
       const std::vector<std::array<float, 2>>& points) {
     const std::vector<int>& levels = levels_;
     std::vector<Mask> candidates;
-    std::vector<uint8_t> covered;
+    // Per low-res cell: the smallest accepted mask covering it (-1: none).
+    std::vector<int> covered;
+    std::vector<int> covered_area;
+    std::vector<std::vector<float>> mask_embedding;
     int cw = 0, ch = 0;
     const auto is_covered = [&](const std::array<float, 2>& p) {
       if (covered.empty()) return false;
@@ -334,7 +350,11 @@ class AutomaticMaskGenerator : public MaskGenerator {
           ImageToLowRes(model_->transform(), dims, p[0] - 0.5, p[1] - 0.5);
       const int iu = std::clamp(static_cast<int>(std::lround(u)), 0, cw - 1);
       const int iv = std::clamp(static_cast<int>(std::lround(v)), 0, ch - 1);
-      return covered[static_cast<size_t>(iv) * cw + iu] != 0;
+      const int owner = covered[static_cast<size_t>(iv) * cw + iu];
+      if (owner < 0) return false;
+      if (options_.covered_similarity <= 0) return true;
+      return Cosine(model_->EmbeddingAt(p[0], p[1]), mask_embedding[owner]) >=
+             options_.covered_similarity;
     };
     int dense_level = 0;
     while ((1 << dense_level) < options_.dense_stride) ++dense_level;
@@ -343,6 +363,10 @@ class AutomaticMaskGenerator : public MaskGenerator {
     // where SAM finds no good mask; decoding it again rarely helps.
     const int n = grid_side_, stride = options_.dense_stride;
     std::vector<uint8_t> outcome(static_cast<size_t>(n) * n, 0);
+    std::vector<size_t> point_of_cell(static_cast<size_t>(n) * n, 0);
+    for (size_t p = 0; p < cells_.size(); ++p) {
+      point_of_cell[static_cast<size_t>(cells_[p][1]) * n + cells_[p][0]] = p;
+    }
     const auto between_rejected = [&](size_t p) {
       if (!options_.skip_between_rejected) return false;
       const auto [i, j] = cells_[p];
@@ -352,9 +376,21 @@ class AutomaticMaskGenerator : public MaskGenerator {
                    ? std::vector<int>{lo}
                    : std::vector<int>{lo, lo + stride};
       };
+      std::vector<float> here;
       for (int u : neighbours(i)) {
         for (int v : neighbours(j)) {
-          if (outcome[static_cast<size_t>(v) * n + u] != 1) return false;
+          const size_t cell = static_cast<size_t>(v) * n + u;
+          if (outcome[cell] != 1) return false;
+          // Only where the image looks the same as at the rejected points.
+          if (options_.covered_similarity > 0) {
+            if (here.empty())
+              here = model_->EmbeddingAt(points[p][0], points[p][1]);
+            const auto& q = points[point_of_cell[cell]];
+            if (Cosine(here, model_->EmbeddingAt(q[0], q[1])) <
+                options_.covered_similarity) {
+              return false;
+            }
+          }
         }
       }
       return true;
@@ -389,14 +425,25 @@ class AutomaticMaskGenerator : public MaskGenerator {
         if (covered.empty()) {
           cw = m.width;
           ch = m.height;
-          covered.assign(static_cast<size_t>(cw) * ch, 0);
+          covered.assign(static_cast<size_t>(cw) * ch, -1);
+          covered_area.assign(covered.size(), 0);
         }
         const auto [gi, gj] = cells_[wave[k]];
         const bool passes = Passes(m, stability[k]);
         outcome[static_cast<size_t>(gj) * n + gi] = passes ? 2 : 1;
         if (!passes) continue;
+        int area = 0;
+        for (float logit : m.logits) area += logit > 0.0f;
+        const int id = static_cast<int>(mask_embedding.size());
+        mask_embedding.push_back(options_.covered_similarity > 0
+                                     ? model_->PooledEmbedding(m)
+                                     : std::vector<float>{});
         for (size_t i = 0; i < covered.size(); ++i) {
-          covered[i] |= m.logits[i] > 0.0f;
+          if (m.logits[i] > 0.0f &&
+              (covered[i] < 0 || area < covered_area[i])) {
+            covered[i] = id;
+            covered_area[i] = area;
+          }
         }
         Mask& mask = upsampled[k];
         if (mask.area == 0) continue;

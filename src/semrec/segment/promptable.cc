@@ -211,6 +211,58 @@ std::vector<float> PromptableSegmenter::PooledEmbedding(
   return mean;
 }
 
+std::vector<float> PromptableSegmenter::PooledEmbedding(
+    const LowResMask& low_res) const {
+  CheckArgument(embedding_.shape.size() == 4,
+                "PooledEmbedding: no image has been encoded");
+  const int c = static_cast<int>(embedding_.shape[1]),
+            h = static_cast<int>(embedding_.shape[2]),
+            w = static_cast<int>(embedding_.shape[3]);
+  std::vector<int> counts(static_cast<size_t>(w) * h, 0);
+  int total = 0;
+  for (int v = 0; v < low_res.height; ++v) {
+    for (int u = 0; u < low_res.width; ++u) {
+      if (low_res.logits[static_cast<size_t>(v) * low_res.width + u] <= 0) {
+        continue;
+      }
+      const int eu = u * w / low_res.width, ev = v * h / low_res.height;
+      ++counts[static_cast<size_t>(ev) * w + eu];
+      ++total;
+    }
+  }
+  if (total == 0) return {};
+  std::vector<float> mean(c, 0.0f);
+  for (size_t cell = 0; cell < counts.size(); ++cell) {
+    if (counts[cell] == 0) continue;
+    const float weight =
+        static_cast<float>(counts[cell]) / static_cast<float>(total);
+    for (int k = 0; k < c; ++k) {
+      mean[k] +=
+          weight * embedding_.data[static_cast<size_t>(k) * w * h + cell];
+    }
+  }
+  return mean;
+}
+
+std::vector<float> PromptableSegmenter::EmbeddingAt(double x, double y) const {
+  CheckArgument(embedding_.shape.size() == 4,
+                "EmbeddingAt: no image has been encoded");
+  const int c = static_cast<int>(embedding_.shape[1]),
+            h = static_cast<int>(embedding_.shape[2]),
+            w = static_cast<int>(embedding_.shape[3]);
+  const int u = std::clamp(
+      static_cast<int>(x * transform_.scale_x * w / transform_.input_width), 0,
+      w - 1);
+  const int v = std::clamp(
+      static_cast<int>(y * transform_.scale_y * h / transform_.input_height), 0,
+      h - 1);
+  std::vector<float> out(c);
+  for (int k = 0; k < c; ++k) {
+    out[k] = embedding_.data[(static_cast<size_t>(k) * h + v) * w + u];
+  }
+  return out;
+}
+
 namespace {
 
 // SAM's ONNX prompt encoding: points then box corners (labels 2, 3); without

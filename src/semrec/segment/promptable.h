@@ -102,6 +102,12 @@ class PromptableSegmenter {
   /// Mean of the image embedding under `mask` (one vector of the encoder's
   /// channels): an appearance descriptor for re-identification.
   std::vector<float> PooledEmbedding(const Mask& mask) const;
+  /// Mean embedding under a low-res mask's positive logits (the low-res grid
+  /// and the embedding grid both cover the model frame); empty when the mask
+  /// is empty.
+  std::vector<float> PooledEmbedding(const LowResMask& low_res) const;
+  /// The embedding vector of the cell holding image point (x, y).
+  std::vector<float> EmbeddingAt(double x, double y) const;
 
  protected:
   infer::InputTransform transform_;

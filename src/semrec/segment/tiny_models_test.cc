@@ -228,6 +228,24 @@ TEST(TinyModels, BoxPromptsAndPooledEmbeddings) {
     differ += std::abs(a[i] - b[i]);
   }
   EXPECT_LT(same, 0.2 * differ);
+  // The low-res forms used to decide which prompts to skip: the embedding at
+  // a point of a region and the mean under that region's decoded mask agree
+  // (one colour); another region's point does not.
+  Prompt inside;
+  inside.points = {{70, 60}};
+  inside.labels = {1};
+  const auto pooled = model->PooledEmbedding(model->Decode(inside));
+  const auto here = model->EmbeddingAt(50, 40);
+  const auto there = model->EmbeddingAt(200, 60);
+  ASSERT_EQ(pooled.size(), here.size());
+  double near = 0, far = 0;
+  for (size_t i = 0; i < pooled.size(); ++i) {
+    near += std::abs(pooled[i] - here[i]);
+    far += std::abs(pooled[i] - there[i]);
+  }
+  EXPECT_LT(near, 0.1 * far);
+  EXPECT_TRUE(model->PooledEmbedding(LowResMask{2, 2, {-1, -1, -1, -1}, 0, {}})
+                  .empty());
 }
 
 TEST(TinyModels, SplitDecoderGivesTheExportsMasks) {
