@@ -100,6 +100,8 @@ void BenchDecoder(const infer::ModelRegistry& registry, const ColorImage& rgb) {
   auto split = segment::PromptableSegmenter::Create(registry, options);
   options.split_decoder = false;
   auto whole = segment::PromptableSegmenter::Create(registry, options);
+  whole->SetImage(rgb);  // warm-up: first runs allocate
+  split->SetImage(rgb);
   auto t = Clock::now();
   whole->SetImage(rgb);
   const double whole_image_s = Since(t);
