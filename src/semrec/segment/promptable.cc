@@ -178,12 +178,33 @@ float PromptableSegmenter::StabilityScore(const LowResMask& low_res,
   return uni > 0 ? static_cast<float>(inter) / static_cast<float>(uni) : 1.0f;
 }
 
+namespace {
+
+// Weighted mean of the embedding's cells ([1, C, h, w]): counts[cell] / total.
+std::vector<float> CellMean(const infer::Tensor& embedding,
+                            const std::vector<int64_t>& counts, int64_t total) {
+  const int c = static_cast<int>(embedding.shape[1]);
+  const size_t cells = counts.size();
+  std::vector<float> mean(c, 0.0f);
+  if (total == 0) return mean;
+  for (size_t cell = 0; cell < cells; ++cell) {
+    if (counts[cell] == 0) continue;
+    const float weight =
+        static_cast<float>(counts[cell]) / static_cast<float>(total);
+    for (int k = 0; k < c; ++k) {
+      mean[k] += weight * embedding.data[static_cast<size_t>(k) * cells + cell];
+    }
+  }
+  return mean;
+}
+
+}  // namespace
+
 std::vector<float> PromptableSegmenter::PooledEmbedding(
     const Mask& mask) const {
   CheckArgument(embedding_.shape.size() == 4,
                 "PooledEmbedding: no image has been encoded");
-  const int c = static_cast<int>(embedding_.shape[1]),
-            h = static_cast<int>(embedding_.shape[2]),
+  const int h = static_cast<int>(embedding_.shape[2]),
             w = static_cast<int>(embedding_.shape[3]);
   // Count mask pixels per embedding cell, then a weighted mean of the cells.
   std::vector<int64_t> counts(static_cast<size_t>(w) * h, 0);
@@ -197,29 +218,17 @@ std::vector<float> PromptableSegmenter::PooledEmbedding(
       ++counts[static_cast<size_t>(v) * w + u];
     }
   }
-  std::vector<float> mean(c, 0.0f);
-  if (mask.area == 0) return mean;
-  for (size_t cell = 0; cell < counts.size(); ++cell) {
-    if (counts[cell] == 0) continue;
-    const float weight =
-        static_cast<float>(counts[cell]) / static_cast<float>(mask.area);
-    for (int k = 0; k < c; ++k) {
-      mean[k] +=
-          weight * embedding_.data[static_cast<size_t>(k) * w * h + cell];
-    }
-  }
-  return mean;
+  return CellMean(embedding_, counts, mask.area);
 }
 
 std::vector<float> PromptableSegmenter::PooledEmbedding(
     const LowResMask& low_res) const {
   CheckArgument(embedding_.shape.size() == 4,
                 "PooledEmbedding: no image has been encoded");
-  const int c = static_cast<int>(embedding_.shape[1]),
-            h = static_cast<int>(embedding_.shape[2]),
+  const int h = static_cast<int>(embedding_.shape[2]),
             w = static_cast<int>(embedding_.shape[3]);
-  std::vector<int> counts(static_cast<size_t>(w) * h, 0);
-  int total = 0;
+  std::vector<int64_t> counts(static_cast<size_t>(w) * h, 0);
+  int64_t total = 0;
   for (int v = 0; v < low_res.height; ++v) {
     for (int u = 0; u < low_res.width; ++u) {
       if (low_res.logits[static_cast<size_t>(v) * low_res.width + u] <= 0) {
@@ -231,17 +240,7 @@ std::vector<float> PromptableSegmenter::PooledEmbedding(
     }
   }
   if (total == 0) return {};
-  std::vector<float> mean(c, 0.0f);
-  for (size_t cell = 0; cell < counts.size(); ++cell) {
-    if (counts[cell] == 0) continue;
-    const float weight =
-        static_cast<float>(counts[cell]) / static_cast<float>(total);
-    for (int k = 0; k < c; ++k) {
-      mean[k] +=
-          weight * embedding_.data[static_cast<size_t>(k) * w * h + cell];
-    }
-  }
-  return mean;
+  return CellMean(embedding_, counts, total);
 }
 
 std::vector<float> PromptableSegmenter::EmbeddingAt(double x, double y) const {

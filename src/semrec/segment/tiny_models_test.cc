@@ -312,6 +312,26 @@ TEST(TinyModels, SplitDecoderPartsAreUsedAndChecked) {
                       ->SetImage(MakeScene().rgb));
 }
 
+infer::Tensor RandomTensor(const std::vector<int64_t>& shape,
+                           semrec::Rng* rng) {
+  infer::Tensor t = infer::Tensor::Zeros(shape);
+  for (float& v : t.data) v = static_cast<float>(rng->Normal());
+  return t;
+}
+
+// Same shape and values within float rounding (relative to the largest).
+void ExpectSameValues(const infer::Tensor& expected, const infer::Tensor& got,
+                      const std::string& name) {
+  ASSERT_EQ(expected.shape, got.shape) << name;
+  double scale = 0;
+  for (float v : expected.data) scale = std::max(scale, std::abs(double{v}));
+  ASSERT_GT(scale, 0.1) << name;
+  for (size_t i = 0; i < expected.data.size(); ++i) {
+    ASSERT_NEAR(expected.data[i], got.data[i], 1e-4 * scale)
+        << name << " value " << i;
+  }
+}
+
 TEST(TinyModels, UpscalingRewriteGivesTheExportsLogits) {
   // scripts/split_sam_decoder.py replaces SAM's NCHW upscaling (ConvTranspose,
   // LayerNorm2d, GELU, ConvTranspose, GELU, hypernetwork product) by
@@ -322,24 +342,14 @@ TEST(TinyModels, UpscalingRewriteGivesTheExportsLogits) {
   const infer::OnnxSession exported(dir / "tiny_sam_upscaling.onnx");
   const infer::OnnxSession rewritten(dir / "tiny_sam_upscaling_rewritten.onnx");
   semrec::Rng rng(3);
-  infer::Tensor tokens = infer::Tensor::Zeros({1, 16, 8});
-  infer::Tensor hyper = infer::Tensor::Zeros({1, 2, 4});
-  for (float& v : tokens.data) v = static_cast<float>(rng.Normal());
-  for (float& v : hyper.data) v = static_cast<float>(rng.Normal());
+  const infer::Tensor tokens = RandomTensor({1, 16, 8}, &rng);
+  const infer::Tensor hyper = RandomTensor({1, 2, 4}, &rng);
   const auto a = exported.Run({{"tokens", tokens}, {"hyper", hyper}});
   const auto b = rewritten.Run({{"tokens", tokens}, {"hyper", hyper}});
-  const infer::Tensor& la = a.at("logits");
-  const infer::Tensor& lb = b.at("logits");
-  ASSERT_EQ(la.shape, lb.shape);
-  ASSERT_EQ(la.shape, (std::vector<int64_t>{1, 2, 256}));
-  double scale = 0;
-  for (float v : la.data) scale = std::max(scale, std::abs(double{v}));
-  ASSERT_GT(scale, 0.1);
-  for (size_t i = 0; i < la.data.size(); ++i) {
-    // Exact up to float rounding, at every output pixel (a wrong raster
-    // permutation or weight layout moves or mixes values).
-    ASSERT_NEAR(la.data[i], lb.data[i], 1e-4 * scale) << "logit " << i;
-  }
+  ASSERT_EQ(a.at("logits").shape, (std::vector<int64_t>{1, 2, 256}));
+  // Exact up to float rounding, at every output pixel (a wrong raster
+  // permutation or weight layout moves or mixes values).
+  ExpectSameValues(a.at("logits"), b.at("logits"), "logits");
 }
 
 TEST(TinyModels, AttentionRewriteGivesTheExportsOutputs) {
@@ -351,23 +361,13 @@ TEST(TinyModels, AttentionRewriteGivesTheExportsOutputs) {
   const infer::OnnxSession rewritten(dir / "tiny_sam_attention_rewritten.onnx");
   semrec::Rng rng(5);
   for (int64_t tokens : {3, 6}) {
-    infer::Tensor t = infer::Tensor::Zeros({1, tokens, 8});
-    infer::Tensor image = infer::Tensor::Zeros({1, 16, 8});
-    for (float& v : t.data) v = static_cast<float>(rng.Normal());
-    for (float& v : image.data) v = static_cast<float>(rng.Normal());
+    const infer::Tensor t = RandomTensor({1, tokens, 8}, &rng);
+    const infer::Tensor image = RandomTensor({1, 16, 8}, &rng);
     const auto a = exported.Run({{"tokens", t}, {"image", image}});
     const auto b = rewritten.Run({{"tokens", t}, {"image", image}});
     for (const char* name : {"tokens_out", "image_out"}) {
-      const infer::Tensor& x = a.at(name);
-      const infer::Tensor& y = b.at(name);
-      ASSERT_EQ(x.shape, y.shape) << name;
-      double scale = 0;
-      for (float v : x.data) scale = std::max(scale, std::abs(double{v}));
-      ASSERT_GT(scale, 0.1) << name;
-      for (size_t i = 0; i < x.data.size(); ++i) {
-        ASSERT_NEAR(x.data[i], y.data[i], 1e-4 * scale)
-            << name << " value " << i << ", " << tokens << " tokens";
-      }
+      SCOPED_TRACE(std::to_string(tokens) + " tokens");
+      ExpectSameValues(a.at(name), b.at(name), name);
     }
   }
 }
