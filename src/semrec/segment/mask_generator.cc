@@ -331,7 +331,8 @@ class AutomaticMaskGenerator : public MaskGenerator {
   }
 
   // The fast path: low-res filtering, full resolution only for survivors,
-  // points inside accepted masks skipped.
+  // finer points inside accepted masks (or between rejected ones) skipped
+  // where the image embedding says the image looks alike.
   std::vector<Mask> DecodeSkippingCovered(
       const std::vector<std::array<float, 2>>& points) {
     const std::vector<int>& levels = levels_;
@@ -383,8 +384,9 @@ class AutomaticMaskGenerator : public MaskGenerator {
           if (outcome[cell] != 1) return false;
           // Only where the image looks the same as at the rejected points.
           if (options_.covered_similarity > 0) {
-            if (here.empty())
+            if (here.empty()) {
               here = model_->EmbeddingAt(points[p][0], points[p][1]);
+            }
             const auto& q = points[point_of_cell[cell]];
             if (Cosine(here, model_->EmbeddingAt(q[0], q[1])) <
                 options_.covered_similarity) {
