@@ -67,8 +67,9 @@ void BenchVote() {
   // 640 x 480, 200 random disc masks, 21 classes.
   Rng rng(1);
   LabelMap semantic(640, 480);
-  for (auto& v : semantic.values())
+  for (auto& v : semantic.values()) {
     v = static_cast<uint16_t>(rng.UniformInt(0, 20));
+  }
   std::vector<segment::Mask> masks;
   for (int m = 0; m < 200; ++m) {
     Image<uint8_t> img(640, 480);
@@ -112,8 +113,8 @@ void BenchDecoder(const infer::ModelRegistry& registry, const ColorImage& rgb) {
   const int n = 48;
   for (int i = 0; i < n; ++i) {
     segment::Prompt prompt;
-    prompt.points = {
-        {(i % 8 + 0.5f) * rgb.width() / 8, (i / 8 + 0.5f) * rgb.height() / 6}};
+    prompt.points = {{(static_cast<float>(i % 8) + 0.5f) * rgb.width() / 8,
+                      (static_cast<float>(i / 8) + 0.5f) * rgb.height() / 6}};
     prompt.labels = {1};
     t = Clock::now();
     whole->Decode(prompt);

@@ -29,8 +29,9 @@ size_t Tensor::NumElements(const std::vector<int64_t>& shape) {
 }
 
 Tensor Tensor::Zeros(const std::vector<int64_t>& shape) {
-  for (int64_t d : shape)
+  for (int64_t d : shape) {
     CheckArgument(d >= 0, "Tensor::Zeros: negative dimension");
+  }
   return {shape, std::vector<float>(NumElements(shape), 0.0f)};
 }
 
@@ -140,7 +141,8 @@ std::map<std::string, Tensor> OnnxSession::Run(
 std::map<std::string, Tensor> OnnxSession::RunRefs(
     const TensorRefs& inputs) const {
   const std::string model = model_path_.filename().string();
-  for (const auto& [name, tensor] : inputs) {
+  for (const auto& input : inputs) {
+    const std::string& name = input.first;
     const bool known =
         std::any_of(inputs_.begin(), inputs_.end(),
                     [&](const TensorInfo& i) { return i.name == name; });
@@ -179,8 +181,9 @@ std::map<std::string, Tensor> OnnxSession::RunRefs(
         t.shape.data(), t.shape.size()));
   }
   std::vector<const char*> output_names;
-  for (const TensorInfo& info : outputs_)
+  for (const TensorInfo& info : outputs_) {
     output_names.push_back(info.name.c_str());
+  }
   std::vector<Ort::Value> results;
   try {
     results = impl_->session.Run(Ort::RunOptions{nullptr}, input_names.data(),

@@ -373,8 +373,9 @@ class SamSegmenter : public PromptableSegmenter {
         encoder_->entry().output ? encoder_->entry().output->name : "output";
     embedding_ = Output(out, name, encoder_->entry().name);
     image_features_.clear();
-    if (image_part_)
+    if (image_part_) {
       image_features_ = image_part_->RunRefs(ImageSide(*image_part_));
+    }
   }
 
   LowResMask Decode(const Prompt& prompt) const override {
