@@ -14,6 +14,39 @@ def attr(node, name, default=None):
     return default
 
 
+def live_nodes(nodes, outputs):
+    """The nodes that the tensors named in `outputs` need, in their order."""
+    needed = set(outputs)
+    live = []
+    for n in reversed(list(nodes)):
+        if any(o in needed for o in n.output):
+            live.append(n)
+            needed.update(i for i in n.input if i)
+    return live[::-1]
+
+
+def replace_node(graph, old, new_nodes):
+    """Puts `new_nodes` where `old` was (its inputs are defined by then)."""
+    at = [k for k, n in enumerate(graph.node) if n is old][0]
+    order = list(graph.node[:at]) + new_nodes + list(graph.node[at + 1:])
+    graph.ClearField("node")
+    graph.node.extend(order)
+
+
+def finish(graph, new_initializers):
+    """Adds the rewrite's constants, then drops the nodes and initializers
+    that no output needs any more (the replaced path)."""
+    for name, value in new_initializers.items():
+        graph.initializer.append(numpy_helper.from_array(value, name))
+    live = live_nodes(graph.node, [o.name for o in graph.output])
+    graph.ClearField("node")
+    graph.node.extend(live)
+    used = set(i for n in graph.node for i in n.input)
+    keep = [i for i in graph.initializer if i.name in used]
+    graph.ClearField("initializer")
+    graph.initializer.extend(keep)
+
+
 def rewrite_upscaling(model):
     """SAM's mask upscaling as GEMMs on the channel-last token layout.
 
@@ -168,22 +201,8 @@ def rewrite_upscaling(model):
                                   name=prefix + "raster"))
 
     # The new Reshape now defines the MatMul's output; the old path goes dead.
-    at = [k for k, n in enumerate(g.node) if n is matmul][0]
-    order = list(g.node[:at]) + nodes + list(g.node[at + 1:])
-    needed = set(o.name for o in g.output)
-    live = []
-    for n in reversed(order):
-        if any(o in needed for o in n.output):
-            live.append(n)
-            needed.update(i for i in n.input if i)
-    g.ClearField("node")
-    g.node.extend(reversed(live))
-    for name, value in new_inits.items():
-        g.initializer.append(numpy_helper.from_array(value, name))
-    used = set(i for n in g.node for i in n.input)
-    keep_inits = [i for i in g.initializer if i.name in used]
-    g.ClearField("initializer")
-    g.initializer.extend(keep_inits)
+    replace_node(g, matmul, nodes)
+    finish(g, new_inits)
     return True
 
 
@@ -339,26 +358,10 @@ def rewrite_attention(model):
             values = node("MatMul", [attn_flat, u], "out_mm")
         nodes.append(helper.make_node("Add", [values, init("b_o", b_o)], [out.output[0]],
                                       name=tag + "out"))
-        at = [i for i, n in enumerate(g.node) if n is out][0]
-        order = list(g.node[:at]) + nodes + list(g.node[at + 1:])
-        g.ClearField("node")
-        g.node.extend(order)
+        replace_node(g, out, nodes)
         by_name = {n.name: n for n in g.node}
         count += 1
     if count:
-        for name, value in new_inits.items():
-            g.initializer.append(numpy_helper.from_array(value, name))
-        needed = set(o.name for o in g.output)
-        live = []
-        for n in reversed(list(g.node)):
-            if any(o in needed for o in n.output):
-                live.append(n)
-                needed.update(i for i in n.input if i)
-        g.ClearField("node")
-        g.node.extend(reversed(live))
-        used = set(i for n in g.node for i in n.input)
-        keep = [i for i in g.initializer if i.name in used]
-        g.ClearField("initializer")
-        g.initializer.extend(keep)
+        finish(g, new_inits)
     return count
 

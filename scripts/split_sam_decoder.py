@@ -28,7 +28,7 @@ import numpy as np
 import onnx
 from onnx import helper, numpy_helper, shape_inference
 
-from sam_decoder_rewrites import attr, rewrite_attention, rewrite_upscaling
+from sam_decoder_rewrites import attr, live_nodes, rewrite_attention, rewrite_upscaling
 
 PROMPT_INPUTS = ("point_coords", "point_labels")
 KEEP_OUTPUTS = ("iou_predictions", "low_res_masks")
@@ -247,13 +247,7 @@ def split(model):
         initializers[name] = numpy_helper.from_array(value, name)
 
     # Keep only what the kept outputs need.
-    needed = set(o.name for o in outputs)
-    kept = []
-    for n in reversed(nodes):
-        if any(o in needed for o in n.output):
-            kept.append(n)
-            needed.update(i for i in n.input if i)
-    kept.reverse()
+    kept = live_nodes(nodes, [o.name for o in outputs])
 
     prompt_dependent = set(PROMPT_INPUTS)
     for n in kept:
@@ -323,7 +317,9 @@ def split(model):
     image_part = make("sam_decoder_image_part", image_nodes, image_inputs, frontier_values)
     prompt_part = make("sam_decoder_prompt_part", prompt_nodes,
                        prompt_side_inputs + frontier_values, outputs)
-    if rewrite_upscaling(prompt_part) | (rewrite_attention(prompt_part) > 0):
+    upscaling_rewritten = rewrite_upscaling(prompt_part)
+    attention_blocks_rewritten = rewrite_attention(prompt_part)
+    if upscaling_rewritten or attention_blocks_rewritten:
         onnx.checker.check_model(prompt_part)
     return image_part, prompt_part, frontier
 

@@ -83,12 +83,17 @@ void CheckSignature(const std::filesystem::path& file,
   }
 }
 
+std::filesystem::path ModelFile(const ModelEntry& entry,
+                                const OnnxModelOptions& options) {
+  const auto dir =
+      options.model_dir.empty() ? DefaultModelDir() : options.model_dir;
+  return dir / entry.file;
+}
+
 OnnxModel::OnnxModel(const ModelEntry& entry, const OnnxModelOptions& options)
     : entry_(entry) {
   options.Check();
-  const auto dir =
-      options.model_dir.empty() ? DefaultModelDir() : options.model_dir;
-  file_ = dir / entry.file;
+  file_ = ModelFile(entry, options);
   Load(options);
 }
 

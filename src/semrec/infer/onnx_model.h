@@ -58,6 +58,11 @@ class OnnxModel {
   std::unique_ptr<OnnxSession> session_;
 };
 
+/// Where `entry`'s file lies: options.model_dir (or the default cache) /
+/// entry.file.
+std::filesystem::path ModelFile(const ModelEntry& entry,
+                                const OnnxModelOptions& options);
+
 /// Checks a session's inputs/outputs against signatures (-1 = any; a dynamic
 /// model dimension matches anything). Throws FormatError naming `file`, the
 /// tensor and both shapes. Extra model inputs are an error (nobody would feed

@@ -28,7 +28,7 @@ void MaskGeneratorOptions::Check() const {
   CheckArgument(dense_stride >= 1 && (dense_stride & (dense_stride - 1)) == 0,
                 "mask generator: dense_stride must be a power of 2");
   CheckArgument(covered_similarity >= 0 && covered_similarity <= 1,
-                "mask generation: covered_similarity must be in [0, 1]");
+                "mask generator: covered_similarity must be in [0, 1]");
   CheckArgument(crop_layers >= 0 && crop_layers <= 4,
                 "mask generator: crop_layers must be in 0..4");
   CheckArgument(crop_overlap_ratio >= 0 && crop_overlap_ratio < 1,
@@ -408,17 +408,23 @@ class AutomaticMaskGenerator : public MaskGenerator {
         }
         ++next;
       }
-      // Decode, score and upsample in parallel (the wave was chosen before
-      // any of its results); book-keeping below in prompt order.
+      // Decode, score, upsample and describe in parallel (the wave was
+      // chosen before any of its results); book-keeping below in prompt
+      // order.
       std::vector<LowResMask> decoded(wave.size());
       std::vector<float> stability(wave.size());
       std::vector<Mask> upsampled(wave.size());
+      std::vector<int> low_res_area(wave.size(), 0);
+      std::vector<std::vector<float>> pooled(wave.size());
       tbb::parallel_for(static_cast<size_t>(0), wave.size(), [&](size_t k) {
-        decoded[k] = DecodePoint(points[wave[k]]);
+        const LowResMask& m = decoded[k] = DecodePoint(points[wave[k]]);
         stability[k] =
-            model_->StabilityScore(decoded[k], 0.0f, options_.stability_offset);
-        if (Passes(decoded[k], stability[k])) {
-          upsampled[k] = model_->Upsample(decoded[k]);
+            model_->StabilityScore(m, 0.0f, options_.stability_offset);
+        if (!Passes(m, stability[k])) return;
+        upsampled[k] = model_->Upsample(m);
+        for (float logit : m.logits) low_res_area[k] += logit > 0.0f;
+        if (options_.covered_similarity > 0) {
+          pooled[k] = model_->PooledEmbedding(m);
         }
       });
       stats_.prompts_decoded += static_cast<int>(wave.size());
@@ -434,12 +440,9 @@ class AutomaticMaskGenerator : public MaskGenerator {
         const bool passes = Passes(m, stability[k]);
         outcome[static_cast<size_t>(gj) * n + gi] = passes ? 2 : 1;
         if (!passes) continue;
-        int area = 0;
-        for (float logit : m.logits) area += logit > 0.0f;
+        const int area = low_res_area[k];
         const int id = static_cast<int>(mask_embedding.size());
-        mask_embedding.push_back(options_.covered_similarity > 0
-                                     ? model_->PooledEmbedding(m)
-                                     : std::vector<float>{});
+        mask_embedding.push_back(std::move(pooled[k]));
         for (size_t i = 0; i < covered.size(); ++i) {
           if (m.logits[i] > 0.0f &&
               (covered[i] < 0 || area < covered_area[i])) {

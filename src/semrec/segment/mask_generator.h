@@ -50,9 +50,9 @@ struct MaskGeneratorOptions {
   /// to the covering mask's mean embedding (a mask nested in an accepted one,
   /// a cushion on a sofa, starts where the embedding changes), and a point
   /// between rejected ones when it is below this to any of their embeddings.
-  /// 0 = skip regardless (session 5's default: ~2x faster, but it missed
+  /// 0 = skip regardless (the former default: ~2x faster, but it missed
   /// 23-43% of the straightforward result's masks). 0.8 found 91-100% of them
-  /// on 7 test images at 8.5-11 s per image (bench/bench_segment).
+  /// on 7 test images at 8.4-12.3 s per image (bench/bench_segment).
   float covered_similarity = 0.8f;
   /// SAM's crop layers (off by default, as in SAM): layer l adds a 2^l x 2^l
   /// grid of overlapping crops, each encoded and prompted with

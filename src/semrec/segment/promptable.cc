@@ -8,7 +8,6 @@
 #include <spdlog/spdlog.h>
 
 #include "semrec/core/error.h"
-#include "semrec/core/file_util.h"
 
 namespace semrec::segment {
 
@@ -329,11 +328,10 @@ LowResMask BestOf(const infer::Tensor& masks, const infer::Tensor& ious,
 bool SplitInstalled(const infer::ModelRegistry& registry,
                     const infer::ModelEntry& decoder,
                     const infer::OnnxModelOptions& runtime) {
-  const auto dir =
-      runtime.model_dir.empty() ? DefaultModelDir() : runtime.model_dir;
-  return std::filesystem::exists(dir /
-                                 registry.Get(decoder.split_image).file) &&
-         std::filesystem::exists(dir / registry.Get(decoder.split_prompt).file);
+  return std::filesystem::exists(
+             infer::ModelFile(registry.Get(decoder.split_image), runtime)) &&
+         std::filesystem::exists(
+             infer::ModelFile(registry.Get(decoder.split_prompt), runtime));
 }
 
 class SamSegmenter : public PromptableSegmenter {
@@ -349,7 +347,7 @@ class SamSegmenter : public PromptableSegmenter {
     if (split && !SplitInstalled(registry, entry, options.runtime)) {
       spdlog::warn(
           "mask decoder '{}': its split parts are not installed (run "
-          "scripts/setup); decoding with the whole export, ~20% slower",
+          "scripts/setup); decoding with the whole export, about half as fast",
           entry.name);
       split = false;
     }
