@@ -147,6 +147,9 @@ if [ -f "$models/deeplab_v3.onnx" ]; then
   [ "$rc" -eq 1 ] && grep -q "not installed: run scripts/setup" "$tmp/err" || fail "segment: missing model: $(cat "$tmp/err")"
   "$SEMREC" segment "$data/ade20k_val_3/images" --semantic nosuchmodel --out "$tmp/s6" 2>"$tmp/err"; rc=$?
   [ "$rc" -eq 1 ] && grep -q "unknown model 'nosuchmodel'" "$tmp/err" || fail "segment: unknown model"
+  "$SEMREC" segment "$data/ade20k_val_3/images" --covered-similarity 1.5 --out "$tmp/s7" 2>"$tmp/err"; rc=$?
+  [ "$rc" -ne 0 ] && grep -q "covered-similarity: Value 1.5 not in range" "$tmp/err" ||
+    fail "segment: bad --covered-similarity: $(cat "$tmp/err")"
   "$SEMREC" eval seg "$tmp/seg" "$data/ade20k_val_3/annotations" --labels voc 2>"$tmp/err"; rc=$?
   [ "$rc" -eq 1 ] && grep -q "no prediction" "$tmp/err" || fail "eval seg: missing prediction: $(cat "$tmp/err")"
   # People: synthetic sequence, detector boxes replaced by the ground truth (YOLOX finds few of the
