@@ -1,7 +1,9 @@
 // Segmentation benchmark: automatic mask generation (fast vs the
 // straightforward reference, with the masks' agreement), the vote, and the
 // semantic branch, on real images.
-//   bench_segment [image ...]   (default: Redwood + ADE20K samples)
+//   bench_segment [--decoder-only] [image ...]
+// (default: Redwood + ADE20K samples; --decoder-only: the per-prompt decoder
+// timings on the first image only).
 // Needs the real models (scripts/setup).
 #include <chrono>
 #include <cstdio>
@@ -107,7 +109,9 @@ void BenchDecoder(const infer::ModelRegistry& registry, const ColorImage& rgb) {
   t = Clock::now();
   split->SetImage(rgb);
   const double split_image_s = Since(t);
-  double whole_s = 0, split_s = 0;
+  double whole_s = 0, split_s = 0, stopped_s = 0;
+  segment::MaskFilter reject_all;  // every prompt stops on its preview
+  reject_all.min_predicted_iou = 2.0f;
   const int n = 48;
   for (int i = 0; i < n; ++i) {
     segment::Prompt prompt;
@@ -120,20 +124,30 @@ void BenchDecoder(const infer::ModelRegistry& registry, const ColorImage& rgb) {
     t = Clock::now();
     split->Decode(prompt);
     split_s += Since(t);
+    t = Clock::now();
+    split->DecodeUnlessRejected(prompt, reject_all);
+    stopped_s += Since(t);
   }
   std::printf(
       "decoder, 1 thread, %d prompts: export %.1f ms/prompt, split %.1f "
-      "ms/prompt (%.2fx); per image: encode %.2f s, encode + image part "
-      "%.2f s\n",
+      "ms/prompt (%.2fx), stopped on the preview %.1f ms/prompt; per image: "
+      "encode %.2f s, encode + image part %.2f s\n",
       n, 1000 * whole_s / n, 1000 * split_s / n, whole_s / split_s,
-      whole_image_s, split_image_s);
+      1000 * stopped_s / n, whole_image_s, split_image_s);
 }
 
 }  // namespace
 
 int main(int argc, char** argv) {
   std::vector<fs::path> images;
-  for (int i = 1; i < argc; ++i) images.emplace_back(argv[i]);
+  bool decoder_only = false;
+  for (int i = 1; i < argc; ++i) {
+    if (std::string(argv[i]) == "--decoder-only") {
+      decoder_only = true;
+    } else {
+      images.emplace_back(argv[i]);
+    }
+  }
   if (images.empty()) {
     const fs::path data =
         fs::path(SEMREC_SOURCE_DIR) / ".." / "shared" / "data";
@@ -141,8 +155,12 @@ int main(int argc, char** argv) {
               data / "ade20k_val_3" / "images" / "ADE_val_00000001.jpg",
               data / "ade20k_val_3" / "images" / "ADE_val_00000002.jpg"};
   }
-  BenchVote();
   const auto registry = infer::ModelRegistry::LoadDefault();
+  if (decoder_only) {
+    BenchDecoder(registry, io::ReadColorImage(images.front()));
+    return 0;
+  }
+  BenchVote();
   BenchDecoder(registry, io::ReadColorImage(images.front()));
   segment::SemanticSegmenter semantic(registry, {});
 
@@ -203,9 +221,11 @@ int main(int argc, char** argv) {
     }
     std::printf(
         "    encode %.2f s (in each); all prompts: decode %.2f s, candidates "
-        "%d, post-processing %.2f s\n",
+        "%d, post-processing %.2f s; default: %d of %d decoded prompts "
+        "stopped on the preview\n",
         fast->stats().encode_seconds, low_res->stats().decode_seconds,
-        low_res->stats().candidates, low_res->stats().postprocess_seconds);
+        low_res->stats().candidates, low_res->stats().postprocess_seconds,
+        fast->stats().prompts_rejected_early, fast->stats().prompts_decoded);
   }
   return 0;
 }

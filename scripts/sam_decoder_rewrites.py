@@ -3,7 +3,10 @@ float rounding) but do far less work per prompt on a CPU; used by
 split_sam_decoder.py. Each returns without changing the model when the graph
 does not have the exact structure of the SAM export it was written for.
 """
+import copy
+
 import numpy as np
+import onnx
 from onnx import helper, numpy_helper
 
 
@@ -365,3 +368,179 @@ def rewrite_attention(model):
         finish(g, new_inits)
     return count
 
+
+
+UPSCALING = "/semrec_upscaling/"
+SHAPE_OPS = ("Reshape", "Flatten", "Squeeze", "Unsqueeze", "Identity")
+# Prompt part -> mask part tensors, and the prompt part's preview output.
+MASK_PART_INPUTS = ("upscaling_tokens", "mask_hyper")
+PREVIEW = "mask_preview"
+
+
+def split_mask_part(model):
+    """Moves the mask upscaling (half the work per prompt) into a mask part.
+
+    Automatic mask generation rejects most prompts' masks for their stability
+    score, which needs the upscaled logits. The prompt part keeps the
+    transformer, the IoU head and the decoder's choice among its candidate
+    masks, and gains a preview: the chosen mask's logits at one of every 4x4
+    low-res cells, computed exactly as the full upscaling would (each output
+    cell of the two 2x2/stride-2 transposed convolutions depends on one
+    token only): preview[y, x] = low_res_masks[4y + 2, 4x + 2]. The mask part
+    computes the chosen mask's full low-res logits from the prompt part's
+    `upscaling_tokens` and `mask_hyper`, only for prompts worth it. Needs the
+    structure rewrite_upscaling leaves, and the export's choice to be a Gather
+    over the masks' axis (reached by shape-only ops). Returns the mask part and
+    changes `model` into the prompt part, or returns None (model unchanged).
+    """
+    g = model.graph
+    by_name = {n.name: n for n in g.node}
+    names = ("mm1", "up1", "ln", "mm2", "up2", "hyper_t", "raster")
+    if any(UPSCALING + k not in by_name for k in names):
+        return None
+    consumers = {}
+    for n in g.node:
+        for i in n.input:
+            consumers.setdefault(i, []).append(n)
+    inits = {i.name: numpy_helper.to_array(i) for i in g.initializer}
+    tokens = by_name[UPSCALING + "mm1"].input[0]
+    hyper = by_name[UPSCALING + "hyper_t"].input[0]  # [1, masks, channels]
+
+    blocks = inits[by_name[UPSCALING + "blocks"].input[1]]  # [H, W, 2, 2, 2, 2, -1]
+    height, width = int(blocks[0]), int(blocks[1])
+    w1, b1 = inits[UPSCALING + "c_w1"], inits[UPSCALING + "c_b1"]
+    w2, b2 = inits[UPSCALING + "c_w2"], inits[UPSCALING + "c_b2"]
+    mid, channels = w1.shape[1] // 4, w2.shape[1] // 4
+
+    # raster [1, masks, 16 HW] -(shape ops)-> [masks, ...] -Gather(choice)->
+    # -(shape ops)-> low_res_masks [1, 1, 4H, 4W]: checked by running the
+    # shape ops on numbered cells for each mask count that they accept.
+    def follow(name, value):
+        while True:
+            users = consumers.get(name, [])
+            if len(users) != 1 or users[0].op_type not in SHAPE_OPS:
+                return name, users, value
+            value = reshaped(users[0], value)
+            name = users[0].output[0]
+
+    def reshaped(n, value):
+        if value is None:
+            return None
+        try:
+            if n.op_type == "Reshape":
+                shape = [d if d != 0 else value.shape[k] for k, d in enumerate(inits[n.input[1]])]
+                return value.reshape(shape)
+            if n.op_type == "Flatten":
+                axis = attr(n, "axis", 1)
+                return value.reshape(int(np.prod(value.shape[:axis])), -1)
+            if n.op_type in ("Squeeze", "Unsqueeze"):
+                axes = inits[n.input[1]] if len(n.input) > 1 else attr(n, "axes")
+                if n.op_type == "Squeeze":
+                    return np.squeeze(value, axis=tuple(int(a) for a in axes))
+                return np.expand_dims(value, axis=tuple(int(a) for a in axes))
+            return value  # Identity
+        except (KeyError, ValueError, TypeError):
+            return None
+
+    cells = 16 * height * width
+    raster = by_name[UPSCALING + "raster"].output[0]
+    accepted = 0
+    for masks in range(1, 9):
+        numbered = np.arange(masks * cells).reshape(1, masks, cells)
+        flat, users, value = follow(raster, numbered)
+        if len(users) != 1 or users[0].op_type != "Gather" or attr(users[0], "axis", 0) != 0:
+            return None
+        gather = users[0]
+        if gather.input[0] != flat:
+            return None
+        if value is None:
+            continue  # a reshape for another mask count
+        if value.shape[0] != masks or not np.array_equal(value.reshape(masks, cells), numbered[0]):
+            return None
+        end, users, low_res = follow(gather.output[0], value[:1])
+        if (users or end != "low_res_masks" or low_res is None
+                or low_res.shape != (1, 1, 4 * height, 4 * width)
+                or not np.array_equal(low_res.reshape(-1), numbered[0, 0])):
+            return None
+        accepted += 1
+    if not accepted:
+        return None
+
+    # The mask part: the upscaling nodes, fed by its own inputs.
+    mask_nodes, needed, stop = [], {by_name[UPSCALING + "raster"].output[0]}, {tokens, hyper}
+    for n in reversed(list(g.node)):
+        if any(o in needed for o in n.output):
+            mask_nodes.append(n)
+            needed.update(i for i in n.input if i and i not in stop and i not in inits)
+    mask_nodes = [copy.deepcopy(n) for n in reversed(mask_nodes)]
+    rename = {tokens: MASK_PART_INPUTS[0], hyper: MASK_PART_INPUTS[1]}
+    for n in mask_nodes:
+        for k, i in enumerate(n.input):
+            n.input[k] = rename.get(i, i)
+    out_shape = np.array([1, 1, 4 * height, 4 * width], np.int64)
+    mask_nodes.append(helper.make_node("Reshape", [mask_nodes[-1].output[0], "c_low_res_shape"],
+                                       ["low_res_masks"], name=UPSCALING + "low_res"))
+    used = set(i for n in mask_nodes for i in n.input)
+    mask_inits = [numpy_helper.from_array(v, k) for k, v in inits.items() if k in used]
+    mask_inits.append(numpy_helper.from_array(out_shape, "c_low_res_shape"))
+    tokens_shape = [1, height * width, w1.shape[0]]
+    mask_graph = helper.make_graph(
+        mask_nodes, "sam_decoder_mask_part",
+        [helper.make_tensor_value_info(MASK_PART_INPUTS[0], onnx.TensorProto.FLOAT, tokens_shape),
+         helper.make_tensor_value_info(MASK_PART_INPUTS[1], onnx.TensorProto.FLOAT,
+                                       [1, 1, channels])],
+        [helper.make_tensor_value_info("low_res_masks", onnx.TensorProto.FLOAT,
+                                       out_shape.tolist())],
+        mask_inits)
+    mask_part = helper.make_model(mask_graph, opset_imports=model.opset_import,
+                                  producer_name="semrec split_sam_decoder.py")
+    mask_part.ir_version = model.ir_version
+
+    # The prompt part: the chosen mask's hypernetwork row, the tokens, the preview.
+    ln = by_name[UPSCALING + "ln"]
+    p = "/semrec_preview/"
+    new_inits = {
+        # Columns are (ky, kx, channel): block 3 = (1, 1) of the first
+        # transposed convolution, block 0 = (0, 0) of the second.
+        p + "c_w1": np.ascontiguousarray(w1[:, 3 * mid:]), p + "c_b1": b1[3 * mid:],
+        p + "c_w2": np.ascontiguousarray(w2[:, :channels]), p + "c_b2": b2[:channels],
+        p + "c_hyper_shape": np.array([1, 1, channels], np.int64),
+        p + "c_shape": np.array([1, 1, height, width], np.int64),
+        p + "c_sqrt2": np.array(np.sqrt(2.0), np.float32),
+        p + "c_one": np.array(1.0, np.float32), p + "c_half": np.array(0.5, np.float32),
+    }
+    nodes = []
+
+    def node(op, inputs, name, output=None, **attrs):
+        nodes.append(helper.make_node(op, inputs, [output or p + name], name=p + name, **attrs))
+        return output or p + name
+
+    def gelu(x, name):
+        e = node("Erf", [node("Div", [x, p + "c_sqrt2"], name + "_div")], name + "_erf")
+        y = node("Mul", [x, node("Add", [e, p + "c_one"], name + "_add")], name + "_mul")
+        return node("Mul", [y, p + "c_half"], name)
+
+    chosen = node("Gather", [node("Flatten", [hyper], "hyper_flat", axis=2), gather.input[1]],
+                  "hyper_chosen", axis=0)
+    hyper_out = node("Reshape", [chosen, p + "c_hyper_shape"], "hyper", MASK_PART_INPUTS[1])
+    node("Identity", [tokens], "tokens", MASK_PART_INPUTS[0])
+    a1 = node("Add", [node("MatMul", [tokens, p + "c_w1"], "mm1"), p + "c_b1"], "up1")
+    n1 = node("LayerNormalization", [a1] + list(ln.input[1:]), "ln", axis=-1,
+              epsilon=attr(ln, "epsilon"))
+    a2 = node("Add", [node("MatMul", [gelu(n1, "gelu1"), p + "c_w2"], "mm2"), p + "c_b2"], "up2")
+    logits = node("MatMul", [gelu(a2, "gelu2"),
+                             node("Transpose", [hyper_out], "hyper_t", perm=[0, 2, 1])], "logits")
+    node("Reshape", [logits, p + "c_shape"], "preview", PREVIEW)
+    at = [k for k, n in enumerate(g.node) if n is gather][0]
+    order = list(g.node[:at]) + nodes + list(g.node[at:])
+    g.ClearField("node")
+    g.node.extend(order)
+    kept = [o for o in g.output if o.name != "low_res_masks"]
+    g.ClearField("output")
+    g.output.extend(kept + [
+        helper.make_tensor_value_info(MASK_PART_INPUTS[0], onnx.TensorProto.FLOAT, tokens_shape),
+        helper.make_tensor_value_info(MASK_PART_INPUTS[1], onnx.TensorProto.FLOAT,
+                                      [1, 1, channels]),
+        helper.make_tensor_value_info(PREVIEW, onnx.TensorProto.FLOAT, [1, 1, height, width])])
+    finish(g, new_inits)
+    return mask_part

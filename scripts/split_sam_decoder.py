@@ -1,7 +1,7 @@
 #!/usr/bin/python3
 """Splits a SAM-style ONNX mask decoder into an image part and a prompt part.
 
-    split_sam_decoder.py DECODER.onnx IMAGE_PART.onnx PROMPT_PART.onnx
+    split_sam_decoder.py DECODER.onnx IMAGE_PART.onnx PROMPT_PART.onnx [MASK_PART.onnx]
 
 Automatic mask generation decodes ~1000 prompts against one image embedding.
 Part of the decoder does not depend on the prompt (projections of the image
@@ -22,13 +22,15 @@ folded into constants first; what still depends on the prompt stays in the
 prompt part. Needs Debian's python3-onnx (1.12+) and numpy only.
 """
 import copy
+import os
 import sys
 
 import numpy as np
 import onnx
 from onnx import helper, numpy_helper, shape_inference
 
-from sam_decoder_rewrites import attr, live_nodes, rewrite_attention, rewrite_upscaling
+from sam_decoder_rewrites import (attr, live_nodes, rewrite_attention, rewrite_upscaling,
+                                   split_mask_part)
 
 PROMPT_INPUTS = ("point_coords", "point_labels")
 KEEP_OUTPUTS = ("iou_predictions", "low_res_masks")
@@ -230,7 +232,7 @@ def with_constants(nodes, chosen, is_constant):
     return [n for n, t in zip(nodes, take) if t]
 
 
-def split(model):
+def split(model, mask_part=True):
     graph = model.graph
     outputs = [o for o in graph.output if o.name in KEEP_OUTPUTS]
     if len(outputs) != len(KEEP_OUTPUTS):
@@ -319,20 +321,37 @@ def split(model):
                        prompt_side_inputs + frontier_values, outputs)
     upscaling_rewritten = rewrite_upscaling(prompt_part)
     attention_blocks_rewritten = rewrite_attention(prompt_part)
+    mask_part = split_mask_part(prompt_part) if upscaling_rewritten and mask_part else None
     if upscaling_rewritten or attention_blocks_rewritten:
         onnx.checker.check_model(prompt_part)
-    return image_part, prompt_part, frontier
+    if mask_part is not None:
+        onnx.checker.check_model(mask_part)
+    return image_part, prompt_part, mask_part, frontier
 
 
 def main():
-    if len(sys.argv) != 4:
+    if len(sys.argv) not in (4, 5):
         raise SystemExit(__doc__)
     model = onnx.load(sys.argv[1])
-    image_part, prompt_part, frontier = split(model)
+    image_part, prompt_part, mask_part, frontier = split(model)
+    if len(sys.argv) == 4 and mask_part is not None:
+        # No place for a mask part: keep the upscaling in the prompt part.
+        image_part, prompt_part, _, frontier = split(onnx.load(sys.argv[1]), mask_part=False)
+        mask_part = None
     onnx.save(image_part, sys.argv[2])
     onnx.save(prompt_part, sys.argv[3])
-    print("split %s: %d image-part nodes, %d prompt-part nodes, %d tensors passed" %
-          (sys.argv[1], len(image_part.graph.node), len(prompt_part.graph.node), len(frontier)))
+    if len(sys.argv) == 5:
+        if mask_part is None:
+            # The prompt part computes the masks itself; an old mask part
+            # must not be paired with it.
+            if os.path.exists(sys.argv[4]):
+                os.remove(sys.argv[4])
+        else:
+            onnx.save(mask_part, sys.argv[4])
+    print("split %s: %d image-part nodes, %d prompt-part nodes, %s, %d tensors passed" %
+          (sys.argv[1], len(image_part.graph.node), len(prompt_part.graph.node),
+           "%d mask-part nodes" % len(mask_part.graph.node) if mask_part else "no mask part",
+           len(frontier)))
 
 
 if __name__ == "__main__":

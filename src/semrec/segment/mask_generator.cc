@@ -319,15 +319,16 @@ class AutomaticMaskGenerator : public MaskGenerator {
   }
 
   bool Passes(const LowResMask& m, float stability) const {
-    return m.predicted_iou >= options_.pred_iou_threshold &&
+    return !m.rejected_early &&
+           m.predicted_iou >= options_.pred_iou_threshold &&
            stability >= options_.stability_threshold;
   }
 
-  LowResMask DecodePoint(const std::array<float, 2>& p) const {
+  static Prompt PointPrompt(const std::array<float, 2>& p) {
     Prompt prompt;
     prompt.points = {p};
     prompt.labels = {1};
-    return model_->Decode(prompt);
+    return prompt;
   }
 
   // The fast path: low-res filtering, full resolution only for survivors,
@@ -336,6 +337,10 @@ class AutomaticMaskGenerator : public MaskGenerator {
   std::vector<Mask> DecodeSkippingCovered(
       const std::vector<std::array<float, 2>>& points) {
     const std::vector<int>& levels = levels_;
+    MaskFilter filter;
+    filter.min_predicted_iou = options_.pred_iou_threshold;
+    filter.min_stability = options_.stability_threshold;
+    filter.stability_offset = options_.stability_offset;
     std::vector<Mask> candidates;
     // Per low-res cell: the smallest accepted mask covering it (-1: none).
     std::vector<int> covered;
@@ -417,7 +422,9 @@ class AutomaticMaskGenerator : public MaskGenerator {
       std::vector<int> low_res_area(wave.size(), 0);
       std::vector<std::vector<float>> pooled(wave.size());
       tbb::parallel_for(static_cast<size_t>(0), wave.size(), [&](size_t k) {
-        const LowResMask& m = decoded[k] = DecodePoint(points[wave[k]]);
+        const LowResMask& m = decoded[k] =
+            model_->DecodeUnlessRejected(PointPrompt(points[wave[k]]), filter);
+        if (m.rejected_early) return;
         stability[k] =
             model_->StabilityScore(m, 0.0f, options_.stability_offset);
         if (!Passes(m, stability[k])) return;
@@ -430,16 +437,17 @@ class AutomaticMaskGenerator : public MaskGenerator {
       stats_.prompts_decoded += static_cast<int>(wave.size());
       for (size_t k = 0; k < wave.size(); ++k) {
         const LowResMask& m = decoded[k];
+        stats_.prompts_rejected_early += m.rejected_early;
+        const auto [gi, gj] = cells_[wave[k]];
+        const bool passes = Passes(m, stability[k]);
+        outcome[static_cast<size_t>(gj) * n + gi] = passes ? 2 : 1;
+        if (!passes) continue;
         if (covered.empty()) {
           cw = m.width;
           ch = m.height;
           covered.assign(static_cast<size_t>(cw) * ch, -1);
           covered_area.assign(covered.size(), 0);
         }
-        const auto [gi, gj] = cells_[wave[k]];
-        const bool passes = Passes(m, stability[k]);
-        outcome[static_cast<size_t>(gj) * n + gi] = passes ? 2 : 1;
-        if (!passes) continue;
         const int area = low_res_area[k];
         const int id = static_cast<int>(mask_embedding.size());
         mask_embedding.push_back(std::move(pooled[k]));
@@ -468,7 +476,7 @@ class AutomaticMaskGenerator : public MaskGenerator {
     std::vector<Mask> masks(points.size());
     std::vector<uint8_t> ok(points.size(), 0);
     tbb::parallel_for(static_cast<size_t>(0), points.size(), [&](size_t k) {
-      const LowResMask m = DecodePoint(points[k]);
+      const LowResMask m = model_->Decode(PointPrompt(points[k]));
       const Image<float> logits = model_->UpsampleLogits(m);
       const float stability =
           StabilityScore(logits.values(), 0.0f, options_.stability_offset);

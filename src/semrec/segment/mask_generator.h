@@ -70,6 +70,9 @@ struct MaskGeneratorOptions {
 struct MaskGeneratorStats {
   int prompts_total = 0;
   int prompts_decoded = 0;
+  /// Of those, stopped on their mask's preview (the mask upscaling skipped;
+  /// PromptableSegmenter::DecodeUnlessRejected).
+  int prompts_rejected_early = 0;
   int candidates = 0;  // passed the IoU and stability filters
   int kept = 0;        // after NMS and clean-up
   double encode_seconds = 0;

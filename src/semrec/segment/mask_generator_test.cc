@@ -24,6 +24,52 @@ TEST(MaskGenerator, StabilityScoreIsTheIouOfTheOffsetThresholds) {
   EXPECT_FLOAT_EQ(StabilityScore({-5.0f, -2.0f}, 0, 1), 1.0f);
 }
 
+// A 640 x 480 image letterboxed into SAM's 1024 x 1024 frame: the image
+// covers preview rows 0..47 of 64 (low-res cell 4y + 2 < 192).
+infer::InputTransform SamFrame() {
+  infer::InputTransform t;
+  t.image_width = 640;
+  t.image_height = 480;
+  t.input_width = t.input_height = 1024;
+  t.resized_width = 1024;
+  t.resized_height = 768;
+  t.scale_x = t.scale_y = 1.6;
+  return t;
+}
+
+// A 64 x 64 preview: `stable` cells at +5, `band` cells at 0 (inside the
+// +-1 band), in rows from `row` on, the rest at -5.
+LowResMask Preview(int stable, int band, int row = 0) {
+  LowResMask p;
+  p.width = p.height = 64;
+  p.logits.assign(64 * 64, -5.0f);
+  for (int i = 0; i < stable + band; ++i) {
+    p.logits[static_cast<size_t>(row) * 64 + i] = i < stable ? 5.0f : 0.0f;
+  }
+  return p;
+}
+
+TEST(MaskGenerator, PreviewRejectsOnlyMasksClearlyBelowTheFilters) {
+  MaskFilter filter;
+  filter.min_predicted_iou = 0.88f;
+  filter.min_stability = 0.95f;
+  const auto t = SamFrame();
+  // 400 cells, estimate 0.80; the margin at n = 400 is 0.03 + 0.025.
+  EXPECT_FALSE(MaskPreviewMayPass(Preview(320, 80), 0.9f, filter, t));
+  // 0.92 is within the margin: decode it fully.
+  EXPECT_TRUE(MaskPreviewMayPass(Preview(368, 32), 0.9f, filter, t));
+  EXPECT_TRUE(MaskPreviewMayPass(Preview(400, 0), 0.9f, filter, t));
+  // The predicted IoU decides alone.
+  EXPECT_FALSE(MaskPreviewMayPass(Preview(400, 0), 0.8f, filter, t));
+  // Too few cells to tell (10, estimate 0.5).
+  EXPECT_TRUE(MaskPreviewMayPass(Preview(5, 5), 0.9f, filter, t));
+  // Unstable cells in the letterbox padding (rows >= 48) do not count.
+  LowResMask padded = Preview(400, 0);
+  for (int i = 0; i < 300; ++i) padded.logits[50 * 64 + i] = 0.0f;
+  EXPECT_TRUE(MaskPreviewMayPass(padded, 0.9f, filter, t));
+  EXPECT_FALSE(MaskPreviewMayPass(Preview(100, 300, 40), 0.9f, filter, t));
+}
+
 TEST(MaskGenerator, BoxNmsKeepsTheBestScoredOfOverlappingMasks) {
   std::vector<Mask> masks = {RectMask(50, 50, {0, 0, 20, 20}, 0.90f),
                              RectMask(50, 50, {1, 1, 21, 21}, 0.95f),

@@ -261,6 +261,40 @@ std::vector<float> PromptableSegmenter::EmbeddingAt(double x, double y) const {
   return out;
 }
 
+bool MaskPreviewMayPass(const LowResMask& preview, float predicted_iou,
+                        const MaskFilter& filter,
+                        const infer::InputTransform& transform) {
+  if (predicted_iou < filter.min_predicted_iou) return false;
+  // Preview cell x is low-res cell 4x + 2 of a 4x finer grid over the model
+  // frame; count those whose centre lies on the image (the letterbox's
+  // padding counts for nothing in the full-resolution score either).
+  const auto inside = [](int cell, int preview_size, int resized, int input) {
+    return (4.0 * cell + 2.5) / (4.0 * preview_size) * input < resized;
+  };
+  const float high = filter.stability_offset, low = -filter.stability_offset;
+  int64_t above_high = 0, above_low = 0;
+  for (int y = 0; y < preview.height; ++y) {
+    if (!inside(y, preview.height, transform.resized_height,
+                transform.input_height)) {
+      break;
+    }
+    for (int x = 0; x < preview.width; ++x) {
+      if (!inside(x, preview.width, transform.resized_width,
+                  transform.input_width)) {
+        break;
+      }
+      const float logit =
+          preview.logits[static_cast<size_t>(y) * preview.width + x];
+      above_high += logit > high;
+      above_low += logit > low;
+    }
+  }
+  if (above_low < 16) return true;  // too few cells to tell
+  const double estimate = static_cast<double>(above_high) / above_low;
+  const double error = 0.03 + 0.5 / std::sqrt(static_cast<double>(above_low));
+  return estimate >= filter.min_stability - error;
+}
+
 namespace {
 
 // SAM's ONNX prompt encoding: points then box corners (labels 2, 3); without
@@ -325,6 +359,13 @@ LowResMask BestOf(const infer::Tensor& masks, const infer::Tensor& ious,
   return out;
 }
 
+bool HasOutput(const infer::OnnxModel& model, const std::string& name) {
+  const auto& outs = model.session().outputs();
+  return std::any_of(outs.begin(), outs.end(), [&](const infer::TensorInfo& o) {
+    return o.name == name;
+  });
+}
+
 bool SplitInstalled(const infer::ModelRegistry& registry,
                     const infer::ModelEntry& decoder,
                     const infer::OnnxModelOptions& runtime) {
@@ -356,6 +397,23 @@ class SamSegmenter : public PromptableSegmenter {
           registry.Get(entry.split_image), options.runtime);
       decoder_ = std::make_unique<infer::OnnxModel>(
           registry.Get(entry.split_prompt), dec);
+      // A prompt part with a preview leaves the upscaling to the mask part.
+      if (HasOutput(*decoder_, "mask_preview")) {
+        if (!entry.split_masks.empty() &&
+            std::filesystem::exists(infer::ModelFile(
+                registry.Get(entry.split_masks), options.runtime))) {
+          mask_part_ = std::make_unique<infer::OnnxModel>(
+              registry.Get(entry.split_masks), dec);
+        } else {
+          spdlog::warn(
+              "mask decoder '{}': its prompt part needs the mask part, which "
+              "is not installed (run scripts/setup); decoding with the whole "
+              "export, about half as fast",
+              entry.name);
+          image_part_.reset();
+          decoder_ = std::make_unique<infer::OnnxModel>(entry, dec);
+        }
+      }
     } else {
       decoder_ = std::make_unique<infer::OnnxModel>(entry, dec);
     }
@@ -377,6 +435,16 @@ class SamSegmenter : public PromptableSegmenter {
   }
 
   LowResMask Decode(const Prompt& prompt) const override {
+    return Run(prompt, nullptr);
+  }
+
+  LowResMask DecodeUnlessRejected(const Prompt& prompt,
+                                  const MaskFilter& filter) const override {
+    return Run(prompt, &filter);
+  }
+
+ private:
+  LowResMask Run(const Prompt& prompt, const MaskFilter* filter) const {
     CheckArgument(!embedding_.shape.empty(), "SAM: SetImage() was not called");
     infer::Tensor coords, labels;
     EncodePrompt(prompt, transform_, &coords, &labels);
@@ -385,11 +453,38 @@ class SamSegmenter : public PromptableSegmenter {
     in["point_labels"] = &labels;
     const auto out = decoder_->RunRefs(in);
     const std::string& name = decoder_->entry().name;
-    return BestOf(Output(out, "low_res_masks", name),
-                  Output(out, "iou_predictions", name), name);
+    const infer::Tensor& iou = Output(out, "iou_predictions", name);
+    if (!mask_part_) {
+      return BestOf(Output(out, "low_res_masks", name), iou, name);
+    }
+    // The prompt part has chosen the mask; judge its preview before paying
+    // for the upscaling.
+    if (filter != nullptr) {
+      const infer::Tensor& p = Output(out, "mask_preview", name);
+      LowResMask preview;
+      if (p.shape.size() != 4 || iou.data.size() != 1) {
+        throw Error(fmt::format(
+            "mask decoder '{}': unexpected preview/IoU shapes", name));
+      }
+      preview.height = static_cast<int>(p.shape[2]);
+      preview.width = static_cast<int>(p.shape[3]);
+      preview.logits = p.data;
+      if (!MaskPreviewMayPass(preview, iou.data[0], *filter, transform_)) {
+        LowResMask rejected;
+        rejected.predicted_iou = iou.data[0];
+        rejected.rejected_early = true;
+        return rejected;
+      }
+    }
+    infer::TensorRefs mask_in;
+    for (const infer::TensorInfo& info : mask_part_->session().inputs()) {
+      mask_in[info.name] = &Output(out, info.name, name);
+    }
+    const std::string& mask_name = mask_part_->entry().name;
+    const auto masks = mask_part_->RunRefs(mask_in);
+    return BestOf(Output(masks, "low_res_masks", mask_name), iou, mask_name);
   }
 
- private:
   // The inputs of `model` that do not depend on the prompt, by reference:
   // the embedding, the image part's outputs, and constants (no mask input;
   // orig_im_size = the low-res size, so the export's upsampling to it costs
@@ -419,7 +514,7 @@ class SamSegmenter : public PromptableSegmenter {
     return in;
   }
 
-  std::unique_ptr<infer::OnnxModel> encoder_, image_part_, decoder_;
+  std::unique_ptr<infer::OnnxModel> encoder_, image_part_, decoder_, mask_part_;
   std::map<std::string, infer::Tensor> image_features_;
   const infer::Tensor no_mask_ = infer::Tensor::Zeros({1, 1, 256, 256});
   const infer::Tensor has_no_mask_ = infer::Tensor::Zeros({1});

