@@ -114,9 +114,10 @@ void BenchDecoder(const infer::ModelRegistry& registry, const ColorImage& rgb) {
   reject_all.min_predicted_iou = 2.0f;
   const int n = 48;
   for (int i = 0; i < n; ++i) {
+    const int column = i % 8, row = i / 8;  // an 8 x 6 grid
     segment::Prompt prompt;
-    prompt.points = {{(static_cast<float>(i % 8) + 0.5f) * rgb.width() / 8,
-                      (static_cast<float>(i / 8) + 0.5f) * rgb.height() / 6}};
+    prompt.points = {{(static_cast<float>(column) + 0.5f) * rgb.width() / 8,
+                      (static_cast<float>(row) + 0.5f) * rgb.height() / 6}};
     prompt.labels = {1};
     t = Clock::now();
     whole->Decode(prompt);
@@ -136,12 +137,19 @@ void BenchDecoder(const infer::ModelRegistry& registry, const ColorImage& rgb) {
       1000 * stopped_s / n, whole_image_s, split_image_s);
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
+int Run(int argc, char** argv) {
   std::vector<fs::path> images;
   bool decoder_only = false;
   for (int i = 1; i < argc; ++i) {
+    if (std::string(argv[i]) == "--help") {
+      std::printf(
+          "bench_segment [--decoder-only] [image ...]\n  Automatic mask "
+          "generation vs the straightforward algorithm, the vote and the "
+          "semantic branch on real images (default: Redwood + ADE20K "
+          "samples); --decoder-only: per-prompt decoder timings on the first "
+          "image.\n");
+      return 0;
+    }
     if (std::string(argv[i]) == "--decoder-only") {
       decoder_only = true;
     } else {
@@ -228,4 +236,15 @@ int main(int argc, char** argv) {
         fast->stats().prompts_rejected_early, fast->stats().prompts_decoded);
   }
   return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  try {
+    return Run(argc, argv);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "bench_segment: %s\n", e.what());
+    return 1;
+  }
 }
