@@ -12,7 +12,11 @@ inputs and does the rest per prompt. Only the outputs semrec reads
 (iou_predictions, low_res_masks) are kept, so the full-size mask upsampling of
 the export is dropped too. The prompt part is then reordered for a CPU
 (sam_decoder_rewrites.py: cross-attention with the projections folded into the
-few tokens' side, the mask upscaling as channel-last matrix products).
+few tokens' side, the mask upscaling as channel-last matrix products). With
+MASK_PART.onnx, the upscaling moves there and the prompt part gives a preview
+of the mask instead (split_mask_part), so that prompts whose mask cannot pass
+the filters skip it; when the decoder lacks the structure for that, the prompt
+part keeps the upscaling and MASK_PART.onnx is removed if present.
 
 SAM exports compute shapes at run time (e.g. the image embedding is tiled to
 the prompt batch size), which ties every image tensor to the prompt through
@@ -333,11 +337,8 @@ def main():
     if len(sys.argv) not in (4, 5):
         raise SystemExit(__doc__)
     model = onnx.load(sys.argv[1])
-    image_part, prompt_part, mask_part, frontier = split(model)
-    if len(sys.argv) == 4 and mask_part is not None:
-        # No place for a mask part: keep the upscaling in the prompt part.
-        image_part, prompt_part, _, frontier = split(onnx.load(sys.argv[1]), mask_part=False)
-        mask_part = None
+    # Without a place for a mask part the prompt part keeps the upscaling.
+    image_part, prompt_part, mask_part, frontier = split(model, mask_part=len(sys.argv) == 5)
     onnx.save(image_part, sys.argv[2])
     onnx.save(prompt_part, sys.argv[3])
     if len(sys.argv) == 5:
