@@ -13,41 +13,39 @@ void ObjectMeshingOptions::Check() const {
                 "object meshing: mask_erosion_px must be in [0, 20]");
 }
 
-namespace {
-
-// Pixels whose (2r+1)^2 neighbourhood has one label only (separable: rows, then
-// columns).
+// Separable: rows, then columns; the offset loops outside so that the inner
+// loops vectorise.
 std::vector<uint8_t> InteriorMask(const LabelMap& labels, int r) {
   const int w = labels.width(), h = labels.height();
-  std::vector<uint8_t> rows(labels.NumPixels(), 1), out(labels.NumPixels(), 1);
-  if (r == 0) return out;
+  std::vector<uint8_t> rows(labels.NumPixels(), 0), out(labels.NumPixels(), 0);
+  if (r == 0) {
+    std::fill(out.begin(), out.end(), 1);
+    return out;
+  }
+  if (w <= 2 * r || h <= 2 * r) return out;
+  const uint16_t* l = labels.data();
   for (int y = 0; y < h; ++y) {
-    for (int x = 0; x < w; ++x) {
-      const uint16_t l = labels(x, y);
-      for (int d = -r; d <= r && rows[y * w + x]; ++d) {
-        const int xx = x + d;
-        if (xx < 0 || xx >= w || labels(xx, y) != l) {
-          rows[static_cast<size_t>(y) * w + x] = 0;
-        }
-      }
+    const uint16_t* row = l + static_cast<size_t>(y) * w;
+    uint8_t* keep = rows.data() + static_cast<size_t>(y) * w;
+    std::fill(keep + r, keep + w - r, 1);
+    for (int d = -r; d <= r; ++d) {
+      for (int x = r; x < w - r; ++x) keep[x] &= row[x + d] == row[x];
     }
   }
-  for (int y = 0; y < h; ++y) {
-    for (int x = 0; x < w; ++x) {
-      const uint16_t l = labels(x, y);
-      uint8_t keep = rows[static_cast<size_t>(y) * w + x];
-      for (int d = -r; d <= r && keep; ++d) {
-        const int yy = y + d;
-        keep = yy >= 0 && yy < h && labels(x, yy) == l &&
-               rows[static_cast<size_t>(yy) * w + x];
+  for (int y = r; y < h - r; ++y) {
+    const size_t at = static_cast<size_t>(y) * w;
+    uint8_t* keep = out.data() + at;
+    std::copy_n(rows.data() + at, w, keep);
+    for (int d = -r; d <= r; ++d) {
+      const size_t other = static_cast<size_t>(y + d) * w;
+      for (int x = 0; x < w; ++x) {
+        keep[x] &=
+            static_cast<uint8_t>(l[other + x] == l[at + x]) & rows[other + x];
       }
-      out[static_cast<size_t>(y) * w + x] = keep;
     }
   }
   return out;
 }
-
-}  // namespace
 
 ObjectMesher::ObjectMesher(const ObjectMeshingOptions& options)
     : options_(options) {
@@ -70,12 +68,21 @@ void ObjectMesher::Integrate(
   struct PixelBox {
     int x0 = std::numeric_limits<int>::max(), y0 = x0, x1 = -1, y1 = -1;
   };
-  std::map<uint16_t, PixelBox> boxes;
+  // Indexed by label (a flat table: a map lookup per pixel cost as much as
+  // the integration of a small object).
+  uint16_t max_label = 0;
+  for (const auto& entry : label_to_object) {
+    max_label = std::max(max_label, entry.first);
+  }
+  std::vector<PixelBox> boxes(static_cast<size_t>(max_label) + 1);
   const int w = labels.width(), h = labels.height();
+  const uint16_t* label_data = labels.data();
   for (int y = 0; y < h; ++y) {
+    const size_t row = static_cast<size_t>(y) * w;
     for (int x = 0; x < w; ++x) {
-      if (!interior[static_cast<size_t>(y) * w + x]) continue;
-      PixelBox& b = boxes[labels(x, y)];
+      const uint16_t l = label_data[row + x];
+      if (l > max_label || !interior[row + x]) continue;
+      PixelBox& b = boxes[l];
       b.x0 = std::min(b.x0, x);
       b.y0 = std::min(b.y0, y);
       b.x1 = std::max(b.x1, x);
@@ -89,9 +96,8 @@ void ObjectMesher::Integrate(
     }
     ++object.observations;
     object.changed = true;
-    const auto it = boxes.find(label);
-    if (it == boxes.end()) continue;  // no interior pixel: nothing to add
-    const PixelBox& b = it->second;
+    const PixelBox& b = boxes[label];
+    if (b.x1 < 0) continue;  // no interior pixel: nothing to add
     const int cw = b.x1 - b.x0 + 1, ch = b.y1 - b.y0 + 1;
     Frame crop;
     crop.index = frame.index;
@@ -105,14 +111,16 @@ void ObjectMesher::Integrate(
     crop.depth = DepthImage(cw, ch);
     crop.color = ColorImage(cw, ch, 3);
     for (int y = 0; y < ch; ++y) {
+      const size_t row = static_cast<size_t>(b.y0 + y) * w + b.x0;
+      const float* depth_in = frame.depth.data() + row;
+      float* depth_out = crop.depth.data() + static_cast<size_t>(y) * cw;
       for (int x = 0; x < cw; ++x) {
-        const int u = b.x0 + x, v = b.y0 + y;
-        const size_t i = static_cast<size_t>(v) * w + u;
-        if (labels(u, v) == label && interior[i]) {
-          crop.depth(x, y) = frame.depth(u, v);
+        if (label_data[row + x] == label && interior[row + x]) {
+          depth_out[x] = depth_in[x];
         }
-        for (int c = 0; c < 3; ++c) crop.color(x, y, c) = frame.color(u, v, c);
       }
+      std::copy_n(frame.color.data() + row * 3, static_cast<size_t>(cw) * 3,
+                  crop.color.data() + static_cast<size_t>(y) * cw * 3);
     }
     object.volume->Integrate(crop);
   }

@@ -30,6 +30,11 @@ struct ObjectMeshingOptions {
   void Check() const;
 };
 
+/// 1 for pixels whose (2r+1) x (2r+1) neighbourhood lies in the image and
+/// has one label only, 0 elsewhere (all 1 for r = 0): the mask erosion that
+/// keeps depth from object boundaries out of the objects' volumes.
+std::vector<uint8_t> InteriorMask(const LabelMap& labels, int r);
+
 class ObjectMesher {
  public:
   explicit ObjectMesher(const ObjectMeshingOptions& options = {});
