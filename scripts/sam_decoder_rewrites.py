@@ -50,6 +50,33 @@ def finish(graph, new_initializers):
     graph.initializer.extend(keep)
 
 
+class Nodes:
+    """New nodes named under one prefix, each output named like its node (or
+    `output`), in the order built; gelu() spells SAM's exact GELU with the
+    constants gelu_constants() names."""
+
+    def __init__(self, prefix):
+        self.prefix, self.list = prefix, []
+
+    def add(self, op, inputs, name, output=None, **attrs):
+        out = output or self.prefix + name
+        self.list.append(helper.make_node(op, inputs, [out], name=self.prefix + name, **attrs))
+        return out
+
+    def gelu(self, x, name):
+        """x * 0.5 * (1 + erf(x / sqrt 2))."""
+        p, add = self.prefix, self.add
+        e = add("Erf", [add("Div", [x, p + "c_sqrt2"], name + "_div")], name + "_erf")
+        y = add("Mul", [x, add("Add", [e, p + "c_one"], name + "_add")], name + "_mul")
+        return add("Mul", [y, p + "c_half"], name)
+
+
+def gelu_constants(prefix):
+    return {prefix + "c_sqrt2": np.array(np.sqrt(2.0), np.float32),
+            prefix + "c_one": np.array(1.0, np.float32),
+            prefix + "c_half": np.array(0.5, np.float32)}
+
+
 def rewrite_upscaling(model):
     """SAM's mask upscaling as GEMMs on the channel-last token layout.
 
@@ -174,20 +201,10 @@ def rewrite_upscaling(model):
         prefix + "c_shape2": np.array([1, height * width * 16, c_out], np.int64),
         prefix + "c_blocks": np.array([height, width, 2, 2, 2, 2, -1], np.int64),
         prefix + "c_raster": np.array([1, -1, height * width * 16], np.int64),
-        prefix + "c_sqrt2": np.array(np.sqrt(2.0), np.float32),
-        prefix + "c_one": np.array(1.0, np.float32), prefix + "c_half": np.array(0.5, np.float32),
+        **gelu_constants(prefix),
     }
-    nodes = []
-
-    def node(op, inputs, name, **attrs):
-        out = prefix + name
-        nodes.append(helper.make_node(op, inputs, [out], name=out, **attrs))
-        return out
-
-    def gelu(x, name):
-        e = node("Erf", [node("Div", [x, prefix + "c_sqrt2"], name + "_div")], name + "_erf")
-        y = node("Mul", [x, node("Add", [e, prefix + "c_one"], name + "_add")], name + "_mul")
-        return node("Mul", [y, prefix + "c_half"], name)
+    built = Nodes(prefix)
+    node, gelu = built.add, built.gelu
 
     a1 = node("Add", [node("MatMul", [tokens, prefix + "c_w1"], "mm1"), prefix + "c_b1"], "up1")
     ln = node("LayerNormalization", [node("Reshape", [a1, prefix + "c_shape1"], "up1_px"),
@@ -200,11 +217,10 @@ def rewrite_upscaling(model):
                   "logits")  # [1, 16 HW, masks], rows (y, x, ky, kx, ky2, kx2)
     blocks = node("Reshape", [logits, prefix + "c_blocks"], "blocks")
     raster = node("Transpose", [blocks], "raster_t", perm=[6, 0, 2, 4, 1, 3, 5])
-    nodes.append(helper.make_node("Reshape", [raster, prefix + "c_raster"], [matmul.output[0]],
-                                  name=prefix + "raster"))
+    node("Reshape", [raster, prefix + "c_raster"], "raster", matmul.output[0])
 
     # The new Reshape now defines the MatMul's output; the old path goes dead.
-    replace_node(g, matmul, nodes)
+    replace_node(g, matmul, built.list)
     finish(g, new_inits)
     return True
 
@@ -281,12 +297,8 @@ def rewrite_attention(model):
             continue
         q, k, v = (linear(prefix + n) for n in ("q_proj", "k_proj", "v_proj"))
         tag = "/semrec_attention/" + prefix.strip("/").replace("/", "_") + "/"
-        nodes = []
-
-        def node(op, inputs, name, **attrs):
-            name = tag + name
-            nodes.append(helper.make_node(op, inputs, [name], name=name, **attrs))
-            return name
+        built = Nodes(tag)
+        node = built.add
 
         def init(name, value):
             new_inits[tag + name] = np.ascontiguousarray(value)
@@ -359,9 +371,8 @@ def rewrite_attention(model):
             u = node("Reshape", [node("MatMul", [vh, init("w_o", wo)], "u_h"),
                                  shape("s_u", [1, -1, w_o.shape[1]])], "u")  # [1,H*T,E']
             values = node("MatMul", [attn_flat, u], "out_mm")
-        nodes.append(helper.make_node("Add", [values, init("b_o", b_o)], [out.output[0]],
-                                      name=tag + "out"))
-        replace_node(g, out, nodes)
+        node("Add", [values, init("b_o", b_o)], "out", out.output[0])
+        replace_node(g, out, built.list)
         by_name = {n.name: n for n in g.node}
         count += 1
     if count:
@@ -506,19 +517,10 @@ def split_mask_part(model):
         p + "c_w2": np.ascontiguousarray(w2[:, :channels]), p + "c_b2": b2[:channels],
         p + "c_hyper_shape": np.array([1, 1, channels], np.int64),
         p + "c_shape": np.array([1, 1, height, width], np.int64),
-        p + "c_sqrt2": np.array(np.sqrt(2.0), np.float32),
-        p + "c_one": np.array(1.0, np.float32), p + "c_half": np.array(0.5, np.float32),
+        **gelu_constants(p),
     }
-    nodes = []
-
-    def node(op, inputs, name, output=None, **attrs):
-        nodes.append(helper.make_node(op, inputs, [output or p + name], name=p + name, **attrs))
-        return output or p + name
-
-    def gelu(x, name):
-        e = node("Erf", [node("Div", [x, p + "c_sqrt2"], name + "_div")], name + "_erf")
-        y = node("Mul", [x, node("Add", [e, p + "c_one"], name + "_add")], name + "_mul")
-        return node("Mul", [y, p + "c_half"], name)
+    built = Nodes(p)
+    node, gelu = built.add, built.gelu
 
     chosen = node("Gather", [node("Flatten", [hyper], "hyper_flat", axis=2), gather.input[1]],
                   "hyper_chosen", axis=0)
@@ -532,7 +534,7 @@ def split_mask_part(model):
                              node("Transpose", [hyper_out], "hyper_t", perm=[0, 2, 1])], "logits")
     node("Reshape", [logits, p + "c_shape"], "preview", PREVIEW)
     at = [k for k, n in enumerate(g.node) if n is gather][0]
-    order = list(g.node[:at]) + nodes + list(g.node[at:])
+    order = list(g.node[:at]) + built.list + list(g.node[at:])
     g.ClearField("node")
     g.node.extend(order)
     kept = [o for o in g.output if o.name != "low_res_masks"]
