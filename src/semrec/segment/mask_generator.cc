@@ -49,6 +49,14 @@ float StabilityScore(const std::vector<float>& logits, float threshold,
   return uni > 0 ? static_cast<float>(inter) / static_cast<float>(uni) : 1.0f;
 }
 
+MaskFilter MaskGeneratorOptions::Filter() const {
+  MaskFilter filter;
+  filter.min_predicted_iou = pred_iou_threshold;
+  filter.min_stability = stability_threshold;
+  filter.stability_offset = stability_offset;
+  return filter;
+}
+
 namespace {
 
 // Components of `bin` (0/255, padded crop) with area < min_area are set to
@@ -337,10 +345,7 @@ class AutomaticMaskGenerator : public MaskGenerator {
   std::vector<Mask> DecodeSkippingCovered(
       const std::vector<std::array<float, 2>>& points) {
     const std::vector<int>& levels = levels_;
-    MaskFilter filter;
-    filter.min_predicted_iou = options_.pred_iou_threshold;
-    filter.min_stability = options_.stability_threshold;
-    filter.stability_offset = options_.stability_offset;
+    const MaskFilter filter = options_.Filter();
     std::vector<Mask> candidates;
     // Per low-res cell: the smallest accepted mask covering it (-1: none).
     std::vector<int> covered;

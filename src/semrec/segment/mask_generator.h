@@ -65,6 +65,9 @@ struct MaskGeneratorOptions {
   /// (not the core count) so results do not depend on the machine.
   int prompts_per_wave = 8;
   void Check() const;
+  /// The predicted-IoU and stability thresholds above, for
+  /// PromptableSegmenter::DecodeUnlessRejected.
+  MaskFilter Filter() const;
 };
 
 struct MaskGeneratorStats {

@@ -215,11 +215,8 @@ TEST(RealModels, PreviewRejectsNoMaskThatPasses) {
   auto model =
       PromptableSegmenter::Create(infer::ModelRegistry::LoadDefault(), options);
   model->SetImage(rgb);
-  const MaskGeneratorOptions amg;  // the filters automatic masks use
-  MaskFilter filter;
-  filter.min_predicted_iou = amg.pred_iou_threshold;
-  filter.min_stability = amg.stability_threshold;
-  filter.stability_offset = amg.stability_offset;
+  // The filters automatic masks use.
+  const MaskFilter filter = MaskGeneratorOptions().Filter();
   const int n = 16;
   std::vector<int> rejected(n * n, 0), passes(n * n, 0), same(n * n, 0);
   tbb::parallel_for(0, n * n, [&](int k) {
