@@ -115,7 +115,7 @@ grep -q "tracking 71/71" "$tmp/err" || fail "track: no progress report"
 [ -e "$tmp/r.txt" ] && fail "track: result written despite errors"
 # Segmentation with the installed models (part of scripts/setup; skipped when absent).
 models="${SEMREC_MODELS:-$SEMREC_SOURCE_DIR/.deps/models}"
-if [ -f "$models/deeplab_v3.onnx" ]; then
+if [ -f "$models/mosaic_r4_ade20k_top31.onnx" ]; then
   "$SEMREC" segment "$data/ade20k_val_3/images/ADE_val_00000003.jpg" --masks none --out "$tmp/seg" \
     >"$tmp/seg.out" 2>"$tmp/seg.err" || fail "segment failed: $(cat "$tmp/seg.err")"
   for f in semantic/ADE_val_00000003.png instance/ADE_val_00000003.png overlay/ADE_val_00000003.png \
@@ -138,7 +138,7 @@ if [ -f "$models/deeplab_v3.onnx" ]; then
   printf 'hello' >"$tmp/notes.txt"
   "$SEMREC" segment "$tmp/notes.txt" --masks none --out "$tmp/s3" 2>"$tmp/err"; rc=$?
   [ "$rc" -eq 1 ] && grep -q "notes.txt: not an image" "$tmp/err" || fail "segment: text input: $(cat "$tmp/err")"
-  mkdir -p "$tmp/badmodels" && printf 'not onnx' >"$tmp/badmodels/deeplab_v3.onnx"
+  mkdir -p "$tmp/badmodels" && printf 'not onnx' >"$tmp/badmodels/mosaic_r4_ade20k_top31.onnx"
   SEMREC_MODELS="$tmp/badmodels" "$SEMREC" segment "$data/ade20k_val_3/images" --masks none \
     --out "$tmp/s4" 2>"$tmp/err"; rc=$?
   [ "$rc" -eq 1 ] && grep -q "re-run scripts/setup" "$tmp/err" || fail "segment: corrupt model: $(cat "$tmp/err")"
@@ -167,7 +167,7 @@ if [ -f "$models/deeplab_v3.onnx" ]; then
   # The tracked people into the scene as time-sampled prims.
   "$SEMREC" mesh "$tmp/ppl" --people "$tmp/trk/persons" --usdz --out "$tmp/pplscene" >"$tmp/mesh.out" 2>/dev/null ||
     fail "mesh --people failed"
-  grep -q "objects (.*), [1-9][0-9]* people" "$tmp/mesh.out" || fail "mesh --people: $(cat "$tmp/mesh.out")"
+  grep -q "objects + [0-9]* structure (.*), [1-9][0-9]* people" "$tmp/mesh.out" || fail "mesh --people: $(cat "$tmp/mesh.out")"
   grep -q 'def Xform "person_' "$tmp/pplscene/dynamic.usda" && grep -q "timeSamples" "$tmp/pplscene/dynamic.usda" ||
     fail "mesh --people: no person prims"
   [ -s "$tmp/pplscene/scene.usdz" ] || fail "mesh --usdz: no package"

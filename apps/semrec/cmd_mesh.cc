@@ -16,10 +16,14 @@ struct MeshArgs {
   std::string out;
   pipeline::ReconstructOptions options;
   bool no_ply = false;
+  std::string gravity = "auto";
+  bool no_structure = false;
 };
 
 void RunMesh(MeshArgs args) {
   args.options.write_ply = !args.no_ply;
+  args.options.gravity = fuse::ParseGravity(args.gravity);
+  args.options.fusion.stuff_per_class = !args.no_structure;
   args.options.Check();
   io::SequenceReaderOptions reader_options = args.sequence.ReaderOptions();
   reader_options.max_depth_m = args.options.meshing.tsdf.max_depth_m;
@@ -30,13 +34,14 @@ void RunMesh(MeshArgs args) {
       pipeline::Reconstruct(reader, *source, args.options, args.out);
   std::printf(
       "%s", fmt::format(
-                "{} frames -> {} objects ({} triangles), {} people{}; wrote "
-                "{}/scene.usda in {:.1f} s\n",
-                r.frames, r.objects, r.triangles, r.people,
+                "{} frames -> {} objects + {} structure ({} triangles), {} "
+                "people{}; gravity: {}; wrote {}/scene.usda in {:.1f} s\n",
+                r.frames, r.objects - r.structure, r.structure, r.triangles,
+                r.people,
                 r.skipped_empty_objects > 0
                     ? fmt::format(", {} empty skipped", r.skipped_empty_objects)
                     : "",
-                args.out, r.seconds)
+                r.gravity.method, args.out, r.seconds)
                 .c_str());
 }
 
@@ -83,6 +88,17 @@ void RegisterMesh(CLI::App& app) {
   cmd->add_option("--up-axis", args->options.stage.up_axis,
                   "USD up axis: Z or Y")
       ->capture_default_str();
+  cmd->add_option("--gravity", args->gravity,
+                  "Write the scene upright (Z up, floor at z = 0): 'auto' "
+                  "estimates up from the cameras and the horizontal planes "
+                  "(a world that is already upright is kept as is), 'none' "
+                  "keeps the sequence's world frame, 'x,y,z' gives the "
+                  "world's up direction (e.g. 0,-1,0). The transform used is "
+                  "in summary.json and the USD layer's customLayerData")
+      ->capture_default_str();
+  cmd->add_flag("--no-structure", args->no_structure,
+                "Fuse stuff classes (wall, floor, ceiling...) like objects "
+                "instead of one /World/Structure prim per class");
   cmd->add_flag("--no-ply", args->no_ply, "Do not write PLY per object");
   cmd->add_flag("--usdz", args->options.usdz,
                 "Also write scene.usdz: objects and people in one layer, "

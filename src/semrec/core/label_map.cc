@@ -6,6 +6,25 @@
 
 namespace semrec {
 
+const char* ClassKindName(ClassKind kind) {
+  switch (kind) {
+    case ClassKind::kStuff:
+      return "stuff";
+    case ClassKind::kOther:
+      return "other";
+    case ClassKind::kThing:
+      break;
+  }
+  return "thing";
+}
+
+std::optional<ClassKind> ParseClassKind(const std::string& text) {
+  if (text == "thing") return ClassKind::kThing;
+  if (text == "stuff") return ClassKind::kStuff;
+  if (text == "other") return ClassKind::kOther;
+  return std::nullopt;
+}
+
 void LabelSet::Add(const LabelClass& label_class) {
   CheckArgument(!label_class.name.empty(),
                 fmt::format("label set '{}': class {} has an empty name", name_,

@@ -15,12 +15,27 @@ namespace semrec {
 /// One label per pixel; 0 conventionally means "unlabelled / background".
 using LabelMap = Image<uint16_t>;
 
+/// What a class is in a scene: countable objects (chair, table) or amorphous
+/// structure (wall, floor, sky), as in panoptic segmentation; `kOther` is a
+/// set's catch-all ("other", VOC "background"): something the set cannot
+/// name, reconstructed as a generic object.
+enum class ClassKind { kThing, kStuff, kOther };
+
+/// "thing", "stuff", "other".
+const char* ClassKindName(ClassKind kind);
+/// Inverse of ClassKindName; nullopt for anything else.
+std::optional<ClassKind> ParseClassKind(const std::string& text);
+
 /// One class of a label set.
 struct LabelClass {
   uint16_t id = 0;
   std::string name;
   std::array<uint8_t, 3> color = {0, 0, 0};
+  ClassKind kind = ClassKind::kThing;
 };
+
+/// Name of the objects made from a set's catch-all class.
+inline constexpr const char* kGenericObjectName = "object";
 
 /// A class table (ADE20K-150, VOC-21, ...). Label sets are data: build them
 /// from files, not code.

@@ -61,12 +61,45 @@ SceneFusion::SceneFusion(const FusionOptions& options) : options_(options) {
   options_.Check();
 }
 
+namespace {
+
+// With stuff_per_class: the frame's segments of one stuff class joined into
+// one (its first position), things unchanged; `origin[i]` is the joined index
+// of input segment i.
+std::vector<FrameSegment> JoinStuffPerClass(
+    const std::vector<FrameSegment>& input, std::vector<size_t>* origin) {
+  std::vector<FrameSegment> joined;
+  std::map<uint16_t, size_t> stuff_index;
+  origin->resize(input.size());
+  for (size_t i = 0; i < input.size(); ++i) {
+    const FrameSegment& s = input[i];
+    if (s.kind == ClassKind::kStuff) {
+      const auto [it, added] = stuff_index.emplace(s.class_id, joined.size());
+      if (!added) {
+        Cloud& into = joined[it->second].points_world;
+        into.insert(into.end(), s.points_world.begin(), s.points_world.end());
+        (*origin)[i] = it->second;
+        continue;
+      }
+    }
+    (*origin)[i] = joined.size();
+    joined.push_back(s);
+  }
+  return joined;
+}
+
+}  // namespace
+
 FrameFusionStats SceneFusion::Integrate(
-    const std::vector<FrameSegment>& frame_segments, size_t frame_index) {
+    const std::vector<FrameSegment>& input_segments, size_t frame_index) {
   const auto start = std::chrono::steady_clock::now();
+  std::vector<size_t> origin;
+  const std::vector<FrameSegment> frame_segments =
+      options_.stuff_per_class ? JoinStuffPerClass(input_segments, &origin)
+                               : input_segments;
   FrameFusionStats stats;
   stats.frame_index = frame_index;
-  stats.frame_segments = frame_segments.size();
+  stats.frame_segments = input_segments.size();
   stats.scene_segments_before = segments_.size();
   const bool fast = options_.method == FusionOptions::Method::kFast;
 
@@ -114,8 +147,18 @@ FrameFusionStats SceneFusion::Integrate(
   };
   std::vector<Candidate> candidates;
   const float margin = static_cast<float>(options_.max_corr_dist_m);
+  std::vector<std::vector<size_t>> matches(frame_segments.size());
   for (size_t f = 0; f < frame_segments.size(); ++f) {
+    const bool stuff = options_.stuff_per_class &&
+                       frame_segments[f].kind == ClassKind::kStuff;
     for (size_t s = 0; s < segments_.size(); ++s) {
+      if (stuff) {
+        // Structure joins its class's segment, whatever the overlap.
+        if (segments_[s].class_id == frame_segments[f].class_id) {
+          matches[f].push_back(s);
+        }
+        continue;
+      }
       if (options_.label_gating &&
           segments_[s].class_id != frame_segments[f].class_id) {
         continue;
@@ -153,7 +196,6 @@ FrameFusionStats SceneFusion::Integrate(
   stats.compare_seconds = std::chrono::duration<double>(
                               std::chrono::steady_clock::now() - compare_start)
                               .count();
-  std::vector<std::vector<size_t>> matches(frame_segments.size());
   for (const Candidate& c : candidates) {
     stats.distance_computations_done += c.overlap.distance_computations;
     SPDLOG_TRACE(
@@ -247,6 +289,13 @@ FrameFusionStats SceneFusion::Integrate(
     next.push_back(std::move(s));
   }
   stats.new_segments = created.size();
+  if (options_.stuff_per_class) {  // report per input segment
+    std::vector<uint32_t> ids(input_segments.size());
+    for (size_t i = 0; i < ids.size(); ++i) {
+      ids[i] = stats.assigned_ids[origin[i]];
+    }
+    stats.assigned_ids = std::move(ids);
+  }
   tbb::parallel_for(size_t{0}, changed.size(), [&](size_t c) {
     SceneSegment& s = next[changed[c]];
     s.points = VoxelDownsample(s.points, options_.store_voxel_size_m);

@@ -16,6 +16,12 @@
 // stored points, downsampled again at store_voxel_size_m. With gating off, a
 // merged segment takes the class holding most of its points (ties: the smaller
 // class id).
+//
+// Structure: segments of a "stuff" class (wall, floor, ceiling...) are not
+// objects. With `stuff_per_class`, all of a frame's segments of one stuff
+// class become one, and it merges into the scene's segment of that class
+// without an overlap test: one segment per stuff class (walls on opposite
+// sides of a room never overlap, yet they are the same structure).
 #pragma once
 
 #include <cstdint>
@@ -50,6 +56,9 @@ struct FusionOptions {
   /// Compare only segments of the same class (off: compare with every scene
   /// segment).
   bool label_gating = true;
+  /// One scene segment per stuff class (see above); off: stuff is fused like
+  /// objects (the paper).
+  bool stuff_per_class = true;
   Method method = Method::kFast;
 
   void Check() const;

@@ -205,7 +205,23 @@ TEST(Fusion, SyntheticSixObjectsEndAsOneSegmentEach) {
         << object.name << " over-segmented";
   }
   EXPECT_GE(objects_seen, 4);
+  // Objects stay apart; structure (the four walls, floor, ceiling) is one
+  // segment per class.
+  std::map<uint16_t, std::set<uint32_t>> structure_segments;  // class -> ids
+  std::set<uint32_t> structure_ids;
+  for (const synth::SceneObject& object : scene.objects) {
+    if (!object.structure) continue;
+    for (uint32_t id : segments_of_object[object.instance_id]) {
+      structure_segments[object.class_id].insert(id);
+      structure_ids.insert(id);
+    }
+  }
+  EXPECT_GE(structure_segments.size(), 2u);  // walls and floor at least
+  for (const auto& [cls, ids] : structure_segments) {
+    EXPECT_EQ(ids.size(), 1u) << "structure class " << cls << " split";
+  }
   for (const auto& [id, objects] : objects_of_segment) {
+    if (structure_ids.count(id) != 0) continue;
     EXPECT_EQ(objects.size(), 1u)
         << "segment " << id << " merges different objects";
   }

@@ -172,7 +172,8 @@ std::vector<FrameSegment> ExtractFrameSegments(
     }
     if (options.excluded_classes.count(classes.Get(cls).name) != 0) continue;
     if (acc.points.size() < options.min_points) continue;
-    out.push_back({cls, instance, std::move(acc.points)});
+    out.push_back(
+        {cls, instance, std::move(acc.points), classes.Get(cls).kind});
   }
   return out;
 }

@@ -57,6 +57,8 @@ struct FrameSegment {
   /// The instance id in the frame's label map.
   uint16_t source_label = 0;
   Cloud points_world;
+  /// Structure (wall, floor...) or an object; from the class table.
+  ClassKind kind = ClassKind::kThing;
 };
 
 struct SegmentExtractionOptions {

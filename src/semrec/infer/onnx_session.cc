@@ -114,7 +114,9 @@ OnnxSession::OnnxSession(const std::filesystem::path& model_path,
   } catch (const Ort::Exception& e) {
     throw FormatError(
         model_path,
-        std::string("ONNX Runtime cannot load the model: ") + e.what());
+        std::string("ONNX Runtime cannot load the model (a damaged file? "
+                    "re-run scripts/setup for the installed models): ") +
+            e.what());
   }
   Ort::AllocatorWithDefaultOptions allocator;
   for (size_t i = 0; i < impl_->session.GetInputCount(); ++i) {

@@ -70,10 +70,33 @@ TEST(LabelSets, UnknownNamesAndFilesAreRejectedClearly) {
   semrec::testing::TempDir dir;
   semrec::testing::WriteText(dir.path() / "bad.json", "[{\"id\": 1}]");
   EXPECT_THROW(LoadLabelSet((dir.path() / "bad.json").string()), FormatError);
-  semrec::testing::WriteText(dir.path() / "mine.json",
-                             "[{\"id\": 3, \"name\": \"mug\"}]");
+  semrec::testing::WriteText(
+      dir.path() / "mine.json",
+      "[{\"id\": 3, \"name\": \"mug\", \"kind\": \"thing\"}, "
+      "{\"id\": 4, \"name\": \"wall\", \"kind\": \"stuff\"}]");
   const LabelSet mine = LoadLabelSet((dir.path() / "mine.json").string());
   EXPECT_EQ(mine.Get(3).name, "mug");
+  EXPECT_EQ(mine.Get(3).kind, ClassKind::kThing);
+  EXPECT_EQ(mine.Get(4).kind, ClassKind::kStuff);
+  // Every class must say whether it is structure or an object.
+  semrec::testing::WriteText(dir.path() / "unmarked.json",
+                             "[{\"id\": 3, \"name\": \"mug\"}]");
+  semrec::testing::WriteText(
+      dir.path() / "badkind.json",
+      "[{\"id\": 3, \"name\": \"mug\", \"kind\": \"object\"}]");
+  for (const auto& [file, message] :
+       {std::pair{"unmarked.json", "class 3 ('mug') has no \"kind\""},
+        std::pair{"badkind.json", "kind 'object' is not thing, stuff"}}) {
+    try {
+      LoadLabelSet((dir.path() / file).string());
+      ADD_FAILURE() << file << " accepted";
+    } catch (const FormatError& e) {
+      EXPECT_NE(std::string(e.what()).find(file), std::string::npos)
+          << e.what();
+      EXPECT_NE(std::string(e.what()).find(message), std::string::npos)
+          << e.what();
+    }
+  }
 }
 
 }  // namespace

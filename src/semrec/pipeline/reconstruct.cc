@@ -23,6 +23,7 @@ void ReconstructOptions::Check() const {
   extraction.Check();
   meshing.Check();
   stage.Check();
+  gravity.Check();
 }
 
 ReconstructResult Reconstruct(const io::SequenceReader& reader,
@@ -78,7 +79,30 @@ ReconstructResult Reconstruct(const io::SequenceReader& reader,
   }
   const auto meshes = mesher.UpdateMeshes();
 
+  // Upright: the scene's points and the cameras decide which way is up.
   ReconstructResult result;
+  {
+    std::vector<const fuse::Cloud*> clouds;
+    std::vector<bool> is_floor;
+    for (const fuse::SceneSegment& s : fusion.segments()) {
+      clouds.push_back(&s.points);
+      is_floor.push_back(source.classes().Get(s.class_id).name == "floor");
+    }
+    std::vector<Transform> cameras;
+    for (size_t i = 0; i < reader.size(); ++i) {
+      cameras.push_back(reader.T_world_camera(i));
+    }
+    result.gravity =
+        fuse::EstimateGravity(clouds, is_floor, cameras, options.gravity);
+    const auto& g = result.gravity;
+    spdlog::info("gravity: {} (up {:.3f} {:.3f} {:.3f}, floor at {:.3f} m)",
+                 g.method, g.up_world.x(), g.up_world.y(), g.up_world.z(),
+                 g.floor_height_m);
+  }
+  const Transform& T_up = result.gravity.T_upright_world;
+  const Eigen::Matrix3f R_up = T_up.rotation().cast<float>();
+  const Eigen::Vector3f t_up = T_up.translation().cast<float>();
+
   result.frames = reader.size();
   std::vector<usd::MeshPrim> prims;
   nlohmann::json objects = nlohmann::json::array();
@@ -92,17 +116,23 @@ ReconstructResult Reconstruct(const io::SequenceReader& reader,
     }
     const open3d::geometry::TriangleMesh& m = *it->second;
     const LabelClass& cls = source.classes().Get(s.class_id);
+    // The set's catch-all ("other") names no class: the segment is still a
+    // thing, a generic object.
+    const std::string name =
+        cls.kind == ClassKind::kOther ? kGenericObjectName : cls.name;
     usd::MeshPrim prim;
-    prim.label = cls.name;
+    prim.label = name;
+    prim.structure =
+        cls.kind == ClassKind::kStuff && options.fusion.stuff_per_class;
     prim.instance_id = s.id;
     prim.color = cls.color;
     prim.point_count = s.points.size();
     prim.first_seen_frame = s.first_seen_frame;
     prim.last_seen_frame = s.last_seen_frame;
     for (size_t v = 0; v < m.vertices_.size(); ++v) {
-      prim.points.push_back(m.vertices_[v].cast<float>());
+      prim.points.push_back(R_up * m.vertices_[v].cast<float>() + t_up);
       if (m.HasVertexNormals()) {
-        prim.normals.push_back(m.vertex_normals_[v].cast<float>());
+        prim.normals.push_back(R_up * m.vertex_normals_[v].cast<float>());
       }
       if (m.HasVertexColors()) {
         const Eigen::Vector3d c =
@@ -120,7 +150,7 @@ ReconstructResult Reconstruct(const io::SequenceReader& reader,
     }
     result.triangles += prim.triangles.size();
     const std::string ply =
-        fmt::format("objects/{:04}_{}.ply", s.id, usd::SanitizeName(cls.name));
+        fmt::format("objects/{:04}_{}.ply", s.id, usd::SanitizeName(name));
     if (options.write_ply) {
       io::PlyData data;
       data.points = prim.points;
@@ -128,8 +158,10 @@ ReconstructResult Reconstruct(const io::SequenceReader& reader,
       data.triangles = prim.triangles;
       io::WritePly(out_dir / ply, data);
     }
+    result.structure += prim.structure ? 1 : 0;
     objects.push_back({{"id", s.id},
-                       {"class", cls.name},
+                       {"class", name},
+                       {"kind", prim.structure ? "structure" : "object"},
                        {"vertices", prim.points.size()},
                        {"triangles", prim.triangles.size()},
                        {"fused_points", s.points.size()},
@@ -151,7 +183,22 @@ ReconstructResult Reconstruct(const io::SequenceReader& reader,
       "label_gating {}; tsdf: voxel_size_m {} sdf_trunc_m {} max_depth_m {}",
       f.alpha, f.corr_voxel_size_m, f.store_voxel_size_m, f.max_corr_dist_m,
       f.label_gating, t.voxel_size_m, t.sdf_trunc_m, t.max_depth_m);
-  const std::vector<usd::PersonTrack> tracks = people.Tracks();
+  const auto& gm = T_up.Matrix();
+  std::string matrix;
+  for (int r = 0; r < 4; ++r) {
+    for (int c = 0; c < 4; ++c) {
+      matrix += fmt::format("{}{:.6g}", r + c ? " " : "", gm(r, c));
+    }
+  }
+  stage.custom_layer_data["T_upright_world"] = matrix;
+  stage.custom_layer_data["gravity"] = result.gravity.method;
+  std::vector<usd::PersonTrack> tracks = people.Tracks();
+  for (usd::PersonTrack& track : tracks) {
+    for (usd::PersonSample& sample : track.samples) {
+      sample.centroid_world = R_up * sample.centroid_world + t_up;
+      for (auto& p : sample.points_world) p = R_up * p + t_up;
+    }
+  }
   result.people = tracks.size();
   if (person_maps) {
     // Time codes are frame indices, played at the sequence's frame rate.
@@ -177,6 +224,16 @@ ReconstructResult Reconstruct(const io::SequenceReader& reader,
       nlohmann::json({{"input", stage.custom_layer_data["input"]},
                       {"options", stage.custom_layer_data["options"]},
                       {"objects", objects},
+                      {"structure", result.structure},
+                      {"gravity",
+                       {{"method", result.gravity.method},
+                        {"up_world",
+                         {result.gravity.up_world.x(),
+                          result.gravity.up_world.y(),
+                          result.gravity.up_world.z()}},
+                        {"floor_height_m", result.gravity.floor_height_m},
+                        {"floor_points", result.gravity.floor_points},
+                        {"T_upright_world", matrix}}},
                       {"people", result.people},
                       {"skipped_empty_objects", result.skipped_empty_objects},
                       {"seconds", result.seconds}})

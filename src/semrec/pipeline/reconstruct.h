@@ -14,6 +14,7 @@
 
 #include "semrec/core/progress.h"
 #include "semrec/fuse/fusion.h"
+#include "semrec/fuse/gravity.h"
 #include "semrec/fuse/segments.h"
 #include "semrec/io/sequence_reader.h"
 #include "semrec/mesh/object_mesher.h"
@@ -27,6 +28,9 @@ struct ReconstructOptions {
   fuse::SegmentExtractionOptions extraction;
   mesh::ObjectMeshingOptions meshing;
   usd::StageOptions stage;
+  /// The scene is written upright (Z up, floor at z = 0) by this transform of
+  /// the sequence's world frame (see fuse/gravity.h).
+  fuse::GravityOptions gravity;
   /// Tracked people for dynamic.usda: "" (none), "gt" (the sequence's person
   /// layer) or a folder of person id maps (semrec track's persons/).
   std::string people;
@@ -46,11 +50,15 @@ struct ReconstructResult {
   size_t skipped_empty_objects = 0;
   size_t triangles = 0;
   size_t people = 0;
+  /// Structure prims (one per stuff class) among `objects`.
+  size_t structure = 0;
+  fuse::GravityEstimate gravity;
   double seconds = 0.0;
 };
 
 /// Writes `out_dir`/scene.usda, static.usda, dynamic.usda, objects/*.ply and
-/// summary.json.
+/// summary.json. Objects of a set's catch-all class ("other", VOC
+/// "background") are named "object"; stuff classes become structure prims.
 ReconstructResult Reconstruct(const io::SequenceReader& reader,
                               const fuse::SegmentationSource& source,
                               const ReconstructOptions& options,

@@ -30,6 +30,7 @@ TEST(RealModels, DeeplabLabelsARedwoodFrameWithVocClasses) {
   SEMREC_REQUIRE_SAMPLE_DATA(redwood, "redwood_livingroom1_5");
   const ColorImage rgb = io::ReadColorImage(redwood / "color" / "00000.jpg");
   SemanticSegmenterOptions options;
+  options.model = "deeplab_v3";
   options.runtime.model_dir = semrec::testing::ModelDir();
   const SemanticSegmenter segmenter(infer::ModelRegistry::LoadDefault(),
                                     options);

@@ -16,7 +16,7 @@ namespace semrec::segment {
 
 struct SemanticSegmenterOptions {
   /// Registry name of the model (role "semantic").
-  std::string model = "deeplab_v3";
+  std::string model = "mosaic_r4_ade20k";
   /// Threads, provider, model cache.
   infer::OnnxModelOptions runtime;
   void Check() const;

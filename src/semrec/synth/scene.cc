@@ -196,7 +196,12 @@ constexpr Rgb kPants[] = {
 const LabelSet& SynthClasses() {
   static const LabelSet classes = [] {
     LabelSet set("semrec-synth");
-    for (const ClassSpec& c : kClasses) set.Add({c.id, c.name, c.color});
+    for (const ClassSpec& c : kClasses) {
+      // The room's shell is structure; everything placed in it is an object.
+      const bool shell = c.id == 1 || c.id == 2 || c.id == 3;
+      set.Add({c.id, c.name, c.color,
+               shell ? ClassKind::kStuff : ClassKind::kThing});
+    }
     return set;
   }();
   return classes;

@@ -109,6 +109,8 @@ void ReadLayer(const fs::path& path, std::vector<MeshPrim>* meshes, int depth) {
       }
     } else if (name == "semrec:label") {
       current->label = Unquote(value);
+    } else if (name == "semrec:kind") {
+      current->structure = Unquote(value) == "stuff";
     } else if (name == "semrec:instanceId") {
       current->instance_id = static_cast<uint32_t>(std::stoul(value));
     } else if (name == "semrec:pointCount") {

@@ -92,93 +92,112 @@ std::string SanitizeName(const std::string& label) {
 
 namespace detail {
 
+// One Mesh prim named `name` (the caller checks names for duplicates).
+std::string MeshPrimText(const MeshPrim& m, const std::string& name) {
+  std::string text;
+  for (const auto& t : m.triangles) {
+    CheckArgument(
+        t[0] < m.points.size() && t[1] < m.points.size() &&
+            t[2] < m.points.size(),
+        "usd: mesh '" + m.label + "' has a triangle index out of range");
+  }
+  CheckArgument(m.normals.empty() || m.normals.size() == m.points.size(),
+                "usd: normals must be empty or one per point");
+  CheckArgument(
+      m.vertex_colors.empty() || m.vertex_colors.size() == m.points.size(),
+      "usd: vertex colours must be empty or one per point");
+  Eigen::AlignedBox3f box;
+  for (const auto& p : m.points) box.extend(p);
+  if (m.points.empty()) box.extend(Eigen::Vector3f::Zero());
+  std::string points, indices, counts, normals, colors;
+  for (size_t i = 0; i < m.points.size(); ++i) {
+    const auto& p = m.points[i];
+    points += fmt::format("{}({}, {}, {})", i ? ", " : "", Num(p.x()),
+                          Num(p.y()), Num(p.z()));
+  }
+  for (size_t i = 0; i < m.triangles.size(); ++i) {
+    const auto& t = m.triangles[i];
+    indices += fmt::format("{}{}, {}, {}", i ? ", " : "", t[0], t[1], t[2]);
+    counts += i ? ", 3" : "3";
+  }
+  for (size_t i = 0; i < m.normals.size(); ++i) {
+    const auto& n = m.normals[i];
+    normals += fmt::format("{}({}, {}, {})", i ? ", " : "", Num(n.x()),
+                           Num(n.y()), Num(n.z()));
+  }
+  for (size_t i = 0; i < m.vertex_colors.size(); ++i) {
+    colors += (i ? ", " : "") + Color3(m.vertex_colors[i]);
+  }
+  const std::string label = Quote(m.label);
+  text += fmt::format(
+      "        def Mesh \"{}\" (\n"
+      "            prepend apiSchemas = [\"SemanticsLabelsAPI:class\", "
+      "\"SemanticsAPI:Semantics\"]\n"
+      "        )\n        {{\n"
+      "            float3[] extent = [({}, {}, {}), ({}, {}, {})]\n"
+      "            int[] faceVertexCounts = [{}]\n"
+      "            int[] faceVertexIndices = [{}]\n"
+      "            point3f[] points = [{}]\n",
+      name, Num(box.min().x()), Num(box.min().y()), Num(box.min().z()),
+      Num(box.max().x()), Num(box.max().y()), Num(box.max().z()), counts,
+      indices, points);
+  if (!m.normals.empty()) {
+    text += fmt::format(
+        "            normal3f[] normals = [{}] (\n                "
+        "interpolation = \"vertex\"\n"
+        "            )\n",
+        normals);
+  }
+  if (!m.vertex_colors.empty()) {
+    text += fmt::format(
+        "            color3f[] primvars:displayColor = [{}] (\n"
+        "                interpolation = \"vertex\"\n            )\n",
+        colors);
+  } else {
+    text += fmt::format(
+        "            color3f[] primvars:displayColor = [{}] (\n"
+        "                interpolation = \"constant\"\n            )\n",
+        Color3(m.color));
+  }
+  text += fmt::format(
+      "            uniform token subdivisionScheme = \"none\"\n"
+      "{}"
+      "            custom int semrec:instanceId = {}\n"
+      "            custom token semrec:kind = \"{}\"\n"
+      "            custom string semrec:label = {}\n"
+      "            custom int semrec:pointCount = {}\n"
+      "            custom int semrec:firstSeenFrame = {}\n"
+      "            custom int semrec:lastSeenFrame = {}\n"
+      "            custom float semrec:confidence = {}\n"
+      "        }}\n",
+      detail::SemanticsAttributes(m.label, "            "), m.instance_id,
+      m.structure ? "stuff" : "thing",
+      label, m.point_count, m.first_seen_frame, m.last_seen_frame,
+      Num(static_cast<float>(m.confidence)));
+  return text;
+}
+
 std::string ObjectsScopeText(const std::vector<MeshPrim>& meshes) {
-  std::string text = "    def Scope \"Objects\"\n    {\n";
+  // Objects by class and instance; structure (walls, floor...) one prim per
+  // class, named by the class alone: /World/Structure/wall.
+  std::string objects, structure;
   std::set<std::string> names;
   for (const MeshPrim& m : meshes) {
-    for (const auto& t : m.triangles) {
-      CheckArgument(
-          t[0] < m.points.size() && t[1] < m.points.size() &&
-              t[2] < m.points.size(),
-          "usd: mesh '" + m.label + "' has a triangle index out of range");
-    }
-    CheckArgument(m.normals.empty() || m.normals.size() == m.points.size(),
-                  "usd: normals must be empty or one per point");
-    CheckArgument(
-        m.vertex_colors.empty() || m.vertex_colors.size() == m.points.size(),
-        "usd: vertex colours must be empty or one per point");
     const std::string name =
-        fmt::format("{}_{}", SanitizeName(m.label), m.instance_id);
-    CheckArgument(names.insert(name).second,
-                  "usd: duplicate object prim " + name);
-    Eigen::AlignedBox3f box;
-    for (const auto& p : m.points) box.extend(p);
-    if (m.points.empty()) box.extend(Eigen::Vector3f::Zero());
-    std::string points, indices, counts, normals, colors;
-    for (size_t i = 0; i < m.points.size(); ++i) {
-      const auto& p = m.points[i];
-      points += fmt::format("{}({}, {}, {})", i ? ", " : "", Num(p.x()),
-                            Num(p.y()), Num(p.z()));
-    }
-    for (size_t i = 0; i < m.triangles.size(); ++i) {
-      const auto& t = m.triangles[i];
-      indices += fmt::format("{}{}, {}, {}", i ? ", " : "", t[0], t[1], t[2]);
-      counts += i ? ", 3" : "3";
-    }
-    for (size_t i = 0; i < m.normals.size(); ++i) {
-      const auto& n = m.normals[i];
-      normals += fmt::format("{}({}, {}, {})", i ? ", " : "", Num(n.x()),
-                             Num(n.y()), Num(n.z()));
-    }
-    for (size_t i = 0; i < m.vertex_colors.size(); ++i) {
-      colors += (i ? ", " : "") + Color3(m.vertex_colors[i]);
-    }
-    const std::string label = Quote(m.label);
-    text += fmt::format(
-        "        def Mesh \"{}\" (\n"
-        "            prepend apiSchemas = [\"SemanticsLabelsAPI:class\", "
-        "\"SemanticsAPI:Semantics\"]\n"
-        "        )\n        {{\n"
-        "            float3[] extent = [({}, {}, {}), ({}, {}, {})]\n"
-        "            int[] faceVertexCounts = [{}]\n"
-        "            int[] faceVertexIndices = [{}]\n"
-        "            point3f[] points = [{}]\n",
-        name, Num(box.min().x()), Num(box.min().y()), Num(box.min().z()),
-        Num(box.max().x()), Num(box.max().y()), Num(box.max().z()), counts,
-        indices, points);
-    if (!m.normals.empty()) {
-      text += fmt::format(
-          "            normal3f[] normals = [{}] (\n                "
-          "interpolation = \"vertex\"\n"
-          "            )\n",
-          normals);
-    }
-    if (!m.vertex_colors.empty()) {
-      text += fmt::format(
-          "            color3f[] primvars:displayColor = [{}] (\n"
-          "                interpolation = \"vertex\"\n            )\n",
-          colors);
-    } else {
-      text += fmt::format(
-          "            color3f[] primvars:displayColor = [{}] (\n"
-          "                interpolation = \"constant\"\n            )\n",
-          Color3(m.color));
-    }
-    text += fmt::format(
-        "            uniform token subdivisionScheme = \"none\"\n"
-        "{}"
-        "            custom int semrec:instanceId = {}\n"
-        "            custom string semrec:label = {}\n"
-        "            custom int semrec:pointCount = {}\n"
-        "            custom int semrec:firstSeenFrame = {}\n"
-        "            custom int semrec:lastSeenFrame = {}\n"
-        "            custom float semrec:confidence = {}\n"
-        "        }}\n",
-        detail::SemanticsAttributes(m.label, "            "), m.instance_id,
-        label, m.point_count, m.first_seen_frame, m.last_seen_frame,
-        Num(static_cast<float>(m.confidence)));
+        m.structure
+            ? SanitizeName(m.label)
+            : fmt::format("{}_{}", SanitizeName(m.label), m.instance_id);
+    CheckArgument(names.insert((m.structure ? "S/" : "O/") + name).second,
+                  std::string("usd: duplicate ") +
+                      (m.structure ? "structure" : "object") + " prim " +
+                      name);
+    (m.structure ? structure : objects) += MeshPrimText(m, name);
   }
-  text += "    }\n";
+  std::string text =
+      "    def Scope \"Objects\"\n    {\n" + objects + "    }\n";
+  if (!structure.empty()) {
+    text += "    def Scope \"Structure\"\n    {\n" + structure + "    }\n";
+  }
   return text;
 }
 

@@ -24,6 +24,9 @@ struct MeshPrim {
   /// the prim name).
   std::string label;
   uint32_t instance_id = 0;
+  /// Structure (one prim per stuff class under /World/Structure, named by the
+  /// class) rather than an object under /World/Objects.
+  bool structure = false;
   std::vector<Eigen::Vector3f> points;
   std::vector<std::array<uint32_t, 3>> triangles;
   /// Optional per-vertex normals and colours (0-255); without colours, `color`
@@ -79,7 +82,8 @@ struct PersonTrack {
 /// stays in `semrec:label`.
 std::string SanitizeName(const std::string& label);
 
-/// Text of a USDA layer with /World/Objects/<sanitised label>_<id> meshes.
+/// Text of a USDA layer with /World/Objects/<sanitised label>_<id> meshes and,
+/// when there is structure, /World/Structure/<sanitised label> meshes.
 std::string StaticLayerText(const std::vector<MeshPrim>& meshes,
                             const StageOptions& options);
 

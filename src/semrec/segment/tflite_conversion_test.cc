@@ -1,0 +1,209 @@
+// scripts/tflite_to_onnx.py against an independent reference: Arm NN (Debian's
+// python3-pyarmnn) runs the quantized TFLite files in integer arithmetic; the
+// converted float ONNX models, run through SemanticSegmenter, must agree with
+// it on real images. A conversion without the activation clamps must fail the
+// same check (so the check can tell a broken conversion).
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include <fmt/format.h>
+
+#include "semrec/io/image_io.h"
+#include "semrec/segment/semantic_segmenter.h"
+#include "semrec/testing/test_util.h"
+
+namespace fs = std::filesystem;
+
+namespace semrec::segment {
+namespace {
+
+constexpr int kSize = 512;  // both models' input size
+
+// Nearest-neighbour stretch to the model size: the same bytes go to Arm NN and
+// to ONNX Runtime, so the resampling method does not matter.
+ColorImage StretchToModelSize(const ColorImage& rgb) {
+  ColorImage out(kSize, kSize, 3);
+  for (int y = 0; y < kSize; ++y) {
+    const int sy = y * rgb.height() / kSize;
+    for (int x = 0; x < kSize; ++x) {
+      const int sx = x * rgb.width() / kSize;
+      for (int c = 0; c < 3; ++c) out(x, y, c) = rgb(sx, sy, c);
+    }
+  }
+  return out;
+}
+
+void WriteRaw(const fs::path& path, const ColorImage& rgb) {
+  std::ofstream f(path, std::ios::binary);
+  f.write(reinterpret_cast<const char*>(rgb.data()),
+          static_cast<std::streamsize>(rgb.values().size()));
+}
+
+std::vector<uint16_t> ReadLabels(const fs::path& path) {
+  std::vector<uint16_t> labels(static_cast<size_t>(kSize) * kSize);
+  std::ifstream f(path, std::ios::binary);
+  f.read(reinterpret_cast<char*>(labels.data()),
+         static_cast<std::streamsize>(labels.size() * 2));
+  if (!f) labels.clear();
+  return labels;
+}
+
+double Agreement(const LabelMap& ours, const std::vector<uint16_t>& ref) {
+  size_t same = 0;
+  for (size_t i = 0; i < ref.size(); ++i) same += ours.values()[i] == ref[i];
+  return static_cast<double>(same) / static_cast<double>(ref.size());
+}
+
+bool RunCommand(const std::string& cmd) {
+  std::printf("$ %s\n", cmd.c_str());
+  std::fflush(stdout);
+  return std::system(cmd.c_str()) == 0;
+}
+
+struct Case {
+  std::string registry_name;
+  std::string tflite;
+  std::vector<fs::path> images;
+};
+
+TEST(TfliteConversion, AgreesWithArmNnAndTheClampsAreNeeded) {
+  const fs::path models = semrec::testing::ModelDir();
+  for (const char* f : {"mosaic_r4_ade20k_top31.onnx",
+                        "deeplabv3_mnv2_ade20k_top31.onnx",
+                        "mosaic_r4_ade20k_top31.tflite",
+                        "deeplabv3_mnv2_ade20k_top31.tflite",
+                        "tflite_schema.fbs"}) {
+    if (!fs::exists(models / f)) {
+      GTEST_SKIP() << "model " << f << " not installed in " << models
+                   << ": run scripts/setup";
+    }
+  }
+  if (std::system("/usr/bin/python3 -c 'import pyarmnn' >/dev/null 2>&1") !=
+      0) {
+    GTEST_SKIP() << "python3-pyarmnn not installed: run scripts/setup";
+  }
+  SEMREC_REQUIRE_SAMPLE_DATA(ade, "ade20k_val_3");
+  SEMREC_REQUIRE_SAMPLE_DATA(chess, "7scenes_chess_0_99");
+  const fs::path scripts = semrec::testing::SourceDir() / "scripts";
+  const semrec::testing::TempDir tmp;
+  const auto registry = infer::ModelRegistry::LoadDefault();
+
+  // Arm NN CpuRef takes about a minute per image: two images for MOSAIC (an
+  // ADE20K scene and a real RGB-D frame), one for DeepLab.
+  const std::vector<Case> cases = {
+      {"mosaic_r4_ade20k",
+       "mosaic_r4_ade20k_top31.tflite",
+       {ade / "images" / "ADE_val_00000001.jpg",
+        chess / "frame-000050.color.jpg"}},
+      {"deeplabv3_mnv2_ade20k",
+       "deeplabv3_mnv2_ade20k_top31.tflite",
+       {ade / "images" / "ADE_val_00000003.jpg"}},
+  };
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.registry_name);
+    std::string cmd = fmt::format("/usr/bin/python3 {} {} --schema {}",
+                                  (scripts / "armnn_reference.py").string(),
+                                  (models / c.tflite).string(),
+                                  (models / "tflite_schema.fbs").string());
+    std::vector<ColorImage> inputs;
+    for (size_t i = 0; i < c.images.size(); ++i) {
+      inputs.push_back(StretchToModelSize(io::ReadColorImage(c.images[i])));
+      const std::string stem = fmt::format("{}_{}", c.registry_name, i);
+      WriteRaw(tmp / (stem + ".rgb"), inputs.back());
+      cmd += " " + (tmp / (stem + ".rgb")).string() + " " +
+             (tmp / (stem + ".labels")).string();
+    }
+    ASSERT_TRUE(RunCommand(cmd)) << "Arm NN reference failed";
+
+    SemanticSegmenterOptions options;
+    options.runtime.model_dir = models;
+    options.model = c.registry_name;
+    const SemanticSegmenter converted(registry, options);
+    for (size_t i = 0; i < inputs.size(); ++i) {
+      const auto ref = ReadLabels(
+          tmp / fmt::format("{}_{}.labels", c.registry_name, i));
+      ASSERT_EQ(ref.size(), static_cast<size_t>(kSize) * kSize);
+      const double agreement =
+          Agreement(converted.Segment(inputs[i]).labels, ref);
+      std::printf("%s on %s: %.2f%% of pixels agree with Arm NN\n",
+                  c.registry_name.c_str(), c.images[i].filename().c_str(),
+                  100.0 * agreement);
+      EXPECT_GE(agreement, 0.97) << c.images[i];
+    }
+
+    // The same conversion without the clamps: the DeepLab file's ReLU6 exists
+    // only as its tensors' quantized range, so this breaks it.
+    if (c.registry_name != "deeplabv3_mnv2_ade20k") continue;
+    const fs::path broken = tmp / "no_clamp.onnx";
+    ASSERT_TRUE(RunCommand(fmt::format(
+        "/usr/bin/python3 {} {} {} --schema {} --output logits --no-clamp "
+        ">/dev/null",
+        (scripts / "tflite_to_onnx.py").string(), (models / c.tflite).string(),
+        broken.string(), (models / "tflite_schema.fbs").string())));
+    const SemanticSegmenter unclamped(registry.Get(c.registry_name), broken,
+                                      options);
+    const auto ref =
+        ReadLabels(tmp / fmt::format("{}_0.labels", c.registry_name));
+    const double agreement = Agreement(unclamped.Segment(inputs[0]).labels, ref);
+    std::printf("%s without clamps: %.2f%% agree\n", c.registry_name.c_str(),
+                100.0 * agreement);
+    EXPECT_LT(agreement, 0.5);
+  }
+}
+
+TEST(TfliteConversion, UnsupportedOperatorIsAClearError) {
+  const fs::path models = semrec::testing::ModelDir();
+  if (!fs::exists(models / "tflite_schema.fbs") ||
+      !fs::exists(models / "mosaic_r4_ade20k_top31.tflite")) {
+    GTEST_SKIP() << "TFLite model or schema not installed: run scripts/setup";
+  }
+  const semrec::testing::TempDir tmp;
+  const fs::path scripts = semrec::testing::SourceDir() / "scripts";
+  // A copy of MOSAIC whose first CONV_2D claims to be a TANH (tests/ helper).
+  const fs::path edited = tmp / "tanh.tflite";
+  ASSERT_TRUE(RunCommand(fmt::format(
+      "/usr/bin/python3 {} {} {} --schema {}",
+      (semrec::testing::SourceDir() / "tests" / "models" /
+       "edit_tflite_opcode.py")
+          .string(),
+      (models / "mosaic_r4_ade20k_top31.tflite").string(), edited.string(),
+      (models / "tflite_schema.fbs").string())));
+  const fs::path log = tmp / "log.txt";
+  const int rc = std::system(
+      fmt::format("/usr/bin/python3 {} {} {} --schema {} > {} 2>&1",
+                  (scripts / "tflite_to_onnx.py").string(), edited.string(),
+                  (tmp / "out.onnx").string(),
+                  (models / "tflite_schema.fbs").string(), log.string())
+          .c_str());
+  EXPECT_NE(rc, 0);
+  std::ifstream f(log);
+  const std::string text((std::istreambuf_iterator<char>(f)),
+                         std::istreambuf_iterator<char>());
+  EXPECT_NE(text.find("unsupported TFLite operator(s): TANH"),
+            std::string::npos)
+      << text;
+  EXPECT_NE(text.find(edited.string()), std::string::npos) << text;
+  EXPECT_FALSE(fs::exists(tmp / "out.onnx"));
+  // Not a TFLite file at all.
+  semrec::testing::WriteText(tmp / "junk.tflite", "not a flatbuffer");
+  EXPECT_NE(std::system(fmt::format("/usr/bin/python3 {} {} {} --schema {} "
+                                    "> {} 2>&1",
+                                    (scripts / "tflite_to_onnx.py").string(),
+                                    (tmp / "junk.tflite").string(),
+                                    (tmp / "out.onnx").string(),
+                                    (models / "tflite_schema.fbs").string(),
+                                    log.string())
+                            .c_str()),
+            0);
+  std::ifstream g(log);
+  const std::string junk((std::istreambuf_iterator<char>(g)),
+                         std::istreambuf_iterator<char>());
+  EXPECT_NE(junk.find("not a TFLite flatbuffer"), std::string::npos) << junk;
+}
+
+}  // namespace
+}  // namespace semrec::segment
