@@ -5,6 +5,7 @@
 // (default: Redwood + ADE20K samples; --decoder-only: the per-prompt decoder
 // timings on the first image only).
 // Needs the real models (scripts/setup).
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
@@ -137,21 +138,67 @@ void BenchDecoder(const infer::ModelRegistry& registry, const ColorImage& rgb) {
       1000 * stopped_s / n, whole_image_s, split_image_s);
 }
 
+// Every semantic model of the registry on each image: median of 5 runs after a
+// warm-up, and the ratio to the first model (VOC DeepLabV3, the former
+// default).
+void BenchSemanticModels(const infer::ModelRegistry& registry,
+                         const std::vector<fs::path>& images) {
+  std::vector<std::string> names;
+  for (const std::string& name : registry.Names()) {
+    if (registry.Get(name).role == "semantic") names.push_back(name);
+  }
+  std::stable_partition(names.begin(), names.end(),
+                        [](const std::string& n) { return n == "deeplab_v3"; });
+  std::printf("\nsemantic branch, median of 5 runs (ms; ratio to %s)\n%-24s",
+              names.front().c_str(), "image");
+  for (const auto& n : names) std::printf(" %24s", n.c_str());
+  std::printf("\n");
+  std::vector<std::unique_ptr<segment::SemanticSegmenter>> models;
+  for (const auto& n : names) {
+    segment::SemanticSegmenterOptions o;
+    o.model = n;
+    models.push_back(std::make_unique<segment::SemanticSegmenter>(registry, o));
+  }
+  for (const fs::path& path : images) {
+    const ColorImage rgb = io::ReadColorImage(path);
+    std::printf("%-24s", path.stem().string().c_str());
+    double first = 0.0;
+    for (size_t m = 0; m < models.size(); ++m) {
+      models[m]->Segment(rgb);  // warm-up
+      std::vector<double> times;
+      for (int r = 0; r < 5; ++r) {
+        const auto t = Clock::now();
+        models[m]->Segment(rgb);
+        times.push_back(Since(t));
+      }
+      std::nth_element(times.begin(), times.begin() + 2, times.end());
+      const double ms = 1000.0 * times[2];
+      if (m == 0) first = ms;
+      std::printf(" %15.1f ms %5.2fx", ms, ms / first);
+    }
+    std::printf("\n");
+  }
+}
+
 int Run(int argc, char** argv) {
   std::vector<fs::path> images;
   bool decoder_only = false;
+  bool semantic_only = false;
   for (int i = 1; i < argc; ++i) {
     if (std::string(argv[i]) == "--help") {
       std::printf(
-          "bench_segment [--decoder-only] [image ...]\n  Automatic mask "
+          "bench_segment [--decoder-only|--semantic-only] [image ...]\n  "
+          "Automatic mask "
           "generation vs the straightforward algorithm, the vote and the "
           "semantic branch on real images (default: Redwood + ADE20K "
           "samples); --decoder-only: per-prompt decoder timings on the first "
-          "image.\n");
+          "image; --semantic-only: every semantic model of the registry.\n");
       return 0;
     }
     if (std::string(argv[i]) == "--decoder-only") {
       decoder_only = true;
+    } else if (std::string(argv[i]) == "--semantic-only") {
+      semantic_only = true;
     } else {
       images.emplace_back(argv[i]);
     }
@@ -164,6 +211,10 @@ int Run(int argc, char** argv) {
               data / "ade20k_val_3" / "images" / "ADE_val_00000002.jpg"};
   }
   const auto registry = infer::ModelRegistry::LoadDefault();
+  if (semantic_only) {
+    BenchSemanticModels(registry, images);
+    return 0;
+  }
   if (decoder_only) {
     BenchDecoder(registry, io::ReadColorImage(images.front()));
     return 0;

@@ -5,7 +5,9 @@
 
 An independent reference for scripts/tflite_to_onnx.py: Arm NN executes the quantized graph in
 integer arithmetic, as TFLite does. IN.rgb holds H*W*3 bytes (RGB, row-major, the model's input
-size); OUT.labels receives H*W little-endian uint16 class ids. Arm NN 22 has no ARG_MAX, so the
+size); OUT.labels receives H*W little-endian uint16 class ids and OUT.labels.margin H*W bytes:
+how many quantization steps the winning logit leads the runner-up by (0 = a tie, capped at 255).
+A float conversion cannot follow the quantized graph's rounding where the margin is small. Arm NN 22 has no ARG_MAX, so the
 graph's final ARG_MAX is removed here and the argmax is taken over the uint8 logits (ties go to
 the lowest class id, as TFLite's ARG_MAX does). CpuRef is slow (about a minute per 512x512 image
 on one core): it belongs in a check, not at run time. Exit status: 0 done, 1 error.
@@ -86,9 +88,11 @@ def main(argv):
         runtime.EnqueueWorkload(net_id, inputs, outputs)
         logits = ann.workload_tensors_to_ndarray(outputs)[0].reshape(h, w, -1)
         labels = np.argmax(logits, axis=-1).astype("<u2")
-        tmp = dst + ".tmp"
-        labels.tofile(tmp)
-        os.replace(tmp, dst)
+        top2 = np.sort(logits.astype(np.int32), axis=-1)[..., -2:]
+        margin = np.minimum(top2[..., 1] - top2[..., 0], 255).astype(np.uint8)
+        for data, path in ((margin, dst + ".margin"), (labels, dst)):
+            data.tofile(path + ".tmp")
+            os.replace(path + ".tmp", path)
     return 0
 
 

@@ -130,7 +130,8 @@ void RunSeg(const SegArgs& args) {
   for (const auto& [pred_file, gt_file] :
        eval::MatchSegFiles(args.pred, args.gt)) {
     const LabelMap pred = io::ReadLabelImage(pred_file);
-    const LabelMap gt = io::ReadLabelImage(gt_file);
+    LabelMap gt = io::ReadLabelImage(gt_file);
+    eval::FoldUnnamedIntoCatchAll(labels, &gt);
     if (!pred.SameSize(gt)) {
       throw FormatError(
           pred_file, fmt::format("is {}x{} but the ground truth {} is {}x{}",
@@ -231,8 +232,11 @@ void RegisterEval(CLI::App& app) {
                   "Predicted label PNGs (or a `semrec segment` output folder)")
       ->required();
   seg->add_option("gt", seg_args->gt, "Ground-truth label PNGs")->required();
-  seg->add_option("--labels", seg_args->labels,
-                  "Label set: voc, ade20k, coco, cityscapes or a JSON file")
+  seg->add_option(
+         "--labels", seg_args->labels,
+         "Label set: voc, ade20k, ade20k-top31, coco, cityscapes or a JSON "
+         "file. With a catch-all class 0 (ade20k-top31's 'other'), "
+         "ground-truth classes the set does not name count as it")
       ->capture_default_str();
   seg->add_option("--boundary-tolerance-px",
                   seg_args->options.boundary_tolerance_px,

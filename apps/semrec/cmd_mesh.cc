@@ -33,16 +33,16 @@ void RunMesh(MeshArgs args) {
   const pipeline::ReconstructResult r =
       pipeline::Reconstruct(reader, *source, args.options, args.out);
   std::printf(
-      "%s", fmt::format(
-                "{} frames -> {} objects + {} structure ({} triangles), {} "
-                "people{}; gravity: {}; wrote {}/scene.usda in {:.1f} s\n",
-                r.frames, r.objects - r.structure, r.structure, r.triangles,
-                r.people,
-                r.skipped_empty_objects > 0
-                    ? fmt::format(", {} empty skipped", r.skipped_empty_objects)
-                    : "",
-                r.gravity.method, args.out, r.seconds)
-                .c_str());
+      "%s",
+      fmt::format(
+          "{} frames -> {} objects + {} structure ({} triangles), {} "
+          "people{}; gravity: {}; wrote {}/scene.usda in {:.1f} s\n",
+          r.frames, r.objects - r.structure, r.structure, r.triangles, r.people,
+          r.skipped_empty_objects > 0
+              ? fmt::format(", {} empty skipped", r.skipped_empty_objects)
+              : "",
+          r.gravity.method, args.out, r.seconds)
+          .c_str());
 }
 
 }  // namespace

@@ -287,4 +287,15 @@ std::vector<std::pair<fs::path, fs::path>> MatchSegFiles(
   return pairs;
 }
 
+size_t FoldUnnamedIntoCatchAll(const LabelSet& labels, LabelMap* gt) {
+  if (!labels.Contains(0) || labels.Get(0).kind != ClassKind::kOther) {
+    return 0;
+  }
+  size_t changed = 0;
+  for (uint16_t& v : gt->values()) {
+    if (v != 0 && !labels.Contains(v)) v = 0, ++changed;
+  }
+  return changed;
+}
+
 }  // namespace semrec::eval

@@ -469,3 +469,35 @@ TEST(SegMetrics, MatchesFilesByStem) {
 
 }  // namespace
 }  // namespace semrec::eval
+
+namespace semrec::eval {
+namespace {
+
+TEST(SegMetrics, UnnamedGroundTruthClassesFoldIntoTheCatchAll) {
+  LabelSet top("top");
+  top.Add({0, "other", {0, 0, 0}, ClassKind::kOther});
+  top.Add({1, "wall", {1, 1, 1}, ClassKind::kStuff});
+  top.Add({20, "chair", {2, 2, 2}, ClassKind::kThing});
+  LabelMap gt(4, 1);
+  gt.values() = {1, 20, 37, 0};  // wall, chair, lamp (not in the set), none
+  EXPECT_EQ(FoldUnnamedIntoCatchAll(top, &gt), 1u);
+  EXPECT_EQ(gt.values(), (std::vector<uint16_t>{1, 20, 0, 0}));
+  // Scored with 0 ignored: predicting "wall" on the lamp costs nothing, the
+  // chair called "other" does.
+  LabelMap pred(4, 1);
+  pred.values() = {1, 0, 1, 1};
+  SegEvaluator evaluator{SegEvalOptions{}};
+  evaluator.Add(pred, gt);
+  const SegMetrics m = evaluator.Result();
+  EXPECT_EQ(m.valid_pixels, 2);
+  EXPECT_DOUBLE_EQ(m.pixel_accuracy, 0.5);
+  // A set without a catch-all leaves unknown ids alone.
+  LabelSet plain("plain");
+  plain.Add({1, "wall", {1, 1, 1}, ClassKind::kStuff});
+  LabelMap gt2(1, 1, 1, 37);
+  EXPECT_EQ(FoldUnnamedIntoCatchAll(plain, &gt2), 0u);
+  EXPECT_EQ(gt2(0, 0), 37);
+}
+
+}  // namespace
+}  // namespace semrec::eval

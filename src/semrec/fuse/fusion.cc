@@ -149,8 +149,8 @@ FrameFusionStats SceneFusion::Integrate(
   const float margin = static_cast<float>(options_.max_corr_dist_m);
   std::vector<std::vector<size_t>> matches(frame_segments.size());
   for (size_t f = 0; f < frame_segments.size(); ++f) {
-    const bool stuff = options_.stuff_per_class &&
-                       frame_segments[f].kind == ClassKind::kStuff;
+    const bool stuff =
+        options_.stuff_per_class && frame_segments[f].kind == ClassKind::kStuff;
     for (size_t s = 0; s < segments_.size(); ++s) {
       if (stuff) {
         // Structure joins its class's segment, whatever the overlap.

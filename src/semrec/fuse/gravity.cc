@@ -3,9 +3,11 @@
 #include <algorithm>
 #include <cmath>
 #include <sstream>
+#include <unordered_map>
 
-#include <Eigen/Eigenvalues>
 #include <fmt/format.h>
+#include <spdlog/spdlog.h>
+#include <Eigen/Eigenvalues>
 
 #include "semrec/core/error.h"
 #include "semrec/core/random.h"
@@ -16,7 +18,7 @@ namespace {
 constexpr double kDegToRad = M_PI / 180.0;
 // RANSAC works on a sample: a room holds ~10^5 points at 5 cm.
 constexpr size_t kMaxPoints = 60000;
-constexpr int kIterations = 400;
+constexpr int kIterations = 600;
 constexpr int kMaxPlanes = 6;
 
 struct Plane {
@@ -55,17 +57,32 @@ std::vector<Plane> HorizontalPlanes(const std::vector<Eigen::Vector3d>& pts,
   const double tol = options.plane_tolerance_m;
   const size_t min_inliers = std::max<size_t>(50, pts.size() / 100);
   Rng rng(options.seed);
+  // Candidate planes from three points of one neighbourhood (a cell of
+  // kCellM): drawn from the whole cloud, three points rarely share a small
+  // plane (a floor patch between furniture), from one cell they mostly do.
+  constexpr double kCellM = 0.3;
+  const auto cell_key = [&](const Eigen::Vector3d& p) {
+    const Eigen::Vector3d c = (p / kCellM).array().floor();
+    return (static_cast<int64_t>(c.x()) * 73856093) ^
+           (static_cast<int64_t>(c.y()) * 19349663) ^
+           (static_cast<int64_t>(c.z()) * 83492791);
+  };
   for (int round = 0; round < kMaxPlanes && remaining.size() >= min_inliers;
        ++round) {
+    std::unordered_map<int64_t, std::vector<size_t>> cells;
+    for (size_t i : remaining) cells[cell_key(pts[i])].push_back(i);
     size_t best_count = 0;
     Eigen::Vector3d best_n = Eigen::Vector3d::Zero();
     double best_d = 0.0;
     for (int it = 0; it < kIterations; ++it) {
-      const auto pick = [&] {
-        return pts[remaining[static_cast<size_t>(rng.UniformInt(
-            0, static_cast<int64_t>(remaining.size()) - 1))]];
+      const auto pick = [&](const std::vector<size_t>& from) {
+        return pts[from[static_cast<size_t>(
+            rng.UniformInt(0, static_cast<int64_t>(from.size()) - 1))]];
       };
-      const Eigen::Vector3d a = pick(), b = pick(), c = pick();
+      const Eigen::Vector3d a = pick(remaining);
+      const std::vector<size_t>& near = cells[cell_key(a)];
+      if (near.size() < 3) continue;
+      const Eigen::Vector3d b = pick(near), c = pick(near);
       Eigen::Vector3d n = (b - a).cross(c - a);
       if (n.norm() < 1e-9) continue;
       n.normalize();
@@ -98,9 +115,8 @@ Eigen::Matrix3d RotationToZ(const Eigen::Vector3d& up) {
 }
 
 GravityEstimate Finish(GravityEstimate e, const GravityOptions& options) {
-  const double angle =
-      std::acos(std::clamp(e.up_world.dot(Eigen::Vector3d::UnitZ()), -1.0,
-                           1.0));
+  const double angle = std::acos(
+      std::clamp(e.up_world.dot(Eigen::Vector3d::UnitZ()), -1.0, 1.0));
   if (options.mode == GravityOptions::Mode::kAuto &&
       angle < options.snap_angle_deg * kDegToRad &&
       std::abs(e.floor_height_m) < options.snap_height_m) {
@@ -141,9 +157,8 @@ GravityOptions ParseGravity(const std::string& text) {
   Eigen::Vector3d v;
   std::istringstream in(text);
   char c1 = 0, c2 = 0;
-  if (!(in >> v.x() >> c1 >> v.y() >> c2 >> v.z()) || c1 != ',' ||
-      c2 != ',' || !(in >> std::ws).eof() || !v.allFinite() ||
-      v.norm() < 1e-9) {
+  if (!(in >> v.x() >> c1 >> v.y() >> c2 >> v.z()) || c1 != ',' || c2 != ',' ||
+      !(in >> std::ws).eof() || !v.allFinite() || v.norm() < 1e-9) {
     throw InvalidArgument(fmt::format(
         "--gravity '{}': use auto, none or the world's up direction as x,y,z "
         "(e.g. 0,-1,0 for a y-down world)",
@@ -187,6 +202,12 @@ GravityEstimate EstimateGravity(const std::vector<const Cloud*>& clouds,
     return e;
   }
   std::vector<Plane> planes = HorizontalPlanes(pts, up, options);
+  for (const Plane& p : planes) {
+    spdlog::debug("gravity: horizontal plane, {} points, normal {:.3f} {:.3f} "
+                  "{:.3f}, height {:.3f} m",
+                  p.inliers.size(), p.normal.x(), p.normal.y(), p.normal.z(),
+                  p.offset);
+  }
 
   // A floor class makes the floor explicit.
   if (floor_pts.size() >= 200) {
@@ -207,9 +228,9 @@ GravityEstimate EstimateGravity(const std::vector<const Cloud*>& clouds,
     // Up from the largest horizontal plane; the floor is the lowest plane with
     // a fair share of points (tables and seats are above it).
     e.up_world = given ? up : planes.front().normal;
-    const size_t needed = static_cast<size_t>(
-        options.min_floor_share *
-        static_cast<double>(planes.front().inliers.size()));
+    const size_t needed =
+        static_cast<size_t>(options.min_floor_share *
+                            static_cast<double>(planes.front().inliers.size()));
     const Plane* floor = nullptr;
     double floor_h = 0.0;
     for (const Plane& p : planes) {

@@ -34,8 +34,10 @@ struct GravityOptions {
   Mode mode = Mode::kAuto;
   Eigen::Vector3d up = Eigen::Vector3d::UnitZ();
   /// Planes whose normal is farther than this from the cameras' up vector are
-  /// not floors, tables or ceilings.
-  double max_tilt_deg = 30.0;
+  /// not floors, tables or ceilings. Generous: scanning a table top, cameras
+  /// look down by 30 degrees and more (7-Scenes chess: 29 on average); walls
+  /// stay 90 degrees away.
+  double max_tilt_deg = 45.0;
   /// RANSAC inlier distance.
   double plane_tolerance_m = 0.03;
   /// A horizontal plane counts as the floor candidate from this share of the
@@ -71,9 +73,9 @@ struct GravityEstimate {
 /// `clouds`: the scene's points (world frame), one cloud per object;
 /// `is_floor`: parallel flags for clouds of a "floor" class (may be empty).
 /// `T_world_cameras`: the camera poses.
-GravityEstimate EstimateGravity(
-    const std::vector<const Cloud*>& clouds, const std::vector<bool>& is_floor,
-    const std::vector<Transform>& T_world_cameras,
-    const GravityOptions& options);
+GravityEstimate EstimateGravity(const std::vector<const Cloud*>& clouds,
+                                const std::vector<bool>& is_floor,
+                                const std::vector<Transform>& T_world_cameras,
+                                const GravityOptions& options);
 
 }  // namespace semrec::fuse

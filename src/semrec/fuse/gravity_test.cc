@@ -78,8 +78,8 @@ TEST(Gravity, RecoversUpAndFloorOfATiltedRoom) {
   for (bool with_floor_class : {false, true}) {
     SCOPED_TRACE(with_floor_class ? "floor class" : "planes");
     const std::vector<bool> is_floor = {false, false, with_floor_class, false};
-    const GravityEstimate e = EstimateGravity({&table, &seat, &floor, &wall},
-                                              is_floor, cameras, {});
+    const GravityEstimate e =
+        EstimateGravity({&table, &seat, &floor, &wall}, is_floor, cameras, {});
     EXPECT_EQ(e.method, with_floor_class ? "floor class" : "planes");
     // Composed with the true world transform, the estimate must give back the
     // room's own frame up to a spin about Z.
@@ -108,8 +108,8 @@ TEST(Gravity, TheFloorIsTheLowestLargePlaneNotTheLargest) {
       big_table.emplace_back(x, y, 0.75f);
     }
   }
-  const GravityEstimate e = EstimateGravity({&big_table, &floor_patch}, {},
-                                            room.cameras, {});
+  const GravityEstimate e =
+      EstimateGravity({&big_table, &floor_patch}, {}, room.cameras, {});
   EXPECT_EQ(e.method, "already upright");
   EXPECT_TRUE(e.T_upright_world.IsApprox(Transform()));
   // Lifted by 1 m: the floor comes back to 0, not the table.
@@ -134,8 +134,8 @@ TEST(Gravity, UprightWorldsAreKeptExactlyAndNoneDoesNothing) {
       Eigen::AngleAxisd(0.5, Eigen::Vector3d::UnitX()).toRotationMatrix(),
       Eigen::Vector3d::Zero());
   const Cloud f = Apply(tilted, room.floor);
-  const GravityEstimate none = EstimateGravity({&f}, {}, room.cameras,
-                                               ParseGravity("none"));
+  const GravityEstimate none =
+      EstimateGravity({&f}, {}, room.cameras, ParseGravity("none"));
   EXPECT_EQ(none.method, "none");
   EXPECT_EQ(none.T_upright_world.Matrix(), Eigen::Matrix4d::Identity());
 }
@@ -145,8 +145,8 @@ TEST(Gravity, GivenUpIsUsedAndParsed) {
   EXPECT_EQ(o.mode, GravityOptions::Mode::kGiven);
   EXPECT_TRUE(o.up.isApprox(Eigen::Vector3d(0, -1, 0)));
   EXPECT_EQ(ParseGravity("auto").mode, GravityOptions::Mode::kAuto);
-  for (const char* bad : {"", "up", "0,0", "0,0,0", "1,2,3,4", "0;0;1",
-                          "nan,0,1"}) {
+  for (const char* bad :
+       {"", "up", "0,0", "0,0,0", "1,2,3,4", "0;0;1", "nan,0,1"}) {
     EXPECT_THROW(ParseGravity(bad), InvalidArgument) << bad;
   }
   // A y-down world: up = -y.

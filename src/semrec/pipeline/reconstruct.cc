@@ -221,22 +221,22 @@ ReconstructResult Reconstruct(const io::SequenceReader& reader,
           .count();
   WriteTextFileAtomic(
       out_dir / "summary.json",
-      nlohmann::json({{"input", stage.custom_layer_data["input"]},
-                      {"options", stage.custom_layer_data["options"]},
-                      {"objects", objects},
-                      {"structure", result.structure},
-                      {"gravity",
-                       {{"method", result.gravity.method},
-                        {"up_world",
-                         {result.gravity.up_world.x(),
-                          result.gravity.up_world.y(),
-                          result.gravity.up_world.z()}},
-                        {"floor_height_m", result.gravity.floor_height_m},
-                        {"floor_points", result.gravity.floor_points},
-                        {"T_upright_world", matrix}}},
-                      {"people", result.people},
-                      {"skipped_empty_objects", result.skipped_empty_objects},
-                      {"seconds", result.seconds}})
+      nlohmann::json(
+          {{"input", stage.custom_layer_data["input"]},
+           {"options", stage.custom_layer_data["options"]},
+           {"objects", objects},
+           {"structure", result.structure},
+           {"gravity",
+            {{"method", result.gravity.method},
+             {"up_world",
+              {result.gravity.up_world.x(), result.gravity.up_world.y(),
+               result.gravity.up_world.z()}},
+             {"floor_height_m", result.gravity.floor_height_m},
+             {"floor_points", result.gravity.floor_points},
+             {"T_upright_world", matrix}}},
+           {"people", result.people},
+           {"skipped_empty_objects", result.skipped_empty_objects},
+           {"seconds", result.seconds}})
               .dump(2) +
           "\n");
   return result;

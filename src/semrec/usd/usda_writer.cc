@@ -171,9 +171,8 @@ std::string MeshPrimText(const MeshPrim& m, const std::string& name) {
       "            custom float semrec:confidence = {}\n"
       "        }}\n",
       detail::SemanticsAttributes(m.label, "            "), m.instance_id,
-      m.structure ? "stuff" : "thing",
-      label, m.point_count, m.first_seen_frame, m.last_seen_frame,
-      Num(static_cast<float>(m.confidence)));
+      m.structure ? "stuff" : "thing", label, m.point_count, m.first_seen_frame,
+      m.last_seen_frame, Num(static_cast<float>(m.confidence)));
   return text;
 }
 
@@ -189,12 +188,10 @@ std::string ObjectsScopeText(const std::vector<MeshPrim>& meshes) {
             : fmt::format("{}_{}", SanitizeName(m.label), m.instance_id);
     CheckArgument(names.insert((m.structure ? "S/" : "O/") + name).second,
                   std::string("usd: duplicate ") +
-                      (m.structure ? "structure" : "object") + " prim " +
-                      name);
+                      (m.structure ? "structure" : "object") + " prim " + name);
     (m.structure ? structure : objects) += MeshPrimText(m, name);
   }
-  std::string text =
-      "    def Scope \"Objects\"\n    {\n" + objects + "    }\n";
+  std::string text = "    def Scope \"Objects\"\n    {\n" + objects + "    }\n";
   if (!structure.empty()) {
     text += "    def Scope \"Structure\"\n    {\n" + structure + "    }\n";
   }
