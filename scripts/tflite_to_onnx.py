@@ -16,7 +16,10 @@ the quantized network sees are scale * (pixel - zero_point); the scale and zero 
 recorded in the model's metadata as `input_scale` / `input_zero_point`).
 
 Outputs: `labels` (int32 [1, H, W]: the TFLite model's ARG_MAX) and/or `logits` (float
-[1, K, H, W]: the tensor that feeds the ARG_MAX). `--fp16` stores the weights as float16 (half
+[1, K, H, W]: the tensor that feeds the ARG_MAX); `coarse-logits`: when that tensor is a
+RESIZE_BILINEAR of a coarser one, the coarse one as `logits` (a 512x512x32 map is 16x the
+128x128 one: semrec upsamples to the image itself, once; the grid alignment to register,
+`asymmetric` or `half_pixel`, is printed and stored in the metadata as `logits_grid`). `--fp16` stores the weights as float16 (half
 the file; a Cast per weight is folded by ONNX Runtime when the session starts).
 
 Operators: CONV_2D, DEPTHWISE_CONV_2D, ADD, AVERAGE_POOL_2D, SPLIT, CONCATENATION, QUANTIZE,
@@ -63,6 +66,8 @@ class Converter:
         self.values = {}  # tensor index -> ONNX value name (float, NCHW when rank 4)
         self.ranges = {}  # ONNX value name -> (lo, hi) known bounds of its values
         self.counter = 0
+        self.resized_from = {}  # tensor index -> (ONNX value, NHWC shape, mode) before a resize
+        self.coarse = None
 
     # ---- tensors --------------------------------------------------------------------------
     def tensor(self, i):
@@ -317,6 +322,7 @@ class Converter:
         xv = self.value(x)
         self.nodes.append(helper.make_node("Resize", [xv, "", "", sizes], [raw], mode="linear",
                                            coordinate_transformation_mode=mode))
+        self.resized_from[op.outputs[0]] = (xv, self.shape(x), mode)
         self.finish(raw, op.outputs[0], 0, "RESIZE_BILINEAR", known=self.ranges.get(xv))
 
     def arg_max(self, op):
@@ -326,6 +332,7 @@ class Converter:
         xv = self.value(x)
         self.logits = xv
         self.logits_shape = self.shape(x)
+        self.coarse = self.resized_from.get(x)
         raw = self.fresh("argmax")
         self.nodes.append(helper.make_node("ArgMax", [xv], [raw], axis=axis, keepdims=0))
         name = self.fresh("labels")
@@ -377,7 +384,16 @@ class Converter:
             self.nodes.append(helper.make_node("Identity", [self.values[out_idx]], ["labels"]))
             outputs.append(helper.make_tensor_value_info("labels", TensorProto.INT32,
                                                          [1] + self.shape(out_idx)[1:]))
-        if output in ("logits", "both"):
+        if output == "coarse-logits":
+            if self.coarse is None:
+                raise ConversionError(f"{self.path}: the ARG_MAX input is not a RESIZE_BILINEAR; "
+                                      "use --output logits")
+            if self.coarse[2] == "align_corners":
+                raise ConversionError(f"{self.path}: the final resize aligns corners, which "
+                                      "semrec's logits grid cannot express; use --output logits")
+            self.logits, self.logits_shape = self.coarse[0], self.coarse[1]
+            self.logits_grid = self.coarse[2] if self.coarse[2] == "asymmetric" else "half_pixel"
+        if output in ("logits", "both", "coarse-logits"):
             src, shape = self.logits, getattr(self, "logits_shape", None)
             if src is None:
                 src, shape = self.values[out_idx], self.shape(out_idx)
@@ -386,12 +402,22 @@ class Converter:
             self.nodes.append(helper.make_node("Identity", [src], ["logits"]))
             outputs.append(helper.make_tensor_value_info("logits", TensorProto.FLOAT, shape))
         inputs = [helper.make_tensor_value_info("image", TensorProto.FLOAT, [1, 3, h, w])]
-        graph = helper.make_graph(self.nodes, "tflite", inputs, outputs, self.initializers)
+        # Only what the outputs need (coarse logits leave the final resize and ARG_MAX unused).
+        needed = {o.name for o in outputs}
+        live = []
+        for node in reversed(self.nodes):
+            if any(out in needed for out in node.output):
+                live.append(node)
+                needed.update(i for i in node.input if i)
+        live.reverse()
+        inits = [t for t in self.initializers if t.name in needed]
+        graph = helper.make_graph(live, "tflite", inputs, outputs, inits)
         model = helper.make_model(graph, opset_imports=[helper.make_opsetid("", OPSET)],
                                   producer_name="semrec tflite_to_onnx.py",
                                   producer_version=CONVERTER_VERSION)
         q = self.quant(in_idx)
-        meta = {"source": os.path.basename(self.path), "clamped": str(self.clamp).lower()}
+        meta = {"source": os.path.basename(self.path), "clamped": str(self.clamp).lower(),
+                "logits_grid": getattr(self, "logits_grid", "half_pixel")}
         if q is not None:
             meta["input_scale"] = repr(float(q[0][0]))
             meta["input_zero_point"] = str(int(q[1][0]))
@@ -401,14 +427,20 @@ class Converter:
         return model
 
 
+def meta_value(model, key):
+    return next((p.value for p in model.metadata_props if p.key == key), "")
+
+
 def main(argv):
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("tflite", help="the .tflite model")
     parser.add_argument("onnx", help="the .onnx file to write (atomically)")
     parser.add_argument("--schema", required=True, help="TFLite's schema.fbs")
-    parser.add_argument("--output", choices=["labels", "logits", "both"], default="labels",
-                        help="labels: the ARG_MAX (int32); logits: the float tensor feeding it")
+    parser.add_argument("--output", choices=["labels", "logits", "coarse-logits", "both"],
+                        default="labels",
+                        help="labels: the ARG_MAX (int32); logits: the float tensor feeding it; "
+                             "coarse-logits: that tensor before its final resize")
     parser.add_argument("--fp16", action="store_true", help="store the weights as float16")
     parser.add_argument("--no-clamp", action="store_true",
                         help="do not clamp activations to their quantized range (wrong for "
@@ -430,7 +462,9 @@ def main(argv):
         digest = hashlib.sha256(f.read()).hexdigest()
     print(f"{args.onnx}: {len(onnx_model.graph.node)} nodes, "
           f"{os.path.getsize(args.onnx)} bytes, from {os.path.basename(args.tflite)} "
-          f"(sha256 {digest[:12]}...)")
+          f"(sha256 {digest[:12]}...)"
+          + (f"; logits grid: {meta_value(onnx_model, 'logits_grid')}"
+             if args.output == "coarse-logits" else ""))
     return 0
 
 

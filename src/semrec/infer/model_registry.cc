@@ -138,8 +138,17 @@ ModelEntry ParseEntry(const std::string& name, const YAML::Node& node) {
   }
   if (node["input"]) e.input = ParseInput(node["input"]);
   if (node["output"]) {
+    const auto grid =
+        ScalarOr<std::string>(node["output"], "grid", "half_pixel");
+    if (grid != "half_pixel" && grid != "asymmetric") {
+      throw EntryError{"output grid must be half_pixel or asymmetric, not '" +
+                       grid + "'"};
+    }
     e.output = OutputSpec{Scalar<std::string>(node["output"], "name"),
-                          Layout(node["output"])};
+                          Layout(node["output"]),
+                          grid == "asymmetric"
+                              ? GridAlignment::kAsymmetric
+                              : GridAlignment::kHalfPixel};
   }
   if (node["signature"]) {
     e.inputs = ParseSignature(node["signature"]["inputs"]);

@@ -40,9 +40,16 @@ struct ImageInputSpec {
   std::array<float, 3> std = {1, 1, 1};
 };
 
+/// Where the cells of a coarse output grid sit in the input frame:
+/// half-pixel centres (cell i covers [i, i + 1) * stride, centre at
+/// (i + 0.5) * stride; most exports) or asymmetric (cell i at i * stride: a
+/// TFLite RESIZE_BILINEAR without align_corners / half_pixel_centers).
+enum class GridAlignment { kHalfPixel, kAsymmetric };
+
 struct OutputSpec {
   std::string name;
   TensorLayout layout = TensorLayout::kNCHW;
+  GridAlignment grid = GridAlignment::kHalfPixel;
 };
 
 /// A tensor name and shape; -1 = any size.

