@@ -86,7 +86,9 @@ void RegisterMesh(CLI::App& app) {
                   "Fusion: merge when sigma > alpha")
       ->capture_default_str();
   cmd->add_option("--up-axis", args->options.stage.up_axis,
-                  "USD up axis: Z or Y")
+                  "USD up axis: Z or Y (the upright scene is turned so that "
+                  "this axis points up; with --gravity none it is only "
+                  "declared)")
       ->capture_default_str();
   cmd->add_option("--gravity", args->gravity,
                   "Write the scene upright (Z up, floor at z = 0): 'auto' "

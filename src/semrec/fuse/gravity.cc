@@ -47,9 +47,17 @@ Plane FitPlane(const std::vector<Eigen::Vector3d>& pts,
 
 // Horizontal planes (normal within max_tilt of `up`), largest first, found by
 // sequential RANSAC on the points not yet explained.
+//
+// A camera that barely turns gives a prior with its mean pitch in it (six-objects
+// orbits 16 degrees in 8 frames looking down by 48), so the cone is wide; a wall
+// inside it is told apart by the cameras looking *up* at it: a plane counts
+// only if the mean viewing direction does not rise above it by more than
+// max_look_up (people film floors and tables from above, not from below).
 std::vector<Plane> HorizontalPlanes(const std::vector<Eigen::Vector3d>& pts,
                                     const Eigen::Vector3d& up,
+                                    const Eigen::Vector3d& mean_view,
                                     const GravityOptions& options) {
+  const double max_rise = std::sin(options.max_look_up_deg * kDegToRad);
   std::vector<Plane> planes;
   std::vector<size_t> remaining(pts.size());
   for (size_t i = 0; i < pts.size(); ++i) remaining[i] = i;
@@ -87,6 +95,8 @@ std::vector<Plane> HorizontalPlanes(const std::vector<Eigen::Vector3d>& pts,
       if (n.norm() < 1e-9) continue;
       n.normalize();
       if (std::abs(n.dot(up)) < cos_tilt) continue;  // not horizontal
+      if (n.dot(up) < 0) n = -n;
+      if (mean_view.dot(n) > max_rise) continue;  // the cameras look up at it
       const double d = n.dot(a);
       size_t count = 0;
       for (size_t i : remaining) count += std::abs(n.dot(pts[i]) - d) < tol;
@@ -98,7 +108,10 @@ std::vector<Plane> HorizontalPlanes(const std::vector<Eigen::Vector3d>& pts,
       (std::abs(best_n.dot(pts[i]) - best_d) < tol ? in : out).push_back(i);
     }
     Plane plane = FitPlane(pts, in, up);
-    if (plane.normal.dot(up) < cos_tilt) break;  // the refit tilted away
+    if (plane.normal.dot(up) < cos_tilt ||
+        mean_view.dot(plane.normal) > max_rise) {
+      break;  // the refit tilted away
+    }
     planes.push_back(std::move(plane));
     remaining = std::move(out);
   }
@@ -112,6 +125,36 @@ std::vector<Plane> HorizontalPlanes(const std::vector<Eigen::Vector3d>& pts,
 Eigen::Matrix3d RotationToZ(const Eigen::Vector3d& up) {
   return Eigen::Quaterniond::FromTwoVectors(up, Eigen::Vector3d::UnitZ())
       .toRotationMatrix();
+}
+
+// Which way the cameras say is up. People hold RGB-D cameras with little roll
+// but any pitch (an orbit looking down at furniture, a walk looking ahead), so
+// the camera x axes are nearly horizontal: when they turn enough to span the
+// horizontal plane, up is the direction perpendicular to all of them
+// (smallest eigenvector of their scatter). Otherwise (a camera that barely
+// turns) the mean -y (image up) with the mean x direction removed: it keeps
+// the pitch error but not the roll. Oriented along the mean -y.
+Eigen::Vector3d CameraUpPrior(const std::vector<Transform>& T_world_cameras) {
+  Eigen::Vector3d image_up = Eigen::Vector3d::Zero();
+  Eigen::Matrix3d scatter = Eigen::Matrix3d::Zero();
+  for (const Transform& T : T_world_cameras) {
+    image_up -= T.rotation().col(1);
+    scatter += T.rotation().col(0) * T.rotation().col(0).transpose();
+  }
+  if (image_up.norm() < 1e-6) return Eigen::Vector3d::UnitZ();
+  image_up.normalize();
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(scatter);
+  const Eigen::Vector3d l = eig.eigenvalues();  // ascending
+  Eigen::Vector3d up;
+  if (l(1) > 0.1 * l(2) && l(0) < 0.1 * l(1)) {
+    up = eig.eigenvectors().col(0);
+  } else {
+    const Eigen::Vector3d x = eig.eigenvectors().col(2);
+    up = image_up - image_up.dot(x) * x;
+    if (up.norm() < 1e-6) return image_up;
+  }
+  up.normalize();
+  return up.dot(image_up) < 0 ? -up : up;
 }
 
 GravityEstimate Finish(GravityEstimate e, const GravityOptions& options) {
@@ -139,6 +182,8 @@ void GravityOptions::Check() const {
                 "gravity: up must be a unit vector");
   CheckArgument(max_tilt_deg > 0.0 && max_tilt_deg < 90.0,
                 "gravity: max_tilt_deg must be in (0, 90)");
+  CheckArgument(max_look_up_deg >= 0.0 && max_look_up_deg < 90.0,
+                "gravity: max_look_up_deg must be in [0, 90)");
   CheckArgument(plane_tolerance_m > 0.0,
                 "gravity: plane_tolerance_m must be > 0");
   CheckArgument(min_floor_share > 0.0 && min_floor_share <= 1.0,
@@ -177,12 +222,16 @@ GravityEstimate EstimateGravity(const std::vector<const Cloud*>& clouds,
   GravityEstimate e;
   if (options.mode == GravityOptions::Mode::kNone) return e;
 
-  // The cameras' up: -y of each camera in the world.
-  Eigen::Vector3d cam_up = Eigen::Vector3d::Zero();
-  for (const Transform& T : T_world_cameras) cam_up -= T.rotation().col(1);
   const bool given = options.mode == GravityOptions::Mode::kGiven;
-  Eigen::Vector3d up = given ? options.up : Eigen::Vector3d::UnitZ();
-  if (!given && cam_up.norm() > 1e-6) up = cam_up.normalized();
+  const Eigen::Vector3d up =
+      given ? options.up : CameraUpPrior(T_world_cameras);
+  Eigen::Vector3d mean_view = Eigen::Vector3d::Zero();
+  for (const Transform& T : T_world_cameras) mean_view += T.rotation().col(2);
+  if (!T_world_cameras.empty()) {
+    mean_view /= static_cast<double>(T_world_cameras.size());
+  }
+  spdlog::debug("gravity: cameras' up {:.3f} {:.3f} {:.3f}", up.x(), up.y(),
+                up.z());
 
   // An even sample of all points, and the floor class's points.
   size_t total = 0;
@@ -201,7 +250,7 @@ GravityEstimate EstimateGravity(const std::vector<const Cloud*>& clouds,
     e.method = "none";
     return e;
   }
-  std::vector<Plane> planes = HorizontalPlanes(pts, up, options);
+  std::vector<Plane> planes = HorizontalPlanes(pts, up, mean_view, options);
   for (const Plane& p : planes) {
     spdlog::debug("gravity: horizontal plane, {} points, normal {:.3f} {:.3f} "
                   "{:.3f}, height {:.3f} m",
@@ -212,7 +261,7 @@ GravityEstimate EstimateGravity(const std::vector<const Cloud*>& clouds,
   // A floor class makes the floor explicit.
   if (floor_pts.size() >= 200) {
     const std::vector<Plane> floor_planes =
-        HorizontalPlanes(floor_pts, up, options);
+        HorizontalPlanes(floor_pts, up, mean_view, options);
     if (!floor_planes.empty()) {
       const Plane& f = floor_planes.front();
       e.up_world = given ? up : f.normal;

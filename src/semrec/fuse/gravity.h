@@ -3,9 +3,10 @@
 // floor at z = 0, so viewers, simulators and queries ("what is on the floor")
 // see it upright.
 //
-// Estimate: the cameras' mean up vector (-y of each camera: people hold RGB-D
-// cameras roughly level) picks the horizontal planes among the planes RANSAC
-// finds in the fused points (normal within max_tilt_deg of it); the normal of
+// Estimate: the cameras' up (perpendicular to their x axes when those turn
+// enough, else their image-up: people hold RGB-D cameras with little roll)
+// picks the horizontal planes among the planes RANSAC finds in the fused
+// points (normal within max_tilt_deg of it, not looked up at); the normal of
 // the largest such plane refined by least squares is "up". The floor is the
 // lowest horizontal plane holding at least min_floor_share of the horizontal
 // points (or the points of a class named "floor" when the scene has them).
@@ -34,10 +35,13 @@ struct GravityOptions {
   Mode mode = Mode::kAuto;
   Eigen::Vector3d up = Eigen::Vector3d::UnitZ();
   /// Planes whose normal is farther than this from the cameras' up vector are
-  /// not floors, tables or ceilings. Generous: scanning a table top, cameras
-  /// look down by 30 degrees and more (7-Scenes chess: 29 on average); walls
-  /// stay 90 degrees away.
-  double max_tilt_deg = 45.0;
+  /// not floors, tables or ceilings. Generous, because a camera that barely
+  /// turns leaves its pitch in that vector (looking down at a table: 29
+  /// degrees on 7-Scenes chess, 48 on the six-objects orbit).
+  double max_tilt_deg = 60.0;
+  /// ... and planes the cameras look up at by more than this on average are
+  /// walls seen from a camera pitched down, not floors.
+  double max_look_up_deg = 20.0;
   /// RANSAC inlier distance.
   double plane_tolerance_m = 0.03;
   /// A horizontal plane counts as the floor candidate from this share of the

@@ -123,6 +123,39 @@ TEST(Gravity, TheFloorIsTheLowestLargePlaneNotTheLargest) {
   EXPECT_NEAR(lifted.T_upright_world.translation().z(), -1.0, 0.01);
 }
 
+TEST(Gravity, CamerasLookingSteeplyDownDoNotTurnAWallIntoTheFloor) {
+  // The six-objects orbit: 8 frames turning 16 degrees, looking down by 48.
+  // The cameras' image-up is then 48 degrees from up and only 42 from the
+  // back wall's normal; the cameras look up at that wall, down at the floor.
+  Room room = MakeRoom(7);
+  Cloud back_wall;  // y = 0, behind the cameras, larger than the floor seen
+  for (float x = 0; x < 4; x += 0.05f) {
+    for (float z = 0; z < 3.0f; z += 0.04f) back_wall.emplace_back(x, 0, z);
+  }
+  Cloud floor_seen;
+  for (const auto& p : room.floor) {
+    if (p.y() > 1.5f && p.y() < 3.5f) floor_seen.push_back(p);
+  }
+  std::vector<Transform> cameras;
+  for (int i = 0; i < 8; ++i) {
+    const double yaw = (i - 4) * 2.0 * M_PI / 180;
+    const Eigen::Vector3d eye(2, 0.5, 2.1);
+    const Eigen::Vector3d dir(std::sin(yaw) * std::cos(0.84),
+                              std::cos(yaw) * std::cos(0.84), -std::sin(0.84));
+    cameras.push_back(LookAt(eye, eye + dir));
+  }
+  const GravityEstimate e = EstimateGravity(
+      {&floor_seen, &back_wall, &room.table}, {}, cameras, {});
+  EXPECT_EQ(e.method, "already upright");
+  EXPECT_GT(e.up_world.z(), 0.999);
+  // Without the look-up rule the back wall would be the floor.
+  GravityOptions no_rule;
+  no_rule.max_look_up_deg = 89;
+  const GravityEstimate wrong = EstimateGravity(
+      {&floor_seen, &back_wall, &room.table}, {}, cameras, no_rule);
+  EXPECT_LT(wrong.up_world.z(), 0.9);
+}
+
 TEST(Gravity, UprightWorldsAreKeptExactlyAndNoneDoesNothing) {
   const Room room = MakeRoom(5);
   const GravityEstimate e = EstimateGravity(

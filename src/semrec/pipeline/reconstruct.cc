@@ -99,6 +99,16 @@ ReconstructResult Reconstruct(const io::SequenceReader& reader,
                  g.method, g.up_world.x(), g.up_world.y(), g.up_world.z(),
                  g.floor_height_m);
   }
+  // An upright scene declared Y-up gets its axes turned: (x, y, z) -> (x, z,
+  // -y). With gravity "none" the stage only declares the user's own axis.
+  if (options.stage.up_axis == "Y" &&
+      options.gravity.mode != fuse::GravityOptions::Mode::kNone) {
+    Eigen::Matrix3d z_to_y;
+    z_to_y << 1, 0, 0, 0, 0, 1, 0, -1, 0;
+    result.gravity.T_upright_world =
+        Transform(z_to_y, Eigen::Vector3d::Zero()) *
+        result.gravity.T_upright_world;
+  }
   const Transform& T_up = result.gravity.T_upright_world;
   const Eigen::Matrix3f R_up = T_up.rotation().cast<float>();
   const Eigen::Vector3f t_up = T_up.translation().cast<float>();

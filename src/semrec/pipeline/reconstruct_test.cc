@@ -11,6 +11,7 @@
 #include "semrec/synth/generator.h"
 #include "semrec/synth/scene.h"
 #include "semrec/testing/test_util.h"
+#include "semrec/usd/usda_reader.h"
 
 namespace fs = std::filesystem;
 
@@ -69,6 +70,55 @@ TEST(Reconstruct, SixObjectsBecomeSixLabelledMeshPrims) {
             std::string::npos);
   // Refuses to overwrite.
   EXPECT_THROW(Reconstruct(reader, *source, {}, dir / "out", Quiet()), IoError);
+}
+
+// The room's shell (stuff classes) becomes one structure prim per class; an
+// upright synthetic world is kept exactly; asked for Y up, the floor ends at
+// y = 0 with the furniture above it.
+TEST(Reconstruct, StructureIsOnePrimPerClassAndTheSceneIsUpright) {
+  testing::TempDir dir;
+  const synth::SynthOptions o = SmallNoiselessScene("six-objects", 8);
+  synth::WriteSyntheticSequence(o, dir / "seq", Quiet());
+  const io::SequenceReader reader = io::SequenceReader::Open(dir / "seq");
+  const auto source = fuse::SegmentationSource::Create("gt", reader);
+  const ReconstructResult r =
+      Reconstruct(reader, *source, {}, dir / "z", Quiet());
+  EXPECT_EQ(r.gravity.method, "already upright");
+  EXPECT_EQ(r.gravity.T_upright_world.Matrix(), Eigen::Matrix4d::Identity());
+  const auto summary = nlohmann::json::parse(ReadTextFile(dir / "z/summary.json"));
+  EXPECT_EQ(summary["gravity"]["method"], "already upright");
+  std::map<std::string, int> structure;
+  for (const auto& object : summary["objects"]) {
+    if (object["kind"] == "structure") ++structure[object["class"]];
+  }
+  EXPECT_EQ(structure["wall"], 1);
+  EXPECT_EQ(structure["floor"], 1);
+  EXPECT_EQ(r.structure, structure.size());
+  const std::string layer = ReadTextFile(dir / "z/static.usda");
+  EXPECT_NE(layer.find("def Scope \"Structure\""), std::string::npos);
+  EXPECT_NE(layer.find("def Mesh \"wall\""), std::string::npos);
+  EXPECT_NE(layer.find("customLayerData"), std::string::npos);
+  for (const usd::MeshPrim& m : usd::ReadScene(dir / "z/scene.usda")) {
+    EXPECT_EQ(m.structure, structure.count(m.label) != 0) << m.label;
+  }
+
+  ReconstructOptions y_up;
+  y_up.stage.up_axis = "Y";
+  Reconstruct(reader, *source, y_up, dir / "y", Quiet());
+  bool saw_floor = false, saw_table = false;
+  for (const usd::MeshPrim& m : usd::ReadScene(dir / "y/scene.usda")) {
+    float top = -1e9f;
+    for (const auto& p : m.points) top = std::max(top, p.y());
+    if (m.label == "floor") {
+      saw_floor = true;
+      for (const auto& p : m.points) ASSERT_NEAR(p.y(), 0.0f, 0.05f);
+    }
+    if (m.label == "table") {
+      saw_table = true;
+      EXPECT_GT(top, 0.5f);
+    }
+  }
+  EXPECT_TRUE(saw_floor && saw_table);
 }
 
 // Synthetic people: each person id becomes a time-sampled prim whose
