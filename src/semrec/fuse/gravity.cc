@@ -48,11 +48,12 @@ Plane FitPlane(const std::vector<Eigen::Vector3d>& pts,
 // Horizontal planes (normal within max_tilt of `up`), largest first, found by
 // sequential RANSAC on the points not yet explained.
 //
-// A camera that barely turns gives a prior with its mean pitch in it (six-objects
-// orbits 16 degrees in 8 frames looking down by 48), so the cone is wide; a wall
-// inside it is told apart by the cameras looking *up* at it: a plane counts
-// only if the mean viewing direction does not rise above it by more than
-// max_look_up (people film floors and tables from above, not from below).
+// A camera that barely turns gives a prior with its mean pitch in it
+// (six-objects orbits 16 degrees in 8 frames looking down by 48), so the cone
+// is wide; a wall inside it is told apart by the cameras looking *up* at it: a
+// plane counts only if the mean viewing direction does not rise above it by
+// more than max_look_up (people film floors and tables from above, not from
+// below).
 std::vector<Plane> HorizontalPlanes(const std::vector<Eigen::Vector3d>& pts,
                                     const Eigen::Vector3d& up,
                                     const Eigen::Vector3d& mean_view,
@@ -144,7 +145,7 @@ Eigen::Vector3d CameraUpPrior(const std::vector<Transform>& T_world_cameras) {
   if (image_up.norm() < 1e-6) return Eigen::Vector3d::UnitZ();
   image_up.normalize();
   const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(scatter);
-  const Eigen::Vector3d l = eig.eigenvalues();  // ascending
+  const Eigen::Vector3d& l = eig.eigenvalues();  // ascending
   Eigen::Vector3d up;
   if (l(1) > 0.1 * l(2) && l(0) < 0.1 * l(1)) {
     up = eig.eigenvectors().col(0);
@@ -252,10 +253,10 @@ GravityEstimate EstimateGravity(const std::vector<const Cloud*>& clouds,
   }
   std::vector<Plane> planes = HorizontalPlanes(pts, up, mean_view, options);
   for (const Plane& p : planes) {
-    spdlog::debug("gravity: horizontal plane, {} points, normal {:.3f} {:.3f} "
-                  "{:.3f}, height {:.3f} m",
-                  p.inliers.size(), p.normal.x(), p.normal.y(), p.normal.z(),
-                  p.offset);
+    spdlog::debug(
+        "gravity: horizontal plane, {} points, normal {:.3f} {:.3f} "
+        "{:.3f}, height {:.3f} m",
+        p.inliers.size(), p.normal.x(), p.normal.y(), p.normal.z(), p.offset);
   }
 
   // A floor class makes the floor explicit.
@@ -299,7 +300,8 @@ GravityEstimate EstimateGravity(const std::vector<const Cloud*>& clouds,
   e.up_world = up;
   std::vector<double> h(pts.size());
   for (size_t i = 0; i < pts.size(); ++i) h[i] = up.dot(pts[i]);
-  std::nth_element(h.begin(), h.begin() + static_cast<long>(h.size() / 100),
+  std::nth_element(h.begin(),
+                   h.begin() + static_cast<std::ptrdiff_t>(h.size() / 100),
                    h.end());
   e.floor_height_m = h[h.size() / 100];
   e.method = given ? "given" : "cameras";

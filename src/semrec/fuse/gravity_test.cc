@@ -2,11 +2,24 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 #include "semrec/core/error.h"
 #include "semrec/core/random.h"
 
 namespace semrec::fuse {
 namespace {
+
+// Calls f(a, b) at a0 + i * sa (< a1), b0 + j * sb (< b1): integer counters,
+// so every grid has the same points whatever the float rounding.
+template <typename F>
+void ForGrid(float a0, float a1, float sa, float b0, float b1, float sb, F f) {
+  const int na = static_cast<int>(std::ceil((a1 - a0) / sa - 1e-4f));
+  const int nb = static_cast<int>(std::ceil((b1 - b0) / sb - 1e-4f));
+  for (int i = 0; i < na; ++i) {
+    for (int j = 0; j < nb; ++j) f(a0 + i * sa, b0 + j * sb);
+  }
+}
 
 // A Z-up room with the floor at z = 0: floor, a table top at 0.75 m (larger
 // than a seat, smaller than the floor), a seat at 0.45 m, one wall and noise.
@@ -19,26 +32,16 @@ Room MakeRoom(uint64_t seed) {
   Rng rng(seed);
   Room r;
   const auto noise = [&] { return static_cast<float>(rng.Normal() * 0.005); };
-  for (float x = 0; x < 4; x += 0.05f) {
-    for (float y = 0; y < 4; y += 0.05f) {
-      r.floor.emplace_back(x, y, noise());
-    }
-  }
-  for (float x = 1; x < 2.2f; x += 0.05f) {
-    for (float y = 1; y < 2; y += 0.05f) {
-      r.table.emplace_back(x, y, 0.75f + noise());
-    }
-  }
-  for (float x = 3; x < 3.5f; x += 0.05f) {
-    for (float y = 1; y < 1.5f; y += 0.05f) {
-      r.seat.emplace_back(x, y, 0.45f + noise());
-    }
-  }
-  for (float y = 0; y < 4; y += 0.05f) {
-    for (float z = 0; z < 2.5f; z += 0.05f) {
-      r.wall.emplace_back(noise(), y, z);
-    }
-  }
+  ForGrid(0, 4, 0.05f, 0, 4, 0.05f,
+          [&](float x, float y) { r.floor.emplace_back(x, y, noise()); });
+  ForGrid(1, 2.2f, 0.05f, 1, 2, 0.05f, [&](float x, float y) {
+    r.table.emplace_back(x, y, 0.75f + noise());
+  });
+  ForGrid(3, 3.5f, 0.05f, 1, 1.5f, 0.05f, [&](float x, float y) {
+    r.seat.emplace_back(x, y, 0.45f + noise());
+  });
+  ForGrid(0, 4, 0.05f, 0, 2.5f, 0.05f,
+          [&](float y, float z) { r.wall.emplace_back(noise(), y, z); });
   // Hand-held cameras at eye height, looking around with a few degrees of
   // roll and pitch.
   for (int i = 0; i < 20; ++i) {
@@ -101,13 +104,10 @@ TEST(Gravity, TheFloorIsTheLowestLargePlaneNotTheLargest) {
   Room room = MakeRoom(4);
   Cloud floor_patch, big_table;
   for (const auto& p : room.floor) {
-    if (p.x() < 1.2f && p.y() < 2.0f) floor_patch.push_back(p);
+    if (p.x() < 2.0f && p.y() < 2.0f) floor_patch.push_back(p);  // a third
   }
-  for (float x = 0; x < 3.5f; x += 0.05f) {
-    for (float y = 0; y < 3.5f; y += 0.05f) {
-      big_table.emplace_back(x, y, 0.75f);
-    }
-  }
+  ForGrid(0, 3.5f, 0.05f, 0, 3.5f, 0.05f,
+          [&](float x, float y) { big_table.emplace_back(x, y, 0.75f); });
   const GravityEstimate e =
       EstimateGravity({&big_table, &floor_patch}, {}, room.cameras, {});
   EXPECT_EQ(e.method, "already upright");
@@ -129,9 +129,8 @@ TEST(Gravity, CamerasLookingSteeplyDownDoNotTurnAWallIntoTheFloor) {
   // back wall's normal; the cameras look up at that wall, down at the floor.
   Room room = MakeRoom(7);
   Cloud back_wall;  // y = 0, behind the cameras, larger than the floor seen
-  for (float x = 0; x < 4; x += 0.05f) {
-    for (float z = 0; z < 3.0f; z += 0.04f) back_wall.emplace_back(x, 0, z);
-  }
+  ForGrid(0, 4, 0.05f, 0, 3.0f, 0.04f,
+          [&](float x, float z) { back_wall.emplace_back(x, 0, z); });
   Cloud floor_seen;
   for (const auto& p : room.floor) {
     if (p.y() > 1.5f && p.y() < 3.5f) floor_seen.push_back(p);
@@ -144,8 +143,8 @@ TEST(Gravity, CamerasLookingSteeplyDownDoNotTurnAWallIntoTheFloor) {
                               std::cos(yaw) * std::cos(0.84), -std::sin(0.84));
     cameras.push_back(LookAt(eye, eye + dir));
   }
-  const GravityEstimate e = EstimateGravity(
-      {&floor_seen, &back_wall, &room.table}, {}, cameras, {});
+  const GravityEstimate e =
+      EstimateGravity({&floor_seen, &back_wall, &room.table}, {}, cameras, {});
   EXPECT_EQ(e.method, "already upright");
   EXPECT_GT(e.up_world.z(), 0.999);
   // Without the look-up rule the back wall would be the floor.

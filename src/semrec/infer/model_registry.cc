@@ -146,9 +146,8 @@ ModelEntry ParseEntry(const std::string& name, const YAML::Node& node) {
     }
     e.output = OutputSpec{Scalar<std::string>(node["output"], "name"),
                           Layout(node["output"]),
-                          grid == "asymmetric"
-                              ? GridAlignment::kAsymmetric
-                              : GridAlignment::kHalfPixel};
+                          grid == "asymmetric" ? GridAlignment::kAsymmetric
+                                               : GridAlignment::kHalfPixel};
   }
   if (node["signature"]) {
     e.inputs = ParseSignature(node["signature"]["inputs"]);

@@ -85,7 +85,8 @@ TEST(Reconstruct, StructureIsOnePrimPerClassAndTheSceneIsUpright) {
       Reconstruct(reader, *source, {}, dir / "z", Quiet());
   EXPECT_EQ(r.gravity.method, "already upright");
   EXPECT_EQ(r.gravity.T_upright_world.Matrix(), Eigen::Matrix4d::Identity());
-  const auto summary = nlohmann::json::parse(ReadTextFile(dir / "z/summary.json"));
+  const auto summary =
+      nlohmann::json::parse(ReadTextFile(dir / "z/summary.json"));
   EXPECT_EQ(summary["gravity"]["method"], "already upright");
   std::map<std::string, int> structure;
   for (const auto& object : summary["objects"]) {

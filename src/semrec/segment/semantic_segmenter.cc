@@ -39,8 +39,7 @@ Taps ComputeTaps(int image_size, double scale, int input_size, int logit_size,
     const double cell = grid == infer::GridAlignment::kAsymmetric
                             ? (input - 0.5) * to_logit
                             : input * to_logit - 0.5;
-    const double s =
-        std::clamp(cell, 0.0, static_cast<double>(logit_size - 1));
+    const double s = std::clamp(cell, 0.0, static_cast<double>(logit_size - 1));
     const int i0 = static_cast<int>(std::floor(s));
     taps.i0[i] = i0;
     taps.i1[i] = std::min(i0 + 1, logit_size - 1);
@@ -162,9 +161,8 @@ SemanticResult SemanticSegmenter::Segment(const ColorImage& rgb) const {
     throw Error("model '" + e.name + "' has no output '" + e.output->name +
                 "'");
   }
-  SemanticResult result =
-      LogitsToLabels(it->second, e.output->layout, transform, e.label_offset,
-                     e.output->grid);
+  SemanticResult result = LogitsToLabels(
+      it->second, e.output->layout, transform, e.label_offset, e.output->grid);
   // A channel without a class in the label set means the registry entry and
   // the model disagree; catch it here rather than writing unknown labels.
   const int channels = static_cast<int>(

@@ -172,7 +172,8 @@ TEST(TfliteConversion, AgreesWithArmNnAndTheClampsAreNeeded) {
     if (c.registry_name != "deeplabv3_mnv2_ade20k") continue;
     const fs::path broken = tmp / "no_clamp.onnx";
     ASSERT_TRUE(RunCommand(fmt::format(
-        "/usr/bin/python3 {} {} {} --schema {} --output coarse-logits --no-clamp "
+        "/usr/bin/python3 {} {} {} --schema {} --output coarse-logits "
+        "--no-clamp "
         ">/dev/null",
         (scripts / "tflite_to_onnx.py").string(), (models / c.tflite).string(),
         broken.string(), (models / "tflite_schema.fbs").string())));
