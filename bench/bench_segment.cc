@@ -138,6 +138,22 @@ void BenchDecoder(const infer::ModelRegistry& registry, const ColorImage& rgb) {
       1000 * stopped_s / n, whole_image_s, split_image_s);
 }
 
+// Median of 5 runs of `f` in ms, printed with its ratio to `*first` (set by
+// the first column).
+template <typename F>
+void PrintMedianMs(bool is_first, double* first, F f) {
+  std::vector<double> times;
+  for (int r = 0; r < 5; ++r) {
+    const auto t = Clock::now();
+    f();
+    times.push_back(Since(t));
+  }
+  std::nth_element(times.begin(), times.begin() + 2, times.end());
+  const double ms = 1000.0 * times[2];
+  if (is_first) *first = ms;
+  std::printf(" %15.1f ms %5.2fx", ms, ms / *first);
+}
+
 // Every semantic model of the registry on each image: median of 5 runs after a
 // warm-up, and the ratio to the first model (VOC DeepLabV3, the former
 // default).
@@ -165,16 +181,7 @@ void BenchSemanticModels(const infer::ModelRegistry& registry,
     double first = 0.0;
     for (size_t m = 0; m < models.size(); ++m) {
       models[m]->Segment(rgb);  // warm-up
-      std::vector<double> times;
-      for (int r = 0; r < 5; ++r) {
-        const auto t = Clock::now();
-        models[m]->Segment(rgb);
-        times.push_back(Since(t));
-      }
-      std::nth_element(times.begin(), times.begin() + 2, times.end());
-      const double ms = 1000.0 * times[2];
-      if (m == 0) first = ms;
-      std::printf(" %15.1f ms %5.2fx", ms, ms / first);
+      PrintMedianMs(m == 0, &first, [&] { models[m]->Segment(rgb); });
     }
     std::printf("\n");
   }
@@ -192,17 +199,10 @@ void BenchSemanticModels(const infer::ModelRegistry& registry,
     for (float& v : logits.data) v = static_cast<float>(rng.Uniform(0, 8));
     const infer::InputTransform transform =
         infer::ComputeInputTransform(640, 480, *e.input);
-    std::vector<double> times;
-    for (int r = 0; r < 5; ++r) {
-      const auto t = Clock::now();
+    PrintMedianMs(m == 0, &first, [&] {
       segment::LogitsToLabels(logits, e.output->layout, transform,
                               e.label_offset, e.output->grid);
-      times.push_back(Since(t));
-    }
-    std::nth_element(times.begin(), times.begin() + 2, times.end());
-    const double ms = 1000.0 * times[2];
-    if (m == 0) first = ms;
-    std::printf(" %15.1f ms %5.2fx", ms, ms / first);
+    });
   }
   std::printf("\n");
 }
