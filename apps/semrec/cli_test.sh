@@ -47,6 +47,22 @@ grep -q '"class": "chair"' "$tmp/q.json" || fail "query: no chair: $(cat "$tmp/q
 [ "$(grep -c '"class"' "$tmp/q.json")" -eq 1 ] || fail "query --class returned other classes"
 "$SEMREC" query "$tmp/scene/scene.usda" >"$tmp/q.txt" || fail "query (table) failed"
 grep -q "objects" "$tmp/q.txt" || fail "query: no table"
+# 3D scores of the ground-truth reconstruction: near perfect on what the cameras saw.
+"$SEMREC" eval scene "$tmp/scene" "$tmp/syn/gt/surface_points.ply" --observed-in "$tmp/syn" --json \
+  >"$tmp/scene.json" 2>"$tmp/err" || fail "eval scene failed: $(cat "$tmp/err")"
+python3 -c "import json,sys; j=json.load(open(sys.argv[1])); sys.exit(0 if j['mean_iou'] > 0.85 and j['ap50'] > 0.9 else 1)" \
+  "$tmp/scene.json" || fail "eval scene: oracle scores low: $(head -c 600 "$tmp/scene.json")"
+"$SEMREC" eval scene "$tmp/scene" "$tmp/syn/gt/surface_points.ply" \
+  --class-map "$SEMREC_SOURCE_DIR/data/class_maps/ade20k-top31_to_synth.json" >"$tmp/scene.txt" ||
+  fail "eval scene with a class map"
+grep -q "mIoU" "$tmp/scene.txt" || fail "eval scene: no summary: $(cat "$tmp/scene.txt")"
+"$SEMREC" eval scene "$tmp/scene" "$tmp/fused/fused.ply" 2>"$tmp/err"; rc=$?
+[ "$rc" -eq 1 ] && grep -q "fused.ply: .*'semantic' and 'instance'" "$tmp/err" ||
+  fail "eval scene: ground truth without labels: exit $rc $(cat "$tmp/err")"
+printf '{"chair": "throne"}' >"$tmp/badmap.json"
+"$SEMREC" eval scene "$tmp/scene" "$tmp/syn/gt/surface_points.ply" --class-map "$tmp/badmap.json" 2>"$tmp/err"; rc=$?
+[ "$rc" -eq 1 ] && grep -q "badmap.json: 'chair' maps to 'throne'" "$tmp/err" ||
+  fail "eval scene: bad class map: exit $rc $(cat "$tmp/err")"
 "$SEMREC" mesh "$tmp/syn" --out "$tmp/scene" 2>"$tmp/err"; rc=$?
 [ "$rc" -eq 1 ] && grep -q "not empty" "$tmp/err" || fail "mesh overwrote a non-empty folder"
 grep -q "dynamic.usda" "$tmp/scene/scene.usda" && [ -s "$tmp/scene/dynamic.usda" ] || fail "mesh: no dynamic layer"

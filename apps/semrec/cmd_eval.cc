@@ -1,5 +1,5 @@
-// `semrec eval c2c|mot|seg`: cloud-to-cloud distance, tracking and
-// segmentation metrics.
+// `semrec eval c2c|mot|seg` (and `scene`, cmd_eval_scene.cc): cloud-to-cloud
+// distance, tracking and segmentation metrics.
 #include <cstdio>
 
 #include <fmt/format.h>
@@ -252,6 +252,8 @@ void RegisterEval(CLI::App& app) {
       "Count label 0 as a class (VOC background)");
   seg->add_flag("--json", seg_args->json, "Print JSON");
   seg->callback([seg_args] { RunSeg(*seg_args); });
+
+  AddEvalScene(eval);
 }
 
 }  // namespace semrec::cli

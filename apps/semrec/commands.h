@@ -42,6 +42,8 @@ void RegisterTsdf(CLI::App& app);
 void RegisterSynth(CLI::App& app);
 void RegisterFuse(CLI::App& app);
 void RegisterEval(CLI::App& app);
+/// `eval scene`, added to the eval command.
+void AddEvalScene(CLI::App* eval);
 void RegisterTrack(CLI::App& app);
 void RegisterMesh(CLI::App& app);
 void RegisterQuery(CLI::App& app);

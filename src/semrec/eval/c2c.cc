@@ -27,26 +27,38 @@ using KdTree = nanoflann::KDTreeSingleIndexAdaptor<
 
 }  // namespace
 
+std::vector<std::pair<size_t, double>> NearestNeighbors(
+    const std::vector<Eigen::Vector3f>& queries,
+    const std::vector<Eigen::Vector3f>& reference) {
+  CheckArgument(!reference.empty(),
+                "nearest neighbours: the reference cloud is empty");
+  const CloudAdaptor adaptor{reference};
+  KdTree tree(3, adaptor, nanoflann::KDTreeSingleIndexAdaptorParams(16));
+  tree.buildIndex();
+  std::vector<std::pair<size_t, double>> out(queries.size());
+  tbb::parallel_for(size_t{0}, queries.size(), [&](size_t i) {
+    size_t index = 0;
+    double d2 = 0.0;
+    nanoflann::KNNResultSet<double, size_t> result(1);
+    result.init(&index, &d2);
+    tree.findNeighbors(result, queries[i].data(), nanoflann::SearchParams());
+    // Recompute in double from the points themselves (the tree's metric is
+    // exact, this only fixes the precision of the reported value).
+    out[i] = {
+        index,
+        (queries[i].cast<double>() - reference[index].cast<double>()).norm()};
+  });
+  return out;
+}
+
 std::vector<double> CloudToCloudDistances(
     const std::vector<Eigen::Vector3f>& estimate,
     const std::vector<Eigen::Vector3f>& reference) {
   CheckArgument(!reference.empty(),
                 "cloud-to-cloud distance: the reference cloud is empty");
-  const CloudAdaptor adaptor{reference};
-  KdTree tree(3, adaptor, nanoflann::KDTreeSingleIndexAdaptorParams(16));
-  tree.buildIndex();
-  std::vector<double> out(estimate.size());
-  tbb::parallel_for(size_t{0}, estimate.size(), [&](size_t i) {
-    size_t index = 0;
-    double d2 = 0.0;
-    nanoflann::KNNResultSet<double, size_t> result(1);
-    result.init(&index, &d2);
-    tree.findNeighbors(result, estimate[i].data(), nanoflann::SearchParams());
-    // Recompute in double from the points themselves (the tree's metric is
-    // exact, this only fixes the precision of the reported value).
-    out[i] =
-        (estimate[i].cast<double>() - reference[index].cast<double>()).norm();
-  });
+  const auto nearest = NearestNeighbors(estimate, reference);
+  std::vector<double> out(nearest.size());
+  for (size_t i = 0; i < nearest.size(); ++i) out[i] = nearest[i].second;
   return out;
 }
 

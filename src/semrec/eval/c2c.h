@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cstddef>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Core>
@@ -12,6 +13,12 @@ namespace semrec::eval {
 
 /// Distance (m) from each estimate point to its nearest reference point. Throws
 /// InvalidArgument when the reference is empty.
+/// For every query point, the index of its nearest reference point and the
+/// distance (exact, k-d tree). Throws InvalidArgument for an empty reference.
+std::vector<std::pair<size_t, double>> NearestNeighbors(
+    const std::vector<Eigen::Vector3f>& queries,
+    const std::vector<Eigen::Vector3f>& reference);
+
 std::vector<double> CloudToCloudDistances(
     const std::vector<Eigen::Vector3f>& estimate,
     const std::vector<Eigen::Vector3f>& reference);

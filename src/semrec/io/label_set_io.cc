@@ -65,7 +65,8 @@ LabelSet LoadLabelSet(const std::string& name_or_path) {
       {"coco", "coco80"},
       {"coco80", "coco80"},
       {"cityscapes", "cityscapes19"},
-      {"cityscapes19", "cityscapes19"}};
+      {"cityscapes19", "cityscapes19"},
+      {"nyu40", "nyu40"}};
   if (auto it = kAliases.find(name_or_path); it != kAliases.end()) {
     return ReadLabelSetJson(ProjectDataDir() / "labels" /
                             (it->second + ".json"));

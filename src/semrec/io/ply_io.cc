@@ -1,7 +1,10 @@
 #include "semrec/io/ply_io.h"
 
+#include <cmath>
 #include <cstring>
 #include <fstream>
+#include <map>
+#include <set>
 #include <sstream>
 #include <string>
 
@@ -24,6 +27,13 @@ void WritePly(const fs::path& path, const PlyData& data) {
     CheckArgument(t[0] < n && t[1] < n && t[2] < n,
                   path.string() + ": triangle index out of range");
   }
+  for (const auto& [name, values] : data.int_properties) {
+    CheckArgument(values.size() == n && !name.empty() &&
+                      name.find_first_of(" \n") == std::string::npos,
+                  path.string() + ": property '" + name +
+                      "' must be a name without spaces with one value per "
+                      "point");
+  }
   std::string header = fmt::format(
       "ply\nformat binary_little_endian 1.0\ncomment written by "
       "semrec\nelement vertex {}\n"
@@ -33,14 +43,18 @@ void WritePly(const fs::path& path, const PlyData& data) {
     header += "property uchar red\nproperty uchar green\nproperty uchar blue\n";
   }
   if (!data.labels.empty()) header += "property uint label\n";
+  for (const auto& property : data.int_properties) {
+    header += "property int " + property.first + "\n";
+  }
   if (!data.triangles.empty()) {
     header += fmt::format(
         "element face {}\nproperty list uchar uint vertex_indices\n",
         data.triangles.size());
   }
   header += "end_header\n";
-  const size_t vertex_bytes =
-      12 + (data.colors.empty() ? 0 : 3) + (data.labels.empty() ? 0 : 4);
+  const size_t vertex_bytes = 12 + (data.colors.empty() ? 0 : 3) +
+                              (data.labels.empty() ? 0 : 4) +
+                              4 * data.int_properties.size();
   std::string body(n * vertex_bytes + data.triangles.size() * 13, '\0');
   char* p = body.data();
   for (size_t i = 0; i < n; ++i) {
@@ -52,6 +66,10 @@ void WritePly(const fs::path& path, const PlyData& data) {
     }
     if (!data.labels.empty()) {
       std::memcpy(p, &data.labels[i], 4);
+      p += 4;
+    }
+    for (const auto& property : data.int_properties) {
+      std::memcpy(p, &property.second[i], 4);
       p += 4;
     }
   }
@@ -168,8 +186,21 @@ PlyData ReadPly(const fs::path& path) {
     }
     return v;
   };
+  static const std::set<std::string> kKnown = {"x",     "y",    "z",    "red",
+                                               "green", "blue", "label"};
   for (const Element& e : elements) {
     const bool vertex = e.name == "vertex", face = e.name == "face";
+    // Columns for the other scalar vertex properties.
+    std::map<std::string, size_t> extra;
+    if (vertex) {
+      for (const Property& prop : e.properties) {
+        if (!prop.is_list && kKnown.count(prop.name) == 0 &&
+            extra.count(prop.name) == 0) {
+          extra[prop.name] = out.int_properties.size();
+          out.int_properties.emplace_back(prop.name, std::vector<int32_t>());
+        }
+      }
+    }
     for (size_t i = 0; i < e.count; ++i) {
       Eigen::Vector3f p = Eigen::Vector3f::Zero();
       std::array<uint8_t, 3> c{};
@@ -204,6 +235,9 @@ PlyData ReadPly(const fs::path& path) {
           c[2] = static_cast<uint8_t>(v);
         } else if (prop.name == "label") {
           label = static_cast<uint32_t>(v), has_label = true;
+        } else if (const auto it = extra.find(prop.name); it != extra.end()) {
+          out.int_properties[it->second].second.push_back(
+              static_cast<int32_t>(std::lround(v)));
         }
       }
       if (vertex) {

@@ -6,6 +6,8 @@
 #include <array>
 #include <cstdint>
 #include <filesystem>
+#include <string>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Core>
@@ -18,6 +20,10 @@ struct PlyData {
   std::vector<std::array<uint8_t, 3>> colors;
   /// Optional per-point integer label (written as property `label`, uint32).
   std::vector<uint32_t> labels;
+  /// Further named per-point integers (written as `int` properties after
+  /// `label`; read from any other scalar vertex property), e.g. `semantic`
+  /// and `instance` of a ground-truth cloud.
+  std::vector<std::pair<std::string, std::vector<int32_t>>> int_properties;
   /// Optional triangles (indices into points).
   std::vector<std::array<uint32_t, 3>> triangles;
 };

@@ -55,3 +55,36 @@ TEST(PlyIo, Errors) {
 
 }  // namespace
 }  // namespace semrec::io
+
+namespace semrec::io {
+namespace {
+
+TEST(Ply, NamedIntegerPropertiesRoundTrip) {
+  semrec::testing::TempDir dir;
+  PlyData data;
+  data.points = {{0, 0, 0}, {1, 2, 3}};
+  data.labels = {7, 8};
+  data.int_properties = {{"semantic", {4, -1}}, {"instance", {12, 0}}};
+  WritePly(dir / "gt.ply", data);
+  const PlyData back = ReadPly(dir / "gt.ply");
+  EXPECT_EQ(back.labels, data.labels);
+  ASSERT_EQ(back.int_properties.size(), 2u);
+  EXPECT_EQ(back.int_properties[0].first, "semantic");
+  EXPECT_EQ(back.int_properties[0].second, (std::vector<int32_t>{4, -1}));
+  EXPECT_EQ(back.int_properties[1].first, "instance");
+  EXPECT_EQ(back.int_properties[1].second, (std::vector<int32_t>{12, 0}));
+  // ASCII files with other types work too.
+  semrec::testing::WriteText(dir / "a.ply",
+                             "ply\nformat ascii 1.0\nelement vertex 1\n"
+                             "property float x\nproperty float y\n"
+                             "property float z\nproperty ushort semantic\n"
+                             "end_header\n1 2 3 5\n");
+  const PlyData a = ReadPly(dir / "a.ply");
+  ASSERT_EQ(a.int_properties.size(), 1u);
+  EXPECT_EQ(a.int_properties[0].second, (std::vector<int32_t>{5}));
+  data.int_properties[1].second.pop_back();
+  EXPECT_THROW(WritePly(dir / "bad.ply", data), InvalidArgument);
+}
+
+}  // namespace
+}  // namespace semrec::io

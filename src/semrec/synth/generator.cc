@@ -354,6 +354,7 @@ SynthSummary WriteSyntheticSequence(const SynthOptions& options_in,
 
   nlohmann::json objects = nlohmann::json::array();
   io::PlyData surface;
+  std::vector<int32_t> semantic, instance;
   for (const SceneObject& o : scene.objects) {
     const Eigen::AlignedBox3d b = o.Bounds();
     nlohmann::json parts = nlohmann::json::array();
@@ -399,9 +400,15 @@ SynthSummary WriteSyntheticSequence(const SynthOptions& options_in,
       surface.points.push_back(s.cast<float>());
       surface.colors.push_back(o.color);
       surface.labels.push_back(o.instance_id);
+      semantic.push_back(o.class_id);
+      instance.push_back(o.instance_id);
     }
   }
   WriteTextFileAtomic(gt / "objects.json", objects.dump(2) + "\n");
+  // The 3D ground truth `semrec eval scene` reads: per point the class and
+  // the instance (`label` repeats the instance for older readers).
+  surface.int_properties = {{"semantic", std::move(semantic)},
+                            {"instance", std::move(instance)}};
   io::WritePly(gt / "surface_points.ply", surface);
 
   nlohmann::json people = nlohmann::json::array();

@@ -1,0 +1,275 @@
+// `semrec eval scene <result-dir> <gt.ply>`: 3D semantic and instance quality
+// of a reconstructed scene against a labelled ground-truth cloud.
+#include <cstdio>
+#include <map>
+#include <sstream>
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include "commands.h"
+#include "semrec/core/error.h"
+#include "semrec/core/file_util.h"
+#include "semrec/core/transform.h"
+#include "semrec/eval/scene_metrics.h"
+#include "semrec/io/label_set_io.h"
+#include "semrec/usd/usda_reader.h"
+
+namespace fs = std::filesystem;
+
+namespace semrec::cli {
+namespace {
+
+struct SceneArgs {
+  std::string result;
+  std::string gt;
+  std::string gt_classes;
+  std::string class_map;
+  std::string observed_in;
+  int observed_stride = 1;
+  bool json = false;
+  eval::SceneEvalOptions options;
+};
+
+// Predicted class name -> ground-truth id: the map file's entries (a JSON
+// object of names to ground-truth names or ids), else the same name in the
+// ground truth's classes; -1 when neither knows it.
+std::map<std::string, int32_t> LoadClassMap(const std::string& path,
+                                            const LabelSet& gt_classes) {
+  std::map<std::string, int32_t> map;
+  if (path.empty()) return map;
+  nlohmann::json j;
+  try {
+    j = nlohmann::json::parse(ReadTextFile(path));
+  } catch (const nlohmann::json::exception& e) {
+    throw FormatError(path, std::string("invalid JSON: ") + e.what());
+  }
+  if (!j.is_object()) {
+    throw FormatError(path,
+                      "expected a JSON object {\"predicted class\": "
+                      "ground-truth class name or id}");
+  }
+  for (const auto& [name, value] : j.items()) {
+    if (name.rfind('_', 0) == 0) continue;  // "_comment" and the like
+    if (value.is_number_integer()) {
+      map[name] = value.get<int32_t>();
+    } else if (value.is_string()) {
+      const auto id = gt_classes.FindByName(value.get<std::string>());
+      if (!id) {
+        throw FormatError(path, fmt::format("'{}' maps to '{}', which is not "
+                                            "a ground-truth class",
+                                            name, value.get<std::string>()));
+      }
+      map[name] = *id;
+    } else if (value.is_null()) {
+      map[name] = -1;
+    } else {
+      throw FormatError(path, "'" + name + "': expected a name, an id or null");
+    }
+  }
+  return map;
+}
+
+// The transform `semrec mesh` applied to its output (summary.json's gravity),
+// identity when there is none.
+Transform UprightTransform(const fs::path& result) {
+  const fs::path summary =
+      (fs::is_directory(result) ? result : result.parent_path()) /
+      "summary.json";
+  if (!fs::exists(summary)) return Transform();
+  nlohmann::json j;
+  try {
+    j = nlohmann::json::parse(ReadTextFile(summary));
+  } catch (const nlohmann::json::exception& e) {
+    throw FormatError(summary, std::string("invalid JSON: ") + e.what());
+  }
+  if (!j.contains("gravity")) return Transform();
+  std::istringstream in(j["gravity"].value("T_upright_world", ""));
+  Eigen::Matrix4d T;
+  for (int k = 0; k < 16; ++k) {
+    if (!(in >> T(k / 4, k % 4))) {
+      throw FormatError(summary, "gravity.T_upright_world is not 16 numbers");
+    }
+  }
+  return Transform::FromMatrix(T, summary.string() + " T_upright_world");
+}
+
+void RunScene(const SceneArgs& args) {
+  args.options.Check();
+  const fs::path result = args.result;
+  const fs::path scene =
+      fs::is_directory(result) ? result / "scene.usda" : result;
+  eval::SceneGroundTruth gt = eval::ReadSceneGroundTruth(args.gt);
+  fs::path classes_file = args.gt_classes;
+  if (classes_file.empty()) {
+    classes_file = fs::path(args.gt).parent_path() / "classes.json";
+    if (!fs::exists(classes_file)) {
+      throw InvalidArgument(
+          fmt::format("no {} beside the ground truth: give its classes with "
+                      "--gt-classes FILE",
+                      classes_file.string()));
+    }
+  }
+  const LabelSet gt_classes = io::LoadLabelSet(classes_file.string());
+  const auto map = LoadClassMap(args.class_map, gt_classes);
+  const size_t all_points = gt.points.size();
+  if (!args.observed_in.empty()) {
+    io::SequenceReaderOptions reader_options;
+    reader_options.stride = args.observed_stride;
+    const io::SequenceReader reader =
+        io::SequenceReader::Open(args.observed_in, reader_options);
+    gt = eval::Subset(gt, eval::ObservedPoints(gt.points, reader));
+  }
+  // The result is written upright: bring the ground truth into its frame.
+  const Transform T_upright_world = UprightTransform(result);
+  for (auto& p : gt.points) {
+    p = (T_upright_world * p.cast<double>()).cast<float>();
+  }
+
+  std::vector<eval::PredictedObject> predicted;
+  std::map<std::string, size_t> unmapped;
+  for (const usd::MeshPrim& m : usd::ReadScene(scene)) {
+    eval::PredictedObject p;
+    p.id = m.instance_id;
+    p.score = static_cast<double>(m.point_count);
+    p.surface = m.points;
+    if (const auto it = map.find(m.label); it != map.end()) {
+      p.class_id = it->second;
+    } else if (const auto id = gt_classes.FindByName(m.label)) {
+      p.class_id = *id;
+    } else {
+      ++unmapped[m.label];
+    }
+    predicted.push_back(std::move(p));
+  }
+  std::set<int32_t> things;
+  for (const LabelClass& c : gt_classes.Classes()) {
+    if (c.kind == ClassKind::kThing) things.insert(c.id);
+  }
+  const eval::SceneMetrics m =
+      eval::EvaluateScene(gt, predicted, things, args.options);
+  const auto name = [&](int32_t id) {
+    return id >= 0 && gt_classes.Contains(static_cast<uint16_t>(id))
+               ? gt_classes.Get(static_cast<uint16_t>(id)).name
+               : fmt::format("({})", id);
+  };
+  size_t split = 0;
+  for (const auto& [object, pieces] : m.pieces_per_gt_object) {
+    split += pieces > 1;
+  }
+  if (args.json) {
+    nlohmann::json classes = nlohmann::json::array();
+    for (const auto& c : m.classes) {
+      nlohmann::json jc = {{"id", c.id},
+                           {"name", name(c.id)},
+                           {"iou", c.iou},
+                           {"tp", c.true_positives},
+                           {"fp", c.false_positives},
+                           {"fn", c.false_negatives}};
+      if (c.has_instances) {
+        jc["gt_objects"] = c.gt_objects;
+        jc["ap25"] = c.ap25;
+        jc["ap50"] = c.ap50;
+      }
+      classes.push_back(jc);
+    }
+    nlohmann::json pieces = nlohmann::json::object();
+    for (const auto& [object, n] : m.pieces_per_gt_object) {
+      pieces[std::to_string(object)] = n;
+    }
+    const nlohmann::json j = {
+        {"gt_points", m.gt_points},
+        {"covered_points", m.covered_points},
+        {"mean_iou", m.mean_iou},
+        {"ap25", m.ap25},
+        {"ap50", m.ap50},
+        {"recall50", m.recall50},
+        {"precision50", m.precision50},
+        {"gt_objects", m.gt_objects},
+        {"predicted_objects", m.predicted_objects},
+        {"objects_per_gt_object", m.objects_per_gt_object},
+        {"pieces_per_gt_object", pieces},
+        {"unmapped_predicted_classes", unmapped},
+        {"classes", classes}};
+    std::printf("%s\n", j.dump(2).c_str());
+    return;
+  }
+  std::string text = fmt::format(
+      "{} vs {}: {} ground-truth points{} ({:.1f}% within {} m of a "
+      "predicted surface)\nmIoU {:.2f}  AP25 {:.2f}  AP50 {:.2f}  recall@0.5 "
+      "{:.2f}  "
+      "precision@0.5 {:.2f}  (percent)\n{} predicted objects for {} "
+      "ground-truth objects ({:.2f} per object; {} objects in more than one "
+      "piece)\n",
+      scene.string(), args.gt, m.gt_points,
+      args.observed_in.empty()
+          ? std::string()
+          : fmt::format(" seen in {} (of {})", args.observed_in, all_points),
+      m.gt_points ? 100.0 * static_cast<double>(m.covered_points) /
+                        static_cast<double>(m.gt_points)
+                  : 0.0,
+      args.options.radius_m, 100 * m.mean_iou, 100 * m.ap25, 100 * m.ap50,
+      100 * m.recall50, 100 * m.precision50, m.predicted_objects, m.gt_objects,
+      m.objects_per_gt_object, split);
+  for (const auto& [label, count] : unmapped) {
+    text += fmt::format(
+        "note: {} predicted '{}' object(s) map to no ground-truth class "
+        "(--class-map)\n",
+        count, label);
+  }
+  text += fmt::format("\n{:>5}  {:<16} {:>7} {:>8} {:>7} {:>7}\n", "id",
+                      "class", "IoU", "objects", "AP25", "AP50");
+  for (const auto& c : m.classes) {
+    text +=
+        c.has_instances
+            ? fmt::format("{:>5}  {:<16} {:>7.2f} {:>8} {:>7.2f} {:>7.2f}\n",
+                          c.id, name(c.id), 100 * c.iou, c.gt_objects,
+                          100 * c.ap25, 100 * c.ap50)
+            : fmt::format("{:>5}  {:<16} {:>7.2f}\n", c.id, name(c.id),
+                          100 * c.iou);
+  }
+  std::printf("%s", text.c_str());
+}
+
+}  // namespace
+
+void AddEvalScene(CLI::App* eval) {
+  auto args = std::make_shared<SceneArgs>();
+  CLI::App* cmd = eval->add_subcommand(
+      "scene",
+      "3D semantic and instance quality of a reconstruction (ScanNet-style): "
+      "each ground-truth point takes the class and object of the nearest "
+      "predicted surface within --radius-m; per-class IoU and mIoU over the "
+      "ground-truth classes; instance AP at IoU 0.25 and 0.5 (ScanNet's "
+      "definition, thing classes, confidence = fused points), recall and "
+      "precision at 0.5, predicted objects per ground-truth object.");
+  cmd->add_option("result", args->result,
+                  "A `semrec mesh` output folder or its scene.usda")
+      ->required();
+  cmd->add_option("gt", args->gt,
+                  "Ground-truth PLY with per-point 'semantic' and 'instance' "
+                  "(semrec synth: gt/surface_points.ply)")
+      ->required();
+  cmd->add_option("--gt-classes", args->gt_classes,
+                  "Ground-truth label set (default: classes.json beside the "
+                  "PLY); its thing classes are scored as instances");
+  cmd->add_option("--class-map", args->class_map,
+                  "JSON object mapping predicted class names to ground-truth "
+                  "names or ids (data/class_maps/); unmapped names match by "
+                  "name");
+  cmd->add_option("--observed-in", args->observed_in,
+                  "Score only ground-truth points some frame of this "
+                  "sequence saw (depth within 2 cm): ground truth sampled "
+                  "from whole objects holds surfaces no camera saw");
+  cmd->add_option("--observed-stride", args->observed_stride,
+                  "Use every n-th frame for --observed-in (the stride the "
+                  "reconstruction used)")
+      ->capture_default_str();
+  cmd->add_option("--radius-m", args->options.radius_m,
+                  "Label transfer radius (m)")
+      ->capture_default_str();
+  cmd->add_flag("--json", args->json, "Print JSON");
+  cmd->callback([args] { RunScene(*args); });
+}
+
+}  // namespace semrec::cli
