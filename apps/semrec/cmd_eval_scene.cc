@@ -9,9 +9,9 @@
 
 #include "commands.h"
 #include "semrec/core/error.h"
-#include "semrec/core/file_util.h"
 #include "semrec/core/transform.h"
 #include "semrec/eval/scene_metrics.h"
+#include "semrec/io/json_file.h"
 #include "semrec/io/label_set_io.h"
 #include "semrec/usd/usda_reader.h"
 
@@ -38,12 +38,7 @@ std::map<std::string, int32_t> LoadClassMap(const std::string& path,
                                             const LabelSet& gt_classes) {
   std::map<std::string, int32_t> map;
   if (path.empty()) return map;
-  nlohmann::json j;
-  try {
-    j = nlohmann::json::parse(ReadTextFile(path));
-  } catch (const nlohmann::json::exception& e) {
-    throw FormatError(path, std::string("invalid JSON: ") + e.what());
-  }
+  const nlohmann::json j = io::ReadJsonFile(path);
   if (!j.is_object()) {
     throw FormatError(path,
                       "expected a JSON object {\"predicted class\": "
@@ -77,12 +72,7 @@ Transform UprightTransform(const fs::path& result) {
       (fs::is_directory(result) ? result : result.parent_path()) /
       "summary.json";
   if (!fs::exists(summary)) return Transform();
-  nlohmann::json j;
-  try {
-    j = nlohmann::json::parse(ReadTextFile(summary));
-  } catch (const nlohmann::json::exception& e) {
-    throw FormatError(summary, std::string("invalid JSON: ") + e.what());
-  }
+  const nlohmann::json j = io::ReadJsonFile(summary);
   if (!j.contains("gravity")) return Transform();
   std::istringstream in(j["gravity"].value("T_upright_world", ""));
   Eigen::Matrix4d T;

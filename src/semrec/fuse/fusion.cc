@@ -5,6 +5,7 @@
 #include <chrono>
 #include <map>
 #include <numeric>
+#include <set>
 
 #include <spdlog/spdlog.h>
 #include <tbb/parallel_for.h>
@@ -63,9 +64,21 @@ SceneFusion::SceneFusion(const FusionOptions& options) : options_(options) {
 
 namespace {
 
-// With stuff_per_class: the frame's segments of one stuff class joined into
-// one (its first position), things unchanged; `origin[i]` is the joined index
-// of input segment i.
+// True when some stuff class has more than one segment in the frame: only
+// then does JoinStuffPerClass change anything.
+bool HasRepeatedStuffClass(const std::vector<FrameSegment>& segments) {
+  std::set<uint16_t> seen;
+  for (const FrameSegment& s : segments) {
+    if (s.kind == ClassKind::kStuff && !seen.insert(s.class_id).second) {
+      return true;
+    }
+  }
+  return false;
+}
+
+// The frame's segments of one stuff class joined into one (at its first
+// position), things unchanged; `origin[i]` is the joined index of input
+// segment i.
 std::vector<FrameSegment> JoinStuffPerClass(
     const std::vector<FrameSegment>& input, std::vector<size_t>* origin) {
   std::vector<FrameSegment> joined;
@@ -93,10 +106,15 @@ std::vector<FrameSegment> JoinStuffPerClass(
 FrameFusionStats SceneFusion::Integrate(
     const std::vector<FrameSegment>& input_segments, size_t frame_index) {
   const auto start = std::chrono::steady_clock::now();
+  // Joined stuff segments only when there is something to join: a copy of
+  // every frame segment's points per frame is not free.
+  const bool join =
+      options_.stuff_per_class && HasRepeatedStuffClass(input_segments);
   std::vector<size_t> origin;
-  const std::vector<FrameSegment> frame_segments =
-      options_.stuff_per_class ? JoinStuffPerClass(input_segments, &origin)
-                               : input_segments;
+  std::vector<FrameSegment> joined;
+  if (join) joined = JoinStuffPerClass(input_segments, &origin);
+  const std::vector<FrameSegment>& frame_segments =
+      join ? joined : input_segments;
   FrameFusionStats stats;
   stats.frame_index = frame_index;
   stats.frame_segments = input_segments.size();
@@ -289,7 +307,7 @@ FrameFusionStats SceneFusion::Integrate(
     next.push_back(std::move(s));
   }
   stats.new_segments = created.size();
-  if (options_.stuff_per_class) {  // report per input segment
+  if (join) {  // report per input segment
     std::vector<uint32_t> ids(input_segments.size());
     for (size_t i = 0; i < ids.size(); ++i) {
       ids[i] = stats.assigned_ids[origin[i]];

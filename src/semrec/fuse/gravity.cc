@@ -122,6 +122,14 @@ std::vector<Plane> HorizontalPlanes(const std::vector<Eigen::Vector3d>& pts,
   return planes;
 }
 
+// Mean height of the points `idx` along `up`.
+double MeanHeight(const std::vector<Eigen::Vector3d>& pts,
+                  const std::vector<size_t>& idx, const Eigen::Vector3d& up) {
+  double sum = 0.0;
+  for (size_t i : idx) sum += up.dot(pts[i]);
+  return sum / static_cast<double>(idx.size());
+}
+
 // Rotation taking `up` to +Z (the smallest one: no spin about the up axis).
 Eigen::Matrix3d RotationToZ(const Eigen::Vector3d& up) {
   return Eigen::Quaterniond::FromTwoVectors(up, Eigen::Vector3d::UnitZ())
@@ -251,14 +259,6 @@ GravityEstimate EstimateGravity(const std::vector<const Cloud*>& clouds,
     e.method = "none";
     return e;
   }
-  std::vector<Plane> planes = HorizontalPlanes(pts, up, mean_view, options);
-  for (const Plane& p : planes) {
-    spdlog::debug(
-        "gravity: horizontal plane, {} points, normal {:.3f} {:.3f} "
-        "{:.3f}, height {:.3f} m",
-        p.inliers.size(), p.normal.x(), p.normal.y(), p.normal.z(), p.offset);
-  }
-
   // A floor class makes the floor explicit.
   if (floor_pts.size() >= 200) {
     const std::vector<Plane> floor_planes =
@@ -266,13 +266,21 @@ GravityEstimate EstimateGravity(const std::vector<const Cloud*>& clouds,
     if (!floor_planes.empty()) {
       const Plane& f = floor_planes.front();
       e.up_world = given ? up : f.normal;
-      double sum = 0.0;
-      for (size_t i : f.inliers) sum += e.up_world.dot(floor_pts[i]);
-      e.floor_height_m = sum / static_cast<double>(f.inliers.size());
+      e.floor_height_m = MeanHeight(floor_pts, f.inliers, e.up_world);
       e.floor_points = f.inliers.size();
       e.method = given ? "given" : "floor class";
       return Finish(e, options);
     }
+  }
+  // Otherwise the horizontal planes of the whole scene (only searched now:
+  // the floor class, when it has a plane, decides alone).
+  const std::vector<Plane> planes =
+      HorizontalPlanes(pts, up, mean_view, options);
+  for (const Plane& p : planes) {
+    spdlog::debug(
+        "gravity: horizontal plane, {} points, normal {:.3f} {:.3f} "
+        "{:.3f}, height {:.3f} m",
+        p.inliers.size(), p.normal.x(), p.normal.y(), p.normal.z(), p.offset);
   }
   if (!planes.empty()) {
     // Up from the largest horizontal plane; the floor is the lowest plane with
@@ -285,9 +293,7 @@ GravityEstimate EstimateGravity(const std::vector<const Cloud*>& clouds,
     double floor_h = 0.0;
     for (const Plane& p : planes) {
       if (p.inliers.size() < needed) continue;
-      double h = 0.0;
-      for (size_t i : p.inliers) h += e.up_world.dot(pts[i]);
-      h /= static_cast<double>(p.inliers.size());
+      const double h = MeanHeight(pts, p.inliers, e.up_world);
       if (floor == nullptr || h < floor_h) floor = &p, floor_h = h;
     }
     e.floor_height_m = floor_h;

@@ -7,16 +7,12 @@
 
 #include "semrec/core/error.h"
 #include "semrec/core/file_util.h"
+#include "semrec/io/json_file.h"
 
 namespace semrec::io {
 
 LabelSet ReadLabelSetJson(const std::filesystem::path& path) {
-  nlohmann::json j;
-  try {
-    j = nlohmann::json::parse(ReadTextFile(path));
-  } catch (const nlohmann::json::exception& e) {
-    throw FormatError(path, std::string("invalid JSON: ") + e.what());
-  }
+  const nlohmann::json j = ReadJsonFile(path);
   if (!j.is_array()) throw FormatError(path, "expected a JSON list of classes");
   LabelSet labels(path.stem().string());
   for (size_t i = 0; i < j.size(); ++i) {

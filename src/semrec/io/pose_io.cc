@@ -9,6 +9,7 @@
 
 #include "semrec/core/error.h"
 #include "semrec/core/file_util.h"
+#include "semrec/io/json_file.h"
 
 namespace fs = std::filesystem;
 
@@ -130,12 +131,7 @@ std::vector<StampedPose> ReadTumTrajectory(const fs::path& path) {
 }
 
 CameraIntrinsics ReadOpen3dIntrinsics(const fs::path& path) {
-  nlohmann::json j;
-  try {
-    j = nlohmann::json::parse(ReadTextFile(path));
-  } catch (const nlohmann::json::exception& e) {
-    throw FormatError(path, std::string("invalid JSON: ") + e.what());
-  }
+  const nlohmann::json j = ReadJsonFile(path);
   try {
     CameraIntrinsics k;
     k.width = j.at("width").get<int>();
