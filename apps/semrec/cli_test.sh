@@ -50,6 +50,7 @@ grep -q "objects" "$tmp/q.txt" || fail "query: no table"
 # 3D scores of the ground-truth reconstruction: near perfect on what the cameras saw.
 "$SEMREC" eval scene "$tmp/scene" "$tmp/syn/gt/surface_points.ply" --observed-in "$tmp/syn" --json \
   >"$tmp/scene.json" 2>"$tmp/err" || fail "eval scene failed: $(cat "$tmp/err")"
+grep -q "checking what the frames saw 3/3" "$tmp/err" || fail "eval scene: no progress report"
 python3 -c "import json,sys; j=json.load(open(sys.argv[1])); sys.exit(0 if j['mean_iou'] > 0.85 and j['ap50'] > 0.9 else 1)" \
   "$tmp/scene.json" || fail "eval scene: oracle scores low: $(head -c 600 "$tmp/scene.json")"
 "$SEMREC" eval scene "$tmp/scene" "$tmp/syn/gt/surface_points.ply" \

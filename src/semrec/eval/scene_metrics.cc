@@ -125,7 +125,10 @@ SceneGroundTruth ReadSceneGroundTruth(const std::filesystem::path& path) {
 
 std::vector<bool> ObservedPoints(const std::vector<Eigen::Vector3f>& points,
                                  const io::SequenceReader& reader,
-                                 double tolerance_m) {
+                                 double tolerance_m,
+                                 const ProgressOptions& progress_options) {
+  Progress progress("checking what the frames saw", reader.size(),
+                    progress_options);
   // Bytes, not vector<bool>: tasks write neighbouring elements concurrently.
   std::vector<uint8_t> seen(points.size(), 0);
   for (size_t f = 0; f < reader.size(); ++f) {
@@ -145,6 +148,7 @@ std::vector<bool> ObservedPoints(const std::vector<Eigen::Vector3f>& points,
       const float z = frame.depth(static_cast<int>(u), static_cast<int>(v));
       if (z > 0.0f && std::abs(z - p.z()) <= tolerance_m) seen[i] = 1;
     });
+    progress.Tick();
   }
   return {seen.begin(), seen.end()};
 }

@@ -25,6 +25,7 @@
 
 #include <Eigen/Core>
 
+#include "semrec/core/progress.h"
 #include "semrec/io/sequence_reader.h"
 
 namespace semrec::eval {
@@ -90,9 +91,11 @@ struct SceneMetrics {
 /// the camera, with measured depth within `tolerance_m` of the point's depth.
 /// A ground truth sampled from whole objects also holds surfaces no camera
 /// saw (backs, undersides), which no reconstruction can recover.
+/// Reports progress per frame.
 std::vector<bool> ObservedPoints(const std::vector<Eigen::Vector3f>& points,
                                  const io::SequenceReader& reader,
-                                 double tolerance_m = 0.02);
+                                 double tolerance_m = 0.02,
+                                 const ProgressOptions& progress = {});
 
 /// The points (and their labels) where `keep` is true.
 SceneGroundTruth Subset(const SceneGroundTruth& gt,
