@@ -22,6 +22,7 @@ struct FuseArgs {
   std::string method = "fast";
   double max_depth_m = 4.0;
   bool overwrite = false;
+  std::string merge = "evidence";
 };
 
 void RunFuse(FuseArgs args) {
@@ -33,6 +34,7 @@ void RunFuse(FuseArgs args) {
                            ? fuse::FusionOptions::Method::kFast
                            : fuse::FusionOptions::Method::kBruteForce;
   args.fusion.label_gating = !args.no_gating;
+  args.fusion.merge = fuse::ParseMerge(args.merge);
   args.fusion.Check();
   args.extraction.Check();
   io::SequenceReaderOptions reader_options = args.sequence.ReaderOptions();
@@ -97,6 +99,11 @@ void RegisterFuse(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--max-corr-dist-m", args->fusion.max_corr_dist_m,
                   "Farthest mutually closest pair that counts (m)")
+      ->capture_default_str();
+  cmd->add_option("--merge", args->merge,
+                  "paper: the paper's rule alone; evidence: also merge what "
+                  "views show inside one mask, vote classes, fold fragments")
+      ->check(CLI::IsMember({"paper", "evidence"}))
       ->capture_default_str();
   cmd->add_flag("--no-gating", args->no_gating,
                 "Compare segments of all classes (for comparison)");

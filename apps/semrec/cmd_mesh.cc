@@ -18,12 +18,14 @@ struct MeshArgs {
   bool no_ply = false;
   std::string gravity = "auto";
   bool no_structure = false;
+  std::string merge = "evidence";
 };
 
 void RunMesh(MeshArgs args) {
   args.options.write_ply = !args.no_ply;
   args.options.gravity = fuse::ParseGravity(args.gravity);
   args.options.fusion.stuff_per_class = !args.no_structure;
+  args.options.fusion.merge = fuse::ParseMerge(args.merge);
   args.options.Check();
   io::SequenceReaderOptions reader_options = args.sequence.ReaderOptions();
   reader_options.max_depth_m = args.options.meshing.tsdf.max_depth_m;
@@ -84,6 +86,12 @@ void RegisterMesh(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--alpha", args->options.fusion.alpha,
                   "Fusion: merge when sigma > alpha")
+      ->capture_default_str();
+  cmd->add_option("--merge", args->merge,
+                  "Fusion: paper (sigma > alpha alone) or evidence (also "
+                  "merge parts that views show inside one mask, vote each "
+                  "object's class, fold fragments; see summary.json events)")
+      ->check(CLI::IsMember({"paper", "evidence"}))
       ->capture_default_str();
   cmd->add_option("--up-axis", args->options.stage.up_axis,
                   "USD up axis: Z or Y (the upright scene is turned so that "

@@ -1,6 +1,8 @@
 #include "semrec/fuse/fuse_sequence.h"
 
+#include <algorithm>
 #include <chrono>
+#include <cmath>
 
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
@@ -13,6 +15,65 @@
 namespace fs = std::filesystem;
 
 namespace semrec::fuse {
+namespace {
+
+std::vector<std::pair<uint16_t, double>> SortedShares(
+    const SceneSegment& segment) {
+  uint64_t total = 0;
+  for (const auto& [cls, n] : segment.class_votes) total += n;
+  std::vector<std::pair<uint16_t, double>> shares;
+  for (const auto& [cls, n] : segment.class_votes) {
+    if (n > 0) {
+      shares.emplace_back(cls,
+                          static_cast<double>(n) / static_cast<double>(total));
+    }
+  }
+  std::stable_sort(shares.begin(), shares.end(),
+                   [](const auto& a, const auto& b) { return a.second > b.second; });
+  return shares;
+}
+
+std::string ClassName(const LabelSet& classes, uint16_t id) {
+  return classes.Contains(id) ? classes.Get(id).name : fmt::format("#{}", id);
+}
+
+}  // namespace
+
+nlohmann::json ClassVotesJson(const SceneSegment& segment,
+                              const LabelSet& classes) {
+  nlohmann::json votes = nlohmann::json::array();
+  for (const auto& [cls, share] : SortedShares(segment)) {
+    votes.push_back({ClassName(classes, cls), std::round(share * 1000) / 1000});
+  }
+  return votes;
+}
+
+std::string ClassVotesText(const SceneSegment& segment,
+                           const LabelSet& classes) {
+  std::string text;
+  for (const auto& [cls, share] : SortedShares(segment)) {
+    text += fmt::format("{}{} {:.2f}", text.empty() ? "" : ", ",
+                        ClassName(classes, cls), share);
+  }
+  return text;
+}
+
+double ClassConfidence(const SceneSegment& segment) {
+  const auto shares = SortedShares(segment);
+  return shares.empty() ? 1.0 : shares.front().second;
+}
+
+nlohmann::json FusionEventsJson(const SceneFusion& fusion) {
+  nlohmann::json events = nlohmann::json::array();
+  for (const FusionEvent& e : fusion.events()) {
+    events.push_back({{"event", FusionEventKindName(e.kind)},
+                      {"frame", e.frame},
+                      {"id", e.id},
+                      {"into", e.into},
+                      {"reason", e.reason}});
+  }
+  return events;
+}
 
 FuseSequenceResult FuseSequence(const io::SequenceReader& reader,
                                 const SegmentationSource& source,
@@ -36,6 +97,12 @@ FuseSequenceResult FuseSequence(const io::SequenceReader& reader,
     progress.Tick();
   }
   progress.Finish();
+  const size_t cleaned = fusion->Finish();
+  if (cleaned > 0) {
+    spdlog::info("end of sequence: {} objects merged or dropped (evidence, "
+                 "fragments)",
+                 cleaned);
+  }
   if (result.empty_frames > 0) {
     spdlog::warn("{} of {} frames had no segment with valid depth",
                  result.empty_frames, reader.size());
@@ -72,6 +139,7 @@ void WriteFusionResult(const fs::path& out_dir, const SceneFusion& fusion,
                         {"first_seen_frame", s.first_seen_frame},
                         {"last_seen_frame", s.last_seen_frame},
                         {"observations", s.observations},
+                        {"class_votes", ClassVotesJson(s, classes)},
                         {"bounds_min", {b.min().x(), b.min().y(), b.min().z()}},
                         {"bounds_max", {b.max().x(), b.max().y(), b.max().z()}},
                         {"file", file}});
@@ -91,6 +159,9 @@ void WriteFusionResult(const fs::path& out_dir, const SceneFusion& fusion,
          {"distance_computations_done", f.distance_computations_done},
          {"merged", f.merged_frame_segments},
          {"new", f.new_segments},
+         {"evidence_merges", f.evidence_merges},
+         {"cross_class_matches", f.cross_class_matches},
+         {"evidence_seconds", f.evidence_seconds},
          {"seconds", f.seconds}});
   }
   const FusionOptions& o = fusion.options();
@@ -102,10 +173,12 @@ void WriteFusionResult(const fs::path& out_dir, const SceneFusion& fusion,
         {"max_corr_dist_m", o.max_corr_dist_m},
         {"alpha", o.alpha},
         {"label_gating", o.label_gating},
+        {"merge", MergeName(o.merge)},
         {"method",
          o.method == FusionOptions::Method::kFast ? "fast" : "brute_force"}}},
       {"segments", segments},
       {"frames", frames},
+      {"events", FusionEventsJson(fusion)},
       {"empty_frames", result.empty_frames},
       {"seconds", result.seconds}};
   WriteTextFileAtomic(out_dir / "summary.json", summary.dump(2) + "\n");

@@ -3,7 +3,10 @@
 #pragma once
 
 #include <filesystem>
+#include <string>
 #include <vector>
+
+#include <nlohmann/json.hpp>
 
 #include "semrec/core/progress.h"
 #include "semrec/fuse/fusion.h"
@@ -19,8 +22,19 @@ struct FuseSequenceResult {
   double seconds = 0.0;
 };
 
+/// The class votes as [[class name, share], ...], largest first, and as text
+/// ("chair 0.72, table 0.28").
+nlohmann::json ClassVotesJson(const SceneSegment& segment,
+                              const LabelSet& classes);
+std::string ClassVotesText(const SceneSegment& segment,
+                           const LabelSet& classes);
+/// The share of the winning class (1 without votes).
+double ClassConfidence(const SceneSegment& segment);
+/// fusion.events() for summary.json.
+nlohmann::json FusionEventsJson(const SceneFusion& fusion);
+
 /// Reads every frame of `reader`, extracts its segments with `source`, fuses
-/// them.
+/// them, then calls fusion->Finish().
 FuseSequenceResult FuseSequence(const io::SequenceReader& reader,
                                 const SegmentationSource& source,
                                 const SegmentExtractionOptions& extraction,

@@ -7,45 +7,21 @@
 #include <numeric>
 #include <set>
 
+#include <fmt/format.h>
 #include <spdlog/spdlog.h>
 #include <tbb/parallel_for.h>
 
 #include "semrec/core/error.h"
+#include "semrec/core/union_find.h"
 #include "semrec/fuse/overlap.h"
 
 namespace semrec::fuse {
 namespace {
 
-Eigen::AlignedBox3f BoundsOf(const Cloud& cloud) {
-  Eigen::AlignedBox3f box;
-  for (const auto& p : cloud) box.extend(p);
-  return box;
+double Seconds(std::chrono::steady_clock::time_point since) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - since)
+      .count();
 }
-
-// Grown by `margin`: boxes farther apart than the correspondence distance share
-// no pair.
-bool Near(const Eigen::AlignedBox3f& a, const Eigen::AlignedBox3f& b,
-          float margin) {
-  return (a.min().array() - margin <= b.max().array()).all() &&
-         (b.min().array() - margin <= a.max().array()).all();
-}
-
-struct UnionFind {
-  explicit UnionFind(size_t n) : parent(n) {
-    std::iota(parent.begin(), parent.end(), 0);
-  }
-  size_t Find(size_t x) {
-    while (parent[x] != x) x = parent[x] = parent[parent[x]];
-    return x;
-  }
-  void Unite(size_t a, size_t b) {
-    a = Find(a), b = Find(b);
-    if (a != b) {
-      parent[std::max(a, b)] = std::min(a, b);  // the lower index (older) wins
-    }
-  }
-  std::vector<size_t> parent;
-};
 
 }  // namespace
 
@@ -56,6 +32,18 @@ void FusionOptions::Check() const {
                 "fusion: store_voxel_size_m must be > 0");
   CheckArgument(max_corr_dist_m > 0.0, "fusion: max_corr_dist_m must be > 0");
   CheckArgument(alpha >= 0.0 && alpha < 1.0, "fusion: alpha must be in [0, 1)");
+  evidence.Check();
+}
+
+const char* MergeName(FusionOptions::Merge merge) {
+  return merge == FusionOptions::Merge::kPaper ? "paper" : "evidence";
+}
+
+FusionOptions::Merge ParseMerge(const std::string& name) {
+  if (name == "paper") return FusionOptions::Merge::kPaper;
+  if (name == "evidence") return FusionOptions::Merge::kEvidence;
+  throw InvalidArgument("merge rule must be 'paper' or 'evidence', got '" +
+                        name + "'");
 }
 
 SceneFusion::SceneFusion(const FusionOptions& options) : options_(options) {
@@ -106,6 +94,7 @@ std::vector<FrameSegment> JoinStuffPerClass(
 FrameFusionStats SceneFusion::Integrate(
     const std::vector<FrameSegment>& input_segments, size_t frame_index) {
   const auto start = std::chrono::steady_clock::now();
+  last_frame_ = frame_index;
   // Joined stuff segments only when there is something to join: a copy of
   // every frame segment's points per frame is not free.
   const bool join =
@@ -120,6 +109,7 @@ FrameFusionStats SceneFusion::Integrate(
   stats.frame_segments = input_segments.size();
   stats.scene_segments_before = segments_.size();
   const bool fast = options_.method == FusionOptions::Method::kFast;
+  const float margin = static_cast<float>(options_.max_corr_dist_m);
 
   // Frame segments at the stored resolution (what a merge adds) and at the
   // comparison resolution (from the stored one: a few thousand points instead
@@ -152,39 +142,61 @@ FrameFusionStats SceneFusion::Integrate(
     }
   }
 
+  // Evidence: where the frame's object masks fall on the scene's objects.
+  double evidence_seconds = 0.0;
+  std::vector<std::vector<uint32_t>> near;
+  if (evidence_on()) {
+    const auto t0 = std::chrono::steady_clock::now();
+    near = Coverage(frame_segments, frame_corr, frame_bounds);
+    evidence_seconds += Seconds(t0);
+  }
+
   // Matches of every frame segment against the scene before this frame. The
-  // candidate pairs (same class; for `fast`, bounding boxes within reach) are
-  // listed first and compared in parallel pair by pair: one large segment
-  // (floor, wall) would otherwise keep a core busy alone.
+  // candidate pairs (same class, or with evidence another class the segment
+  // covers almost entirely; for `fast`, bounding boxes within reach) are listed
+  // first and compared in parallel pair by pair: one large segment (floor,
+  // wall) would otherwise keep a core busy alone.
   const auto compare_start = std::chrono::steady_clock::now();
   struct Candidate {
     size_t frame_segment;
     size_t scene_segment;
+    double alpha;
     OverlapResult overlap;
     bool exceeds = false;
   };
   std::vector<Candidate> candidates;
-  const float margin = static_cast<float>(options_.max_corr_dist_m);
   std::vector<std::vector<size_t>> matches(frame_segments.size());
   for (size_t f = 0; f < frame_segments.size(); ++f) {
-    const bool stuff =
-        options_.stuff_per_class && frame_segments[f].kind == ClassKind::kStuff;
+    const bool stuff = frame_segments[f].kind == ClassKind::kStuff;
     for (size_t s = 0; s < segments_.size(); ++s) {
-      if (stuff) {
+      // With evidence, also objects whose votes show the classes confused.
+      const bool same_class =
+          evidence_on() && !stuff
+              ? ConfusedWith(segments_[s], frame_segments[f].class_id)
+              : segments_[s].class_id == frame_segments[f].class_id;
+      if (stuff && options_.stuff_per_class) {
         // Structure joins its class's segment, whatever the overlap.
-        if (segments_[s].class_id == frame_segments[f].class_id) {
-          matches[f].push_back(s);
-        }
+        if (same_class) matches[f].push_back(s);
         continue;
       }
-      if (options_.label_gating &&
-          segments_[s].class_id != frame_segments[f].class_id) {
+      if (options_.label_gating && !same_class) {
+        // Across classes only with evidence, for objects, and only where the
+        // coverage leaves the strong overlap possible (|M| <= covered points).
+        const double alpha = options_.evidence.cross_class_alpha;
+        if (!evidence_on() || stuff || segments_[s].kind == ClassKind::kStuff ||
+            alpha >= 1.0 ||
+            near[f][s] <= alpha * static_cast<double>(std::min(
+                                      frame_corr[f].size(),
+                                      segments_[s].corr_points.size()))) {
+          continue;
+        }
+        candidates.push_back({f, s, alpha, {}, false});
         continue;
       }
       ++stats.compared_pairs;
       // No pair can be close.
-      if (fast && !Near(frame_bounds[f], segments_[s].bounds, margin)) continue;
-      candidates.push_back({f, s, {}, false});
+      if (fast && !BoxesWithin(frame_bounds[f], segments_[s].bounds, margin)) continue;
+      candidates.push_back({f, s, options_.alpha, {}, false});
     }
   }
   auto compare = [&](size_t k) {
@@ -196,14 +208,14 @@ FrameFusionStats SceneFusion::Integrate(
       const OverlapDecision d = MutualOverlapExceeds(
           frame_corr[c.frame_segment], frame_grids[c.frame_segment],
           scene.corr_points, scene.corr_grid, options_.max_corr_dist_m,
-          options_.alpha);
+          c.alpha);
       c.overlap = d.partial;
       c.exceeds = d.exceeds;
     } else {
       c.overlap =
           MutualOverlapBruteForce(frame_corr[c.frame_segment],
                                   scene.corr_points, options_.max_corr_dist_m);
-      c.exceeds = c.overlap.sigma > options_.alpha;
+      c.exceeds = c.overlap.sigma > c.alpha;
     }
   };
   if (fast) {
@@ -211,9 +223,7 @@ FrameFusionStats SceneFusion::Integrate(
   } else {
     for (size_t k = 0; k < candidates.size(); ++k) compare(k);
   }
-  stats.compare_seconds = std::chrono::duration<double>(
-                              std::chrono::steady_clock::now() - compare_start)
-                              .count();
+  stats.compare_seconds = Seconds(compare_start);
   for (const Candidate& c : candidates) {
     stats.distance_computations_done += c.overlap.distance_computations;
     SPDLOG_TRACE(
@@ -224,8 +234,26 @@ FrameFusionStats SceneFusion::Integrate(
         segments_[c.scene_segment].corr_points.size(), fast ? ">=" : "=",
         c.overlap.mutual_pairs, fast ? ">=" : "=", c.overlap.sigma,
         c.exceeds ? "merge" : "no");
-    // In increasing scene order per frame segment (the list's order).
-    if (c.exceeds) matches[c.frame_segment].push_back(c.scene_segment);
+    if (!c.exceeds) continue;
+    matches[c.frame_segment].push_back(c.scene_segment);
+    const SceneSegment& scene = segments_[c.scene_segment];
+    if (scene.class_id != frame_segments[c.frame_segment].class_id) {
+      ++stats.cross_class_matches;
+      events_.push_back(
+          {FusionEvent::Kind::kCrossClassMatch, frame_index, 0, scene.id,
+           fmt::format("a segment of class {} overlaps object {} (class {}) "
+                       "with sigma >= {:.2f} > {}",
+                       frame_segments[c.frame_segment].class_id, scene.id,
+                       scene.class_id, c.overlap.sigma, c.alpha)});
+    }
+  }
+  // In increasing scene order per frame segment, whatever the comparison order.
+  for (auto& m : matches) std::sort(m.begin(), m.end());
+
+  if (evidence_on()) {
+    const auto t0 = std::chrono::steady_clock::now();
+    RecordViewEvidence(frame_segments, near, frame_index);
+    evidence_seconds += Seconds(t0);
   }
 
   // Apply: union scene segments linked through a frame segment, attach the
@@ -244,6 +272,8 @@ FrameFusionStats SceneFusion::Integrate(
       s.id = next_id_++;
       stats.assigned_ids[f] = s.id;
       s.class_id = frame_segments[f].class_id;
+      s.kind = frame_segments[f].kind;
+      s.class_votes[s.class_id] = frame_corr[f].size();
       s.points = std::move(frame_store[f]);
       s.first_seen_frame = s.last_seen_frame = frame_index;
       s.observations = 1;
@@ -273,31 +303,31 @@ FrameFusionStats SceneFusion::Integrate(
     SceneSegment merged = std::move(segments_[root]);
     std::map<uint16_t, size_t> class_points;
     class_points[merged.class_id] += merged.points.size();
-    Cloud all = std::move(merged.points);
     for (size_t s : group) {
       if (s == root) continue;
       SceneSegment& other = segments_[s];
       class_points[other.class_id] += other.points.size();
-      all.insert(all.end(), other.points.begin(), other.points.end());
-      merged.first_seen_frame =
-          std::min(merged.first_seen_frame, other.first_seen_frame);
-      merged_into_[other.id] = merged.id;
-      merged.observations += other.observations;
+      Absorb(&merged, &other);
       ++stats.removed_by_merge;
     }
     for (size_t f : it->second) {
       const Cloud& p = frame_store[f];
       class_points[frame_segments[f].class_id] += p.size();
-      all.insert(all.end(), p.begin(), p.end());
+      merged.points.insert(merged.points.end(), p.begin(), p.end());
       ++merged.observations;
+      // With evidence the coverage counted this segment's vote already.
+      if (!evidence_on()) {
+        merged.class_votes[frame_segments[f].class_id] += frame_corr[f].size();
+      }
     }
-    if (!options_.label_gating) {
+    if (evidence_on()) {
+      UpdateClass(&merged);
+    } else if (!options_.label_gating) {
       size_t best = 0;
       for (const auto& [cls, count] : class_points) {
         if (count > best) best = count, merged.class_id = cls;
       }
     }
-    merged.points = std::move(all);
     merged.last_seen_frame = frame_index;
     changed.push_back(next.size());
     next.push_back(std::move(merged));
@@ -314,20 +344,20 @@ FrameFusionStats SceneFusion::Integrate(
     }
     stats.assigned_ids = std::move(ids);
   }
-  tbb::parallel_for(size_t{0}, changed.size(), [&](size_t c) {
-    SceneSegment& s = next[changed[c]];
-    s.points = VoxelDownsample(s.points, options_.store_voxel_size_m);
-    s.corr_points = VoxelDownsample(s.points, options_.corr_voxel_size_m);
-    s.bounds = BoundsOf(s.corr_points);
-    s.corr_grid = VoxelGrid(s.corr_points, options_.max_corr_dist_m);
-  });
+  tbb::parallel_for(size_t{0}, changed.size(),
+                    [&](size_t c) { Rebuild(&next[changed[c]]); });
   std::sort(
       next.begin(), next.end(),
       [](const SceneSegment& a, const SceneSegment& b) { return a.id < b.id; });
   segments_ = std::move(next);
-  stats.seconds =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - start)
-          .count();
+  if (evidence_on()) {
+    const auto t0 = std::chrono::steady_clock::now();
+    for (SceneSegment& s : segments_) UpdateClass(&s);
+    stats.evidence_merges = MergeByEvidence(frame_index);
+    evidence_seconds += Seconds(t0);
+  }
+  stats.evidence_seconds = evidence_seconds;
+  stats.seconds = Seconds(start);
   return stats;
 }
 

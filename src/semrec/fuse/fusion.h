@@ -22,14 +22,23 @@
 // class become one, and it merges into the scene's segment of that class
 // without an overlap test: one segment per stuff class (walls on opposite
 // sides of a room never overlap, yet they are the same structure).
+//
+// Evidence (Merge::kEvidence, the default): after the paper's rule, views that
+// show two objects inside one mask merge them (fuse/evidence.h), an object's
+// class is the vote of every mask that fell on it, a frame segment merges into
+// an object of another class on a strong overlap (sigma >
+// cross_class_alpha), and Finish() folds fragments into the object they touch
+// or drops them. Every such decision is listed in events().
 #pragma once
 
 #include <cstdint>
 #include <map>
+#include <string>
 #include <vector>
 
 #include <Eigen/Geometry>
 
+#include "semrec/fuse/evidence.h"
 #include "semrec/fuse/segments.h"
 #include "semrec/fuse/voxel.h"
 
@@ -60,13 +69,33 @@ struct FusionOptions {
   /// objects (the paper).
   bool stuff_per_class = true;
   Method method = Method::kFast;
+  enum class Merge {
+    /// The paper's rule alone.
+    kPaper,
+    /// The paper's rule, then multi-view evidence, class votes, cross-class
+    /// merges on strong overlap and fragment cleanup (see above).
+    kEvidence,
+  };
+  Merge merge = Merge::kEvidence;
+  EvidenceOptions evidence;
 
   void Check() const;
 };
 
+/// "paper" or "evidence"; ParseMerge throws InvalidArgument for anything else.
+const char* MergeName(FusionOptions::Merge merge);
+FusionOptions::Merge ParseMerge(const std::string& name);
+
 struct SceneSegment {
   uint32_t id = 0;
+  /// With evidence: the class with most votes; otherwise the first segment's
+  /// class (or, without gating, the class holding most points).
   uint16_t class_id = 0;
+  ClassKind kind = ClassKind::kThing;
+  /// Votes per class: comparison points of masks of that class that fell on
+  /// this object (with evidence: every mask of every view that saw it; paper
+  /// rule: the segments merged into it).
+  std::map<uint16_t, uint64_t> class_votes;
   /// Stored cloud (world frame), downsampled at store_voxel_size_m.
   Cloud points;
   size_t first_seen_frame = 0;
@@ -98,6 +127,12 @@ struct FrameFusionStats {
   size_t merged_frame_segments = 0;
   size_t new_segments = 0;
   size_t removed_by_merge = 0;
+  /// Scene objects merged by view evidence, and frame segments that merged into
+  /// an object of another class on a strong overlap.
+  size_t evidence_merges = 0;
+  size_t cross_class_matches = 0;
+  /// The evidence steps' share of `seconds` (coverage, votes, evidence merges).
+  double evidence_seconds = 0.0;
   /// Whole Integrate() call, and its comparison stage alone (the overlap
   /// tests).
   double seconds = 0.0;
@@ -108,6 +143,19 @@ struct FrameFusionStats {
   std::vector<uint32_t> assigned_ids;
 };
 
+/// A decision beyond the paper's rule, for the user to audit (summary.json).
+struct FusionEvent {
+  enum class Kind { kEvidenceMerge, kCrossClassMatch, kFragmentMerge, kDropped };
+  Kind kind = Kind::kEvidenceMerge;
+  /// Frame it happened in (Finish(): the last frame integrated).
+  size_t frame = 0;
+  /// The object merged (or dropped) and the one it went into (0: none).
+  uint32_t id = 0;
+  uint32_t into = 0;
+  std::string reason;
+};
+const char* FusionEventKindName(FusionEvent::Kind kind);
+
 class SceneFusion {
  public:
   explicit SceneFusion(const FusionOptions& options = {});
@@ -116,16 +164,55 @@ class SceneFusion {
   FrameFusionStats Integrate(const std::vector<FrameSegment>& frame_segments,
                              size_t frame_index);
 
+  /// Ends the sequence: evidence merges re-checked over all pairs, fragments
+  /// merged or dropped (Merge::kEvidence; nothing for the paper's rule).
+  /// Returns the number of objects merged or dropped.
+  size_t Finish();
+
   /// Scene segments, sorted by id.
   const std::vector<SceneSegment>& segments() const { return segments_; }
   const FusionOptions& options() const { return options_; }
 
   /// The current id of the segment that segment `id` was merged into (itself if
-  /// it was not).
+  /// it was not; 0 if it was dropped).
   uint32_t ResolveId(uint32_t id) const;
 
+  const std::vector<FusionEvent>& events() const { return events_; }
+  const EvidenceGraph& evidence() const { return evidence_; }
+
  private:
+  bool evidence_on() const {
+    return options_.merge == FusionOptions::Merge::kEvidence;
+  }
+  /// near[f][s]: points of frame segment f lying on scene segment s (objects
+  /// only; 0 for structure).
+  std::vector<std::vector<uint32_t>> Coverage(
+      const std::vector<FrameSegment>& frame_segments,
+      const std::vector<Cloud>& frame_corr,
+      const std::vector<Eigen::AlignedBox3f>& frame_bounds) const;
+  /// Class votes and view evidence of one frame (before its merges).
+  void RecordViewEvidence(const std::vector<FrameSegment>& frame_segments,
+                          const std::vector<std::vector<uint32_t>>& near,
+                          size_t frame_index);
+  /// The segment's class is `class_id`, or (with evidence) its votes give
+  /// that class at least confusion_share.
+  bool ConfusedWith(const SceneSegment& s, uint16_t class_id) const;
+  /// Merges each group of segments_ indices into its first member (it keeps
+  /// its id) and rebuilds the merged clouds; returns the number absorbed.
+  size_t MergeGroups(const std::vector<std::vector<size_t>>& groups);
+  /// Evidence merges over all pairs the graph says are one (classes permitting).
+  size_t MergeByEvidence(size_t frame_index);
+  /// Folds fragments into the object of their class they touch, or drops them.
+  size_t CleanFragments();
+  /// Moves `from`'s points, votes and history into `into` (clouds not rebuilt).
+  void Absorb(SceneSegment* into, SceneSegment* from);
+  void Rebuild(SceneSegment* s) const;
+  void UpdateClass(SceneSegment* s) const;
+
   FusionOptions options_;
+  EvidenceGraph evidence_;
+  std::vector<FusionEvent> events_;
+  size_t last_frame_ = 0;
   std::vector<SceneSegment> segments_;
   uint32_t next_id_ = 1;
   /// Absorbed segment id -> the id it was merged into.

@@ -11,6 +11,13 @@
 
 namespace semrec::fuse {
 
+Eigen::AlignedBox3f BoundsOf(const Cloud& cloud) {
+  Eigen::AlignedBox3f box;
+  for (const auto& p : cloud) box.extend(p);
+  return box;
+}
+
+
 uint64_t PackVoxel(int64_t x, int64_t y, int64_t z) {
   constexpr int64_t kOffset = 1 << 20;
   constexpr uint64_t kMask = (1u << 21) - 1;

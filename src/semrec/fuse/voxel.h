@@ -10,10 +10,22 @@
 #include <vector>
 
 #include <Eigen/Core>
+#include <Eigen/Geometry>
 
 namespace semrec::fuse {
 
 using Cloud = std::vector<Eigen::Vector3f>;
+
+/// Axis-aligned bounds of a cloud (empty for an empty cloud).
+Eigen::AlignedBox3f BoundsOf(const Cloud& cloud);
+
+/// True when boxes grown by `margin_m` touch: clouds whose boxes are farther
+/// apart than a distance share no point pair within it.
+inline bool BoxesWithin(const Eigen::AlignedBox3f& a,
+                        const Eigen::AlignedBox3f& b, float margin_m) {
+  return (a.min().array() - margin_m <= b.max().array()).all() &&
+         (b.min().array() - margin_m <= a.max().array()).all();
+}
 
 /// Integer voxel coordinates packed into one key (21 bits per axis, +-1M
 /// voxels).

@@ -11,6 +11,7 @@
 
 #include "semrec/core/error.h"
 #include "semrec/core/file_util.h"
+#include "semrec/fuse/fuse_sequence.h"
 #include "semrec/io/ply_io.h"
 
 namespace fs = std::filesystem;
@@ -64,12 +65,19 @@ ReconstructResult Reconstruct(const io::SequenceReader& reader,
       progress.Tick();
     }
   }
+  if (const size_t cleaned = fusion.Finish(); cleaned > 0) {
+    spdlog::info("end of sequence: {} objects merged or dropped (evidence, "
+                 "fragments; see summary.json events)",
+                 cleaned);
+  }
   // Pass 2: per-object volumes with the final ids.
   mesh::ObjectMesher mesher(options.meshing);
   {
     Progress progress("meshing", reader.size(), progress_options);
     for (size_t i = 0; i < reader.size(); ++i) {
       for (auto& [label, id] : assignments[i]) id = fusion.ResolveId(id);
+      std::erase_if(assignments[i],
+                    [](const auto& a) { return a.second == 0; });  // dropped
       if (!assignments[i].empty()) {
         mesher.Integrate(reader.Read(i), source.Get(reader, i).instance,
                          assignments[i]);
@@ -139,6 +147,8 @@ ReconstructResult Reconstruct(const io::SequenceReader& reader,
     prim.point_count = s.points.size();
     prim.first_seen_frame = s.first_seen_frame;
     prim.last_seen_frame = s.last_seen_frame;
+    prim.confidence = fuse::ClassConfidence(s);
+    prim.class_votes = fuse::ClassVotesText(s, source.classes());
     for (size_t v = 0; v < m.vertices_.size(); ++v) {
       prim.points.push_back(R_up * m.vertices_[v].cast<float>() + t_up);
       if (m.HasVertexNormals()) {
@@ -175,6 +185,8 @@ ReconstructResult Reconstruct(const io::SequenceReader& reader,
                        {"vertices", prim.points.size()},
                        {"triangles", prim.triangles.size()},
                        {"fused_points", s.points.size()},
+                       {"observations", s.observations},
+                       {"class_votes", fuse::ClassVotesJson(s, source.classes())},
                        {"first_seen_frame", s.first_seen_frame},
                        {"last_seen_frame", s.last_seen_frame},
                        {"ply", options.write_ply ? ply : ""}});
@@ -190,9 +202,9 @@ ReconstructResult Reconstruct(const io::SequenceReader& reader,
   stage.custom_layer_data["options"] = fmt::format(
       "fusion: alpha {} corr_voxel_size_m {} store_voxel_size_m {} "
       "max_corr_dist_m {} "
-      "label_gating {}; tsdf: voxel_size_m {} sdf_trunc_m {} max_depth_m {}",
+      "label_gating {} merge {}; tsdf: voxel_size_m {} sdf_trunc_m {} max_depth_m {}",
       f.alpha, f.corr_voxel_size_m, f.store_voxel_size_m, f.max_corr_dist_m,
-      f.label_gating, t.voxel_size_m, t.sdf_trunc_m, t.max_depth_m);
+      f.label_gating, fuse::MergeName(f.merge), t.voxel_size_m, t.sdf_trunc_m, t.max_depth_m);
   const auto& gm = T_up.Matrix();
   std::string matrix;
   for (int r = 0; r < 4; ++r) {
@@ -245,6 +257,7 @@ ReconstructResult Reconstruct(const io::SequenceReader& reader,
              {"floor_points", result.gravity.floor_points},
              {"T_upright_world", matrix}}},
            {"people", result.people},
+           {"fusion_events", fuse::FusionEventsJson(fusion)},
            {"skipped_empty_objects", result.skipped_empty_objects},
            {"seconds", result.seconds}})
               .dump(2) +

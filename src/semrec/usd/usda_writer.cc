@@ -169,10 +169,15 @@ std::string MeshPrimText(const MeshPrim& m, const std::string& name) {
       "            custom int semrec:firstSeenFrame = {}\n"
       "            custom int semrec:lastSeenFrame = {}\n"
       "            custom float semrec:confidence = {}\n"
+      "{}"
       "        }}\n",
       detail::SemanticsAttributes(m.label, "            "), m.instance_id,
       m.structure ? "stuff" : "thing", label, m.point_count, m.first_seen_frame,
-      m.last_seen_frame, Num(static_cast<float>(m.confidence)));
+      m.last_seen_frame, Num(static_cast<float>(m.confidence)),
+      m.class_votes.empty()
+          ? std::string()
+          : fmt::format("            custom string semrec:classVotes = {}\n",
+                        Quote(m.class_votes)));
   return text;
 }
 
