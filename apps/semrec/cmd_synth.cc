@@ -23,6 +23,8 @@ struct SynthArgs {
   std::optional<int> width;
   std::optional<int> height;
   std::optional<double> gt_spacing_m;
+  bool label_noise = false;
+  synth::LabelNoiseOptions label_noise_options;
   bool overwrite = false;
 };
 
@@ -47,6 +49,8 @@ void RunSynth(const SynthArgs& args) {
   options.noise.strength = args.noise_strength;
   options.noise.max_depth_m = args.max_depth_m;
   options.overwrite = args.overwrite;
+  options.write_noisy_labels = args.label_noise;
+  options.label_noise = args.label_noise_options;
   options.Check();
   const synth::SynthSummary s =
       synth::WriteSyntheticSequence(options, args.out);
@@ -107,6 +111,25 @@ void RegisterSynth(CLI::App& app) {
   cmd->add_option(
       "--gt-spacing-m", args->gt_spacing_m,
       "Spacing of the dense ground-truth object samples (default 0.005)");
+  cmd->add_flag("--label-noise", args->label_noise,
+                "Also write segmenter-like labels to <out>/labels_noisy (objects "
+                "cut into parts, joined with neighbours, classes flipped, "
+                "ragged boundaries, small masks dropped; per view, seeded): "
+                "fuse them with --labels <out>/labels_noisy");
+  cmd->add_option("--label-split", args->label_noise_options.split_probability,
+                  "Label noise: probability an object's mask is cut in a view")
+      ->capture_default_str();
+  cmd->add_option("--label-merge", args->label_noise_options.merge_probability,
+                  "Label noise: probability an object's mask joins a touching "
+                  "neighbour's")
+      ->capture_default_str();
+  cmd->add_option("--label-flip",
+                  args->label_noise_options.class_flip_probability,
+                  "Label noise: probability a mask gets another object class")
+      ->capture_default_str();
+  cmd->add_option("--label-jitter-px", args->label_noise_options.jitter_px,
+                  "Label noise: boundary jitter (pixels)")
+      ->capture_default_str();
   cmd->add_flag("--overwrite", args->overwrite,
                 "Write into a non-empty output folder");
   cmd->callback([args] { RunSynth(*args); });

@@ -38,6 +38,7 @@ void EvidenceOptions::Check() const {
                 "fusion evidence: min_hold_share must be in (0, 1]");
   CheckArgument(min_one_views >= 1,
                 "fusion evidence: min_one_views must be >= 1");
+  CheckArgument(min_views >= 1, "fusion evidence: min_views must be >= 1");
   CheckArgument(two_weight >= 0.0, "fusion evidence: two_weight must be >= 0");
   CheckArgument(max_gap_m >= 0.0, "fusion evidence: max_gap_m must be >= 0");
   CheckArgument(cross_class_alpha > 0.0 && cross_class_alpha <= 1.0,
@@ -98,6 +99,7 @@ const PairEvidence* EvidenceGraph::Find(uint32_t a, uint32_t b) const {
 bool EvidenceGraph::SaysOne(const PairEvidence& e,
                             const EvidenceOptions& options) {
   return e.one() >= options.min_one_views &&
+         e.one() + e.two() >= options.min_views &&
          static_cast<double>(e.one()) >
              options.two_weight * static_cast<double>(e.two());
 }

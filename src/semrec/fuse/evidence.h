@@ -33,9 +33,12 @@ struct EvidenceOptions {
   double min_hold_share = 0.5;
   /// Merge two objects when at least `min_one_views` views held both in one
   /// segment and one > two_weight x two (views holding them in different
-  /// segments).
+  /// segments): with 0.5, one view in three showing a single mask suffices.
   size_t min_one_views = 2;
-  double two_weight = 0.3;
+  double two_weight = 0.5;
+  /// ... and the pair was seen together (held by one or by two segments) in at
+  /// least this many views: early views alone do not decide.
+  size_t min_views = 3;
   /// "Two" views are counted only for objects whose bounding boxes are within
   /// this gap (parts of one object touch; far-apart objects need no votes).
   double max_gap_m = 0.3;

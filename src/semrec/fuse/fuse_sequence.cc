@@ -63,14 +63,20 @@ double ClassConfidence(const SceneSegment& segment) {
   return shares.empty() ? 1.0 : shares.front().second;
 }
 
-nlohmann::json FusionEventsJson(const SceneFusion& fusion) {
+nlohmann::json FusionEventsJson(const SceneFusion& fusion,
+                                const LabelSet& classes) {
   nlohmann::json events = nlohmann::json::array();
   for (const FusionEvent& e : fusion.events()) {
-    events.push_back({{"event", FusionEventKindName(e.kind)},
-                      {"frame", e.frame},
-                      {"id", e.id},
-                      {"into", e.into},
-                      {"reason", e.reason}});
+    nlohmann::json event = {{"event", FusionEventKindName(e.kind)},
+                            {"frame", e.frame},
+                            {"id", e.id},
+                            {"into", e.into},
+                            {"reason", e.reason}};
+    if (e.kind == FusionEvent::Kind::kCrossClassMatch) {
+      event["segment_class"] = ClassName(classes, e.segment_class);
+      event["object_class"] = ClassName(classes, e.object_class);
+    }
+    events.push_back(std::move(event));
   }
   return events;
 }
@@ -178,7 +184,7 @@ void WriteFusionResult(const fs::path& out_dir, const SceneFusion& fusion,
          o.method == FusionOptions::Method::kFast ? "fast" : "brute_force"}}},
       {"segments", segments},
       {"frames", frames},
-      {"events", FusionEventsJson(fusion)},
+      {"events", FusionEventsJson(fusion, classes)},
       {"empty_frames", result.empty_frames},
       {"seconds", result.seconds}};
   WriteTextFileAtomic(out_dir / "summary.json", summary.dump(2) + "\n");

@@ -31,7 +31,8 @@ std::string ClassVotesText(const SceneSegment& segment,
 /// The share of the winning class (1 without votes).
 double ClassConfidence(const SceneSegment& segment);
 /// fusion.events() for summary.json.
-nlohmann::json FusionEventsJson(const SceneFusion& fusion);
+nlohmann::json FusionEventsJson(const SceneFusion& fusion,
+                                const LabelSet& classes);
 
 /// Reads every frame of `reader`, extracts its segments with `source`, fuses
 /// them, then calls fusion->Finish().

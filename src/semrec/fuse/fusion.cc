@@ -169,25 +169,20 @@ FrameFusionStats SceneFusion::Integrate(
   for (size_t f = 0; f < frame_segments.size(); ++f) {
     const bool stuff = frame_segments[f].kind == ClassKind::kStuff;
     for (size_t s = 0; s < segments_.size(); ++s) {
-      // With evidence, also objects whose votes show the classes confused.
       const bool same_class =
-          evidence_on() && !stuff
-              ? ConfusedWith(segments_[s], frame_segments[f].class_id)
-              : segments_[s].class_id == frame_segments[f].class_id;
+          segments_[s].class_id == frame_segments[f].class_id;
       if (stuff && options_.stuff_per_class) {
         // Structure joins its class's segment, whatever the overlap.
         if (same_class) matches[f].push_back(s);
         continue;
       }
       if (options_.label_gating && !same_class) {
-        // Across classes only with evidence, for objects, and only where the
-        // coverage leaves the strong overlap possible (|M| <= covered points).
+        // Across classes only with evidence, for objects, when most of the
+        // frame segment lies on this object.
         const double alpha = options_.evidence.cross_class_alpha;
         if (!evidence_on() || stuff || segments_[s].kind == ClassKind::kStuff ||
             alpha >= 1.0 ||
-            near[f][s] <= alpha * static_cast<double>(std::min(
-                                      frame_corr[f].size(),
-                                      segments_[s].corr_points.size()))) {
+            near[f][s] <= alpha * static_cast<double>(frame_corr[f].size())) {
           continue;
         }
         candidates.push_back({f, s, alpha, {}, false});
@@ -240,11 +235,11 @@ FrameFusionStats SceneFusion::Integrate(
     if (scene.class_id != frame_segments[c.frame_segment].class_id) {
       ++stats.cross_class_matches;
       events_.push_back(
-          {FusionEvent::Kind::kCrossClassMatch, frame_index, 0, scene.id,
-           fmt::format("a segment of class {} overlaps object {} (class {}) "
-                       "with sigma >= {:.2f} > {}",
-                       frame_segments[c.frame_segment].class_id, scene.id,
-                       scene.class_id, c.overlap.sigma, c.alpha)});
+          {FusionEvent::Kind::kCrossClassMatch, frame_index, scene.id, 0,
+           fmt::format("a segment of another class lies on object {} "
+                       "(overlap sigma >= {:.2f} > {})",
+                       scene.id, c.overlap.sigma, c.alpha),
+           frame_segments[c.frame_segment].class_id, scene.class_id});
     }
   }
   // In increasing scene order per frame segment, whatever the comparison order.

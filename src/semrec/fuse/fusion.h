@@ -153,6 +153,9 @@ struct FusionEvent {
   uint32_t id = 0;
   uint32_t into = 0;
   std::string reason;
+  /// Cross-class matches: the frame segment's class and the object's.
+  uint16_t segment_class = 0;
+  uint16_t object_class = 0;
 };
 const char* FusionEventKindName(FusionEvent::Kind kind);
 

@@ -67,15 +67,33 @@ std::vector<std::vector<uint32_t>> SceneFusion::Coverage(
   std::vector<std::vector<uint32_t>> near(
       frame_segments.size(), std::vector<uint32_t>(segments_.size(), 0));
   const float margin = static_cast<float>(options_.max_corr_dist_m);
+  const float max_d2 =
+      static_cast<float>(options_.max_corr_dist_m * options_.max_corr_dist_m);
   tbb::parallel_for(size_t{0}, frame_segments.size(), [&](size_t f) {
     if (frame_segments[f].kind == ClassKind::kStuff) return;
+    std::vector<size_t> reachable;
     for (size_t s = 0; s < segments_.size(); ++s) {
-      const SceneSegment& scene = segments_[s];
-      if (!IsObject(scene) ||
-          !BoxesWithin(frame_bounds[f], scene.bounds, margin)) {
-        continue;
+      if (IsObject(segments_[s]) &&
+          BoxesWithin(frame_bounds[f], segments_[s].bounds, margin)) {
+        reachable.push_back(s);
       }
-      near[f][s] = PointsOn(frame_corr[f], scene, options_.max_corr_dist_m);
+    }
+    if (reachable.empty()) return;
+    // Each point counts for the one object nearest to it: a mask's fringe
+    // that reaches a neighbour's surface still lies on its own object.
+    uint64_t computations = 0;
+    for (const auto& p : frame_corr[f]) {
+      float best_d2 = max_d2;
+      int64_t best = -1;
+      for (size_t s : reachable) {
+        const SceneSegment& scene = segments_[s];
+        const Neighbor n =
+            scene.corr_grid.Nearest(scene.corr_points, p, best_d2, &computations);
+        if (n.index >= 0 && (best < 0 || n.d2 < best_d2)) {
+          best_d2 = n.d2, best = static_cast<int64_t>(s);
+        }
+      }
+      if (best >= 0) ++near[f][static_cast<size_t>(best)];
     }
   });
   return near;

@@ -257,7 +257,7 @@ ReconstructResult Reconstruct(const io::SequenceReader& reader,
              {"floor_points", result.gravity.floor_points},
              {"T_upright_world", matrix}}},
            {"people", result.people},
-           {"fusion_events", fuse::FusionEventsJson(fusion)},
+           {"fusion_events", fuse::FusionEventsJson(fusion, source.classes())},
            {"skipped_empty_objects", result.skipped_empty_objects},
            {"seconds", result.seconds}})
               .dump(2) +

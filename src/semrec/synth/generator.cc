@@ -106,6 +106,7 @@ void SynthOptions::Check() const {
   CheckArgument(
       noise.max_depth_m * kDepthScale < 65535.0,
       "synth: max_depth_m must be < 13.1 (depth PNGs store 0.2 mm steps)");
+  label_noise.Check();
   CheckArgument(gt_object_spacing_m >= 0.001 && gt_structure_spacing_m >= 0.001,
                 "synth: ground-truth sample spacing must be >= 1 mm");
   CheckArgument(trajectory.kind != TrajectoryOptions::Kind::kOrbit ||
@@ -303,6 +304,15 @@ SynthSummary WriteSyntheticSequence(const SynthOptions& options_in,
     io::WritePng(record.layers["semantic"], r.semantic);
     io::WritePng(record.layers["instance"], r.instance);
     io::WritePng(record.layers["person"], r.person);
+    if (options.write_noisy_labels) {
+      const NoisyLabels noisy_labels =
+          ApplyLabelNoise(r, scene, poses[i], k, options.label_noise,
+                          Mix(Mix(options.seed, 0x1abe1), i + 1));
+      io::WritePng(out_dir / "labels_noisy" / "instance" / stem,
+                   noisy_labels.instance);
+      io::WritePng(out_dir / "labels_noisy" / "semantic" / stem,
+                   noisy_labels.semantic);
+    }
     uint64_t frame_bytes =
         FileSize(record.color_path) + FileSize(record.depth_path);
     for (const auto& [name, path] : record.layers) {
@@ -351,6 +361,10 @@ SynthSummary WriteSyntheticSequence(const SynthOptions& options_in,
   // Ground truth.
   const fs::path gt = out_dir / "gt";
   io::WriteLabelSetJson(gt / "classes.json", SynthClasses());
+  if (options.write_noisy_labels) {
+    io::WriteLabelSetJson(out_dir / "labels_noisy" / "classes.json",
+                          SynthClasses());
+  }
 
   nlohmann::json objects = nlohmann::json::array();
   io::PlyData surface;

@@ -12,6 +12,7 @@
 #include "semrec/core/camera.h"
 #include "semrec/core/progress.h"
 #include "semrec/core/transform.h"
+#include "semrec/synth/label_noise.h"
 #include "semrec/synth/noise.h"
 #include "semrec/synth/scene.h"
 
@@ -60,6 +61,11 @@ struct SynthOptions {
   /// structure.
   double gt_object_spacing_m = 0.005;
   double gt_structure_spacing_m = 0.02;
+  /// Also write segmenter-like labels (synth/label_noise.h) to
+  /// labels_noisy/{instance,semantic}/ with labels_noisy/classes.json, a
+  /// folder `semrec fuse|mesh --labels` reads.
+  bool write_noisy_labels = false;
+  LabelNoiseOptions label_noise;
   /// Allow writing into a non-empty output folder (files are replaced).
   bool overwrite = false;
 

@@ -13,6 +13,7 @@ struct Drawable {
   uint16_t semantic;
   uint16_t person;
   Rgb color;
+  uint16_t part = 0;
 };
 
 struct Rect {
@@ -67,8 +68,9 @@ std::vector<Drawable> CollectDrawables(const Scene& scene,
   std::vector<Drawable> out;
   for (const SceneObject& o : scene.objects) {
     if (o.structure) continue;
-    for (const Primitive& p : o.parts) {
-      out.push_back({&p, o.instance_id, o.class_id, 0, o.color});
+    for (size_t j = 0; j < o.parts.size(); ++j) {
+      out.push_back({&o.parts[j], o.instance_id, o.class_id, 0, o.color,
+                     static_cast<uint16_t>(j + 1)});
     }
   }
   for (size_t i = 0; i < bodies.size(); ++i) {
@@ -201,6 +203,7 @@ RenderedFrame Render(const Scene& scene, double time_s,
   out.semantic = LabelMap(w, h);
   out.instance = LabelMap(w, h);
   out.person = LabelMap(w, h);
+  out.part = LabelMap(w, h);
   const Eigen::Vector3d light = Eigen::Vector3d(0.3, -0.5, 1.0).normalized();
   uint8_t* color = out.color.data();
   for (size_t i = 0; i < n; ++i) {
@@ -215,6 +218,7 @@ RenderedFrame Render(const Scene& scene, double time_s,
     out.semantic.data()[i] = dr.semantic;
     out.instance.data()[i] = dr.instance;
     out.person.data()[i] = dr.person;
+    out.part.data()[i] = dr.part;
     // Lambert from a fixed light plus a head-light term, and a surface-fixed
     // texture.
     const double shade =

@@ -25,6 +25,9 @@ struct RenderedFrame {
   LabelMap instance;
   /// Person id per pixel, 0 = no person.
   LabelMap person;
+  /// 1-based index of the object's primitive (SceneObject::parts) per pixel;
+  /// 0 for structure, people and background.
+  LabelMap part;
 };
 
 /// Renders `scene` at `time_s` (people move) from T_world_camera with
