@@ -34,6 +34,8 @@ void Insert(std::vector<uint32_t>* v, uint32_t x) {
 void EvidenceOptions::Check() const {
   CheckArgument(min_seen_points >= 1,
                 "fusion evidence: min_seen_points must be >= 1");
+  CheckArgument(min_seen_share >= 0.0 && min_seen_share <= 1.0,
+                "fusion evidence: min_seen_share must be in [0, 1]");
   CheckArgument(min_hold_share > 0.0 && min_hold_share <= 1.0,
                 "fusion evidence: min_hold_share must be in (0, 1]");
   CheckArgument(min_one_views >= 1,

@@ -28,6 +28,10 @@ struct EvidenceOptions {
   /// An object is seen in a frame when at least this many of the frame's
   /// comparison points (corr_voxel_size_m voxels) lie on it.
   size_t min_seen_points = 4;
+  /// ... and at least this share of the object's own comparison points: a
+  /// neighbour's mask grazing an object that is out of view says nothing
+  /// about it.
+  double min_seen_share = 0.2;
   /// A frame segment holds an object in that view when it has at least this
   /// share of the object's seen points.
   double min_hold_share = 0.5;
@@ -39,17 +43,17 @@ struct EvidenceOptions {
   /// ... and the pair was seen together (held by one or by two segments) in at
   /// least this many views: early views alone do not decide.
   size_t min_views = 3;
-  /// "Two" views are counted only for objects whose bounding boxes are within
-  /// this gap (parts of one object touch; far-apart objects need no votes).
+  /// Views count only for objects whose bounding boxes are within this gap:
+  /// parts of one object touch, and a mask that spans two objects far apart
+  /// joined them through a third (a chair, the table, another chair).
   double max_gap_m = 0.3;
-  /// A frame segment also merges into a scene object of another class when
-  /// their overlap sigma exceeds this (the same surface, labelled differently
-  /// in different views).
+  /// Objects of different classes merge only when the class votes show the
+  /// two classes confused (one object's votes give the other's class at least
+  /// `confusion_share`), by view evidence or when they cover the same surface
+  /// (overlap sigma > cross_class_alpha: one surface, labelled differently in
+  /// different views).
+  double confusion_share = 0.35;
   double cross_class_alpha = 0.8;
-  /// View evidence merges objects of different classes only when the class
-  /// votes show the two classes confused: one object's votes give the other's
-  /// class at least this share.
-  double confusion_share = 0.15;
   /// At the end, an object seen in fewer frames or with fewer stored points is
   /// a fragment: merged into the object of its class it touches most, or
   /// dropped.
@@ -96,18 +100,21 @@ class EvidenceGraph {
 
 /// What one view says, from the coverage counts near[f][s] (points of frame
 /// segment f lying on object s). Objects seen (>= min_seen_points) and held by
-/// a segment (>= min_hold_share of their seen points) form pairs: same holder
-/// -> one, different holders -> two (only when `adjacent(s, t)`).
+/// a segment (>= min_hold_share of their seen points) form pairs when
+/// `adjacent(s, t)`: same holder -> one, different holders -> two.
 struct ViewEvidence {
   /// (s, t, one) over object indices, s < t.
   std::vector<std::tuple<size_t, size_t, bool>> pairs;
   /// Holder segment per object, -1 when not seen or not held.
   std::vector<int64_t> holder;
 };
+/// `object_points[s]`: object s's comparison points.
 template <typename Adjacent>
 ViewEvidence EvaluateView(const std::vector<std::vector<uint32_t>>& near,
-                          size_t objects, const EvidenceOptions& options,
+                          const std::vector<size_t>& object_points,
+                          const EvidenceOptions& options,
                           const Adjacent& adjacent) {
+  const size_t objects = object_points.size();
   ViewEvidence view;
   view.holder.assign(objects, -1);
   for (size_t s = 0; s < objects; ++s) {
@@ -118,6 +125,8 @@ ViewEvidence EvaluateView(const std::vector<std::vector<uint32_t>>& near,
       if (near[f][s] > best) best = near[f][s], holder = static_cast<int64_t>(f);
     }
     if (seen >= options.min_seen_points &&
+        static_cast<double>(seen) >=
+            options.min_seen_share * static_cast<double>(object_points[s]) &&
         static_cast<double>(best) >=
             options.min_hold_share * static_cast<double>(seen)) {
       view.holder[s] = holder;
@@ -127,8 +136,9 @@ ViewEvidence EvaluateView(const std::vector<std::vector<uint32_t>>& near,
     if (view.holder[s] < 0) continue;
     for (size_t t = s + 1; t < objects; ++t) {
       if (view.holder[t] < 0) continue;
-      const bool one = view.holder[s] == view.holder[t];
-      if (one || adjacent(s, t)) view.pairs.emplace_back(s, t, one);
+      if (adjacent(s, t)) {
+        view.pairs.emplace_back(s, t, view.holder[s] == view.holder[t]);
+      }
     }
   }
   return view;

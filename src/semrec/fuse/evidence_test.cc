@@ -65,24 +65,31 @@ TEST(EvidenceGraph, ViewsGiveOneForASharedHolderAndTwoForNeighbours) {
   };
   EvidenceOptions o;
   o.min_seen_points = 4;
+  const std::vector<size_t> sizes = {20, 20, 20, 20};
   const ViewEvidence view =
-      EvaluateView(near, 4, o, [](size_t, size_t) { return true; });
+      EvaluateView(near, sizes, o, [](size_t, size_t) { return true; });
   EXPECT_EQ(view.holder, (std::vector<int64_t>{0, 0, 1, -1}));
   using P = std::tuple<size_t, size_t, bool>;
   EXPECT_EQ(view.pairs,
             (std::vector<P>{{0, 1, true}, {0, 2, false}, {1, 2, false}}));
-  // Far apart objects give no "two".
+  // Far apart objects give no views either way.
   const ViewEvidence apart =
-      EvaluateView(near, 4, o, [](size_t, size_t) { return false; });
-  EXPECT_EQ(apart.pairs, (std::vector<P>{{0, 1, true}}));
+      EvaluateView(near, sizes, o, [](size_t, size_t) { return false; });
+  EXPECT_TRUE(apart.pairs.empty());
   // An object split evenly between two segments has no holder.
-  const ViewEvidence split = EvaluateView({{5, 0}, {5, 0}}, 2, o,
+  const ViewEvidence split = EvaluateView({{5, 0}, {5, 0}}, {20, 20}, o,
                                           [](size_t, size_t) { return true; });
   EXPECT_EQ(split.holder[0], 0);  // 5 >= 0.5 * 10: the first one
   o.min_hold_share = 0.6;
-  const ViewEvidence strict = EvaluateView({{5, 0}, {5, 0}}, 2, o,
+  const ViewEvidence strict = EvaluateView({{5, 0}, {5, 0}}, {20, 20}, o,
                                            [](size_t, size_t) { return true; });
   EXPECT_EQ(strict.holder[0], -1);
+  // A large object grazed by a few points is not seen (10 < 0.2 x 60).
+  o = {};
+  const ViewEvidence grazed = EvaluateView({{10, 9}}, {60, 20}, o,
+                                           [](size_t, size_t) { return true; });
+  EXPECT_EQ(grazed.holder, (std::vector<int64_t>{-1, 0}));
+  EXPECT_TRUE(grazed.pairs.empty());
 }
 
 TEST(EvidenceOptions, AreChecked) {
@@ -204,10 +211,14 @@ TEST(FusionEvidence, ClassIsTheVoteOfEveryView) {
         static_cast<double>(s.class_votes.at(2)) /
         static_cast<double>(s.class_votes.at(1) + s.class_votes.at(2));
     EXPECT_NEAR(share2, 4.0 / 6.0, 0.05);  // four views of six, equal sizes
-    // Class-2 segments matched the class-1 object until the vote turned.
+    // Class-2 segments lie on the class-1 object and join it until the vote
+    // turns (after two or three of them, depending on the exact counts).
     size_t cross = 0;
     for (const FusionEvent& e : fusion.events()) {
-      cross += e.kind == FusionEvent::Kind::kCrossClassMatch;
+      if (e.kind != FusionEvent::Kind::kCrossClassMatch) continue;
+      ++cross;
+      EXPECT_EQ(e.class_id, 2);
+      EXPECT_EQ(e.into, 1u);
     }
     EXPECT_GE(cross, 2u);
     EXPECT_LE(cross, 3u);

@@ -72,10 +72,8 @@ nlohmann::json FusionEventsJson(const SceneFusion& fusion,
                             {"id", e.id},
                             {"into", e.into},
                             {"reason", e.reason}};
-    if (e.kind == FusionEvent::Kind::kCrossClassMatch) {
-      event["segment_class"] = ClassName(classes, e.segment_class);
-      event["object_class"] = ClassName(classes, e.object_class);
-    }
+    event["class"] = ClassName(classes, e.class_id);
+    if (e.into != 0) event["into_class"] = ClassName(classes, e.into_class_id);
     events.push_back(std::move(event));
   }
   return events;

@@ -144,16 +144,16 @@ FrameFusionStats SceneFusion::Integrate(
 
   // Evidence: where the frame's object masks fall on the scene's objects.
   double evidence_seconds = 0.0;
-  std::vector<std::vector<uint32_t>> near;
+  FrameCoverage coverage;
   if (evidence_on()) {
     const auto t0 = std::chrono::steady_clock::now();
-    near = Coverage(frame_segments, frame_corr, frame_bounds);
+    coverage = Coverage(frame_segments, frame_corr, frame_bounds);
     evidence_seconds += Seconds(t0);
   }
 
   // Matches of every frame segment against the scene before this frame. The
-  // candidate pairs (same class, or with evidence another class the segment
-  // covers almost entirely; for `fast`, bounding boxes within reach) are listed
+  // candidate pairs (same class, or with evidence an object of another class
+  // the segment lies on; for `fast`, bounding boxes within reach) are listed
   // first and compared in parallel pair by pair: one large segment (floor,
   // wall) would otherwise keep a core busy alone.
   const auto compare_start = std::chrono::steady_clock::now();
@@ -180,12 +180,12 @@ FrameFusionStats SceneFusion::Integrate(
         // Across classes only with evidence, for objects, when most of the
         // frame segment lies on this object.
         const double alpha = options_.evidence.cross_class_alpha;
-        if (!evidence_on() || stuff || segments_[s].kind == ClassKind::kStuff ||
-            alpha >= 1.0 ||
-            near[f][s] <= alpha * static_cast<double>(frame_corr[f].size())) {
-          continue;
+        if (evidence_on() && !stuff && alpha < 1.0 &&
+            segments_[s].kind != ClassKind::kStuff &&
+            coverage.nearest[f][s] >
+                alpha * static_cast<double>(frame_corr[f].size())) {
+          candidates.push_back({f, s, alpha, {}, false});
         }
-        candidates.push_back({f, s, alpha, {}, false});
         continue;
       }
       ++stats.compared_pairs;
@@ -230,24 +230,24 @@ FrameFusionStats SceneFusion::Integrate(
         c.overlap.mutual_pairs, fast ? ">=" : "=", c.overlap.sigma,
         c.exceeds ? "merge" : "no");
     if (!c.exceeds) continue;
+    // In increasing scene order per frame segment (the list's order).
     matches[c.frame_segment].push_back(c.scene_segment);
     const SceneSegment& scene = segments_[c.scene_segment];
-    if (scene.class_id != frame_segments[c.frame_segment].class_id) {
+    const uint16_t segment_class = frame_segments[c.frame_segment].class_id;
+    if (scene.class_id != segment_class) {
       ++stats.cross_class_matches;
       events_.push_back(
-          {FusionEvent::Kind::kCrossClassMatch, frame_index, scene.id, 0,
-           fmt::format("a segment of another class lies on object {} "
-                       "(overlap sigma >= {:.2f} > {})",
+          {FusionEvent::Kind::kCrossClassMatch, frame_index, 0, scene.id,
+           fmt::format("a segment of another class lies on object {} (overlap "
+                       "sigma >= {:.2f} > {})",
                        scene.id, c.overlap.sigma, c.alpha),
-           frame_segments[c.frame_segment].class_id, scene.class_id});
+           segment_class, scene.class_id});
     }
   }
-  // In increasing scene order per frame segment, whatever the comparison order.
-  for (auto& m : matches) std::sort(m.begin(), m.end());
 
   if (evidence_on()) {
     const auto t0 = std::chrono::steady_clock::now();
-    RecordViewEvidence(frame_segments, near, frame_index);
+    RecordViewEvidence(frame_segments, coverage, frame_index);
     evidence_seconds += Seconds(t0);
   }
 

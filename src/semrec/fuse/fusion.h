@@ -25,8 +25,8 @@
 //
 // Evidence (Merge::kEvidence, the default): after the paper's rule, views that
 // show two objects inside one mask merge them (fuse/evidence.h), an object's
-// class is the vote of every mask that fell on it, a frame segment merges into
-// an object of another class on a strong overlap (sigma >
+// class is the vote of every mask that fell on it, a frame segment lying on an
+// object of another class merges into it on a strong overlap (sigma >
 // cross_class_alpha), and Finish() folds fragments into the object they touch
 // or drops them. Every such decision is listed in events().
 #pragma once
@@ -149,13 +149,15 @@ struct FusionEvent {
   Kind kind = Kind::kEvidenceMerge;
   /// Frame it happened in (Finish(): the last frame integrated).
   size_t frame = 0;
-  /// The object merged (or dropped) and the one it went into (0: none).
+  /// The object merged (or dropped) and the one it went into (0: none); for a
+  /// cross-class match, `into` is the object a segment of class `class_id`
+  /// joined.
   uint32_t id = 0;
   uint32_t into = 0;
   std::string reason;
-  /// Cross-class matches: the frame segment's class and the object's.
-  uint16_t segment_class = 0;
-  uint16_t object_class = 0;
+  /// The classes of `id` (or of the segment) and `into` when they merged.
+  uint16_t class_id = 0;
+  uint16_t into_class_id = 0;
 };
 const char* FusionEventKindName(FusionEvent::Kind kind);
 
@@ -187,16 +189,24 @@ class SceneFusion {
   bool evidence_on() const {
     return options_.merge == FusionOptions::Merge::kEvidence;
   }
-  /// near[f][s]: points of frame segment f lying on scene segment s (objects
-  /// only; 0 for structure).
-  std::vector<std::vector<uint32_t>> Coverage(
+  /// Where a frame's object masks fall on the scene's objects (structure
+  /// excluded), per frame segment f and scene object s: `on[f][s]` counts f's
+  /// comparison points within the correspondence distance of s (what the view
+  /// shows of s, even where a duplicate of s lies on the same surface),
+  /// `nearest[f][s]` those for which s is the nearest object (a mask's fringe
+  /// that reaches a neighbour still counts for its own object).
+  struct FrameCoverage {
+    std::vector<std::vector<uint32_t>> on;
+    std::vector<std::vector<uint32_t>> nearest;
+  };
+  FrameCoverage Coverage(
       const std::vector<FrameSegment>& frame_segments,
       const std::vector<Cloud>& frame_corr,
       const std::vector<Eigen::AlignedBox3f>& frame_bounds) const;
-  /// Class votes and view evidence of one frame (before its merges).
+  /// Class votes (from `nearest`) and view evidence (from `on`) of one frame,
+  /// before its merges.
   void RecordViewEvidence(const std::vector<FrameSegment>& frame_segments,
-                          const std::vector<std::vector<uint32_t>>& near,
-                          size_t frame_index);
+                          const FrameCoverage& coverage, size_t frame_index);
   /// The segment's class is `class_id`, or (with evidence) its votes give
   /// that class at least confusion_share.
   bool ConfusedWith(const SceneSegment& s, uint16_t class_id) const;

@@ -60,12 +60,14 @@ bool SceneFusion::ConfusedWith(const SceneSegment& s, uint16_t class_id) const {
           VoteShare(s, class_id) >= options_.evidence.confusion_share);
 }
 
-std::vector<std::vector<uint32_t>> SceneFusion::Coverage(
+SceneFusion::FrameCoverage SceneFusion::Coverage(
     const std::vector<FrameSegment>& frame_segments,
     const std::vector<Cloud>& frame_corr,
     const std::vector<Eigen::AlignedBox3f>& frame_bounds) const {
-  std::vector<std::vector<uint32_t>> near(
-      frame_segments.size(), std::vector<uint32_t>(segments_.size(), 0));
+  FrameCoverage coverage;
+  coverage.on.assign(frame_segments.size(),
+                     std::vector<uint32_t>(segments_.size(), 0));
+  coverage.nearest = coverage.on;
   const float margin = static_cast<float>(options_.max_corr_dist_m);
   const float max_d2 =
       static_cast<float>(options_.max_corr_dist_m * options_.max_corr_dist_m);
@@ -78,9 +80,6 @@ std::vector<std::vector<uint32_t>> SceneFusion::Coverage(
         reachable.push_back(s);
       }
     }
-    if (reachable.empty()) return;
-    // Each point counts for the one object nearest to it: a mask's fringe
-    // that reaches a neighbour's surface still lies on its own object.
     uint64_t computations = 0;
     for (const auto& p : frame_corr[f]) {
       float best_d2 = max_d2;
@@ -88,30 +87,35 @@ std::vector<std::vector<uint32_t>> SceneFusion::Coverage(
       for (size_t s : reachable) {
         const SceneSegment& scene = segments_[s];
         const Neighbor n =
-            scene.corr_grid.Nearest(scene.corr_points, p, best_d2, &computations);
-        if (n.index >= 0 && (best < 0 || n.d2 < best_d2)) {
+            scene.corr_grid.Nearest(scene.corr_points, p, max_d2, &computations);
+        if (n.index < 0) continue;
+        ++coverage.on[f][s];
+        if (best < 0 || n.d2 < best_d2) {  // ties: the earlier object
           best_d2 = n.d2, best = static_cast<int64_t>(s);
         }
       }
-      if (best >= 0) ++near[f][static_cast<size_t>(best)];
+      if (best >= 0) ++coverage.nearest[f][static_cast<size_t>(best)];
     }
   });
-  return near;
+  return coverage;
 }
 
 void SceneFusion::RecordViewEvidence(
     const std::vector<FrameSegment>& frame_segments,
-    const std::vector<std::vector<uint32_t>>& near, size_t frame_index) {
+    const FrameCoverage& coverage, size_t frame_index) {
   for (size_t f = 0; f < frame_segments.size(); ++f) {
     for (size_t s = 0; s < segments_.size(); ++s) {
-      if (near[f][s] > 0) {
-        segments_[s].class_votes[frame_segments[f].class_id] += near[f][s];
+      if (coverage.nearest[f][s] > 0) {
+        segments_[s].class_votes[frame_segments[f].class_id] +=
+            coverage.nearest[f][s];
       }
     }
   }
+  std::vector<size_t> sizes;
+  for (const SceneSegment& s : segments_) sizes.push_back(s.corr_points.size());
   const float gap = static_cast<float>(options_.evidence.max_gap_m);
   const ViewEvidence view = EvaluateView(
-      near, segments_.size(), options_.evidence, [&](size_t s, size_t t) {
+      coverage.on, sizes, options_.evidence, [&](size_t s, size_t t) {
         return BoxesWithin(segments_[s].bounds, segments_[t].bounds, gap);
       });
   for (const auto& [s, t, one] : view.pairs) {
@@ -200,7 +204,9 @@ size_t SceneFusion::MergeByEvidence(size_t frame_index) {
       const auto it = reasons.find(group[k]);
       events_.push_back({FusionEvent::Kind::kEvidenceMerge, frame_index,
                          segments_[group[k]].id, segments_[group[0]].id,
-                         it != reasons.end() ? it->second : "through the group"});
+                         it != reasons.end() ? it->second : "through the group",
+                         segments_[group[k]].class_id,
+                         segments_[group[0]].class_id});
     }
   }
   return merged.empty() ? 0 : MergeGroups(merged);
@@ -245,11 +251,13 @@ size_t SceneFusion::CleanFragments() {
       events_.push_back({FusionEvent::Kind::kFragmentMerge, last_frame_, id,
                          segments_[target].id,
                          fmt::format("{} touching object {} of its class", what,
-                                     segments_[target].id)});
+                                     segments_[target].id),
+                         fragment.class_id, segments_[target].class_id});
       MergeGroups({{target, f}});
     } else {
       events_.push_back({FusionEvent::Kind::kDropped, last_frame_, id, 0,
-                         what + " touching no object of its class"});
+                         what + " touching no object of its class",
+                         fragment.class_id, 0});
       merged_into_[id] = 0;
       evidence_.Erase(id);
       segments_.erase(segments_.begin() + static_cast<std::ptrdiff_t>(f));
