@@ -111,11 +111,12 @@ void RegisterSynth(CLI::App& app) {
   cmd->add_option(
       "--gt-spacing-m", args->gt_spacing_m,
       "Spacing of the dense ground-truth object samples (default 0.005)");
-  cmd->add_flag("--label-noise", args->label_noise,
-                "Also write segmenter-like labels to <out>/labels_noisy (objects "
-                "cut into parts, joined with neighbours, classes flipped, "
-                "ragged boundaries, small masks dropped; per view, seeded): "
-                "fuse them with --labels <out>/labels_noisy");
+  cmd->add_flag(
+      "--label-noise", args->label_noise,
+      "Also write segmenter-like labels to <out>/labels_noisy (objects "
+      "cut into parts, joined with neighbours, classes flipped, "
+      "ragged boundaries, small masks dropped; per view, seeded): "
+      "fuse them with --labels <out>/labels_noisy");
   cmd->add_option("--label-split", args->label_noise_options.split_probability,
                   "Label noise: probability an object's mask is cut in a view")
       ->capture_default_str();

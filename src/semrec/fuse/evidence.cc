@@ -78,8 +78,8 @@ void EvidenceGraph::Absorb(uint32_t into, uint32_t from) {
   for (auto& [other, e] : moved) {
     PairEvidence& target = pairs_[Key(into, other)];
     target.one_frames = Union(target.one_frames, e.one_frames);
-    target.two_frames = Difference(Union(target.two_frames, e.two_frames),
-                                   target.one_frames);
+    target.two_frames =
+        Difference(Union(target.two_frames, e.two_frames), target.one_frames);
   }
 }
 

@@ -122,7 +122,9 @@ ViewEvidence EvaluateView(const std::vector<std::vector<uint32_t>>& near,
     int64_t holder = -1;
     for (size_t f = 0; f < near.size(); ++f) {
       seen += near[f][s];
-      if (near[f][s] > best) best = near[f][s], holder = static_cast<int64_t>(f);
+      if (near[f][s] > best) {
+        best = near[f][s], holder = static_cast<int64_t>(f);
+      }
     }
     if (seen >= options.min_seen_points &&
         static_cast<double>(seen) >=

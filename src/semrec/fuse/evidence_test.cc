@@ -1,5 +1,6 @@
 #include "semrec/fuse/evidence.h"
 
+#include <cmath>
 #include <random>
 
 #include <gtest/gtest.h>
@@ -86,8 +87,8 @@ TEST(EvidenceGraph, ViewsGiveOneForASharedHolderAndTwoForNeighbours) {
   EXPECT_EQ(strict.holder[0], -1);
   // A large object grazed by a few points is not seen (10 < 0.2 x 60).
   o = {};
-  const ViewEvidence grazed = EvaluateView({{10, 9}}, {60, 20}, o,
-                                           [](size_t, size_t) { return true; });
+  const ViewEvidence grazed =
+      EvaluateView({{10, 9}}, {60, 20}, o, [](size_t, size_t) { return true; });
   EXPECT_EQ(grazed.holder, (std::vector<int64_t>{-1, 0}));
   EXPECT_TRUE(grazed.pairs.empty());
 }
@@ -112,9 +113,12 @@ TEST(EvidenceOptions, AreChecked) {
 Cloud Patch(float x0, float x1, std::mt19937& rng, float y1 = 0.5f) {
   std::normal_distribution<float> g(0, 0.003f);
   Cloud c;
-  for (float x = x0; x < x1; x += 0.01f) {
-    for (float y = 0; y < y1; y += 0.01f) {
-      c.emplace_back(x + g(rng), y + g(rng), 0.05f + g(rng));
+  const int nx = static_cast<int>(std::lround((x1 - x0) / 0.01f));
+  const int ny = static_cast<int>(std::lround(y1 / 0.01f));
+  for (int i = 0; i < nx; ++i) {
+    for (int j = 0; j < ny; ++j) {
+      c.emplace_back(x0 + 0.01f * static_cast<float>(i) + g(rng),
+                     0.01f * static_cast<float>(j) + g(rng), 0.05f + g(rng));
     }
   }
   return c;
@@ -235,9 +239,8 @@ TEST(FusionEvidence, FragmentsAreFoldedOrDropped) {
   }
   Cloud far = Patch(0.0f, 0.1f, rng, 0.1f);
   for (auto& p : far) p.x() += 5.0f;
-  fusion.Integrate({Segment(1, 2, Patch(1.0f, 1.12f, rng, 0.1f)),
-                    Segment(1, 3, far)},
-                   3);
+  fusion.Integrate(
+      {Segment(1, 2, Patch(1.0f, 1.12f, rng, 0.1f)), Segment(1, 3, far)}, 3);
   ASSERT_EQ(fusion.segments().size(), 3u);
   EXPECT_EQ(fusion.Finish(), 2u);
   ASSERT_EQ(fusion.segments().size(), 1u);

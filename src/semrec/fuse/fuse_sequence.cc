@@ -28,8 +28,9 @@ std::vector<std::pair<uint16_t, double>> SortedShares(
                           static_cast<double>(n) / static_cast<double>(total));
     }
   }
-  std::stable_sort(shares.begin(), shares.end(),
-                   [](const auto& a, const auto& b) { return a.second > b.second; });
+  std::stable_sort(
+      shares.begin(), shares.end(),
+      [](const auto& a, const auto& b) { return a.second > b.second; });
   return shares;
 }
 
@@ -103,9 +104,10 @@ FuseSequenceResult FuseSequence(const io::SequenceReader& reader,
   progress.Finish();
   const size_t cleaned = fusion->Finish();
   if (cleaned > 0) {
-    spdlog::info("end of sequence: {} objects merged or dropped (evidence, "
-                 "fragments)",
-                 cleaned);
+    spdlog::info(
+        "end of sequence: {} objects merged or dropped (evidence, "
+        "fragments)",
+        cleaned);
   }
   if (result.empty_frames > 0) {
     spdlog::warn("{} of {} frames had no segment with valid depth",

@@ -190,7 +190,9 @@ FrameFusionStats SceneFusion::Integrate(
       }
       ++stats.compared_pairs;
       // No pair can be close.
-      if (fast && !BoxesWithin(frame_bounds[f], segments_[s].bounds, margin)) continue;
+      if (fast && !BoxesWithin(frame_bounds[f], segments_[s].bounds, margin)) {
+        continue;
+      }
       candidates.push_back({f, s, options_.alpha, {}, false});
     }
   }

@@ -145,7 +145,12 @@ struct FrameFusionStats {
 
 /// A decision beyond the paper's rule, for the user to audit (summary.json).
 struct FusionEvent {
-  enum class Kind { kEvidenceMerge, kCrossClassMatch, kFragmentMerge, kDropped };
+  enum class Kind {
+    kEvidenceMerge,
+    kCrossClassMatch,
+    kFragmentMerge,
+    kDropped
+  };
   Kind kind = Kind::kEvidenceMerge;
   /// Frame it happened in (Finish(): the last frame integrated).
   size_t frame = 0;
@@ -213,7 +218,8 @@ class SceneFusion {
   /// Merges each group of segments_ indices into its first member (it keeps
   /// its id) and rebuilds the merged clouds; returns the number absorbed.
   size_t MergeGroups(const std::vector<std::vector<size_t>>& groups);
-  /// Evidence merges over all pairs the graph says are one (classes permitting).
+  /// Evidence merges over all pairs the graph says are one (classes
+  /// permitting).
   size_t MergeByEvidence(size_t frame_index);
   /// Folds fragments into the object of their class they touch, or drops them.
   size_t CleanFragments();

@@ -86,8 +86,8 @@ SceneFusion::FrameCoverage SceneFusion::Coverage(
       int64_t best = -1;
       for (size_t s : reachable) {
         const SceneSegment& scene = segments_[s];
-        const Neighbor n =
-            scene.corr_grid.Nearest(scene.corr_points, p, max_d2, &computations);
+        const Neighbor n = scene.corr_grid.Nearest(scene.corr_points, p, max_d2,
+                                                   &computations);
         if (n.index < 0) continue;
         ++coverage.on[f][s];
         if (best < 0 || n.d2 < best_d2) {  // ties: the earlier object
@@ -131,7 +131,8 @@ void SceneFusion::Absorb(SceneSegment* into, SceneSegment* from) {
   for (const auto& [cls, n] : from->class_votes) into->class_votes[cls] += n;
   into->first_seen_frame =
       std::min(into->first_seen_frame, from->first_seen_frame);
-  into->last_seen_frame = std::max(into->last_seen_frame, from->last_seen_frame);
+  into->last_seen_frame =
+      std::max(into->last_seen_frame, from->last_seen_frame);
   into->observations += from->observations;
   merged_into_[from->id] = into->id;
   evidence_.Absorb(into->id, from->id);
@@ -152,7 +153,8 @@ void SceneFusion::UpdateClass(SceneSegment* s) const {
   }
 }
 
-size_t SceneFusion::MergeGroups(const std::vector<std::vector<size_t>>& groups) {
+size_t SceneFusion::MergeGroups(
+    const std::vector<std::vector<size_t>>& groups) {
   std::vector<bool> removed(segments_.size(), false);
   std::vector<size_t> changed;
   size_t absorbed = 0;
@@ -225,9 +227,11 @@ size_t SceneFusion::CleanFragments() {
   std::sort(fragments.begin(), fragments.end());  // smallest first
   const float margin = static_cast<float>(options_.max_corr_dist_m);
   size_t done = 0;
-  for (const auto& [points, id] : fragments) {
-    const auto it = std::find_if(segments_.begin(), segments_.end(),
-                                 [&](const SceneSegment& s) { return s.id == id; });
+  for (const auto& candidate : fragments) {
+    const uint32_t id = candidate.second;
+    const auto it =
+        std::find_if(segments_.begin(), segments_.end(),
+                     [&](const SceneSegment& s) { return s.id == id; });
     if (it == segments_.end() || !is_fragment(*it)) continue;
     const size_t f = static_cast<size_t>(it - segments_.begin());
     const SceneSegment& fragment = segments_[f];

@@ -75,34 +75,35 @@ TEST(Fusion, FastAndBruteForceMakeIdenticalDecisions) {
   for (uint32_t seed : {1u, 2u, 3u, 4u}) {
     for (const auto merge :
          {FusionOptions::Merge::kPaper, FusionOptions::Merge::kEvidence}) {
-    for (bool gating : {true, false}) {
-      FusionOptions fast_options, brute_options;
-      fast_options.label_gating = brute_options.label_gating = gating;
-      fast_options.merge = brute_options.merge = merge;
-      brute_options.method = FusionOptions::Method::kBruteForce;
-      SceneFusion fast(fast_options), brute(brute_options);
-      const auto frames = RandomFrames(seed);
-      for (size_t f = 0; f < frames.size(); ++f) {
-        const FrameFusionStats sf = fast.Integrate(frames[f], f);
-        const FrameFusionStats sb = brute.Integrate(frames[f], f);
-        EXPECT_EQ(sf.merged_frame_segments, sb.merged_frame_segments);
-        EXPECT_EQ(sf.distance_computations_ungated,
-                  sb.distance_computations_ungated);
-        EXPECT_EQ(sf.evidence_merges, sb.evidence_merges);
-        EXPECT_EQ(sf.cross_class_matches, sb.cross_class_matches);
-        if (merge == FusionOptions::Merge::kPaper) {
-          // The paper's count (evidence adds cross-class comparisons).
-          EXPECT_EQ(sb.distance_computations_done,
-                    gating ? sb.distance_computations_gated
-                           : sb.distance_computations_ungated);
+      for (bool gating : {true, false}) {
+        FusionOptions fast_options, brute_options;
+        fast_options.label_gating = brute_options.label_gating = gating;
+        fast_options.merge = brute_options.merge = merge;
+        brute_options.method = FusionOptions::Method::kBruteForce;
+        SceneFusion fast(fast_options), brute(brute_options);
+        const auto frames = RandomFrames(seed);
+        for (size_t f = 0; f < frames.size(); ++f) {
+          const FrameFusionStats sf = fast.Integrate(frames[f], f);
+          const FrameFusionStats sb = brute.Integrate(frames[f], f);
+          EXPECT_EQ(sf.merged_frame_segments, sb.merged_frame_segments);
+          EXPECT_EQ(sf.distance_computations_ungated,
+                    sb.distance_computations_ungated);
+          EXPECT_EQ(sf.evidence_merges, sb.evidence_merges);
+          EXPECT_EQ(sf.cross_class_matches, sb.cross_class_matches);
+          if (merge == FusionOptions::Merge::kPaper) {
+            // The paper's count (evidence adds cross-class comparisons).
+            EXPECT_EQ(sb.distance_computations_done,
+                      gating ? sb.distance_computations_gated
+                             : sb.distance_computations_ungated);
+          }
+          EXPECT_LE(sf.distance_computations_done,
+                    sb.distance_computations_done);
         }
-        EXPECT_LE(sf.distance_computations_done, sb.distance_computations_done);
+        EXPECT_EQ(fast.Finish(), brute.Finish());
+        ExpectSameScene(fast, brute);
+        // Each object, seen over several frames, ends as one segment.
+        EXPECT_LE(fast.segments().size(), 8u);
       }
-      EXPECT_EQ(fast.Finish(), brute.Finish());
-      ExpectSameScene(fast, brute);
-      // Each object, seen over several frames, ends as one segment.
-      EXPECT_LE(fast.segments().size(), 8u);
-    }
     }
   }
 }

@@ -17,7 +17,6 @@ Eigen::AlignedBox3f BoundsOf(const Cloud& cloud) {
   return box;
 }
 
-
 uint64_t PackVoxel(int64_t x, int64_t y, int64_t z) {
   constexpr int64_t kOffset = 1 << 20;
   constexpr uint64_t kMask = (1u << 21) - 1;

@@ -66,9 +66,10 @@ ReconstructResult Reconstruct(const io::SequenceReader& reader,
     }
   }
   if (const size_t cleaned = fusion.Finish(); cleaned > 0) {
-    spdlog::info("end of sequence: {} objects merged or dropped (evidence, "
-                 "fragments; see summary.json events)",
-                 cleaned);
+    spdlog::info(
+        "end of sequence: {} objects merged or dropped (evidence, "
+        "fragments; see summary.json events)",
+        cleaned);
   }
   // Pass 2: per-object volumes with the final ids.
   mesh::ObjectMesher mesher(options.meshing);
@@ -179,17 +180,18 @@ ReconstructResult Reconstruct(const io::SequenceReader& reader,
       io::WritePly(out_dir / ply, data);
     }
     result.structure += prim.structure ? 1 : 0;
-    objects.push_back({{"id", s.id},
-                       {"class", name},
-                       {"kind", prim.structure ? "structure" : "object"},
-                       {"vertices", prim.points.size()},
-                       {"triangles", prim.triangles.size()},
-                       {"fused_points", s.points.size()},
-                       {"observations", s.observations},
-                       {"class_votes", fuse::ClassVotesJson(s, source.classes())},
-                       {"first_seen_frame", s.first_seen_frame},
-                       {"last_seen_frame", s.last_seen_frame},
-                       {"ply", options.write_ply ? ply : ""}});
+    objects.push_back(
+        {{"id", s.id},
+         {"class", name},
+         {"kind", prim.structure ? "structure" : "object"},
+         {"vertices", prim.points.size()},
+         {"triangles", prim.triangles.size()},
+         {"fused_points", s.points.size()},
+         {"observations", s.observations},
+         {"class_votes", fuse::ClassVotesJson(s, source.classes())},
+         {"first_seen_frame", s.first_seen_frame},
+         {"last_seen_frame", s.last_seen_frame},
+         {"ply", options.write_ply ? ply : ""}});
     prims.push_back(std::move(prim));
   }
   result.objects = prims.size();
@@ -202,9 +204,11 @@ ReconstructResult Reconstruct(const io::SequenceReader& reader,
   stage.custom_layer_data["options"] = fmt::format(
       "fusion: alpha {} corr_voxel_size_m {} store_voxel_size_m {} "
       "max_corr_dist_m {} "
-      "label_gating {} merge {}; tsdf: voxel_size_m {} sdf_trunc_m {} max_depth_m {}",
+      "label_gating {} merge {}; tsdf: voxel_size_m {} sdf_trunc_m {} "
+      "max_depth_m {}",
       f.alpha, f.corr_voxel_size_m, f.store_voxel_size_m, f.max_corr_dist_m,
-      f.label_gating, fuse::MergeName(f.merge), t.voxel_size_m, t.sdf_trunc_m, t.max_depth_m);
+      f.label_gating, fuse::MergeName(f.merge), t.voxel_size_m, t.sdf_trunc_m,
+      t.max_depth_m);
   const auto& gm = T_up.Matrix();
   std::string matrix;
   for (int r = 0; r < 4; ++r) {

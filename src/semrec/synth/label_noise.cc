@@ -21,7 +21,8 @@ bool IsObject(uint16_t instance, const Scene& scene) {
 }  // namespace
 
 void LabelNoiseOptions::Check() const {
-  for (double p : {split_probability, merge_probability, class_flip_probability}) {
+  for (double p :
+       {split_probability, merge_probability, class_flip_probability}) {
     CheckArgument(p >= 0.0 && p <= 1.0,
                   "label noise: probabilities must be in [0, 1]");
   }
@@ -105,7 +106,8 @@ NoisyLabels ApplyLabelNoise(const RenderedFrame& frame, const Scene& scene,
     if (o.parts.size() >= 2 && rng.Uniform() < 0.5) {
       cut.by_parts = true;
       for (size_t p = 0; p < o.parts.size(); ++p) {
-        cut.part_piece.push_back(static_cast<int>(rng.UniformInt(0, pieces - 1)));
+        cut.part_piece.push_back(
+            static_cast<int>(rng.UniformInt(0, pieces - 1)));
       }
     } else {
       cut.center = o.Bounds().center();
@@ -144,8 +146,9 @@ NoisyLabels ApplyLabelNoise(const RenderedFrame& frame, const Scene& scene,
           if (cut.by_parts && part >= 1) {
             piece = cut.part_piece[part - 1];
           } else if (!cut.by_parts) {
-            const Eigen::Vector3d p = T_world_camera * k.BackProject(
-                u, v, static_cast<double>(frame.depth(u, v)));
+            const Eigen::Vector3d p =
+                T_world_camera *
+                k.BackProject(u, v, static_cast<double>(frame.depth(u, v)));
             for (size_t n = 0; n < cut.normals.size(); ++n) {
               if (cut.normals[n].dot(p - cut.center) > 0) piece |= 1 << n;
             }
@@ -167,8 +170,9 @@ NoisyLabels ApplyLabelNoise(const RenderedFrame& frame, const Scene& scene,
     if (!o.structure) object_classes.push_back(o.class_id);
   }
   std::sort(object_classes.begin(), object_classes.end());
-  object_classes.erase(std::unique(object_classes.begin(), object_classes.end()),
-                       object_classes.end());
+  object_classes.erase(
+      std::unique(object_classes.begin(), object_classes.end()),
+      object_classes.end());
   for (const auto& [key, id] : mask_id) {
     const bool object = IsObject(static_cast<uint16_t>(key.first), scene);
     if (!object || object_classes.size() < 2 ||
@@ -177,15 +181,17 @@ NoisyLabels ApplyLabelNoise(const RenderedFrame& frame, const Scene& scene,
     }
     uint16_t flipped = mask_class[id];
     while (flipped == mask_class[id]) {
-      flipped = object_classes[static_cast<size_t>(rng.UniformInt(
-          0, static_cast<int64_t>(object_classes.size()) - 1))];
+      flipped = object_classes[static_cast<size_t>(
+          rng.UniformInt(0, static_cast<int64_t>(object_classes.size()) - 1))];
     }
     mask_class[id] = flipped;
   }
   for (int v = 0; v < h; ++v) {
     for (int u = 0; u < w; ++u) {
       const uint16_t id = out.instance(u, v);
-      if (id != 0 && id < kPersonInstanceBase) out.semantic(u, v) = mask_class[id];
+      if (id != 0 && id < kPersonInstanceBase) {
+        out.semantic(u, v) = mask_class[id];
+      }
     }
   }
 
@@ -209,10 +215,14 @@ NoisyLabels ApplyLabelNoise(const RenderedFrame& frame, const Scene& scene,
 
   // Small object masks are dropped.
   std::map<uint16_t, size_t> sizes;
-  for (size_t i = 0; i < out.instance.NumPixels(); ++i) ++sizes[out.instance.data()[i]];
+  for (size_t i = 0; i < out.instance.NumPixels(); ++i) {
+    ++sizes[out.instance.data()[i]];
+  }
   std::set<uint16_t> objects_masks;
   for (const auto& [key, id] : mask_id) {
-    if (IsObject(static_cast<uint16_t>(key.first), scene)) objects_masks.insert(id);
+    if (IsObject(static_cast<uint16_t>(key.first), scene)) {
+      objects_masks.insert(id);
+    }
   }
   for (size_t i = 0; i < out.instance.NumPixels(); ++i) {
     const uint16_t id = out.instance.data()[i];

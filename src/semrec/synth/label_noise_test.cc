@@ -73,7 +73,9 @@ TEST(LabelNoise, WithoutNoiseTheMasksAreTheGroundTruth) {
     EXPECT_EQ(backward.emplace(mask, gt).first->second, gt);
   }
   size_t objects = 0;
-  for (const auto& [gt, mask] : forward) objects += IsObjectInstance(gt, v.scene);
+  for (const auto& [gt, mask] : forward) {
+    objects += IsObjectInstance(gt, v.scene);
+  }
   EXPECT_GE(objects, 4u) << "the view should show most of the six objects";
 }
 
@@ -108,7 +110,9 @@ TEST(LabelNoise, MergesJoinTouchingNeighboursAndFlipsChangeClasses) {
     }
   }
   size_t joint = 0;
-  for (const auto& [mask, objects] : objects_per_mask) joint += objects.size() > 1;
+  for (const auto& [mask, objects] : objects_per_mask) {
+    joint += objects.size() > 1;
+  }
   EXPECT_GE(joint, 1u) << "objects touching in the view share a mask";
 
   o = Clean();
