@@ -57,7 +57,7 @@ struct EvidenceOptions {
   /// At the end, an object seen in fewer frames or with fewer stored points is
   /// a fragment: merged into the object of its class it touches most, or
   /// dropped.
-  size_t fragment_min_observations = 2;
+  size_t fragment_min_frames = 2;
   size_t fragment_min_points = 20;
 
   void Check() const;

@@ -162,6 +162,9 @@ TEST(FusionEvidence, PartsThatViewsShowInOneMaskBecomeOneObject) {
     EXPECT_EQ(fusion.events().front().id, 2u);
     EXPECT_EQ(fusion.events().front().into, 1u);
     EXPECT_EQ(fusion.segments()[0].observations, 6u);
+    // Both halves of view 0 are one sighting.
+    EXPECT_EQ(fusion.segments()[0].frames_seen,
+              (std::vector<uint32_t>{0, 1, 2, 3, 4}));
   }
 }
 
@@ -261,6 +264,24 @@ TEST(FusionEvidence, FragmentsAreFoldedOrDropped) {
   p.Integrate({Segment(1, 3, far)}, 0);
   EXPECT_EQ(p.Finish(), 0u);
   EXPECT_EQ(p.segments().size(), 1u);
+}
+
+// Two masks of one view that fold together are still one sighting: the pair,
+// far from anything else, is dropped.
+TEST(FusionEvidence, MasksOfOneViewAreOneSighting) {
+  std::mt19937 rng(11);
+  SceneFusion fusion;
+  Cloud left = Patch(0.0f, 0.1f, rng, 0.2f);
+  Cloud right = Patch(0.1f, 0.25f, rng, 0.2f);
+  fusion.Integrate({Segment(1, 1, left), Segment(1, 2, right)}, 0);
+  ASSERT_EQ(fusion.segments().size(), 2u);
+  EXPECT_EQ(fusion.Finish(), 2u);
+  EXPECT_TRUE(fusion.segments().empty());
+  ASSERT_EQ(fusion.events().size(), 2u);
+  EXPECT_EQ(fusion.events()[0].kind, FusionEvent::Kind::kFragmentMerge);
+  EXPECT_EQ(fusion.events()[1].kind, FusionEvent::Kind::kDropped);
+  EXPECT_EQ(fusion.ResolveId(1), 0u);
+  EXPECT_EQ(fusion.ResolveId(2), 0u);
 }
 
 }  // namespace

@@ -274,6 +274,7 @@ FrameFusionStats SceneFusion::Integrate(
       s.points = std::move(frame_store[f]);
       s.first_seen_frame = s.last_seen_frame = frame_index;
       s.observations = 1;
+      s.frames_seen = {static_cast<uint32_t>(frame_index)};
       created.push_back(std::move(s));
     } else {
       const size_t root = groups.Find(matches[f][0]);
@@ -312,6 +313,12 @@ FrameFusionStats SceneFusion::Integrate(
       class_points[frame_segments[f].class_id] += p.size();
       merged.points.insert(merged.points.end(), p.begin(), p.end());
       ++merged.observations;
+      const auto frame = static_cast<uint32_t>(frame_index);
+      const auto at = std::lower_bound(merged.frames_seen.begin(),
+                                       merged.frames_seen.end(), frame);
+      if (at == merged.frames_seen.end() || *at != frame) {
+        merged.frames_seen.insert(at, frame);
+      }
       // With evidence the coverage counted this segment's vote already.
       if (!evidence_on()) {
         merged.class_votes[frame_segments[f].class_id] += frame_corr[f].size();

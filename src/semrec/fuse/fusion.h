@@ -102,6 +102,9 @@ struct SceneSegment {
   size_t last_seen_frame = 0;
   /// Frame segments merged into this one (including the first).
   size_t observations = 0;
+  /// The frames it was seen in (sorted, unique): several segments of one
+  /// frame are one sighting.
+  std::vector<uint32_t> frames_seen;
   /// The cloud at corr_voxel_size_m and its bounds, for the overlap test.
   Cloud corr_points;
   Eigen::AlignedBox3f bounds;

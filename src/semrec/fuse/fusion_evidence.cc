@@ -2,6 +2,7 @@
 // the scene's objects by a frame's masks, class votes, merges the views argue
 // for, and the fragment clean-up at the end. See fuse/evidence.h.
 #include <algorithm>
+#include <iterator>
 #include <map>
 
 #include <fmt/format.h>
@@ -134,6 +135,11 @@ void SceneFusion::Absorb(SceneSegment* into, SceneSegment* from) {
   into->last_seen_frame =
       std::max(into->last_seen_frame, from->last_seen_frame);
   into->observations += from->observations;
+  std::vector<uint32_t> frames;
+  std::set_union(into->frames_seen.begin(), into->frames_seen.end(),
+                 from->frames_seen.begin(), from->frames_seen.end(),
+                 std::back_inserter(frames));
+  into->frames_seen = std::move(frames);
   merged_into_[from->id] = into->id;
   evidence_.Absorb(into->id, from->id);
 }
@@ -217,7 +223,7 @@ size_t SceneFusion::MergeByEvidence(size_t frame_index) {
 size_t SceneFusion::CleanFragments() {
   const EvidenceOptions& o = options_.evidence;
   auto is_fragment = [&](const SceneSegment& s) {
-    return IsObject(s) && (s.observations < o.fragment_min_observations ||
+    return IsObject(s) && (s.frames_seen.size() < o.fragment_min_frames ||
                            s.points.size() < o.fragment_min_points);
   };
   std::vector<std::pair<size_t, uint32_t>> fragments;  // (points, id)
@@ -249,8 +255,8 @@ size_t SceneFusion::CleanFragments() {
     const std::string what = fmt::format(
         "a fragment: seen in {} frame(s), {} points (minimum {} frames, {} "
         "points)",
-        fragment.observations, fragment.points.size(),
-        o.fragment_min_observations, o.fragment_min_points);
+        fragment.frames_seen.size(), fragment.points.size(),
+        o.fragment_min_frames, o.fragment_min_points);
     if (best > 0) {
       events_.push_back({FusionEvent::Kind::kFragmentMerge, last_frame_, id,
                          segments_[target].id,
