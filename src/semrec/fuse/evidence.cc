@@ -8,14 +8,6 @@
 namespace semrec::fuse {
 namespace {
 
-std::vector<uint32_t> Union(const std::vector<uint32_t>& a,
-                            const std::vector<uint32_t>& b) {
-  std::vector<uint32_t> out;
-  std::set_union(a.begin(), a.end(), b.begin(), b.end(),
-                 std::back_inserter(out));
-  return out;
-}
-
 std::vector<uint32_t> Difference(const std::vector<uint32_t>& a,
                                  const std::vector<uint32_t>& b) {
   std::vector<uint32_t> out;
@@ -24,12 +16,20 @@ std::vector<uint32_t> Difference(const std::vector<uint32_t>& a,
   return out;
 }
 
-void Insert(std::vector<uint32_t>* v, uint32_t x) {
+}  // namespace
+
+std::vector<uint32_t> SortedUnion(const std::vector<uint32_t>& a,
+                                  const std::vector<uint32_t>& b) {
+  std::vector<uint32_t> out;
+  std::set_union(a.begin(), a.end(), b.begin(), b.end(),
+                 std::back_inserter(out));
+  return out;
+}
+
+void SortedInsert(std::vector<uint32_t>* v, uint32_t x) {
   const auto it = std::lower_bound(v->begin(), v->end(), x);
   if (it == v->end() || *it != x) v->insert(it, x);
 }
-
-}  // namespace
 
 void EvidenceOptions::Check() const {
   CheckArgument(min_seen_points >= 1,
@@ -54,11 +54,11 @@ void EvidenceGraph::Record(uint32_t a, uint32_t b, uint32_t frame, bool one) {
   if (a == b) return;
   PairEvidence& e = pairs_[Key(a, b)];
   if (one) {
-    Insert(&e.one_frames, frame);
+    SortedInsert(&e.one_frames, frame);
     e.two_frames = Difference(e.two_frames, {frame});
   } else if (!std::binary_search(e.one_frames.begin(), e.one_frames.end(),
                                  frame)) {
-    Insert(&e.two_frames, frame);
+    SortedInsert(&e.two_frames, frame);
   }
 }
 
@@ -77,9 +77,9 @@ void EvidenceGraph::Absorb(uint32_t into, uint32_t from) {
   }
   for (auto& [other, e] : moved) {
     PairEvidence& target = pairs_[Key(into, other)];
-    target.one_frames = Union(target.one_frames, e.one_frames);
-    target.two_frames =
-        Difference(Union(target.two_frames, e.two_frames), target.one_frames);
+    target.one_frames = SortedUnion(target.one_frames, e.one_frames);
+    target.two_frames = Difference(SortedUnion(target.two_frames, e.two_frames),
+                                   target.one_frames);
   }
 }
 

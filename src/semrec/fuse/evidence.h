@@ -63,6 +63,11 @@ struct EvidenceOptions {
   void Check() const;
 };
 
+/// Sets of frame indices kept as sorted vectors without duplicates.
+std::vector<uint32_t> SortedUnion(const std::vector<uint32_t>& a,
+                                  const std::vector<uint32_t>& b);
+void SortedInsert(std::vector<uint32_t>* v, uint32_t x);
+
 /// Views in which a pair of objects was held by one segment, and views in
 /// which both were held by different segments.
 struct PairEvidence {

@@ -313,20 +313,14 @@ FrameFusionStats SceneFusion::Integrate(
       class_points[frame_segments[f].class_id] += p.size();
       merged.points.insert(merged.points.end(), p.begin(), p.end());
       ++merged.observations;
-      const auto frame = static_cast<uint32_t>(frame_index);
-      const auto at = std::lower_bound(merged.frames_seen.begin(),
-                                       merged.frames_seen.end(), frame);
-      if (at == merged.frames_seen.end() || *at != frame) {
-        merged.frames_seen.insert(at, frame);
-      }
+      SortedInsert(&merged.frames_seen, static_cast<uint32_t>(frame_index));
       // With evidence the coverage counted this segment's vote already.
       if (!evidence_on()) {
         merged.class_votes[frame_segments[f].class_id] += frame_corr[f].size();
       }
     }
-    if (evidence_on()) {
-      UpdateClass(&merged);
-    } else if (!options_.label_gating) {
+    // With evidence every class is updated from the votes below.
+    if (!evidence_on() && !options_.label_gating) {
       size_t best = 0;
       for (const auto& [cls, count] : class_points) {
         if (count > best) best = count, merged.class_id = cls;

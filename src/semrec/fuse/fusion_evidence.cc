@@ -2,7 +2,6 @@
 // the scene's objects by a frame's masks, class votes, merges the views argue
 // for, and the fragment clean-up at the end. See fuse/evidence.h.
 #include <algorithm>
-#include <iterator>
 #include <map>
 
 #include <fmt/format.h>
@@ -135,11 +134,7 @@ void SceneFusion::Absorb(SceneSegment* into, SceneSegment* from) {
   into->last_seen_frame =
       std::max(into->last_seen_frame, from->last_seen_frame);
   into->observations += from->observations;
-  std::vector<uint32_t> frames;
-  std::set_union(into->frames_seen.begin(), into->frames_seen.end(),
-                 from->frames_seen.begin(), from->frames_seen.end(),
-                 std::back_inserter(frames));
-  into->frames_seen = std::move(frames);
+  into->frames_seen = SortedUnion(into->frames_seen, from->frames_seen);
   merged_into_[from->id] = into->id;
   evidence_.Absorb(into->id, from->id);
 }

@@ -304,17 +304,18 @@ SynthSummary WriteSyntheticSequence(const SynthOptions& options_in,
     io::WritePng(record.layers["semantic"], r.semantic);
     io::WritePng(record.layers["instance"], r.instance);
     io::WritePng(record.layers["person"], r.person);
+    uint64_t frame_bytes =
+        FileSize(record.color_path) + FileSize(record.depth_path);
     if (options.write_noisy_labels) {
       const NoisyLabels noisy_labels =
           ApplyLabelNoise(r, scene, poses[i], k, options.label_noise,
                           Mix(Mix(options.seed, 0x1abe1), i + 1));
-      io::WritePng(out_dir / "labels_noisy" / "instance" / stem,
-                   noisy_labels.instance);
-      io::WritePng(out_dir / "labels_noisy" / "semantic" / stem,
-                   noisy_labels.semantic);
+      const fs::path noisy = out_dir / "labels_noisy";
+      io::WritePng(noisy / "instance" / stem, noisy_labels.instance);
+      io::WritePng(noisy / "semantic" / stem, noisy_labels.semantic);
+      frame_bytes += FileSize(noisy / "instance" / stem) +
+                     FileSize(noisy / "semantic" / stem);
     }
-    uint64_t frame_bytes =
-        FileSize(record.color_path) + FileSize(record.depth_path);
     for (const auto& [name, path] : record.layers) {
       frame_bytes += FileSize(path);
     }
