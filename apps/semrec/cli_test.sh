@@ -39,7 +39,7 @@ ls "$tmp/fused/segments" | grep -q "_chair.ply" || fail "fuse: no per-segment PL
 "$SEMREC" fuse "$tmp/syn" --labels "$tmp/nolabels" --out "$tmp/f2" 2>"$tmp/err"; rc=$?
 [ "$rc" -eq 1 ] && grep -q "nolabels" "$tmp/err" || fail "fuse: bad labels folder: exit $rc $(cat "$tmp/err")"
 "$SEMREC" mesh "$tmp/syn" --out "$tmp/scene" >"$tmp/mesh.out" 2>"$tmp/mesh.err" || fail "mesh failed: $(cat "$tmp/mesh.err")"
-grep -q "meshing 3/3" "$tmp/mesh.err" || fail "mesh: no progress report"
+grep -q "reconstructing 3/3" "$tmp/mesh.err" || fail "mesh: no progress report"
 [ -s "$tmp/scene/scene.usda" ] && [ -s "$tmp/scene/static.usda" ] || fail "mesh: no USD written"
 grep -q 'semantics:labels:class = \["chair"\]' "$tmp/scene/static.usda" || fail "mesh: no chair prim"
 "$SEMREC" query "$tmp/scene/scene.usda" --class chair --json >"$tmp/q.json" || fail "query failed"

@@ -110,6 +110,10 @@ void RegisterMesh(CLI::App& app) {
                 "Fuse stuff classes (wall, floor, ceiling...) like objects "
                 "instead of one /World/Structure prim per class");
   cmd->add_flag("--no-ply", args->no_ply, "Do not write PLY per object");
+  cmd->add_flag("--two-pass", args->options.two_pass,
+                "Build the object volumes in a second pass over the frames "
+                "with fusion's final ids (the reference for the default "
+                "streaming volumes, which are combined when objects merge)");
   cmd->add_flag("--usdz", args->options.usdz,
                 "Also write scene.usdz: objects and people in one layer, "
                 "packaged per the USDZ spec (stored, 64-byte aligned)");

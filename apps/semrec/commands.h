@@ -48,5 +48,6 @@ void RegisterTrack(CLI::App& app);
 void RegisterMesh(CLI::App& app);
 void RegisterQuery(CLI::App& app);
 void RegisterSegment(CLI::App& app);
+void RegisterRun(CLI::App& app);
 
 }  // namespace semrec::cli

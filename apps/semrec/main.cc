@@ -18,7 +18,7 @@ int Run(int argc, char** argv) {
       "(Redwood/Open3D, 7-Scenes/3DMatch, "
       "TUM RGB-D, or semrec's own sequence.yaml); see README.md.",
       "semrec"};
-  app.set_version_flag("--version", "semrec 0.1.0");
+  app.set_version_flag("--version", "semrec " SEMREC_VERSION);
   std::string log_level = "info";
   app.add_option("--log-level", log_level,
                  "trace, debug, info, warn, error or off")
@@ -33,6 +33,7 @@ int Run(int argc, char** argv) {
   semrec::cli::RegisterMesh(app);
   semrec::cli::RegisterQuery(app);
   semrec::cli::RegisterSegment(app);
+  semrec::cli::RegisterRun(app);
   app.parse_complete_callback([&] { semrec::InitLogging(log_level); });
   try {
     app.parse(argc, argv);

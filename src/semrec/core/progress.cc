@@ -80,6 +80,7 @@ std::string Progress::Render(bool bar) const {
   } else if (total_ > 0 && rate > 0) {
     text += " ETA " + FormatDuration((total_ - done_) / rate);
   }
+  if (!detail_.empty()) text += " | " + detail_;
   return text;
 }
 

@@ -6,6 +6,7 @@
 #include <cstddef>
 #include <cstdio>
 #include <string>
+#include <utility>
 
 namespace semrec {
 
@@ -35,6 +36,9 @@ class Progress {
 
   /// Advances by `n` items.
   void Tick(size_t n = 1);
+  /// Text shown after the rate (e.g. a per-stage time breakdown); shown from
+  /// the next update on.
+  void set_detail(std::string detail) { detail_ = std::move(detail); }
   /// Prints the final state (items, elapsed time, rate). Idempotent.
   void Finish();
 
@@ -49,6 +53,7 @@ class Progress {
   void Emit(bool final);
 
   std::string label_;
+  std::string detail_;
   size_t total_;
   ProgressOptions options_;
   std::FILE* stream_;

@@ -126,6 +126,23 @@ void ObjectMesher::Integrate(
   }
 }
 
+void ObjectMesher::Merge(uint32_t from, uint32_t into) {
+  CheckArgument(from != into, "ObjectMesher::Merge: an object into itself");
+  auto it = objects_.find(from);
+  if (it == objects_.end()) return;  // never integrated: nothing to carry
+  Object& target = objects_[into];
+  if (!target.volume) {
+    target.volume = std::move(it->second.volume);
+  } else {
+    target.volume->Absorb(it->second.volume.get());
+  }
+  target.observations += it->second.observations;
+  target.changed = true;
+  objects_.erase(it);
+}
+
+void ObjectMesher::Erase(uint32_t id) { objects_.erase(id); }
+
 std::map<uint32_t, std::shared_ptr<open3d::geometry::TriangleMesh>>
 ObjectMesher::UpdateMeshes() {
   remeshed_last_update_ = 0;

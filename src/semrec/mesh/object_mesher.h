@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <map>
 #include <memory>
+#include <utility>
 #include <vector>
 
 #include <open3d/geometry/TriangleMesh.h>
@@ -52,6 +53,32 @@ class ObjectMesher {
   /// mesh, so only changed objects are re-meshed.
   std::map<uint32_t, std::shared_ptr<open3d::geometry::TriangleMesh>>
   UpdateMeshes();
+
+  /// Object `from`'s volume goes into `into`'s (TsdfIntegrator::Absorb):
+  /// what a streaming pipeline does when fusion merges two objects after both
+  /// were integrated. `into` is marked as changed; `from` is gone.
+  void Merge(uint32_t from, uint32_t into);
+  /// Forgets an object (fusion dropped it).
+  void Erase(uint32_t id);
+  /// Brings the volumes in line with fusion's ids: every object whose
+  /// `resolve(id)` differs is merged into that object, or erased when it is 0.
+  /// Returns the number of volumes merged or erased.
+  template <typename Resolve>
+  size_t Reconcile(const Resolve& resolve) {
+    std::vector<std::pair<uint32_t, uint32_t>> moves;
+    for (const auto& entry : objects_) {
+      const uint32_t to = resolve(entry.first);
+      if (to != entry.first) moves.emplace_back(entry.first, to);
+    }
+    for (const auto& [from, to] : moves) {
+      if (to == 0) {
+        Erase(from);
+      } else {
+        Merge(from, to);
+      }
+    }
+    return moves.size();
+  }
 
   size_t remeshed_last_update() const { return remeshed_last_update_; }
   size_t num_objects() const { return objects_.size(); }

@@ -4,6 +4,7 @@
 
 #include <open3d/io/TriangleMeshIO.h>
 #include <open3d/pipelines/integration/ScalableTSDFVolume.h>
+#include <open3d/pipelines/integration/UniformTSDFVolume.h>
 
 #include "semrec/core/error.h"
 #include "semrec/core/file_util.h"
@@ -55,6 +56,40 @@ void TsdfIntegrator::Integrate(const Frame& frame) {
   volume_->Integrate(*rgbd, ToOpen3d(frame.intrinsics),
                      frame.T_world_camera.Inverse().Matrix());
   ++num_integrated_;
+}
+
+void TsdfIntegrator::Absorb(TsdfIntegrator* other) {
+  CheckArgument(other != nullptr && other != this,
+                "TsdfIntegrator::Absorb: needs another volume");
+  CheckArgument(other->options_.voxel_size_m == options_.voxel_size_m &&
+                    other->options_.sdf_trunc_m == options_.sdf_trunc_m &&
+                    other->volume_->volume_unit_resolution_ ==
+                        volume_->volume_unit_resolution_,
+                "TsdfIntegrator::Absorb: volumes differ in voxel size, "
+                "truncation or unit resolution");
+  auto& units = volume_->volume_units_;
+  for (auto& [index, unit] : other->volume_->volume_units_) {
+    auto it = units.find(index);
+    if (it == units.end()) {
+      // Units are placed by their index alone: moving one is exact.
+      units.emplace(index, std::move(unit));
+      continue;
+    }
+    auto& into = it->second.volume_->voxels_;
+    const auto& from = unit.volume_->voxels_;
+    for (size_t v = 0; v < into.size(); ++v) {
+      const float w_from = from[v].weight_;
+      if (w_from <= 0.0f) continue;
+      const float w_into = into[v].weight_;
+      const float w = w_into + w_from;
+      into[v].tsdf_ = (into[v].tsdf_ * w_into + from[v].tsdf_ * w_from) / w;
+      into[v].color_ = (into[v].color_ * w_into + from[v].color_ * w_from) / w;
+      into[v].weight_ = w;
+    }
+  }
+  other->volume_->volume_units_.clear();
+  num_integrated_ += other->num_integrated_;
+  other->num_integrated_ = 0;
 }
 
 std::shared_ptr<open3d::geometry::TriangleMesh> TsdfIntegrator::ExtractMesh()

@@ -58,6 +58,14 @@ class TsdfIntegrator {
   std::shared_ptr<open3d::geometry::TriangleMesh> ExtractMesh() const;
   size_t num_integrated() const { return num_integrated_; }
 
+  /// Adds `other`'s volume to this one as if its frames had been integrated
+  /// here: per voxel, TSDF and colour are averaged weighted by the voxels'
+  /// weights and the weights add (exactly what integrating those frames does,
+  /// up to floating-point rounding). `other` must have the same voxel size and
+  /// truncation; it is left empty. Lets a streaming pipeline combine the
+  /// volumes of two objects that fusion merges after both were integrated.
+  void Absorb(TsdfIntegrator* other);
+
  private:
   TsdfOptions options_;
   std::unique_ptr<open3d::pipelines::integration::ScalableTSDFVolume> volume_;

@@ -96,6 +96,7 @@ PeopleFrame PeopleTracker::Process(
   // The tracker skips low-score detections and keeps the others in order:
   // pair its output with the masks by walking the kept detections.
   const std::vector<track::TrackedBox> tracked = tracker_.Update(detections);
+  frame.tracker_input = detections;
   size_t next = 0;
   for (const track::TrackedBox& t : tracked) {
     while (next < detections.size() &&
@@ -111,6 +112,11 @@ PeopleFrame PeopleTracker::Process(
     ++next;
   }
   return frame;
+}
+
+std::vector<track::TrackedBox> PeopleTracker::Replay(
+    const std::vector<track::Detection>& tracker_input) {
+  return tracker_.Update(tracker_input);
 }
 
 LabelMap PersonInstanceMap(const std::vector<PersonObservation>& people,

@@ -49,6 +49,9 @@ struct PeopleFrame {
   double detect_seconds = 0.0;
   double encode_seconds = 0.0;
   double mask_seconds = 0.0;
+  /// The detections (with embeddings) the tracker got: with Replay() they
+  /// redo this frame's tracking without the models (checkpoint resume).
+  std::vector<track::Detection> tracker_input;
 };
 
 class PeopleTracker {
@@ -66,6 +69,11 @@ class PeopleTracker {
   PeopleFrame Process(
       const ColorImage& rgb,
       const std::optional<std::vector<track::Detection>>& detections = {});
+
+  /// Advances the tracker as Process() did on a frame whose `tracker_input`
+  /// this is, without running any model; returns the tracked boxes.
+  std::vector<track::TrackedBox> Replay(
+      const std::vector<track::Detection>& tracker_input);
 
  private:
   const infer::ModelRegistry& registry_;

@@ -3,10 +3,10 @@
 // then each object's pixels are integrated into its own TSDF volume and meshed,
 // and the scene is written as USD (+ PLY per object).
 //
-// Volumes are built from the stored observations once fusion has settled the
-// final object ids (a second pass over the frames): when fusion merges two
-// objects, their observations simply go into one volume, so merged objects need
-// no volume merging.
+// One pass: a SceneBuilder fuses each frame and integrates its objects'
+// volumes as it goes (volumes of objects that fusion merges are combined).
+// `two_pass` builds the volumes in a second pass with the final ids instead:
+// the reference the streaming result is tested against.
 #pragma once
 
 #include <filesystem>
@@ -41,6 +41,9 @@ struct ReconstructOptions {
   bool usdz = false;
   /// Write into a non-empty output folder.
   bool overwrite = false;
+  /// Integrate the volumes in a second pass over the frames with fusion's
+  /// final ids (reads every frame twice; the reference for streaming).
+  bool two_pass = false;
   void Check() const;
 };
 

@@ -1,6 +1,7 @@
 #include "semrec/segment/segment_io.h"
 
 #include <algorithm>
+#include <map>
 
 #include <nlohmann/json.hpp>
 #include <opencv2/imgproc.hpp>
@@ -66,49 +67,90 @@ std::vector<SegmentInput> ListSegmentInputs(const fs::path& path, int stride,
   return inputs;
 }
 
-ColorImage RenderOverlay(const ColorImage& rgb, const HybridResult& result,
-                         const LabelSet& labels) {
-  const LabelMap& semantic = result.vote.semantic;
-  const LabelMap& instance = result.vote.instance;
+ColorImage RenderLabelOverlay(const ColorImage& rgb, const LabelMap& semantic,
+                              const LabelMap& instance,
+                              const LabelSet& labels) {
+  CheckArgument(semantic.width() == rgb.width() &&
+                    semantic.height() == rgb.height() &&
+                    instance.SameSize(semantic),
+                "overlay: labels and image differ in size");
   ColorImage out = rgb;
   const int w = rgb.width(), h = rgb.height();
+  // Names go where a region is widest: the pixel farthest from any instance
+  // boundary (a centroid can fall outside a non-convex region).
+  cv::Mat inside(h, w, CV_8UC1);
   for (int y = 0; y < h; ++y) {
     for (int x = 0; x < w; ++x) {
-      const uint16_t id = semantic(x, y);
-      const auto color =
-          labels.Contains(id) ? labels.Get(id).color : LabelColor(id);
-      // Mask outlines in white: a pixel whose right or lower neighbour
-      // belongs to another instance.
       const uint16_t inst = instance(x, y);
       const bool edge = (x + 1 < w && instance(x + 1, y) != inst) ||
                         (y + 1 < h && instance(x, y + 1) != inst);
+      const bool border = x == 0 || y == 0 || x + 1 == w || y + 1 == h;
+      inside.at<uint8_t>(y, x) = edge || border ? 0 : 255;
+      const uint16_t id = semantic(x, y);
+      const auto color =
+          labels.Contains(id) ? labels.Get(id).color : LabelColor(id);
+      // Mask outlines in white.
       for (int c = 0; c < 3; ++c) {
         out(x, y, c) =
             edge ? 255 : static_cast<uint8_t>((rgb(x, y, c) + color[c]) / 2);
       }
     }
   }
+  cv::Mat distance;
+  cv::distanceTransform(inside, distance, cv::DIST_L2, 3);
+  struct Region {
+    int64_t area = 0;
+    float best = -1.0f;
+    int bx = 0, by = 0;
+    std::map<uint16_t, int64_t> classes;
+  };
+  std::map<uint16_t, Region> regions;
+  for (int y = 0; y < h; ++y) {
+    for (int x = 0; x < w; ++x) {
+      const uint16_t inst = instance(x, y);
+      if (inst == 0) continue;
+      Region& r = regions[inst];
+      ++r.area;
+      ++r.classes[semantic(x, y)];
+      const float d = distance.at<float>(y, x);
+      if (d > r.best) {
+        r.best = d;
+        r.bx = x;
+        r.by = y;
+      }
+    }
+  }
   cv::Mat canvas(h, w, CV_8UC3, out.data());
   const double scale = std::clamp(w / 1200.0, 0.35, 1.0);
-  for (size_t m = 0; m < result.masks.size(); ++m) {
-    const Mask& mask = result.masks[m];
-    if (mask.area < 400) continue;  // no room for a name
-    double cx, cy;
-    mask.Centroid(&cx, &cy);
-    const uint16_t id = result.vote.mask_labels[m];
+  for (const auto& [inst, r] : regions) {
+    if (r.area < 400) continue;  // no room for a name
+    const uint16_t id =
+        std::max_element(r.classes.begin(), r.classes.end(),
+                         [](const auto& a, const auto& b) {
+                           return a.second < b.second;
+                         })
+            ->first;
+    if (id == 0 && !labels.Contains(0)) continue;
     const std::string name =
         labels.Contains(id) ? labels.Get(id).name : std::to_string(id);
     int baseline = 0;
     const cv::Size size =
         cv::getTextSize(name, cv::FONT_HERSHEY_SIMPLEX, scale, 1, &baseline);
-    const cv::Point at(static_cast<int>(cx) - size.width / 2,
-                       static_cast<int>(cy) + size.height / 2);
+    const cv::Point at(std::clamp(r.bx - size.width / 2, 0,
+                                  std::max(0, w - size.width)),
+                       std::clamp(r.by + size.height / 2, size.height, h - 1));
     cv::putText(canvas, name, at, cv::FONT_HERSHEY_SIMPLEX, scale,
                 cv::Scalar(0, 0, 0), 3, cv::LINE_AA);
     cv::putText(canvas, name, at, cv::FONT_HERSHEY_SIMPLEX, scale,
                 cv::Scalar(255, 255, 255), 1, cv::LINE_AA);
   }
   return out;
+}
+
+ColorImage RenderOverlay(const ColorImage& rgb, const HybridResult& result,
+                         const LabelSet& labels) {
+  return RenderLabelOverlay(rgb, result.vote.semantic, result.vote.instance,
+                            labels);
 }
 
 void WriteSegmentation(const fs::path& out_dir, const SegmentInput& input,

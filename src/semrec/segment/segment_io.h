@@ -27,8 +27,12 @@ std::vector<SegmentInput> ListSegmentInputs(const std::filesystem::path& path,
                                             int stride = 1,
                                             size_t max_frames = 0);
 
-/// The colour overlay: image blended with class colours, mask outlines, class
-/// names at mask centroids.
+/// The colour overlay: image blended with class colours, instance outlines,
+/// each instance's class name (majority of its pixels) at its centroid.
+ColorImage RenderLabelOverlay(const ColorImage& rgb, const LabelMap& semantic,
+                              const LabelMap& instance,
+                              const LabelSet& labels);
+/// RenderLabelOverlay of the vote's maps.
 ColorImage RenderOverlay(const ColorImage& rgb, const HybridResult& result,
                          const LabelSet& labels);
 

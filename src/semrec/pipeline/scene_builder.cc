@@ -1,0 +1,303 @@
+#include "semrec/pipeline/scene_builder.h"
+
+#include <chrono>
+#include <cmath>
+
+#include <fmt/format.h>
+#include <spdlog/spdlog.h>
+
+#include "semrec/core/error.h"
+#include "semrec/fuse/fuse_sequence.h"
+#include "semrec/io/ply_io.h"
+
+namespace fs = std::filesystem;
+
+namespace semrec::pipeline {
+namespace {
+
+double SecondsSince(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start)
+      .count();
+}
+
+std::vector<std::pair<uint16_t, uint32_t>> Assignments(
+    const std::vector<fuse::FrameSegment>& segments,
+    const fuse::FrameFusionStats& stats) {
+  std::vector<std::pair<uint16_t, uint32_t>> out;
+  for (size_t k = 0; k < segments.size(); ++k) {
+    out.emplace_back(segments[k].source_label, stats.assigned_ids[k]);
+  }
+  return out;
+}
+
+usd::MeshPrim ToPrim(const open3d::geometry::TriangleMesh& m,
+                     const Eigen::Matrix3f& R_up, const Eigen::Vector3f& t_up) {
+  usd::MeshPrim prim;
+  for (size_t v = 0; v < m.vertices_.size(); ++v) {
+    prim.points.push_back(R_up * m.vertices_[v].cast<float>() + t_up);
+    if (m.HasVertexNormals()) {
+      prim.normals.push_back(R_up * m.vertex_normals_[v].cast<float>());
+    }
+    if (m.HasVertexColors()) {
+      const Eigen::Vector3d c =
+          (m.vertex_colors_[v] * 255.0).cwiseMax(0.0).cwiseMin(255.0);
+      prim.vertex_colors.push_back({static_cast<uint8_t>(std::lround(c.x())),
+                                    static_cast<uint8_t>(std::lround(c.y())),
+                                    static_cast<uint8_t>(std::lround(c.z()))});
+    }
+  }
+  for (const auto& t : m.triangles_) {
+    prim.triangles.push_back({static_cast<uint32_t>(t.x()),
+                              static_cast<uint32_t>(t.y()),
+                              static_cast<uint32_t>(t.z())});
+  }
+  return prim;
+}
+
+}  // namespace
+
+void SceneBuilderOptions::Check() const {
+  fusion.Check();
+  extraction.Check();
+  meshing.Check();
+  people_3d.Check();
+  stage.Check();
+  gravity.Check();
+}
+
+nlohmann::json GravityJson(const fuse::GravityEstimate& gravity,
+                           const std::string& upright_matrix) {
+  return {{"method", gravity.method},
+          {"up_world",
+           {gravity.up_world.x(), gravity.up_world.y(), gravity.up_world.z()}},
+          {"floor_height_m", gravity.floor_height_m},
+          {"floor_points", gravity.floor_points},
+          {"T_upright_world", upright_matrix}};
+}
+
+fuse::FrameLabels WithoutPeople(const fuse::FrameLabels& labels,
+                                const LabelMap& person_ids) {
+  CheckArgument(labels.instance.SameSize(person_ids),
+                "person map and labels differ in size (" + labels.source + ")");
+  fuse::FrameLabels out = labels;
+  const uint16_t* person = person_ids.data();
+  uint16_t* instance = out.instance.data();
+  for (size_t p = 0; p < person_ids.NumPixels(); ++p) {
+    if (person[p] != 0) instance[p] = 0;
+  }
+  return out;
+}
+
+SceneBuilder::SceneBuilder(const LabelSet& classes,
+                           const SceneBuilderOptions& options)
+    : classes_(classes),
+      options_((options.Check(), options)),
+      fusion_(options.fusion),
+      mesher_(options.meshing),
+      people_(options.people_3d) {}
+
+SceneBuilder::~SceneBuilder() = default;
+
+SceneFrameStats SceneBuilder::Add(const Frame& frame,
+                                  const fuse::FrameLabels* labels,
+                                  const LabelMap* person_ids) {
+  CheckArgument(!finished_, "SceneBuilder: Add() after Finish()");
+  if (cameras_.empty()) first_timestamp_s_ = frame.timestamp_s;
+  last_timestamp_s_ = frame.timestamp_s;
+  cameras_.push_back(frame.T_world_camera);
+  if (person_ids != nullptr) people_.Add(frame, *person_ids);
+  SceneFrameStats stats;
+  if (labels == nullptr) return stats;
+  ++labelled_frames_;
+  const fuse::FrameLabels static_labels =
+      person_ids != nullptr ? WithoutPeople(*labels, *person_ids) : *labels;
+  auto start = std::chrono::steady_clock::now();
+  const auto segments = fuse::ExtractFrameSegments(frame, static_labels,
+                                                   classes_, options_.extraction);
+  const fuse::FrameFusionStats fused = fusion_.Integrate(segments, frame.index);
+  stats.segments = segments.size();
+  stats.fusion_seconds = SecondsSince(start);
+  start = std::chrono::steady_clock::now();
+  auto pairs = Assignments(segments, fused);
+  if (options_.stream_volumes) {
+    if (!pairs.empty()) {
+      mesher_.Integrate(frame, static_labels.instance, pairs);
+    }
+    stats.volumes_merged =
+        mesher_.Reconcile([&](uint32_t id) { return fusion_.ResolveId(id); });
+  } else {
+    assignments_.push_back(std::move(pairs));
+  }
+  stats.volume_seconds = SecondsSince(start);
+  return stats;
+}
+
+void SceneBuilder::Finish() {
+  if (finished_) return;
+  finished_ = true;
+  if (const size_t cleaned = fusion_.Finish(); cleaned > 0) {
+    spdlog::info(
+        "end of sequence: {} objects merged or dropped (evidence, "
+        "fragments; see summary.json events)",
+        cleaned);
+  }
+  mesher_.Reconcile([&](uint32_t id) { return fusion_.ResolveId(id); });
+}
+
+void SceneBuilder::RebuildVolumes(
+    const std::function<Frame(size_t)>& frame,
+    const std::function<fuse::FrameLabels(size_t)>& labels) {
+  CheckArgument(finished_ && !options_.stream_volumes,
+                "SceneBuilder::RebuildVolumes: only after Finish() with "
+                "stream_volumes off");
+  for (size_t i = 0; i < assignments_.size(); ++i) {
+    auto& pairs = assignments_[i];
+    for (auto& [label, id] : pairs) id = fusion_.ResolveId(id);
+    std::erase_if(pairs, [](const auto& a) { return a.second == 0; });
+    if (pairs.empty()) continue;
+    mesher_.Integrate(frame(i), labels(i).instance, pairs);
+  }
+  assignments_.clear();
+}
+
+SceneWriteResult SceneBuilder::Write(const fs::path& out_dir,
+                                     const SceneWriteOptions& write_options) {
+  SceneWriteResult result;
+  const auto meshes = mesher_.UpdateMeshes();
+  result.remeshed = mesher_.remeshed_last_update();
+
+  // Upright: the scene's points and the cameras decide which way is up.
+  {
+    std::vector<const fuse::Cloud*> clouds;
+    std::vector<bool> is_floor;
+    for (const fuse::SceneSegment& s : fusion_.segments()) {
+      clouds.push_back(&s.points);
+      is_floor.push_back(classes_.Get(s.class_id).name == "floor");
+    }
+    result.gravity =
+        fuse::EstimateGravity(clouds, is_floor, cameras_, options_.gravity);
+  }
+  // An upright scene declared Y-up gets its axes turned: (x, y, z) -> (x, z,
+  // -y). With gravity "none" the stage only declares the user's own axis.
+  if (options_.stage.up_axis == "Y" &&
+      options_.gravity.mode != fuse::GravityOptions::Mode::kNone) {
+    Eigen::Matrix3d z_to_y;
+    z_to_y << 1, 0, 0, 0, 0, 1, 0, -1, 0;
+    result.gravity.T_upright_world =
+        Transform(z_to_y, Eigen::Vector3d::Zero()) *
+        result.gravity.T_upright_world;
+  }
+  const Transform& T_up = result.gravity.T_upright_world;
+  const Eigen::Matrix3f R_up = T_up.rotation().cast<float>();
+  const Eigen::Vector3f t_up = T_up.translation().cast<float>();
+
+  std::vector<usd::MeshPrim> prims;
+  for (const fuse::SceneSegment& s : fusion_.segments()) {
+    const auto it = meshes.find(s.id);
+    const LabelClass& cls = classes_.Get(s.class_id);
+    if (it == meshes.end() || it->second->triangles_.empty()) {
+      ++result.skipped_empty_objects;
+      spdlog::debug("object {} ({}) has no surface to mesh; skipped", s.id,
+                    cls.name);
+      continue;
+    }
+    // The set's catch-all ("other") names no class: the segment is still a
+    // thing, a generic object.
+    const std::string name =
+        cls.kind == ClassKind::kOther ? kGenericObjectName : cls.name;
+    usd::MeshPrim prim = ToPrim(*it->second, R_up, t_up);
+    prim.label = name;
+    prim.structure =
+        cls.kind == ClassKind::kStuff && options_.fusion.stuff_per_class;
+    prim.instance_id = s.id;
+    prim.color = cls.color;
+    prim.point_count = s.points.size();
+    prim.first_seen_frame = s.first_seen_frame;
+    prim.last_seen_frame = s.last_seen_frame;
+    prim.confidence = fuse::ClassConfidence(s);
+    prim.class_votes = fuse::ClassVotesText(s, classes_);
+    result.triangles += prim.triangles.size();
+    const std::string ply =
+        fmt::format("objects/{:04}_{}.ply", s.id, usd::SanitizeName(name));
+    if (write_options.write_ply) {
+      io::PlyData data;
+      data.points = prim.points;
+      data.colors = prim.vertex_colors;
+      data.triangles = prim.triangles;
+      io::WritePly(out_dir / ply, data);
+    }
+    result.structure += prim.structure ? 1 : 0;
+    result.objects_json.push_back(
+        {{"id", s.id},
+         {"class", name},
+         {"kind", prim.structure ? "structure" : "object"},
+         {"vertices", prim.points.size()},
+         {"triangles", prim.triangles.size()},
+         {"fused_points", s.points.size()},
+         {"observations", s.observations},
+         {"frames_seen", s.frames_seen.size()},
+         {"class_votes", fuse::ClassVotesJson(s, classes_)},
+         {"first_seen_frame", s.first_seen_frame},
+         {"last_seen_frame", s.last_seen_frame},
+         {"ply", write_options.write_ply ? ply : ""}});
+    prims.push_back(std::move(prim));
+  }
+  result.objects = prims.size();
+
+  usd::StageOptions stage = options_.stage;
+  for (const auto& [key, value] : write_options.custom_layer_data) {
+    stage.custom_layer_data[key] = value;
+  }
+  const auto& f = options_.fusion;
+  const auto& t = options_.meshing.tsdf;
+  result.options_text = fmt::format(
+      "fusion: alpha {} corr_voxel_size_m {} store_voxel_size_m {} "
+      "max_corr_dist_m {} "
+      "label_gating {} merge {}; tsdf: voxel_size_m {} sdf_trunc_m {} "
+      "max_depth_m {}",
+      f.alpha, f.corr_voxel_size_m, f.store_voxel_size_m, f.max_corr_dist_m,
+      f.label_gating, fuse::MergeName(f.merge), t.voxel_size_m, t.sdf_trunc_m,
+      t.max_depth_m);
+  if (!stage.custom_layer_data.contains("options")) {
+    stage.custom_layer_data["options"] = result.options_text;
+  }
+  const auto& gm = T_up.Matrix();
+  for (int r = 0; r < 4; ++r) {
+    for (int c = 0; c < 4; ++c) {
+      result.upright_matrix += fmt::format("{}{:.6g}", r + c ? " " : "", gm(r, c));
+    }
+  }
+  stage.custom_layer_data["T_upright_world"] = result.upright_matrix;
+  stage.custom_layer_data["gravity"] = result.gravity.method;
+
+  std::vector<usd::PersonTrack> tracks = people_.Tracks();
+  if (person_filter_) {
+    std::erase_if(tracks, [&](const usd::PersonTrack& track) {
+      return !person_filter_(track.track_id);
+    });
+  }
+  for (usd::PersonTrack& track : tracks) {
+    for (usd::PersonSample& sample : track.samples) {
+      sample.centroid_world = R_up * sample.centroid_world + t_up;
+      for (auto& p : sample.points_world) p = R_up * p + t_up;
+    }
+  }
+  result.people = tracks.size();
+  if (!tracks.empty()) {
+    // Time codes are frame indices, played at the sequence's frame rate.
+    const double span = last_timestamp_s_ - first_timestamp_s_;
+    stage.time_codes_per_second =
+        cameras_.size() > 1 && span > 0
+            ? static_cast<double>(cameras_.size() - 1) / span
+            : 30.0;
+    stage.start_time_code = 0;
+    stage.end_time_code = static_cast<double>(cameras_.size() - 1);
+  }
+  usd::WriteScene(out_dir, prims, stage, tracks);
+  if (write_options.usdz) {
+    usd::WriteSceneUsdz(out_dir / "scene.usdz", prims, stage, tracks);
+  }
+  return result;
+}
+
+}  // namespace semrec::pipeline

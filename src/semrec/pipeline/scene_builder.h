@@ -1,0 +1,163 @@
+// The scene as frames stream in: labelled frames go through semantics-guided
+// fusion (which segments are which object) and, in the same step, each
+// object's pixels into that object's own TSDF volume; tracked people are
+// collected as time-sampled 3-D tracks. At any point the scene can be written
+// as USD (scene.usda -> static.usda + dynamic.usda) and PLY per object; only
+// the objects that changed since the last write are re-meshed.
+//
+// When fusion merges two objects after both were integrated, their volumes are
+// combined voxel by voxel (weights add, TSDF and colour are weight-averaged:
+// exactly what integrating the frames into one volume gives, up to rounding).
+// `stream_volumes = false` instead records which frame label went into which
+// object and integrates the volumes afterwards with the final ids
+// (RebuildVolumes): the two-pass reference the streaming result is tested
+// against.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <filesystem>
+#include <functional>
+#include <map>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "semrec/core/frame.h"
+#include "semrec/core/label_map.h"
+#include "semrec/fuse/fusion.h"
+#include "semrec/fuse/gravity.h"
+#include "semrec/fuse/segments.h"
+#include "semrec/mesh/object_mesher.h"
+#include "semrec/pipeline/people_3d.h"
+#include "semrec/usd/usda_writer.h"
+
+namespace semrec::pipeline {
+
+struct SceneBuilderOptions {
+  fuse::FusionOptions fusion;
+  fuse::SegmentExtractionOptions extraction;
+  mesh::ObjectMeshingOptions meshing;
+  People3dOptions people_3d;
+  usd::StageOptions stage;
+  /// The scene is written upright (Z up, floor at z = 0) by this transform of
+  /// the sequence's world frame (see fuse/gravity.h).
+  fuse::GravityOptions gravity;
+  /// Integrate each object's volume as its frames arrive (true), or only
+  /// after Finish() with the final ids (RebuildVolumes; the reference).
+  bool stream_volumes = true;
+  void Check() const;
+};
+
+/// What one Add() did.
+struct SceneFrameStats {
+  /// Static segments fused (0 for a frame without labels).
+  size_t segments = 0;
+  /// Object volumes merged or dropped because fusion merged or dropped their
+  /// objects.
+  size_t volumes_merged = 0;
+  double fusion_seconds = 0.0;
+  double volume_seconds = 0.0;
+};
+
+/// What Write() wrote.
+struct SceneWriteResult {
+  size_t objects = 0;
+  /// Structure prims (one per stuff class) among `objects`.
+  size_t structure = 0;
+  size_t skipped_empty_objects = 0;
+  size_t triangles = 0;
+  size_t people = 0;
+  /// Objects re-meshed for this write (the others kept their mesh).
+  size_t remeshed = 0;
+  fuse::GravityEstimate gravity;
+  /// Per object: id, class, kind, sizes, votes, frames, ply (summary.json).
+  nlohmann::json objects_json = nlohmann::json::array();
+  /// The effective options as one line (also in the USD layer metadata).
+  std::string options_text;
+  /// T_upright_world as 16 numbers, row-major.
+  std::string upright_matrix;
+};
+
+struct SceneWriteOptions {
+  /// Also write objects/<id>_<class>.ply.
+  bool write_ply = true;
+  /// Also package the scene as scene.usdz (one flattened layer).
+  bool usdz = false;
+  /// Provenance for the USD layer metadata (customLayerData), e.g. "input".
+  std::map<std::string, std::string> custom_layer_data;
+};
+
+class SceneBuilder {
+ public:
+  /// `classes`: the label set the frames' semantic labels refer to.
+  SceneBuilder(const LabelSet& classes, const SceneBuilderOptions& options);
+  ~SceneBuilder();
+  SceneBuilder(const SceneBuilder&) = delete;
+  SceneBuilder& operator=(const SceneBuilder&) = delete;
+
+  /// Adds one frame. `labels`: its static segmentation (nullptr: a frame that
+  /// was not segmented; it still counts for the camera path). `person_ids`:
+  /// tracked people (track id per pixel, 0 = nobody), or nullptr. Person pixels
+  /// never go into the static map: the labels are cleared under them.
+  SceneFrameStats Add(const Frame& frame, const fuse::FrameLabels* labels,
+                      const LabelMap* person_ids = nullptr);
+
+  /// Ends the stream: fusion's end-of-sequence clean-up (evidence, fragments),
+  /// volumes follow. Further Add() calls are refused.
+  void Finish();
+
+  /// Two-pass reference (stream_volumes = false), after Finish(): integrates
+  /// every labelled frame again with the final object ids. `frame(i)` and
+  /// `labels(i)` give back what Add() got for the i-th labelled frame.
+  void RebuildVolumes(const std::function<Frame(size_t)>& frame,
+                      const std::function<fuse::FrameLabels(size_t)>& labels);
+
+  /// Writes `out_dir`/scene.usda, static.usda, dynamic.usda (people) and
+  /// objects/*.ply (each atomically). Callable mid-stream for a snapshot.
+  /// Objects of a set's catch-all class ("other", VOC "background") are named
+  /// "object"; stuff classes become structure prims.
+  SceneWriteResult Write(const std::filesystem::path& out_dir,
+                         const SceneWriteOptions& write_options);
+
+  const fuse::SceneFusion& fusion() const { return fusion_; }
+  const LabelSet& classes() const { return classes_; }
+  /// People as time-sampled tracks (world frame, not yet upright).
+  std::vector<usd::PersonTrack> PeopleTracks() const {
+    return people_.Tracks();
+  }
+  /// Keeps only the people tracks `keep(track id)` accepts (e.g. those the
+  /// offline track smoothing kept).
+  void set_person_filter(std::function<bool(uint32_t)> keep) {
+    person_filter_ = std::move(keep);
+  }
+  size_t frames() const { return cameras_.size(); }
+  size_t labelled_frames() const { return labelled_frames_; }
+  size_t volumes() const { return mesher_.num_objects(); }
+
+ private:
+  LabelSet classes_;
+  SceneBuilderOptions options_;
+  fuse::SceneFusion fusion_;
+  mesh::ObjectMesher mesher_;
+  People3d people_;
+  std::function<bool(uint32_t)> person_filter_;
+  std::vector<Transform> cameras_;
+  double first_timestamp_s_ = 0.0, last_timestamp_s_ = 0.0;
+  size_t labelled_frames_ = 0;
+  bool finished_ = false;
+  /// Two-pass only: per labelled frame, (frame label, object id at the time).
+  std::vector<std::vector<std::pair<uint16_t, uint32_t>>> assignments_;
+};
+
+/// The gravity estimate for summary.json / report.json.
+nlohmann::json GravityJson(const fuse::GravityEstimate& gravity,
+                           const std::string& upright_matrix);
+
+/// The labels with every pixel of a tracked person (person_ids != 0) set to 0.
+fuse::FrameLabels WithoutPeople(const fuse::FrameLabels& labels,
+                                const LabelMap& person_ids);
+
+}  // namespace semrec::pipeline

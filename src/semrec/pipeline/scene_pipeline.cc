@@ -1,0 +1,220 @@
+#include "semrec/pipeline/scene_pipeline.h"
+
+#include <algorithm>
+#include <chrono>
+#include <map>
+#include <set>
+
+#include "semrec/core/error.h"
+#include "semrec/segment/segment_io.h"
+
+namespace semrec::pipeline {
+namespace {
+
+class Stopwatch {
+ public:
+  double Lap() {
+    const auto now = std::chrono::steady_clock::now();
+    const double s = std::chrono::duration<double>(now - last_).count();
+    last_ = now;
+    return s;
+  }
+
+ private:
+  std::chrono::steady_clock::time_point last_ =
+      std::chrono::steady_clock::now();
+};
+
+}  // namespace
+
+void ScenePipelineOptions::Check() const {
+  CheckArgument(segment_every >= 1, "pipeline: segment_every must be >= 1");
+  if (labels == Labels::kModels) {
+    segmenter.Check();
+    if (track_people) people.Check();
+  }
+  offline.Check();
+  scene.Check();
+}
+
+std::vector<PersonObservation> PeopleFromIdMap(const LabelMap& person_ids) {
+  const int w = person_ids.width(), h = person_ids.height();
+  std::map<uint16_t, segment::Box> boxes;
+  for (int y = 0; y < h; ++y) {
+    for (int x = 0; x < w; ++x) {
+      const uint16_t id = person_ids(x, y);
+      if (id == 0) continue;
+      auto [it, added] = boxes.try_emplace(id, segment::Box{x, y, x + 1, y + 1});
+      segment::Box& b = it->second;
+      b.x0 = std::min(b.x0, x);
+      b.y0 = std::min(b.y0, y);
+      b.x1 = std::max(b.x1, x + 1);
+      b.y1 = std::max(b.y1, y + 1);
+    }
+  }
+  std::vector<PersonObservation> people;
+  for (const auto& [id, b] : boxes) {
+    PersonObservation p;
+    p.box.track_id = id;
+    p.box.box = {static_cast<double>(b.x0), static_cast<double>(b.y0),
+                 static_cast<double>(b.width()), static_cast<double>(b.height())};
+    p.mask.image_width = w;
+    p.mask.image_height = h;
+    p.mask.box = b;
+    p.mask.bits.assign(static_cast<size_t>(b.width()) * b.height(), 0);
+    for (int y = b.y0; y < b.y1; ++y) {
+      for (int x = b.x0; x < b.x1; ++x) {
+        if (person_ids(x, y) != id) continue;
+        p.mask.bits[static_cast<size_t>(y - b.y0) * b.width() + (x - b.x0)] = 1;
+        ++p.mask.area;
+      }
+    }
+    people.push_back(std::move(p));
+  }
+  return people;
+}
+
+ScenePipeline::ScenePipeline(const infer::ModelRegistry* registry,
+                             const LabelSet* given_classes,
+                             const ScenePipelineOptions& options)
+    : options_(options) {
+  options_.Check();
+  if (options_.labels == ScenePipelineOptions::Labels::kModels) {
+    CheckArgument(registry != nullptr,
+                  "pipeline: running the models needs a model registry");
+    segmenter_ =
+        std::make_unique<segment::HybridSegmenter>(*registry, options_.segmenter);
+    if (options_.track_people) {
+      tracker_ = std::make_unique<PeopleTracker>(*registry, options_.people);
+    }
+    builder_ = std::make_unique<SceneBuilder>(segmenter_->label_set(),
+                                              options_.scene);
+  } else {
+    CheckArgument(given_classes != nullptr,
+                  "pipeline: given labels need their class table");
+    builder_ = std::make_unique<SceneBuilder>(*given_classes, options_.scene);
+  }
+}
+
+ScenePipeline::~ScenePipeline() = default;
+
+PipelineFrameResult ScenePipeline::Process(const PipelineInput& input) {
+  CheckArgument(!finished_, "pipeline: Process() after Finish()");
+  const Frame& frame = input.frame;
+  const bool models =
+      options_.labels == ScenePipelineOptions::Labels::kModels;
+  PipelineFrameResult result;
+  Stopwatch watch;
+
+  // Segmentation: every segment_every-th frame (the first one always).
+  std::optional<fuse::FrameLabels> labels;
+  if (input.replay) {
+    CheckArgument(models, "pipeline: replay is for model outputs");
+    labels = input.replay->labels;
+  } else if (frames_ % options_.segment_every == 0) {
+    if (models) {
+      segment::HybridResult hybrid;
+      try {
+        hybrid = segmenter_->Segment(frame.color);
+      } catch (const InvalidArgument& e) {
+        throw FormatError(frame.color_path, e.what());
+      }
+      labels = fuse::FrameLabels{std::move(hybrid.vote.instance),
+                                 std::move(hybrid.vote.semantic),
+                                 frame.color_path.string()};
+    } else {
+      CheckArgument(input.labels.has_value(),
+                    "pipeline: frame " + input.name + " came without labels");
+      labels = input.labels;
+    }
+  }
+  seconds_.segment += watch.Lap();
+
+  // People: every frame.
+  std::vector<PersonObservation> people;
+  std::optional<LabelMap> person_ids;
+  const int w = frame.color.width(), h = frame.color.height();
+  if (options_.track_people) {
+    if (input.replay) {
+      const auto boxes = tracker_->Replay(input.replay->tracker_input);
+      person_ids = input.replay->person_ids;
+      for (const track::TrackedBox& box : boxes) {
+        PersonObservation p;
+        p.box = box;
+        people.push_back(std::move(p));
+      }
+      result.outputs.tracker_input = input.replay->tracker_input;
+    } else if (models) {
+      PeopleFrame tracked;
+      try {
+        tracked = tracker_->Process(frame.color);
+      } catch (const InvalidArgument& e) {
+        throw FormatError(frame.color_path, e.what());
+      }
+      people = std::move(tracked.people);
+      person_ids = PersonInstanceMap(people, w, h);
+      result.outputs.tracker_input = std::move(tracked.tracker_input);
+    } else if (input.person_ids) {
+      person_ids = input.person_ids;
+      people = PeopleFromIdMap(*person_ids);
+    }
+    for (const PersonObservation& p : people) {
+      track_points_.push_back({static_cast<int>(frame.index) + 1, p.box, false});
+    }
+  }
+  seconds_.track += watch.Lap();
+
+  const SceneFrameStats stats = builder_->Add(
+      frame, labels ? &*labels : nullptr, person_ids ? &*person_ids : nullptr);
+  seconds_.fuse += stats.fusion_seconds;
+  seconds_.volumes += stats.volume_seconds;
+  watch.Lap();
+
+  if (options_.overlays && !input.replay) {
+    const ColorImage base =
+        labels ? segment::RenderLabelOverlay(frame.color, labels->semantic,
+                                             labels->instance, classes())
+               : frame.color;
+    result.overlay = RenderPeopleOverlay(base, people);
+  }
+  seconds_.overlay += watch.Lap();
+
+  if (models) {
+    result.outputs.labels = labels;
+    if (person_ids) result.outputs.person_ids = *person_ids;
+  }
+  result.segmented = labels.has_value();
+  result.segments = stats.segments;
+  result.people = people.size();
+  ++frames_;
+  segmented_frames_ += result.segmented ? 1 : 0;
+  return result;
+}
+
+void ScenePipeline::Finish() {
+  if (finished_) return;
+  finished_ = true;
+  builder_->Finish();
+  finished_tracks_ = track::FinishTracks(track_points_, options_.offline);
+  // People prims show the tracks the result file keeps.
+  std::set<uint32_t> kept;
+  for (const track::TrackPoint& p : finished_tracks_) {
+    kept.insert(static_cast<uint32_t>(p.box.track_id));
+  }
+  builder_->set_person_filter(
+      [kept](uint32_t id) { return kept.contains(id); });
+}
+
+SceneWriteResult ScenePipeline::Write(const std::filesystem::path& out_dir,
+                                      const SceneWriteOptions& write_options) {
+  Stopwatch watch;
+  SceneWriteResult result = builder_->Write(out_dir, write_options);
+  seconds_.write += watch.Lap();
+  return result;
+}
+
+std::vector<io::MotBox> ScenePipeline::Tracks() const {
+  return track::ToMotBoxes(finished_ ? finished_tracks_ : track_points_);
+}
+
+}  // namespace semrec::pipeline

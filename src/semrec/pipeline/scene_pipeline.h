@@ -1,0 +1,152 @@
+// The whole system in one streaming pass (the paper's pipeline): frames go in
+// one at a time; each is segmented (semantic branch + masks + vote, every
+// `segment_every`-th frame), its people are tracked (detector, box-prompted
+// masks, re-identification; every frame), the static segments (people left
+// out) are fused into objects and integrated into the objects' volumes, and
+// the USD scene can be written at any time. Each frame is decoded once, each
+// model runs once per frame it is needed for, and nothing goes through files.
+//
+// Labels may also come with the frames (ground truth, as the paper did on
+// Hypersim): then no model runs.
+#pragma once
+
+#include <filesystem>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "semrec/core/frame.h"
+#include "semrec/core/label_map.h"
+#include "semrec/fuse/segments.h"
+#include "semrec/infer/model_registry.h"
+#include "semrec/pipeline/people_tracker.h"
+#include "semrec/pipeline/scene_builder.h"
+#include "semrec/segment/hybrid_segmenter.h"
+#include "semrec/track/sequence.h"
+
+namespace semrec::pipeline {
+
+struct ScenePipelineOptions {
+  enum class Labels {
+    /// The hybrid segmenter and the people tracker run on the frames.
+    kModels,
+    /// Every frame brings its labels and person map (ground truth).
+    kGiven,
+  };
+  Labels labels = Labels::kModels;
+  /// Segment every n-th frame (1 = all); people are tracked on every frame.
+  /// Fusion and volumes use the segmented frames only.
+  int segment_every = 1;
+  segment::HybridSegmenterOptions segmenter;
+  /// Track people (models) or take the frames' person maps (given).
+  bool track_people = true;
+  PeopleTrackerOptions people;
+  /// The offline step on finished tracks (gaps, short tracks) for tracks.txt
+  /// and the people prims.
+  track::OfflineOptions offline = track::OfflineOptions::Improved();
+  SceneBuilderOptions scene;
+  /// Draw overlays (classes with names, people with ids).
+  bool overlays = true;
+  void Check() const;
+};
+
+/// What the models gave for one frame: enough to redo the frame without them
+/// (a resumed run replays these from its checkpoint).
+struct ModelOutputs {
+  /// The static labels (segmented frames only).
+  std::optional<fuse::FrameLabels> labels;
+  /// Detections with embeddings, as the tracker got them.
+  std::vector<track::Detection> tracker_input;
+  /// Tracked people's masks (track id per pixel; empty without people).
+  LabelMap person_ids;
+};
+
+/// One frame and what comes with it.
+struct PipelineInput {
+  Frame frame;
+  /// Name for per-frame outputs (overlays), e.g. the colour image's.
+  std::string name;
+  /// Labels::kGiven: the frame's static labels and person ids.
+  std::optional<fuse::FrameLabels> labels;
+  std::optional<LabelMap> person_ids;
+  /// Labels::kModels: this frame's recorded model outputs; no model runs and
+  /// no overlay is drawn (checkpoint replay).
+  std::optional<ModelOutputs> replay;
+};
+
+/// Seconds spent per stage, summed over frames.
+struct StageSeconds {
+  double read = 0.0;
+  double segment = 0.0;
+  double track = 0.0;
+  double fuse = 0.0;
+  double volumes = 0.0;
+  double overlay = 0.0;
+  double write = 0.0;
+  double Total() const {
+    return read + segment + track + fuse + volumes + overlay + write;
+  }
+};
+
+/// What one frame gave.
+struct PipelineFrameResult {
+  bool segmented = false;
+  size_t segments = 0;
+  size_t people = 0;
+  /// The overlay (empty unless options.overlays; none on replay).
+  ColorImage overlay;
+  /// Labels::kModels: what the models gave (for the checkpoint).
+  ModelOutputs outputs;
+};
+
+class ScenePipeline {
+ public:
+  /// `registry`: the models (Labels::kModels; may be null for kGiven).
+  /// `given_classes`: the label set of given labels (Labels::kGiven).
+  /// Models load here; throws as OnnxModel does when one is missing.
+  ScenePipeline(const infer::ModelRegistry* registry,
+                const LabelSet* given_classes,
+                const ScenePipelineOptions& options);
+  ~ScenePipeline();
+
+  /// Runs every stage on one frame. Frames must come in order.
+  PipelineFrameResult Process(const PipelineInput& input);
+
+  /// Ends the stream (fusion's end-of-sequence clean-up, the offline track
+  /// step); then Write() gives the final scene.
+  void Finish();
+
+  /// Writes the scene (USD, PLY) to `out_dir`; mid-stream, a snapshot.
+  SceneWriteResult Write(const std::filesystem::path& out_dir,
+                         const SceneWriteOptions& write_options);
+
+  /// People boxes (MOTChallenge; frame = frame index + 1): after Finish() the
+  /// offline-smoothed tracks, before it the online ones.
+  std::vector<io::MotBox> Tracks() const;
+
+  const LabelSet& classes() const { return builder_->classes(); }
+  const SceneBuilder& scene() const { return *builder_; }
+  const StageSeconds& seconds() const { return seconds_; }
+  size_t frames() const { return frames_; }
+  size_t segmented_frames() const { return segmented_frames_; }
+  const ScenePipelineOptions& options() const { return options_; }
+
+ private:
+  ScenePipelineOptions options_;
+  std::unique_ptr<segment::HybridSegmenter> segmenter_;
+  std::unique_ptr<PeopleTracker> tracker_;
+  std::unique_ptr<SceneBuilder> builder_;
+  std::vector<track::TrackPoint> track_points_;
+  std::vector<track::TrackPoint> finished_tracks_;
+  bool finished_ = false;
+  StageSeconds seconds_;
+  size_t frames_ = 0;
+  size_t segmented_frames_ = 0;
+};
+
+/// The people in a person id map as boxes (one per id, tight around its
+/// pixels) with their masks: what the tracker would report.
+std::vector<PersonObservation> PeopleFromIdMap(const LabelMap& person_ids);
+
+}  // namespace semrec::pipeline
