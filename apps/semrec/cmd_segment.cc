@@ -1,21 +1,14 @@
 // `semrec segment <image|folder|sequence> --out DIR`: hybrid semantic
 // segmentation (semantic branch + automatic masks + vote).
-#include <chrono>
 #include <cstdio>
 #include <memory>
 
 #include <fmt/format.h>
-#include <nlohmann/json.hpp>
 
 #include "commands.h"
-#include "semrec/core/error.h"
 #include "semrec/core/file_util.h"
-#include "semrec/core/progress.h"
 #include "semrec/infer/model_registry.h"
-#include "semrec/io/image_io.h"
-#include "semrec/io/label_set_io.h"
-#include "semrec/segment/hybrid_segmenter.h"
-#include "semrec/segment/segment_io.h"
+#include "semrec/segment/segment_images.h"
 
 namespace fs = std::filesystem;
 
@@ -52,54 +45,12 @@ void RunSegment(SegmentArgs args) {
   const auto inputs =
       segment::ListSegmentInputs(args.input, args.stride, args.max_frames);
   RequireEmptyOrOverwrite(args.out, args.overwrite);
-  segment::HybridSegmenter segmenter(registry, options);
-  // classes.json first: with semantic/ and instance/ it makes the output a
-  // label folder for `semrec fuse --labels`.
-  io::WriteLabelSetJson(fs::path(args.out) / "classes.json",
-                        segmenter.label_set());
-  Progress progress("segmenting", inputs.size());
-  double seconds = 0;
-  size_t masks = 0;
-  for (const auto& input : inputs) {
-    const ColorImage rgb = io::ReadColorImage(input.image);
-    const auto start = std::chrono::steady_clock::now();
-    segment::HybridResult result;
-    try {
-      result = segmenter.Segment(rgb);
-    } catch (const InvalidArgument& e) {
-      throw FormatError(input.image, e.what());
-    }
-    seconds +=
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - start)
-            .count();
-    masks += result.masks.size();
-    segment::WriteSegmentation(args.out, input, rgb, result,
-                               segmenter.label_set());
-    progress.Tick();
-  }
-  progress.Finish();
-  const nlohmann::json summary = {
-      {"input", args.input},
-      {"images", inputs.size()},
-      {"semantic_model", args.semantic},
-      {"mask_model", args.masks},
-      {"label_set", segmenter.label_set().name()},
-      {"points_per_side", options.masks.points_per_side},
-      {"pred_iou_threshold", options.masks.pred_iou_threshold},
-      {"stability_threshold", options.masks.stability_threshold},
-      {"box_nms_threshold", options.masks.box_nms_threshold},
-      {"min_region_area_px", options.masks.min_region_area_px},
-      {"crop_layers", options.masks.crop_layers},
-      {"skip_covered_points", options.masks.skip_covered_points},
-      {"covered_similarity", options.masks.covered_similarity},
-      {"seconds_per_image", inputs.empty() ? 0.0 : seconds / inputs.size()}};
-  WriteTextFileAtomic(fs::path(args.out) / "summary.json",
-                      summary.dump(2) + "\n");
+  const segment::SegmentImagesResult result = segment::SegmentImages(
+      registry, options, inputs, args.out, args.input);
   std::printf("%s", fmt::format("{} images, {} masks, {:.2f} s per image; "
                                 "wrote {}\n",
-                                inputs.size(), masks,
-                                inputs.empty() ? 0.0 : seconds / inputs.size(),
-                                args.out)
+                                result.images, result.masks,
+                                result.seconds_per_image, args.out)
                         .c_str());
 }
 

@@ -1,7 +1,6 @@
 // `semrec track`: people tracking. On images (a folder or a sequence):
 // detect (YOLOX) or read boxes, box-prompted masks, re-identification; on
 // MOTChallenge detections alone: geometry only.
-#include <chrono>
 #include <cstdio>
 #include <map>
 #include <optional>
@@ -13,9 +12,8 @@
 #include "semrec/core/error.h"
 #include "semrec/core/file_util.h"
 #include "semrec/core/progress.h"
-#include "semrec/io/image_io.h"
 #include "semrec/io/mot_io.h"
-#include "semrec/pipeline/people_tracker.h"
+#include "semrec/pipeline/track_images.h"
 #include "semrec/segment/segment_io.h"
 #include "semrec/track/sequence.h"
 #include "semrec/track/tracker.h"
@@ -164,87 +162,50 @@ void RunTrackImages(const TrackArgs& args) {
     given = track::DetectionsByFrame(io::ReadMotFile(args.detections));
   }
   RequireEmptyOrOverwrite(args.out, args.overwrite);
-  const track::OfflineOptions offline = OfflineOptionsFrom(args);
-  pipeline::PeopleTracker tracker(registry, options, pca);
-  std::vector<track::TrackPoint> points;
-  std::vector<std::vector<float>> embeddings;
-  std::map<int, int> frames_per_track;
-  int reidentified = 0;
-  double detect_s = 0, encode_s = 0, mask_s = 0;
-  Progress progress("tracking", inputs.size());
-  for (size_t i = 0; i < inputs.size(); ++i) {
-    const int frame_number =
-        static_cast<int>(i) + 1;  // MOTChallenge frames start at 1
-    const ColorImage rgb = io::ReadColorImage(inputs[i].image);
-    std::optional<std::vector<track::Detection>> boxes;
-    if (!args.detections.empty()) {
-      const auto it = given.find(frame_number);
-      boxes = it == given.end() ? std::vector<track::Detection>{} : it->second;
-    }
-    pipeline::PeopleFrame frame;
-    try {
-      frame = tracker.Process(rgb, boxes);
-    } catch (const InvalidArgument& e) {
-      throw FormatError(inputs[i].image, e.what());
-    }
-    detect_s += frame.detect_seconds;
-    encode_s += frame.encode_seconds;
-    mask_s += frame.mask_seconds;
-    for (const auto& p : frame.people) {
-      if (!p.embedding.empty()) embeddings.push_back(p.embedding);
-      points.push_back({frame_number, p.box, false});
-      reidentified += p.box.reidentified;
-    }
-    const fs::path name = inputs[i].name;
-    io::WritePng(
-        fs::path(args.out) / "persons" / name,
-        pipeline::PersonInstanceMap(frame.people, rgb.width(), rgb.height()));
-    io::WritePng(fs::path(args.out) / "overlay" / name,
-                 pipeline::RenderPeopleOverlay(rgb, frame.people));
-    progress.Tick();
-  }
-  progress.Finish();
-  // The per-frame images show the online state; the result file gets the
-  // offline steps on the finished tracks.
-  const std::vector<io::MotBox> result =
-      track::ToMotBoxes(track::FinishTracks(points, offline));
-  for (const io::MotBox& b : result) ++frames_per_track[b.id];
-  io::WriteMotFile(fs::path(args.out) / "result.txt", result);
+  pipeline::TrackImagesOptions track_options;
+  track_options.people = options;
+  track_options.offline = OfflineOptionsFrom(args);
+  track_options.frame_step = args.stride;
+  const pipeline::TrackImagesResult r = pipeline::TrackImages(
+      registry, track_options, pca, inputs,
+      args.detections.empty() ? nullptr : &given, args.out);
+  const double n = inputs.empty() ? 1.0 : static_cast<double>(inputs.size());
   nlohmann::json summary = {
       {"input", args.input},
       {"frames", inputs.size()},
+      {"frame_step", args.stride},
       {"detections", args.detections.empty() ? args.detector : args.detections},
       {"masks", args.masks},
-      {"tracks", frames_per_track.size()},
-      {"boxes", result.size()},
-      {"reidentified", reidentified},
+      {"tracks", r.tracks},
+      {"boxes", r.boxes.size()},
+      {"reidentified", r.reidentified},
       {"reid", args.reid},
       {"tau", options.tracker.reid.tau},
       {"pca", args.pca},
       {"seconds_per_frame",
-       {{"detect", inputs.empty() ? 0.0 : detect_s / inputs.size()},
-        {"encode", inputs.empty() ? 0.0 : encode_s / inputs.size()},
-        {"masks", inputs.empty() ? 0.0 : mask_s / inputs.size()}}}};
+       {{"detect", r.detect_seconds / n},
+        {"encode", r.encode_seconds / n},
+        {"masks", r.mask_seconds / n}}}};
   if (!args.fit_pca.empty()) {
-    if (embeddings.size() < static_cast<size_t>(args.pca_dims) + 1) {
+    if (r.embeddings.size() < static_cast<size_t>(args.pca_dims) + 1) {
       throw InvalidArgument(fmt::format(
           "--fit-pca: only {} person embeddings in {}, need more than {}",
-          embeddings.size(), args.input, args.pca_dims));
+          r.embeddings.size(), args.input, args.pca_dims));
     }
     const auto fitted =
-        track::PcaProjection::Fit(embeddings, args.pca_dims, /*whiten=*/true);
+        track::PcaProjection::Fit(r.embeddings, args.pca_dims, /*whiten=*/true);
     fitted.Save(args.fit_pca);
     summary["fitted_pca"] = {
         {"file", args.fit_pca},
-        {"embeddings", embeddings.size()},
+        {"embeddings", r.embeddings.size()},
         {"explained_variance", fitted.explained_variance()}};
   }
   WriteTextFileAtomic(fs::path(args.out) / "summary.json",
                       summary.dump(2) + "\n");
   std::printf("%s", fmt::format("{} frames, {} tracks, {} boxes, {} "
                                 "re-identified; wrote {}\n",
-                                inputs.size(), frames_per_track.size(),
-                                result.size(), reidentified, args.out)
+                                inputs.size(), r.tracks, r.boxes.size(),
+                                r.reidentified, args.out)
                         .c_str());
 }
 
@@ -279,7 +240,9 @@ void RegisterTrack(CLI::App& app) {
                   "Image folder or sequence (omit for --detections only)");
   cmd->add_option("--detections", args->detections,
                   "MOTChallenge det.txt: boxes instead of the detector (frame "
-                  "1 = first image)");
+                  "1 = first image of the recording; with --stride N the "
+                  "images used are frames 1, 1+N, ...; result.txt keeps "
+                  "these numbers)");
   cmd->add_option("--out,-o", args->out,
                   "Output folder (images) or result file (--detections only)")
       ->required();

@@ -21,6 +21,7 @@ struct SequenceArgs {
   int stride = 1;
   size_t max_frames = 0;
   std::string intrinsics;
+  std::string pose_correction;
   io::SequenceReaderOptions ReaderOptions() const;
 };
 void AddSequenceArgs(CLI::App* cmd, SequenceArgs* args);

@@ -7,6 +7,7 @@ io::SequenceReaderOptions SequenceArgs::ReaderOptions() const {
   options.stride = stride;
   options.max_frames = max_frames;
   options.intrinsics_path = intrinsics;
+  options.pose_correction_path = pose_correction;
   return options;
 }
 
@@ -20,6 +21,10 @@ void AddSequenceArgs(CLI::App* cmd, SequenceArgs* args) {
       ->capture_default_str();
   cmd->add_option("--intrinsics", args->intrinsics,
                   "Override intrinsics: Open3D JSON or 3x3 K matrix text file");
+  cmd->add_option("--pose-correction", args->pose_correction,
+                  "YAML with pre/post 4x4 matrices: T_world_camera = pre * "
+                  "pose * post (e.g. data/poses/bonn_rgbd_dynamic.yaml for "
+                  "the Bonn RGB-D Dynamic dataset's mocap poses)");
 }
 
 infer::ModelRegistry ModelArgs::LoadRegistry() const {

@@ -1,11 +1,14 @@
 #include "semrec/io/pose_io.h"
 
 #include <algorithm>
+#include <cmath>
 #include <sstream>
 #include <string>
 
+#include <Eigen/SVD>
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
+#include <yaml-cpp/yaml.h>
 
 #include "semrec/core/error.h"
 #include "semrec/core/file_util.h"
@@ -186,6 +189,113 @@ void WriteRedwoodLog(const fs::path& path,
     }
   }
   WriteTextFileAtomic(path, text);
+}
+
+namespace {
+
+Eigen::Matrix4d MatrixFromYaml(const YAML::Node& node,
+                               const std::filesystem::path& path,
+                               const std::string& what, bool orthonormalize) {
+  if (!node.IsSequence() || node.size() != 4) {
+    throw FormatError(path, what + ": expected 4 rows of 4 numbers");
+  }
+  Eigen::Matrix4d m;
+  for (int r = 0; r < 4; ++r) {
+    if (!node[r].IsSequence() || node[r].size() != 4) {
+      throw FormatError(path, fmt::format("{}: row {} must have 4 numbers",
+                                          what, r + 1));
+    }
+    for (int c = 0; c < 4; ++c) {
+      try {
+        m(r, c) = node[r][c].as<double>();
+      } catch (const YAML::Exception&) {
+        throw FormatError(path, fmt::format("{}: row {} column {} is not a "
+                                            "number",
+                                            what, r + 1, c + 1));
+      }
+      if (!std::isfinite(m(r, c))) {
+        throw FormatError(path, what + ": non-finite entry");
+      }
+    }
+  }
+  if (m.row(3) != Eigen::RowVector4d(0, 0, 0, 1)) {
+    throw FormatError(path, what + ": the last row must be 0 0 0 1");
+  }
+  const Eigen::Matrix3d block = m.topLeftCorner<3, 3>();
+  Eigen::JacobiSVD<Eigen::Matrix3d> svd(
+      block, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  Eigen::Matrix3d R = svd.matrixU() * svd.matrixV().transpose();
+  if (R.determinant() < 0) {
+    throw FormatError(path, what + ": the 3x3 block is a reflection, not a "
+                                   "rotation");
+  }
+  if (!orthonormalize && (R - block).cwiseAbs().maxCoeff() > 1e-3) {
+    throw FormatError(path, what + ": the 3x3 block is not a rotation (set "
+                                   "orthonormalize: true to use the nearest "
+                                   "one)");
+  }
+  m.topLeftCorner<3, 3>() = R;
+  return m;
+}
+
+Eigen::Matrix4d ProductFromYaml(const YAML::Node& node,
+                                const std::filesystem::path& path,
+                                const std::string& key, bool orthonormalize) {
+  if (!node) return Eigen::Matrix4d::Identity();
+  // One matrix (rows of numbers) or a list of matrices.
+  if (node.IsSequence() && node.size() > 0 && node[0].IsSequence() &&
+      node[0].size() > 0 && node[0][0].IsSequence()) {
+    Eigen::Matrix4d product = Eigen::Matrix4d::Identity();
+    for (size_t k = 0; k < node.size(); ++k) {
+      product = product * MatrixFromYaml(node[k], path,
+                                         fmt::format("{}[{}]", key, k),
+                                         orthonormalize);
+    }
+    return product;
+  }
+  return MatrixFromYaml(node, path, key, orthonormalize);
+}
+
+}  // namespace
+
+Transform PoseCorrection::Apply(const Transform& T_file) const {
+  const Eigen::Matrix4d m = pre * T_file.Matrix() * post;
+  return Transform(m.topLeftCorner<3, 3>(), m.topRightCorner<3, 1>());
+}
+
+PoseCorrection ReadPoseCorrection(const std::filesystem::path& path) {
+  RequireFile(path, "pose correction");
+  YAML::Node root;
+  try {
+    root = YAML::LoadFile(path.string());
+  } catch (const YAML::Exception& e) {
+    throw FormatError(path, std::string("not valid YAML: ") + e.what());
+  }
+  if (!root.IsMap()) {
+    throw FormatError(path, "expected a map with pre: and/or post:");
+  }
+  for (const auto& entry : root) {
+    const std::string key = entry.first.as<std::string>();
+    if (key != "pre" && key != "post" && key != "orthonormalize" &&
+        key != "description") {
+      throw FormatError(path, "unknown entry '" + key +
+                                  "' (expected pre, post, orthonormalize, "
+                                  "description)");
+    }
+  }
+  bool orthonormalize = true;
+  if (root["orthonormalize"]) {
+    try {
+      orthonormalize = root["orthonormalize"].as<bool>();
+    } catch (const YAML::Exception&) {
+      throw FormatError(path, "orthonormalize must be true or false");
+    }
+  }
+  PoseCorrection c;
+  c.pre = ProductFromYaml(root["pre"], path, "pre", orthonormalize);
+  c.post = ProductFromYaml(root["post"], path, "post", orthonormalize);
+  c.source = path.string();
+  return c;
 }
 
 }  // namespace semrec::io

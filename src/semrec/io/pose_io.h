@@ -2,7 +2,10 @@
 #pragma once
 
 #include <filesystem>
+#include <string>
 #include <vector>
+
+#include <Eigen/Core>
 
 #include "semrec/core/camera.h"
 #include "semrec/core/transform.h"
@@ -36,6 +39,24 @@ CameraIntrinsics ReadIntrinsicsMatrixFile(const std::filesystem::path& path,
                                           int width, int height);
 
 /// Writes a Redwood `.log` trajectory atomically.
+/// A correction of a dataset's poses: T_world_camera = pre * T_file * post
+/// (e.g. a motion-capture rig's pose -> the camera's, or a change of axes).
+struct PoseCorrection {
+  Eigen::Matrix4d pre = Eigen::Matrix4d::Identity();
+  Eigen::Matrix4d post = Eigen::Matrix4d::Identity();
+  /// Where it came from, for reports.
+  std::string source;
+  Transform Apply(const Transform& T_file) const;
+};
+
+/// Reads a pose correction (YAML): `pre:` and `post:`, each a 4x4 matrix
+/// (4 rows of 4 numbers) or a list of such matrices multiplied left to right;
+/// either may be missing (identity). Each matrix's 3x3 block is replaced by
+/// the nearest rotation (a correction measured with a small scale error stays
+/// rigid); `orthonormalize: false` refuses such matrices instead. Throws
+/// FormatError naming the file and the entry for anything else.
+PoseCorrection ReadPoseCorrection(const std::filesystem::path& path);
+
 void WriteRedwoodLog(const std::filesystem::path& path,
                      const std::vector<Transform>& poses);
 

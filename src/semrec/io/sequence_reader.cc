@@ -112,6 +112,14 @@ SequenceReader::SequenceReader(SequenceIndex index,
   }
   CheckArgument(index_.depth_scale > 0.0,
                 index_.root.string() + ": depth scale must be > 0");
+  if (!options_.pose_correction_path.empty()) {
+    const PoseCorrection correction =
+        ReadPoseCorrection(options_.pose_correction_path);
+    for (FrameRecord& frame : index_.frames) {
+      frame.T_world_camera = correction.Apply(frame.T_world_camera);
+    }
+    index_.pose_source += " corrected by " + correction.source;
+  }
   if (options_.stride > 1 || options_.max_frames > 0) {
     std::vector<FrameRecord> kept;
     for (size_t i = 0; i < index_.frames.size(); i += options_.stride) {

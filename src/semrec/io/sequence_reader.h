@@ -34,6 +34,10 @@ struct SequenceReaderOptions {
   /// Redwood: trajectory file name inside the folder; empty = odometry.log,
   /// then trajectory.log.
   std::string pose_file;
+  /// A pose correction (YAML, see io::ReadPoseCorrection) applied to every
+  /// pose: T_world_camera = pre * T_file * post. For datasets whose poses
+  /// are not the camera's (e.g. data/poses/bonn_rgbd_dynamic.yaml).
+  std::filesystem::path pose_correction_path;
 
   /// Throws InvalidArgument for out-of-range values.
   void Check() const;

@@ -77,6 +77,7 @@ struct PipelineInput {
 
 /// Seconds spent per stage, summed over frames.
 struct StageSeconds {
+  /// Reading and decoding the frame (filled in by whoever reads them).
   double read = 0.0;
   double segment = 0.0;
   double track = 0.0;

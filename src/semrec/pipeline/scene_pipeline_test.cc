@@ -4,6 +4,7 @@
 #include <map>
 #include <set>
 
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include "semrec/core/error.h"
@@ -14,6 +15,8 @@
 #include "semrec/pipeline/reconstruct.h"
 #include "semrec/pipeline/people_3d.h"
 #include "semrec/pipeline/run_sequence.h"
+#include "semrec/pipeline/track_images.h"
+#include "semrec/io/image_io.h"
 #include "semrec/synth/generator.h"
 #include "semrec/testing/test_util.h"
 
@@ -294,6 +297,46 @@ TEST(RunSequence, ResumeGivesTheSameScene) {
   // No checkpoint at all.
   EXPECT_THROW(RunSequence(reader, nullptr, options, dir / "none", Quiet()),
                IoError);
+}
+
+}  // namespace
+}  // namespace semrec::pipeline
+
+namespace semrec::pipeline {
+namespace {
+
+// With a stride, given boxes are looked up by the recording's frame numbers
+// and the result keeps them: image k of every 2nd frame is frame 1 + 2k.
+TEST(TrackImages, StrideKeepsTheRecordingsFrameNumbers) {
+  testing::TempDir dir;
+  std::vector<segment::SegmentInput> inputs;
+  std::map<int, std::vector<track::Detection>> given;
+  for (int frame = 1; frame <= 9; ++frame) {
+    track::Detection d;
+    d.box = {2.0 * frame, 20.0, 30.0, 60.0};  // moves 2 px per frame
+    d.score = 0.9;
+    given[frame].push_back(d);
+    if ((frame - 1) % 2 != 0) continue;  // stride 2: frames 1, 3, 5, 7, 9
+    ColorImage image(160, 120, 3);
+    const std::string name = fmt::format("{:03}.png", frame);
+    io::WritePng(dir / "images" / name, image);
+    inputs.push_back({name, dir / "images" / name});
+  }
+  TrackImagesOptions options;
+  options.people.masks = false;
+  options.people.tracker = track::TrackerOptions::Improved();
+  options.people.tracker.min_hits = 1;
+  options.frame_step = 2;
+  const infer::ModelRegistry registry;
+  const TrackImagesResult r = TrackImages(registry, options, {}, inputs,
+                                          &given, dir / "out", Quiet());
+  ASSERT_EQ(r.boxes.size(), 5u);
+  for (const io::MotBox& b : r.boxes) {
+    EXPECT_EQ((b.frame - 1) % 2, 0) << b.frame;
+    EXPECT_NEAR(b.left, 2.0 * b.frame, 1e-6) << b.frame;
+  }
+  EXPECT_EQ(r.tracks, 1u);
+  EXPECT_TRUE(fs::is_regular_file(dir / "out/persons/005.png"));
 }
 
 }  // namespace
