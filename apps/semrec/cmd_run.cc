@@ -75,8 +75,20 @@ void ApplyConfigFile(CLI::App* cmd, const std::string& path) {
   }
 }
 
-// The effective options as YAML (every option with its value or default).
-std::string EffectiveConfig(const CLI::App* cmd) {
+// Options that change where or how often things are written, not the scene:
+// a run may be resumed with other values.
+bool AffectsOnlyOutputs(const std::string& key) {
+  for (const char* k : {"out", "snapshot-every", "checkpoint-every", "strict",
+                        "threads", "provider", "no-overlays", "no-ply",
+                        "usdz"}) {
+    if (key == k) return true;
+  }
+  return false;
+}
+
+// The effective options as YAML (every option with its value or default);
+// `scene_only` leaves out those that only affect the outputs.
+std::string EffectiveConfig(const CLI::App* cmd, bool scene_only) {
   std::istringstream toml(cmd->config_to_str(/*default_also=*/true));
   std::string out = "# semrec run: the effective options (usable as --config)\n";
   for (std::string line; std::getline(toml, line);) {
@@ -87,16 +99,18 @@ std::string EffectiveConfig(const CLI::App* cmd) {
     }
     std::string key = line.substr(0, eq), value = line.substr(eq + 1);
     if (key == "config" || key == "resume" || key == "overwrite") continue;
+    if (scene_only && AffectsOnlyOutputs(key)) continue;
     if (value == "\"\"" || value.empty()) value = "\"\"";
     out += key + ": " + value + "\n";
   }
   return out;
 }
 
-void RunRun(RunArgs args, CLI::App* cmd) {
+void RunRun(RunArgs& args, CLI::App* cmd) {
   if (!args.config.empty()) ApplyConfigFile(cmd, args.config);
   pipeline::RunOptions& run = args.run;
-  run.config_text = EffectiveConfig(cmd);
+  run.config_text = EffectiveConfig(cmd, /*scene_only=*/false);
+  run.resume_key = EffectiveConfig(cmd, /*scene_only=*/true);
   pipeline::ScenePipelineOptions& p = run.pipeline;
   infer::ModelRegistry registry;
   if (args.labels == "models") {
@@ -235,6 +249,7 @@ void RegisterRun(CLI::App& app) {
   cmd->add_flag("--usdz", args->run.usdz, "Also write scene.usdz");
   cmd->add_flag("--overwrite", args->run.overwrite,
                 "Write into a non-empty output folder (a fresh run)");
+  // By reference: --config sets the options through their bindings.
   cmd->callback([args, cmd] { RunRun(*args, cmd); });
 }
 

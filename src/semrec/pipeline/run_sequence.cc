@@ -25,17 +25,17 @@ namespace fs = std::filesystem;
 namespace semrec::pipeline {
 namespace {
 
+// YAML lines as "key: value; key: value" (comments left out): USD layer
+// metadata strings hold one line.
 std::string OneLine(const std::string& text) {
   std::string out;
-  for (char c : text) {
-    if (c == '\n') {
-      if (!out.empty() && out.back() != ' ') out += "; ";
-    } else {
-      out += c;
-    }
-  }
-  while (!out.empty() && (out.back() == ' ' || out.back() == ';')) {
-    out.pop_back();
+  size_t start = 0;
+  while (start < text.size()) {
+    size_t end = text.find('\n', start);
+    if (end == std::string::npos) end = text.size();
+    const std::string line = text.substr(start, end - start);
+    if (!line.empty() && line[0] != '#') out += (out.empty() ? "" : "; ") + line;
+    start = end + 1;
   }
   return out;
 }
@@ -129,7 +129,8 @@ RunResult RunSequence(const io::SequenceReader& reader,
 
   CheckpointStore store(out_dir / "checkpoint");
   Sha256 config_hash;
-  config_hash.Update(options.config_text);
+  config_hash.Update(options.resume_key.empty() ? options.config_text
+                                                : options.resume_key);
   const RunIdentity identity = {reader.root().string(), reader.layout(),
                                 reader.size(), config_hash.HexDigest()};
   const size_t begin = options.resume ? store.Resume(identity) : 0;

@@ -41,6 +41,9 @@ struct RunOptions {
   /// The effective configuration as text (YAML): written to run.yaml, into
   /// the USD layer metadata, and compared on --resume.
   std::string config_text;
+  /// What a checkpoint must match to be resumed: the options that change the
+  /// scene (empty: config_text).
+  std::string resume_key;
   void Check() const;
 };
 
