@@ -3,6 +3,8 @@
 #include <sys/resource.h>
 
 #include <chrono>
+#include <exception>
+#include <future>
 #include <map>
 #include <memory>
 #include <optional>
@@ -158,10 +160,44 @@ RunResult RunSequence(const io::SequenceReader& reader,
   size_t snapshots = 0;
   double read_seconds = 0.0;
   Progress progress("run", reader.size(), progress_options);
-  for (size_t i = 0; i < reader.size(); ++i) {
-    const io::FrameRecord& record = reader.index().frames[i];
+  // Reading and decoding frame i + 1 overlaps the work on frame i.
+  struct Loaded {
     PipelineInput input;
-    input.name = record.color_path.stem().string() + ".png";
+    std::exception_ptr error;
+    double seconds = 0.0;
+  };
+  const auto load = [&](size_t i) {
+    Loaded loaded;
+    const auto read_start = std::chrono::steady_clock::now();
+    loaded.input.name =
+        reader.index().frames[i].color_path.stem().string() + ".png";
+    try {
+      loaded.input.frame = reader.Read(i);
+      if (!models) {
+        loaded.input.labels = source->Get(reader, i);
+        if (person_maps) loaded.input.person_ids = person_maps->Get(i);
+      }
+    } catch (...) {
+      loaded.error = std::current_exception();
+    }
+    loaded.seconds = std::chrono::duration<double>(
+                         std::chrono::steady_clock::now() - read_start)
+                         .count();
+    return loaded;
+  };
+  std::future<Loaded> next;
+  const auto start_loading = [&](size_t i) {
+    if (i < reader.size()) {
+      next = std::async(options.prefetch ? std::launch::async
+                                         : std::launch::deferred,
+                        load, i);
+    }
+  };
+  start_loading(0);
+  for (size_t i = 0; i < reader.size(); ++i) {
+    Loaded loaded = next.get();
+    start_loading(i + 1);
+    PipelineInput& input = loaded.input;
     const bool replay = i < begin;
     std::optional<CheckpointFrame> saved;
     if (replay) {
@@ -172,24 +208,19 @@ RunResult RunSequence(const io::SequenceReader& reader,
         continue;
       }
     }
-    const auto read_start = std::chrono::steady_clock::now();
-    try {
-      input.frame = reader.Read(i);
-      if (!models) {
-        input.labels = source->Get(reader, i);
-        if (person_maps) input.person_ids = person_maps->Get(i);
+    read_seconds += loaded.seconds;
+    if (loaded.error) {
+      try {
+        std::rethrow_exception(loaded.error);
+      } catch (const FileError& e) {
+        if (options.strict || replay) throw;
+        spdlog::warn("skipping frame {}: {}", i, e.what());
+        skipped.push_back({{"frame", i}, {"reason", e.what()}});
+        store.Record(i, {std::string(e.what()), std::nullopt});
+        progress.Tick();
+        continue;
       }
-    } catch (const FileError& e) {
-      if (options.strict || replay) throw;
-      spdlog::warn("skipping frame {}: {}", i, e.what());
-      skipped.push_back({{"frame", i}, {"reason", e.what()}});
-      store.Record(i, {std::string(e.what()), std::nullopt});
-      progress.Tick();
-      continue;
     }
-    read_seconds += std::chrono::duration<double>(
-                        std::chrono::steady_clock::now() - read_start)
-                        .count();
     if (replay && models) input.replay = saved->outputs;
     const PipelineFrameResult frame = pipeline.Process(input);
     if (replay) {

@@ -32,6 +32,9 @@ struct RunOptions {
   int checkpoint_every = 25;
   /// Continue an interrupted run in the same output folder.
   bool resume = false;
+  /// Read and decode the next frame on another thread while this one is
+  /// processed (off: one after the other; for measurements).
+  bool prefetch = true;
   /// Stop at the first corrupt or missing frame instead of skipping it.
   bool strict = false;
   bool write_ply = true;

@@ -260,6 +260,33 @@ TEST(SceneBuilder, TrackedPeopleStayOutOfTheStaticMap) {
   EXPECT_GT(chair_points_near_people(without), 50u);
 }
 
+// A corrupt or missing frame is skipped with its file named and counted;
+// --strict stops there instead.
+TEST(RunSequence, CorruptFramesAreSkippedAndCounted) {
+  testing::TempDir dir;
+  synth::SynthOptions o = SmallScene("six-objects", 6);
+  synth::WriteSyntheticSequence(o, dir / "seq", Quiet());
+  const io::SequenceReader reader = io::SequenceReader::Open(dir / "seq");
+  const fs::path broken = reader.index().frames[2].depth_path;
+  testing::WriteText(broken, "not a png");
+  fs::remove(reader.index().frames[4].color_path);
+  RunOptions options;
+  options.pipeline.labels = ScenePipelineOptions::Labels::kGiven;
+  options.config_text = "labels: gt\n";
+  const RunResult r = RunSequence(reader, nullptr, options, dir / "out", Quiet());
+  EXPECT_EQ(r.skipped_frames, 2u);
+  const auto& skipped = r.report["skipped_frames"];
+  ASSERT_EQ(skipped.size(), 2u);
+  EXPECT_EQ(skipped[0]["frame"], 2);
+  EXPECT_NE(skipped[0]["reason"].get<std::string>().find(broken.filename().string()),
+            std::string::npos);
+  EXPECT_EQ(skipped[1]["frame"], 4);
+  EXPECT_GT(r.scene.objects, 3u);
+  options.strict = true;
+  EXPECT_THROW(RunSequence(reader, nullptr, options, dir / "strict", Quiet()),
+               FileError);
+}
+
 // A resumed run ends with the same scene as one that was not interrupted; a
 // checkpoint of other options is refused.
 TEST(RunSequence, ResumeGivesTheSameScene) {
