@@ -78,9 +78,9 @@ void ApplyConfigFile(CLI::App* cmd, const std::string& path) {
 // Options that change where or how often things are written, not the scene:
 // a run may be resumed with other values.
 bool AffectsOnlyOutputs(const std::string& key) {
-  for (const char* k : {"out", "snapshot-every", "checkpoint-every", "strict",
-                        "threads", "provider", "no-overlays", "no-ply",
-                        "usdz"}) {
+  for (const char* k :
+       {"out", "snapshot-every", "checkpoint-every", "strict", "threads",
+        "provider", "no-overlays", "no-ply", "usdz"}) {
     if (key == k) return true;
   }
   return false;
@@ -90,7 +90,8 @@ bool AffectsOnlyOutputs(const std::string& key) {
 // `scene_only` leaves out those that only affect the outputs.
 std::string EffectiveConfig(const CLI::App* cmd, bool scene_only) {
   std::istringstream toml(cmd->config_to_str(/*default_also=*/true));
-  std::string out = "# semrec run: the effective options (usable as --config)\n";
+  std::string out =
+      "# semrec run: the effective options (usable as --config)\n";
   for (std::string line; std::getline(toml, line);) {
     const size_t eq = line.find('=');
     if (line.empty() || line[0] == '#' || line[0] == '[' ||

@@ -45,8 +45,8 @@ void RunSegment(SegmentArgs args) {
   const auto inputs =
       segment::ListSegmentInputs(args.input, args.stride, args.max_frames);
   RequireEmptyOrOverwrite(args.out, args.overwrite);
-  const segment::SegmentImagesResult result = segment::SegmentImages(
-      registry, options, inputs, args.out, args.input);
+  const segment::SegmentImagesResult result =
+      segment::SegmentImages(registry, options, inputs, args.out, args.input);
   std::printf("%s", fmt::format("{} images, {} masks, {:.2f} s per image; "
                                 "wrote {}\n",
                                 result.images, result.masks,

@@ -82,4 +82,28 @@ ls "$tmp/clean/overlay" | grep -q png || fail "no overlays"
 "$SEMREC" run --config "$tmp/clean/run.yaml" "$bonn" --out "$tmp/again" >/dev/null 2>"$tmp/again.err" ||
   fail "--config run.yaml: $(tail -3 "$tmp/again.err")"
 same "$tmp/clean/static.usda" "$tmp/again/static.usda" || fail "--config run.yaml gave another scene"
+
+# Real models on 7-Scenes frames: completes, a valid USD scene with objects, overlays.
+chess="$data/7scenes_chess_0_99"
+[ -d "$chess" ] || fail "$chess missing"
+"$SEMREC" run "$chess" --stride 40 --points-per-side 8 --out "$tmp/chess" >"$tmp/chess.out" 2>"$tmp/chess.err" ||
+  fail "chess run: $(tail -5 "$tmp/chess.err")"
+grep -q "3 frames (3 segmented, 0 skipped)" "$tmp/chess.out" || fail "chess: $(cat "$tmp/chess.out")"
+[ "$(ls "$tmp/chess/overlay" | wc -l)" -eq 3 ] || fail "chess: overlays missing"
+/usr/bin/python3 - "$tmp/chess/report.json" <<'PY' || fail "chess report"
+import json, sys
+r = json.load(open(sys.argv[1]))
+assert r["objects"] >= 2 and r["structure"] >= 1, (r["objects"], r["structure"])
+assert {"floor", "table"} <= set(r["objects_per_class"]), r["objects_per_class"]
+assert all(m["sha256"] for m in r["models"]) and len(r["models"]) >= 3, r["models"]
+PY
+pkg="$SEMREC_SOURCE_DIR/.deps/node/node_modules/tinyusdz"
+if [ -f "$pkg/tinyusdz.wasm" ] && command -v node >/dev/null; then
+  node "$SEMREC_SOURCE_DIR/src/semrec/usd/validate_usd.mjs" "$pkg" "$tmp/chess/static.usda" >"$tmp/usd.json" ||
+    fail "tinyusdz could not read the chess scene"
+  /usr/bin/python3 -c "import json,sys; r=json.load(open(sys.argv[1])); assert r['ok'] and len(r['meshes']) >= 3, r.get('error')" \
+    "$tmp/usd.json" || fail "chess static.usda: $(head -c 300 "$tmp/usd.json")"
+else
+  echo "SKIP: tinyusdz/node missing (run scripts/setup)"; exit 77
+fi
 echo ok

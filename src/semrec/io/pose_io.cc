@@ -5,10 +5,10 @@
 #include <sstream>
 #include <string>
 
-#include <Eigen/SVD>
 #include <fmt/format.h>
-#include <nlohmann/json.hpp>
 #include <yaml-cpp/yaml.h>
+#include <Eigen/SVD>
+#include <nlohmann/json.hpp>
 
 #include "semrec/core/error.h"
 #include "semrec/core/file_util.h"
@@ -202,8 +202,8 @@ Eigen::Matrix4d MatrixFromYaml(const YAML::Node& node,
   Eigen::Matrix4d m;
   for (int r = 0; r < 4; ++r) {
     if (!node[r].IsSequence() || node[r].size() != 4) {
-      throw FormatError(path, fmt::format("{}: row {} must have 4 numbers",
-                                          what, r + 1));
+      throw FormatError(
+          path, fmt::format("{}: row {} must have 4 numbers", what, r + 1));
     }
     for (int c = 0; c < 4; ++c) {
       try {
@@ -226,13 +226,15 @@ Eigen::Matrix4d MatrixFromYaml(const YAML::Node& node,
       block, Eigen::ComputeFullU | Eigen::ComputeFullV);
   Eigen::Matrix3d R = svd.matrixU() * svd.matrixV().transpose();
   if (R.determinant() < 0) {
-    throw FormatError(path, what + ": the 3x3 block is a reflection, not a "
-                                   "rotation");
+    throw FormatError(path, what +
+                                ": the 3x3 block is a reflection, not a "
+                                "rotation");
   }
   if (!orthonormalize && (R - block).cwiseAbs().maxCoeff() > 1e-3) {
-    throw FormatError(path, what + ": the 3x3 block is not a rotation (set "
-                                   "orthonormalize: true to use the nearest "
-                                   "one)");
+    throw FormatError(path, what +
+                                ": the 3x3 block is not a rotation (set "
+                                "orthonormalize: true to use the nearest "
+                                "one)");
   }
   m.topLeftCorner<3, 3>() = R;
   return m;
@@ -247,9 +249,9 @@ Eigen::Matrix4d ProductFromYaml(const YAML::Node& node,
       node[0].size() > 0 && node[0][0].IsSequence()) {
     Eigen::Matrix4d product = Eigen::Matrix4d::Identity();
     for (size_t k = 0; k < node.size(); ++k) {
-      product = product * MatrixFromYaml(node[k], path,
-                                         fmt::format("{}[{}]", key, k),
-                                         orthonormalize);
+      product =
+          product * MatrixFromYaml(node[k], path, fmt::format("{}[{}]", key, k),
+                                   orthonormalize);
     }
     return product;
   }

@@ -59,7 +59,8 @@ void CheckpointStore::Start(const RunIdentity& identity) {
   std::error_code ec;
   fs::remove_all(dir_, ec);
   fs::create_directories(dir_ / "frames", ec);
-  if (ec) throw IoError(dir_, "cannot create checkpoint folder: " + ec.message());
+  if (ec)
+    throw IoError(dir_, "cannot create checkpoint folder: " + ec.message());
   WriteTextFileAtomic(dir_ / "identity.json", identity.ToJson().dump(2) + "\n");
   Commit(0);
 }
@@ -83,7 +84,8 @@ size_t CheckpointStore::Resume(const RunIdentity& identity) const {
     if (!saved.contains(key) || saved[key] != now[key]) {
       throw InvalidArgument(fmt::format(
           "cannot resume: the checkpoint in {} belongs to a run with a "
-          "different {} ({} there, {} now); run with the same sequence and options, or "
+          "different {} ({} there, {} now); run with the same sequence and "
+          "options, or "
           "without --resume (and --overwrite) to start afresh",
           dir_.string(), what, saved.contains(key) ? saved[key].dump() : "none",
           now[key].dump()));
@@ -121,9 +123,9 @@ void CheckpointStore::Record(size_t position,
 }
 
 void CheckpointStore::Commit(size_t frames_done) const {
-  WriteTextFileAtomic(dir_ / "state.json",
-                      nlohmann::json({{"frames_done", frames_done}}).dump(2) +
-                          "\n");
+  WriteTextFileAtomic(
+      dir_ / "state.json",
+      nlohmann::json({{"frames_done", frames_done}}).dump(2) + "\n");
 }
 
 CheckpointFrame CheckpointStore::Load(size_t position) const {
@@ -147,8 +149,8 @@ CheckpointFrame CheckpointStore::Load(size_t position) const {
       frame.outputs = std::move(o);
     }
   } catch (const nlohmann::json::exception& e) {
-    throw FormatError(path, std::string("damaged checkpoint record: ") +
-                                e.what());
+    throw FormatError(path,
+                      std::string("damaged checkpoint record: ") + e.what());
   }
   return frame;
 }

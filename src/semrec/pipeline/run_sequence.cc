@@ -4,11 +4,13 @@
 
 #include <chrono>
 #include <exception>
+#include <fstream>
 #include <future>
 #include <map>
 #include <memory>
 #include <optional>
 #include <set>
+#include <string>
 
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
@@ -17,6 +19,7 @@
 #include "semrec/core/file_util.h"
 #include "semrec/core/sha256.h"
 #include "semrec/fuse/fuse_sequence.h"
+#include "semrec/infer/onnx_model.h"
 #include "semrec/io/image_io.h"
 #include "semrec/io/mot_io.h"
 #include "semrec/pipeline/checkpoint.h"
@@ -36,7 +39,8 @@ std::string OneLine(const std::string& text) {
     size_t end = text.find('\n', start);
     if (end == std::string::npos) end = text.size();
     const std::string line = text.substr(start, end - start);
-    if (!line.empty() && line[0] != '#') out += (out.empty() ? "" : "; ") + line;
+    if (!line.empty() && line[0] != '#')
+      out += (out.empty() ? "" : "; ") + line;
     start = end + 1;
   }
   return out;
@@ -45,10 +49,10 @@ std::string OneLine(const std::string& text) {
 std::string StageDetail(const StageSeconds& s, size_t frames) {
   if (frames == 0) return "";
   const double n = static_cast<double>(frames);
-  return fmt::format("per frame: segment {:.2f}s track {:.2f}s fuse {:.0f}ms "
-                     "volumes {:.0f}ms",
-                     s.segment / n, s.track / n, 1000 * s.fuse / n,
-                     1000 * s.volumes / n);
+  return fmt::format(
+      "per frame: segment {:.2f}s track {:.2f}s fuse {:.0f}ms "
+      "volumes {:.0f}ms",
+      s.segment / n, s.track / n, 1000 * s.fuse / n, 1000 * s.volumes / n);
 }
 
 // Registry entries of the models a run uses, with their checksums.
@@ -75,7 +79,18 @@ nlohmann::json ModelsJson(const infer::ModelRegistry* registry,
   for (const std::string& name : names) {
     if (!seen.insert(name).second || !registry->Contains(name)) continue;
     const infer::ModelEntry& e = registry->Get(name);
-    out.push_back({{"name", name}, {"file", e.file}, {"sha256", e.sha256}});
+    // Models made at setup (TFLite conversions) have no registered checksum:
+    // the report gives the installed file's.
+    std::string sha256 = e.sha256;
+    const fs::path file =
+        infer::ModelFile(e, options.segmenter.semantic.runtime);
+    if (sha256.empty() && fs::is_regular_file(file)) {
+      sha256 = Sha256File(file);
+    }
+    out.push_back({{"name", name},
+                   {"file", file.string()},
+                   {"sha256", sha256},
+                   {"sha256_registered", !e.sha256.empty()}});
   }
   return out;
 }
@@ -92,6 +107,14 @@ void RunOptions::Check() const {
 }
 
 size_t PeakRssBytes() {
+  // VmHWM belongs to this process image (getrusage's maximum is carried over
+  // from the parent through fork and exec).
+  std::ifstream status("/proc/self/status");
+  for (std::string line; std::getline(status, line);) {
+    if (line.rfind("VmHWM:", 0) == 0) {
+      return static_cast<size_t>(std::stoull(line.substr(6))) * 1024;  // kB
+    }
+  }
   rusage usage{};
   if (getrusage(RUSAGE_SELF, &usage) != 0) return 0;
   return static_cast<size_t>(usage.ru_maxrss) * 1024;  // Linux: kilobytes
@@ -119,8 +142,8 @@ RunResult RunSequence(const io::SequenceReader& reader,
     source = fuse::SegmentationSource::Create(options.given_labels, reader);
     if (options.pipeline.track_people) {
       std::string people = options.given_people;
-      if (people.empty() && reader.index().frames.front().layers.contains(
-                                "person")) {
+      if (people.empty() &&
+          reader.index().frames.front().layers.contains("person")) {
         people = "gt";
       }
       if (!people.empty()) person_maps.emplace(people, reader);
@@ -138,9 +161,10 @@ RunResult RunSequence(const io::SequenceReader& reader,
   const size_t begin = options.resume ? store.Resume(identity) : 0;
   if (!options.resume) store.Start(identity);
   if (options.resume) {
-    spdlog::info("resuming: {} of {} frames are done; replaying them without "
-                 "the models",
-                 begin, reader.size());
+    spdlog::info(
+        "resuming: {} of {} frames are done; replaying them without "
+        "the models",
+        begin, reader.size());
   }
   WriteTextFileAtomic(out_dir / "run.yaml", options.config_text);
 
@@ -188,9 +212,9 @@ RunResult RunSequence(const io::SequenceReader& reader,
   std::future<Loaded> next;
   const auto start_loading = [&](size_t i) {
     if (i < reader.size()) {
-      next = std::async(options.prefetch ? std::launch::async
-                                         : std::launch::deferred,
-                        load, i);
+      next = std::async(
+          options.prefetch ? std::launch::async : std::launch::deferred, load,
+          i);
     }
   };
   start_loading(0);
@@ -229,15 +253,15 @@ RunResult RunSequence(const io::SequenceReader& reader,
       if (!frame.overlay.empty()) {
         io::WritePng(out_dir / "overlay" / input.name, frame.overlay);
       }
-      store.Record(i, {std::nullopt, models ? std::optional<ModelOutputs>(
-                                                  frame.outputs)
-                                            : std::nullopt});
+      store.Record(
+          i, {std::nullopt, models ? std::optional<ModelOutputs>(frame.outputs)
+                                   : std::nullopt});
       if (options.checkpoint_every > 0 &&
           (i + 1) % options.checkpoint_every == 0) {
         store.Commit(i + 1);
       }
-      if (options.snapshot_every > 0 &&
-          (i + 1) % options.snapshot_every == 0 && i + 1 < reader.size()) {
+      if (options.snapshot_every > 0 && (i + 1) % options.snapshot_every == 0 &&
+          i + 1 < reader.size()) {
         pipeline.Write(out_dir, snapshot);
         ++snapshots;
       }
@@ -331,9 +355,9 @@ std::string RunSummaryTable(const RunResult& result, const fs::path& out_dir) {
                        r.at("seconds_per_frame").at(stage).get<double>());
   }
   out += "\n";
-  out += fmt::format("  {} objects + {} structure:",
-                     r.at("objects").get<size_t>(),
-                     r.at("structure").get<size_t>());
+  out +=
+      fmt::format("  {} objects + {} structure:", r.at("objects").get<size_t>(),
+                  r.at("structure").get<size_t>());
   for (const auto& [name, count] : r.at("objects_per_class").items()) {
     out += fmt::format(" {} {}", count.get<int>(), name);
   }

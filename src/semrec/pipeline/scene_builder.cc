@@ -75,6 +75,37 @@ nlohmann::json GravityJson(const fuse::GravityEstimate& gravity,
           {"T_upright_world", upright_matrix}};
 }
 
+std::vector<usd::PersonTrack> FollowTracks(
+    std::vector<usd::PersonTrack> tracks,
+    const std::map<uint32_t, std::set<size_t>>& frames) {
+  std::vector<usd::PersonTrack> out;
+  for (usd::PersonTrack& track : tracks) {
+    const auto listed = frames.find(track.track_id);
+    if (listed == frames.end()) continue;
+    const std::vector<usd::PersonSample> observed = std::move(track.samples);
+    track.samples.clear();
+    size_t next = 0;  // first observation at or after the frame
+    for (const size_t frame : listed->second) {
+      while (next < observed.size() && observed[next].frame < frame) ++next;
+      if (next < observed.size() && observed[next].frame == frame) {
+        track.samples.push_back(observed[next]);
+      } else if (next > 0 && next < observed.size()) {
+        const usd::PersonSample& a = observed[next - 1];
+        const usd::PersonSample& b = observed[next];
+        const float t = static_cast<float>(frame - a.frame) /
+                        static_cast<float>(b.frame - a.frame);
+        usd::PersonSample filled;
+        filled.frame = frame;
+        filled.centroid_world =
+            (1.0f - t) * a.centroid_world + t * b.centroid_world;
+        track.samples.push_back(std::move(filled));
+      }
+    }
+    if (!track.samples.empty()) out.push_back(std::move(track));
+  }
+  return out;
+}
+
 fuse::FrameLabels WithoutPeople(const fuse::FrameLabels& labels,
                                 const LabelMap& person_ids) {
   CheckArgument(labels.instance.SameSize(person_ids),
@@ -112,8 +143,8 @@ SceneFrameStats SceneBuilder::Add(const Frame& frame,
   const fuse::FrameLabels static_labels =
       person_ids != nullptr ? WithoutPeople(*labels, *person_ids) : *labels;
   auto start = std::chrono::steady_clock::now();
-  const auto segments = fuse::ExtractFrameSegments(frame, static_labels,
-                                                   classes_, options_.extraction);
+  const auto segments = fuse::ExtractFrameSegments(
+      frame, static_labels, classes_, options_.extraction);
   const fuse::FrameFusionStats fused = fusion_.Integrate(segments, frame.index);
   stats.segments = segments.size();
   stats.fusion_seconds = SecondsSince(start);
@@ -264,18 +295,15 @@ SceneWriteResult SceneBuilder::Write(const fs::path& out_dir,
   const auto& gm = T_up.Matrix();
   for (int r = 0; r < 4; ++r) {
     for (int c = 0; c < 4; ++c) {
-      result.upright_matrix += fmt::format("{}{:.6g}", r + c ? " " : "", gm(r, c));
+      result.upright_matrix +=
+          fmt::format("{}{:.6g}", r + c ? " " : "", gm(r, c));
     }
   }
   stage.custom_layer_data["T_upright_world"] = result.upright_matrix;
   stage.custom_layer_data["gravity"] = result.gravity.method;
 
   std::vector<usd::PersonTrack> tracks = people_.Tracks();
-  if (person_filter_) {
-    std::erase_if(tracks, [&](const usd::PersonTrack& track) {
-      return !person_filter_(track.track_id);
-    });
-  }
+  if (person_frames_) tracks = FollowTracks(std::move(tracks), *person_frames_);
   for (usd::PersonTrack& track : tracks) {
     for (usd::PersonSample& sample : track.samples) {
       sample.centroid_world = R_up * sample.centroid_world + t_up;

@@ -19,6 +19,8 @@
 #include <filesystem>
 #include <functional>
 #include <map>
+#include <optional>
+#include <set>
 #include <string>
 #include <utility>
 #include <vector>
@@ -128,10 +130,13 @@ class SceneBuilder {
   std::vector<usd::PersonTrack> PeopleTracks() const {
     return people_.Tracks();
   }
-  /// Keeps only the people tracks `keep(track id)` accepts (e.g. those the
-  /// offline track smoothing kept).
-  void set_person_filter(std::function<bool(uint32_t)> keep) {
-    person_filter_ = std::move(keep);
+  /// The people prims follow these tracks (e.g. the offline-smoothed ones of
+  /// tracks.txt): track id -> the frame indices it has a box in. Tracks not
+  /// listed are left out, observations in frames not listed dropped, and
+  /// listed frames without an observation (gaps the smoothing filled) get a
+  /// position interpolated between the observations around them.
+  void set_person_frames(std::map<uint32_t, std::set<size_t>> frames) {
+    person_frames_ = std::move(frames);
   }
   size_t frames() const { return cameras_.size(); }
   size_t labelled_frames() const { return labelled_frames_; }
@@ -143,7 +148,7 @@ class SceneBuilder {
   fuse::SceneFusion fusion_;
   mesh::ObjectMesher mesher_;
   People3d people_;
-  std::function<bool(uint32_t)> person_filter_;
+  std::optional<std::map<uint32_t, std::set<size_t>>> person_frames_;
   std::vector<Transform> cameras_;
   double first_timestamp_s_ = 0.0, last_timestamp_s_ = 0.0;
   size_t labelled_frames_ = 0;
@@ -151,6 +156,11 @@ class SceneBuilder {
   /// Two-pass only: per labelled frame, (frame label, object id at the time).
   std::vector<std::vector<std::pair<uint16_t, uint32_t>>> assignments_;
 };
+
+/// `tracks` reduced to `frames` (see SceneBuilder::set_person_frames).
+std::vector<usd::PersonTrack> FollowTracks(
+    std::vector<usd::PersonTrack> tracks,
+    const std::map<uint32_t, std::set<size_t>>& frames);
 
 /// The gravity estimate for summary.json / report.json.
 nlohmann::json GravityJson(const fuse::GravityEstimate& gravity,

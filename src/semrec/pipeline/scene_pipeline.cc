@@ -44,7 +44,8 @@ std::vector<PersonObservation> PeopleFromIdMap(const LabelMap& person_ids) {
     for (int x = 0; x < w; ++x) {
       const uint16_t id = person_ids(x, y);
       if (id == 0) continue;
-      auto [it, added] = boxes.try_emplace(id, segment::Box{x, y, x + 1, y + 1});
+      auto [it, added] =
+          boxes.try_emplace(id, segment::Box{x, y, x + 1, y + 1});
       segment::Box& b = it->second;
       b.x0 = std::min(b.x0, x);
       b.y0 = std::min(b.y0, y);
@@ -57,7 +58,8 @@ std::vector<PersonObservation> PeopleFromIdMap(const LabelMap& person_ids) {
     PersonObservation p;
     p.box.track_id = id;
     p.box.box = {static_cast<double>(b.x0), static_cast<double>(b.y0),
-                 static_cast<double>(b.width()), static_cast<double>(b.height())};
+                 static_cast<double>(b.width()),
+                 static_cast<double>(b.height())};
     p.mask.image_width = w;
     p.mask.image_height = h;
     p.mask.box = b;
@@ -82,13 +84,13 @@ ScenePipeline::ScenePipeline(const infer::ModelRegistry* registry,
   if (options_.labels == ScenePipelineOptions::Labels::kModels) {
     CheckArgument(registry != nullptr,
                   "pipeline: running the models needs a model registry");
-    segmenter_ =
-        std::make_unique<segment::HybridSegmenter>(*registry, options_.segmenter);
+    segmenter_ = std::make_unique<segment::HybridSegmenter>(*registry,
+                                                            options_.segmenter);
     if (options_.track_people) {
       tracker_ = std::make_unique<PeopleTracker>(*registry, options_.people);
     }
-    builder_ = std::make_unique<SceneBuilder>(segmenter_->label_set(),
-                                              options_.scene);
+    builder_ =
+        std::make_unique<SceneBuilder>(segmenter_->label_set(), options_.scene);
   } else {
     CheckArgument(given_classes != nullptr,
                   "pipeline: given labels need their class table");
@@ -101,8 +103,7 @@ ScenePipeline::~ScenePipeline() = default;
 PipelineFrameResult ScenePipeline::Process(const PipelineInput& input) {
   CheckArgument(!finished_, "pipeline: Process() after Finish()");
   const Frame& frame = input.frame;
-  const bool models =
-      options_.labels == ScenePipelineOptions::Labels::kModels;
+  const bool models = options_.labels == ScenePipelineOptions::Labels::kModels;
   PipelineFrameResult result;
   Stopwatch watch;
 
@@ -159,7 +160,8 @@ PipelineFrameResult ScenePipeline::Process(const PipelineInput& input) {
       people = PeopleFromIdMap(*person_ids);
     }
     for (const PersonObservation& p : people) {
-      track_points_.push_back({static_cast<int>(frame.index) + 1, p.box, false});
+      track_points_.push_back(
+          {static_cast<int>(frame.index) + 1, p.box, false});
     }
   }
   seconds_.track += watch.Lap();
@@ -196,13 +198,13 @@ void ScenePipeline::Finish() {
   finished_ = true;
   builder_->Finish();
   finished_tracks_ = track::FinishTracks(track_points_, options_.offline);
-  // People prims show the tracks the result file keeps.
-  std::set<uint32_t> kept;
+  // People prims show the tracks the result file keeps, in its frames.
+  std::map<uint32_t, std::set<size_t>> frames;
   for (const track::TrackPoint& p : finished_tracks_) {
-    kept.insert(static_cast<uint32_t>(p.box.track_id));
+    frames[static_cast<uint32_t>(p.box.track_id)].insert(
+        static_cast<size_t>(p.frame - 1));
   }
-  builder_->set_person_filter(
-      [kept](uint32_t id) { return kept.contains(id); });
+  builder_->set_person_frames(std::move(frames));
 }
 
 SceneWriteResult ScenePipeline::Write(const std::filesystem::path& out_dir,

@@ -124,21 +124,20 @@ ColorImage RenderLabelOverlay(const ColorImage& rgb, const LabelMap& semantic,
   const double scale = std::clamp(w / 1200.0, 0.35, 1.0);
   for (const auto& [inst, r] : regions) {
     if (r.area < 400) continue;  // no room for a name
-    const uint16_t id =
-        std::max_element(r.classes.begin(), r.classes.end(),
-                         [](const auto& a, const auto& b) {
-                           return a.second < b.second;
-                         })
-            ->first;
+    const uint16_t id = std::max_element(r.classes.begin(), r.classes.end(),
+                                         [](const auto& a, const auto& b) {
+                                           return a.second < b.second;
+                                         })
+                            ->first;
     if (id == 0 && !labels.Contains(0)) continue;
     const std::string name =
         labels.Contains(id) ? labels.Get(id).name : std::to_string(id);
     int baseline = 0;
     const cv::Size size =
         cv::getTextSize(name, cv::FONT_HERSHEY_SIMPLEX, scale, 1, &baseline);
-    const cv::Point at(std::clamp(r.bx - size.width / 2, 0,
-                                  std::max(0, w - size.width)),
-                       std::clamp(r.by + size.height / 2, size.height, h - 1));
+    const cv::Point at(
+        std::clamp(r.bx - size.width / 2, 0, std::max(0, w - size.width)),
+        std::clamp(r.by + size.height / 2, size.height, h - 1));
     cv::putText(canvas, name, at, cv::FONT_HERSHEY_SIMPLEX, scale,
                 cv::Scalar(0, 0, 0), 3, cv::LINE_AA);
     cv::putText(canvas, name, at, cv::FONT_HERSHEY_SIMPLEX, scale,

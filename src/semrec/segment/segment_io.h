@@ -30,8 +30,7 @@ std::vector<SegmentInput> ListSegmentInputs(const std::filesystem::path& path,
 /// The colour overlay: image blended with class colours, instance outlines,
 /// each instance's class name (majority of its pixels) at its centroid.
 ColorImage RenderLabelOverlay(const ColorImage& rgb, const LabelMap& semantic,
-                              const LabelMap& instance,
-                              const LabelSet& labels);
+                              const LabelMap& instance, const LabelSet& labels);
 /// RenderLabelOverlay of the vote's maps.
 ColorImage RenderOverlay(const ColorImage& rgb, const HybridResult& result,
                          const LabelSet& labels);
