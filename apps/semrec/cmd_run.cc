@@ -102,7 +102,7 @@ std::string EffectiveConfig(const CLI::App* cmd, bool scene_only) {
     if (key == "config" || key == "resume" || key == "overwrite") continue;
     if (scene_only && AffectsOnlyOutputs(key)) continue;
     if (value == "\"\"" || value.empty()) value = "\"\"";
-    out += key + ": " + value + "\n";
+    out += fmt::format("{}: {}\n", key, value);
   }
   return out;
 }

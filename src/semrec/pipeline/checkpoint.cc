@@ -59,8 +59,9 @@ void CheckpointStore::Start(const RunIdentity& identity) {
   std::error_code ec;
   fs::remove_all(dir_, ec);
   fs::create_directories(dir_ / "frames", ec);
-  if (ec)
+  if (ec) {
     throw IoError(dir_, "cannot create checkpoint folder: " + ec.message());
+  }
   WriteTextFileAtomic(dir_ / "identity.json", identity.ToJson().dump(2) + "\n");
   Commit(0);
 }

@@ -80,12 +80,8 @@ ReconstructResult Reconstruct(const io::SequenceReader& reader,
         });
   }
 
-  SceneWriteOptions write;
-  write.write_ply = options.write_ply;
-  write.usdz = options.usdz;
-  write.custom_layer_data["input"] =
-      fmt::format("{} ({} layout, {} frames)", reader.root().string(),
-                  reader.layout(), reader.size());
+  SceneWriteOptions write =
+      SceneWriteOptions::For(reader, options.write_ply, options.usdz);
   if (person_maps) write.custom_layer_data["people"] = options.people;
   const SceneWriteResult written = builder.Write(out_dir, write);
   if (written.skipped_empty_objects > 0) {

@@ -39,8 +39,9 @@ std::string OneLine(const std::string& text) {
     size_t end = text.find('\n', start);
     if (end == std::string::npos) end = text.size();
     const std::string line = text.substr(start, end - start);
-    if (!line.empty() && line[0] != '#')
+    if (!line.empty() && line[0] != '#') {
       out += (out.empty() ? "" : "; ") + line;
+    }
     start = end + 1;
   }
   return out;
@@ -168,12 +169,8 @@ RunResult RunSequence(const io::SequenceReader& reader,
   }
   WriteTextFileAtomic(out_dir / "run.yaml", options.config_text);
 
-  SceneWriteOptions write;
-  write.write_ply = options.write_ply;
-  write.usdz = options.usdz;
-  write.custom_layer_data["input"] =
-      fmt::format("{} ({} layout, {} frames)", reader.root().string(),
-                  reader.layout(), reader.size());
+  SceneWriteOptions write =
+      SceneWriteOptions::For(reader, options.write_ply, options.usdz);
   write.custom_layer_data["config"] = OneLine(options.config_text);
   SceneWriteOptions snapshot = write;
   snapshot.write_ply = false;

@@ -56,6 +56,17 @@ usd::MeshPrim ToPrim(const open3d::geometry::TriangleMesh& m,
 
 }  // namespace
 
+SceneWriteOptions SceneWriteOptions::For(const io::SequenceReader& reader,
+                                         bool write_ply, bool usdz) {
+  SceneWriteOptions o;
+  o.write_ply = write_ply;
+  o.usdz = usdz;
+  o.custom_layer_data["input"] =
+      fmt::format("{} ({} layout, {} frames)", reader.root().string(),
+                  reader.layout(), reader.size());
+  return o;
+}
+
 void SceneBuilderOptions::Check() const {
   fusion.Check();
   extraction.Check();

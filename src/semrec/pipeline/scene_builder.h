@@ -32,6 +32,7 @@
 #include "semrec/fuse/fusion.h"
 #include "semrec/fuse/gravity.h"
 #include "semrec/fuse/segments.h"
+#include "semrec/io/sequence_reader.h"
 #include "semrec/mesh/object_mesher.h"
 #include "semrec/pipeline/people_3d.h"
 #include "semrec/usd/usda_writer.h"
@@ -90,6 +91,9 @@ struct SceneWriteOptions {
   bool usdz = false;
   /// Provenance for the USD layer metadata (customLayerData), e.g. "input".
   std::map<std::string, std::string> custom_layer_data;
+  /// These options with "input" naming `reader`'s sequence.
+  static SceneWriteOptions For(const io::SequenceReader& reader, bool write_ply,
+                               bool usdz);
 };
 
 class SceneBuilder {

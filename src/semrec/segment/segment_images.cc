@@ -2,6 +2,8 @@
 
 #include <chrono>
 
+#include <nlohmann/json.hpp>
+
 #include "semrec/core/error.h"
 #include "semrec/core/file_util.h"
 #include "semrec/io/image_io.h"
@@ -54,21 +56,22 @@ SegmentImagesResult SegmentImages(const infer::ModelRegistry& registry,
       mask_model.resize(mask_model.size() - suffix.size());
     }
   }
-  result.summary = {{"input", description},
-                    {"images", inputs.size()},
-                    {"semantic_model", options.semantic.model},
-                    {"mask_model", mask_model},
-                    {"label_set", segmenter.label_set().name()},
-                    {"points_per_side", m.points_per_side},
-                    {"pred_iou_threshold", m.pred_iou_threshold},
-                    {"stability_threshold", m.stability_threshold},
-                    {"box_nms_threshold", m.box_nms_threshold},
-                    {"min_region_area_px", m.min_region_area_px},
-                    {"crop_layers", m.crop_layers},
-                    {"skip_covered_points", m.skip_covered_points},
-                    {"covered_similarity", m.covered_similarity},
-                    {"seconds_per_image", result.seconds_per_image}};
-  WriteTextFileAtomic(out_dir / "summary.json", result.summary.dump(2) + "\n");
+  const nlohmann::json summary = {
+      {"input", description},
+      {"images", inputs.size()},
+      {"semantic_model", options.semantic.model},
+      {"mask_model", mask_model},
+      {"label_set", segmenter.label_set().name()},
+      {"points_per_side", m.points_per_side},
+      {"pred_iou_threshold", m.pred_iou_threshold},
+      {"stability_threshold", m.stability_threshold},
+      {"box_nms_threshold", m.box_nms_threshold},
+      {"min_region_area_px", m.min_region_area_px},
+      {"crop_layers", m.crop_layers},
+      {"skip_covered_points", m.skip_covered_points},
+      {"covered_similarity", m.covered_similarity},
+      {"seconds_per_image", result.seconds_per_image}};
+  WriteTextFileAtomic(out_dir / "summary.json", summary.dump(2) + "\n");
   return result;
 }
 

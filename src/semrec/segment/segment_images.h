@@ -7,8 +7,6 @@
 #include <string>
 #include <vector>
 
-#include <nlohmann/json.hpp>
-
 #include "semrec/core/progress.h"
 #include "semrec/infer/model_registry.h"
 #include "semrec/segment/hybrid_segmenter.h"
@@ -20,8 +18,6 @@ struct SegmentImagesResult {
   size_t images = 0;
   size_t masks = 0;
   double seconds_per_image = 0.0;
-  /// What summary.json holds.
-  nlohmann::json summary;
 };
 
 /// Segments `inputs` into `out_dir` (a label folder `semrec fuse|mesh|run
