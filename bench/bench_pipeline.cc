@@ -46,7 +46,7 @@ fs::path Scratch() {
 }
 
 fs::path Synthetic(const std::string& preset, int frames) {
-  const fs::path dir = Scratch() / (preset + "_" + std::to_string(frames));
+  fs::path dir = Scratch() / (preset + "_" + std::to_string(frames));
   if (!fs::exists(dir / "sequence.yaml")) {
     synth::SynthOptions o = synth::SynthOptions::Preset(preset);
     o.frames = frames;

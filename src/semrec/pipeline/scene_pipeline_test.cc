@@ -51,7 +51,8 @@ double MaxNearestDistance(const std::vector<Eigen::Vector3f>& a,
   const size_t step = std::max<size_t>(1, a.size() / 400);
   for (size_t i = 0; i < a.size(); i += step) {
     double best = 1e9;
-    for (const auto& q : b) best = std::min(best, double((a[i] - q).norm()));
+    for (const auto& q : b)
+      best = std::min(best, static_cast<double>((a[i] - q).norm()));
     worst = std::max(worst, best);
   }
   return worst;
@@ -159,8 +160,9 @@ TEST(RunSequence, GroundTruthLabelsAndPeople) {
   EXPECT_EQ(r.skipped_frames, 0u);
   std::map<std::string, int> per_class;
   for (const auto& object : r.scene.objects_json) {
-    if (object["kind"] == "object")
+    if (object["kind"] == "object") {
       ++per_class[object["class"].get<std::string>()];
+    }
   }
   for (const char* cls : {"sofa", "shelf", "table", "chair", "plant"}) {
     EXPECT_EQ(per_class[cls], 1) << cls;
