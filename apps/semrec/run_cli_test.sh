@@ -20,6 +20,11 @@ done
 # Missing poses / bad files are clear errors.
 "$SEMREC" run /nonexistent/seq --out "$tmp/x" 2>"$tmp/err"; rc=$?
 [ "$rc" -eq 1 ] && grep -q "sequence path does not exist" "$tmp/err" || fail "missing sequence: $rc $(cat "$tmp/err")"
+# A TUM sequence without poses: refused, saying that semrec does not estimate them.
+mkdir -p "$tmp/nopose" && cp "$bonn/rgb.txt" "$bonn/depth.txt" "$tmp/nopose/"
+"$SEMREC" run "$tmp/nopose" --out "$tmp/x" 2>"$tmp/err"; rc=$?
+[ "$rc" -eq 1 ] && grep -q "groundtruth.txt: no camera poses.*does not estimate them" "$tmp/err" ||
+  fail "sequence without poses: $rc $(cat "$tmp/err")"
 printf 'stride: [1, 2]\n' >"$tmp/bad.yaml"
 "$SEMREC" run "$bonn" --config "$tmp/bad.yaml" --out "$tmp/x" 2>"$tmp/err"; rc=$?
 [ "$rc" -eq 1 ] && grep -q "bad.yaml.*stride" "$tmp/err" || fail "bad config: $rc $(cat "$tmp/err")"

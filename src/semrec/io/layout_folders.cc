@@ -93,8 +93,9 @@ std::optional<SequenceIndex> IndexRedwood(
       const auto logs = ListFiles(folder, {".log"});
       if (logs.empty()) {
         throw IoError(folder / "odometry.log",
-                      "no trajectory file (odometry.log, trajectory.log or "
-                      "*.log) in the folder");
+                      std::string("no trajectory file (odometry.log, "
+                                  "trajectory.log or *.log) in the folder: ") +
+                          kNoPoses);
       }
       pose_path = logs.front();
     }

@@ -83,7 +83,9 @@ std::optional<SequenceIndex> IndexTum(const fs::path& folder,
     return std::nullopt;
   }
   const fs::path gt_path = folder / "groundtruth.txt";
-  RequireFile(gt_path, "TUM trajectory (groundtruth.txt)");
+  if (!fs::is_regular_file(gt_path)) {
+    throw IoError(gt_path, std::string("no camera poses: ") + kNoPoses);
+  }
   const auto colors = ReadFileList(folder / "rgb.txt");
   const auto depths = ReadFileList(folder / "depth.txt");
   const auto poses = ReadTumTrajectory(gt_path);

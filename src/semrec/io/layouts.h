@@ -10,6 +10,12 @@
 
 namespace semrec::io::internal {
 
+/// What a sequence without poses is told: semrec fuses frames at given poses.
+inline constexpr const char* kNoPoses =
+    "semrec needs a camera pose for every frame and does not estimate them "
+    "(pose estimation is out of scope): run a SLAM or odometry tool first and "
+    "store its trajectory in the layout's pose file";
+
 std::optional<SequenceIndex> IndexManifest(
     const std::filesystem::path& path, const SequenceReaderOptions& options);
 std::optional<SequenceIndex> IndexTum(const std::filesystem::path& folder,

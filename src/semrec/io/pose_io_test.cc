@@ -50,5 +50,45 @@ TEST(PoseIo, IntrinsicsFiles) {
   EXPECT_EQ(b, (CameraIntrinsics{640, 480, 585.0, 586.0, 320.0, 240.0}));
 }
 
+// T_world_camera = pre * T_file * post, lists multiplied left to right, a
+// scaled 3x3 block replaced by its rotation (or refused when asked), bad
+// entries named.
+TEST(PoseIo, PoseCorrection) {
+  semrec::testing::TempDir dir;
+  semrec::testing::WriteText(dir / "c.yaml",
+                             "pre: [[-1,0,0,0],[0,0,1,0],[0,1,0,0],[0,0,0,1]]\n"
+                             "post:\n"
+                             "  - [[1,0,0,1],[0,1,0,0],[0,0,1,0],[0,0,0,1]]\n"
+                             "  - [[2,0,0,0],[0,2,0,0],[0,0,2,0],[0,0,0,1]]\n");
+  const PoseCorrection c = ReadPoseCorrection(dir / "c.yaml");
+  const Transform T_file(
+      Eigen::AngleAxisd(0.4, Eigen::Vector3d::UnitZ()).toRotationMatrix(),
+      {1, 2, 3});
+  Eigen::Matrix4d pre, post = Eigen::Matrix4d::Identity();
+  pre << -1, 0, 0, 0, 0, 0, 1, 0, 0, 1, 0, 0, 0, 0, 0, 1;
+  post(0, 3) = 1;  // the scale of the second matrix is orthonormalised away
+  const Eigen::Matrix4d expected = pre * T_file.Matrix() * post;
+  EXPECT_TRUE(c.Apply(T_file).Matrix().isApprox(expected, 1e-12));
+  // The whole chain keeps rotations rigid.
+  const Eigen::Matrix3d R = c.Apply(T_file).rotation();
+  EXPECT_NEAR((R * R.transpose() - Eigen::Matrix3d::Identity()).norm(), 0,
+              1e-9);
+
+  semrec::testing::WriteText(dir / "strict.yaml",
+                             "orthonormalize: false\npost: "
+                             "[[2,0,0,0],[0,2,0,0],[0,0,2,0],[0,0,0,1]]\n");
+  EXPECT_THROW(ReadPoseCorrection(dir / "strict.yaml"), FormatError);
+  semrec::testing::WriteText(dir / "bad.yaml", "pre: [[1,0,0],[0,1,0]]\n");
+  try {
+    ReadPoseCorrection(dir / "bad.yaml");
+    FAIL() << "a 2x3 matrix was accepted";
+  } catch (const FormatError& e) {
+    EXPECT_NE(std::string(e.what()).find("pre"), std::string::npos) << e.what();
+  }
+  semrec::testing::WriteText(dir / "key.yaml", "prefix: 1\n");
+  EXPECT_THROW(ReadPoseCorrection(dir / "key.yaml"), FormatError);
+  EXPECT_THROW(ReadPoseCorrection(dir / "missing.yaml"), IoError);
+}
+
 }  // namespace
 }  // namespace semrec::io
