@@ -214,6 +214,18 @@ RunResult RunSequence(const io::SequenceReader& reader,
           i);
     }
   };
+  // Fusion and volumes of frame i run on another thread while the models
+  // work on frame i + 1 (each side keeps frame order).
+  std::future<void> integrating;
+  bool tick_pending = false;
+  const auto wait_integrating = [&] {
+    if (integrating.valid()) integrating.get();
+    if (tick_pending) {
+      progress.set_detail(StageDetail(pipeline.seconds(), pipeline.frames()));
+      progress.Tick();
+      tick_pending = false;
+    }
+  };
   start_loading(0);
   for (size_t i = 0; i < reader.size(); ++i) {
     Loaded loaded = next.get();
@@ -224,6 +236,7 @@ RunResult RunSequence(const io::SequenceReader& reader,
     if (replay) {
       saved = store.Load(i);
       if (saved->skipped) {
+        wait_integrating();
         skipped.push_back({{"frame", i}, {"reason", *saved->skipped}});
         progress.Tick();
         continue;
@@ -231,6 +244,7 @@ RunResult RunSequence(const io::SequenceReader& reader,
     }
     read_seconds += loaded.seconds;
     if (loaded.error) {
+      wait_integrating();
       try {
         std::rethrow_exception(loaded.error);
       } catch (const FileError& e) {
@@ -243,12 +257,17 @@ RunResult RunSequence(const io::SequenceReader& reader,
       }
     }
     if (replay && models) input.replay = saved->outputs;
-    const PipelineFrameResult frame = pipeline.Process(input);
-    if (replay) {
-      ++result.resumed_frames;
-    } else {
+    PreparedFrame prepared = pipeline.Prepare(input);
+    wait_integrating();
+    const auto integrate = [&, i, replay, name = input.name,
+                            prepared = std::move(prepared)]() mutable {
+      const PipelineFrameResult frame = pipeline.Integrate(std::move(prepared));
+      if (replay) {
+        ++result.resumed_frames;
+        return;
+      }
       if (!frame.overlay.empty()) {
-        io::WritePng(out_dir / "overlay" / input.name, frame.overlay);
+        io::WritePng(out_dir / "overlay" / name, frame.overlay);
       }
       store.Record(
           i, {std::nullopt, models ? std::optional<ModelOutputs>(frame.outputs)
@@ -262,10 +281,13 @@ RunResult RunSequence(const io::SequenceReader& reader,
         pipeline.Write(out_dir, snapshot);
         ++snapshots;
       }
-    }
-    progress.set_detail(StageDetail(pipeline.seconds(), pipeline.frames()));
-    progress.Tick();
+    };
+    integrating =
+        std::async(options.overlap ? std::launch::async : std::launch::deferred,
+                   std::move(integrate));
+    tick_pending = true;
   }
+  wait_integrating();
   progress.Finish();
   store.Commit(reader.size());
 

@@ -35,6 +35,9 @@ struct RunOptions {
   /// Read and decode the next frame on another thread while this one is
   /// processed (off: one after the other; for measurements).
   bool prefetch = true;
+  /// Fuse and integrate frame i on another thread while the models work on
+  /// frame i + 1 (off: one after the other; for measurements).
+  bool overlap = true;
   /// Stop at the first corrupt or missing frame instead of skipping it.
   bool strict = false;
   bool write_ply = true;

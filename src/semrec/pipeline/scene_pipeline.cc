@@ -101,14 +101,20 @@ ScenePipeline::ScenePipeline(const infer::ModelRegistry* registry,
 ScenePipeline::~ScenePipeline() = default;
 
 PipelineFrameResult ScenePipeline::Process(const PipelineInput& input) {
+  return Integrate(Prepare(input));
+}
+
+PreparedFrame ScenePipeline::Prepare(const PipelineInput& input) {
   CheckArgument(!finished_, "pipeline: Process() after Finish()");
   const Frame& frame = input.frame;
   const bool models = options_.labels == ScenePipelineOptions::Labels::kModels;
-  PipelineFrameResult result;
+  PreparedFrame prepared;
+  prepared.frame = input.frame;
+  prepared.replay = input.replay.has_value();
   Stopwatch watch;
 
   // Segmentation: every segment_every-th frame (the first one always).
-  std::optional<fuse::FrameLabels> labels;
+  std::optional<fuse::FrameLabels>& labels = prepared.labels;
   if (input.replay) {
     CheckArgument(models, "pipeline: replay is for model outputs");
     labels = input.replay->labels;
@@ -132,8 +138,8 @@ PipelineFrameResult ScenePipeline::Process(const PipelineInput& input) {
   seconds_.segment += watch.Lap();
 
   // People: every frame.
-  std::vector<PersonObservation> people;
-  std::optional<LabelMap> person_ids;
+  std::vector<PersonObservation>& people = prepared.people;
+  std::optional<LabelMap>& person_ids = prepared.person_ids;
   const int w = frame.color.width(), h = frame.color.height();
   if (options_.track_people) {
     if (input.replay) {
@@ -144,7 +150,7 @@ PipelineFrameResult ScenePipeline::Process(const PipelineInput& input) {
         p.box = box;
         people.push_back(std::move(p));
       }
-      result.outputs.tracker_input = input.replay->tracker_input;
+      prepared.tracker_input = input.replay->tracker_input;
     } else if (models) {
       PeopleFrame tracked;
       try {
@@ -154,7 +160,7 @@ PipelineFrameResult ScenePipeline::Process(const PipelineInput& input) {
       }
       people = std::move(tracked.people);
       person_ids = PersonInstanceMap(people, w, h);
-      result.outputs.tracker_input = std::move(tracked.tracker_input);
+      prepared.tracker_input = std::move(tracked.tracker_input);
     } else if (input.person_ids) {
       person_ids = input.person_ids;
       people = PeopleFromIdMap(*person_ids);
@@ -165,30 +171,40 @@ PipelineFrameResult ScenePipeline::Process(const PipelineInput& input) {
     }
   }
   seconds_.track += watch.Lap();
+  ++frames_;
+  return prepared;
+}
 
-  const SceneFrameStats stats = builder_->Add(
-      frame, labels ? &*labels : nullptr, person_ids ? &*person_ids : nullptr);
+PipelineFrameResult ScenePipeline::Integrate(PreparedFrame prepared) {
+  const bool models = options_.labels == ScenePipelineOptions::Labels::kModels;
+  const std::optional<fuse::FrameLabels>& labels = prepared.labels;
+  const std::optional<LabelMap>& person_ids = prepared.person_ids;
+  PipelineFrameResult result;
+  Stopwatch watch;
+  const SceneFrameStats stats =
+      builder_->Add(prepared.frame, labels ? &*labels : nullptr,
+                    person_ids ? &*person_ids : nullptr);
   seconds_.fuse += stats.fusion_seconds;
   seconds_.volumes += stats.volume_seconds;
   watch.Lap();
 
-  if (options_.overlays && !input.replay) {
-    const ColorImage base =
-        labels ? segment::RenderLabelOverlay(frame.color, labels->semantic,
-                                             labels->instance, classes())
-               : frame.color;
-    result.overlay = RenderPeopleOverlay(base, people);
+  if (options_.overlays && !prepared.replay) {
+    const ColorImage base = labels ? segment::RenderLabelOverlay(
+                                         prepared.frame.color, labels->semantic,
+                                         labels->instance, classes())
+                                   : prepared.frame.color;
+    result.overlay = RenderPeopleOverlay(base, prepared.people);
   }
   seconds_.overlay += watch.Lap();
 
   if (models) {
+    result.outputs.tracker_input = std::move(prepared.tracker_input);
     result.outputs.labels = labels;
     if (person_ids) result.outputs.person_ids = *person_ids;
   }
   result.segmented = labels.has_value();
   result.segments = stats.segments;
-  result.people = people.size();
-  ++frames_;
+  result.people = prepared.people.size();
   segmented_frames_ += result.segmented ? 1 : 0;
   return result;
 }

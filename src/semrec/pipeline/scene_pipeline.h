@@ -101,6 +101,16 @@ struct PipelineFrameResult {
   ModelOutputs outputs;
 };
 
+/// A frame after the models (segmentation, people), before fusion.
+struct PreparedFrame {
+  Frame frame;
+  bool replay = false;
+  std::optional<fuse::FrameLabels> labels;
+  std::vector<PersonObservation> people;
+  std::optional<LabelMap> person_ids;
+  std::vector<track::Detection> tracker_input;
+};
+
 class ScenePipeline {
  public:
   /// `registry`: the models (Labels::kModels; may be null for kGiven).
@@ -113,6 +123,14 @@ class ScenePipeline {
 
   /// Runs every stage on one frame. Frames must come in order.
   PipelineFrameResult Process(const PipelineInput& input);
+
+  /// Process() in two steps that may overlap across frames: Prepare() runs
+  /// the models (segmentation, people tracking) and Integrate() fuses and
+  /// integrates the result. Prepare(frame i + 1) may run on one thread while
+  /// Integrate(frame i) runs on another; each of the two must be called in
+  /// frame order, one call at a time.
+  PreparedFrame Prepare(const PipelineInput& input);
+  PipelineFrameResult Integrate(PreparedFrame prepared);
 
   /// Ends the stream (fusion's end-of-sequence clean-up, the offline track
   /// step); then Write() gives the final scene.
@@ -129,6 +147,7 @@ class ScenePipeline {
   const LabelSet& classes() const { return builder_->classes(); }
   const SceneBuilder& scene() const { return *builder_; }
   const StageSeconds& seconds() const { return seconds_; }
+  /// Frames prepared, and segmented frames integrated.
   size_t frames() const { return frames_; }
   size_t segmented_frames() const { return segmented_frames_; }
   const ScenePipelineOptions& options() const { return options_; }
