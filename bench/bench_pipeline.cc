@@ -190,7 +190,9 @@ int main(int argc, char** argv) try {
   }
 
   // 3. Prefetch against one after the other.
-  std::printf("\n3. reading on its own thread (prefetch) vs in turn\n");
+  std::printf(
+      "\n3. prefetch (reading) + overlap (fusion with the next frame's "
+      "models) vs one after the other\n");
   if (part('3')) {
     io::SequenceReaderOptions ro;
     ro.max_frames = 100;
