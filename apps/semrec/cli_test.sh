@@ -10,6 +10,13 @@ grep -q "info" "$tmp/help" && grep -q "tsdf" "$tmp/help" && grep -q "synth" "$tm
   fail "--help does not list subcommands"
 "$SEMREC" tsdf --help | grep -q -- "--voxel-size-m" || fail "tsdf --help lacks --voxel-size-m"
 
+"$SEMREC" tsdf --no-such-flag 2>"$tmp/err"; rc=$?
+[ "$rc" -eq 2 ] || fail "unknown flag: exit $rc, expected 2 (usage error)"
+"$SEMREC" >/dev/null 2>&1; rc=$?
+[ "$rc" -eq 2 ] || fail "no subcommand: exit $rc, expected 2 (usage error)"
+"$SEMREC" run --help >/dev/null 2>&1; rc=$?
+[ "$rc" -eq 0 ] || fail "run --help: exit $rc"
+
 "$SEMREC" info /nonexistent/seq 2>"$tmp/err"; rc=$?
 [ "$rc" -eq 1 ] || fail "missing sequence: exit $rc, expected 1"
 grep -q "error: /nonexistent/seq: sequence path does not exist" "$tmp/err" || fail "message: $(cat "$tmp/err")"

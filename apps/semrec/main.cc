@@ -38,7 +38,9 @@ int Run(int argc, char** argv) {
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
-    return app.exit(e);
+    // --help / --version exit 0; usage errors exit 2 as documented (CLI11's
+    // own codes are 105-114).
+    return app.exit(e) == 0 ? 0 : 2;
   } catch (const semrec::Error& e) {
     std::fprintf(stderr, "error: %s\n", e.what());
     return 1;
