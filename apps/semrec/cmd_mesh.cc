@@ -19,16 +19,18 @@ struct MeshArgs {
   std::string gravity = "auto";
   bool no_structure = false;
   std::string merge = "evidence";
+  bool two_pass = false;
 };
 
 void RunMesh(MeshArgs args) {
   args.options.write_ply = !args.no_ply;
-  args.options.gravity = fuse::ParseGravity(args.gravity);
-  args.options.fusion.stuff_per_class = !args.no_structure;
-  args.options.fusion.merge = fuse::ParseMerge(args.merge);
+  args.options.scene.gravity = fuse::ParseGravity(args.gravity);
+  args.options.scene.stream_volumes = !args.two_pass;
+  args.options.scene.fusion.stuff_per_class = !args.no_structure;
+  args.options.scene.fusion.merge = fuse::ParseMerge(args.merge);
   args.options.Check();
   io::SequenceReaderOptions reader_options = args.sequence.ReaderOptions();
-  reader_options.max_depth_m = args.options.meshing.tsdf.max_depth_m;
+  reader_options.max_depth_m = args.options.scene.meshing.tsdf.max_depth_m;
   const io::SequenceReader reader =
       io::SequenceReader::Open(args.sequence.path, reader_options);
   const auto source = fuse::SegmentationSource::Create(args.labels, reader);
@@ -39,11 +41,12 @@ void RunMesh(MeshArgs args) {
       fmt::format(
           "{} frames -> {} objects + {} structure ({} triangles), {} "
           "people{}; gravity: {}; wrote {}/scene.usda in {:.1f} s\n",
-          r.frames, r.objects - r.structure, r.structure, r.triangles, r.people,
-          r.skipped_empty_objects > 0
-              ? fmt::format(", {} empty skipped", r.skipped_empty_objects)
+          r.frames, r.scene.objects - r.scene.structure, r.scene.structure,
+          r.scene.triangles, r.scene.people,
+          r.scene.skipped_empty_objects > 0
+              ? fmt::format(", {} empty skipped", r.scene.skipped_empty_objects)
               : "",
-          r.gravity.method, args.out, r.seconds)
+          r.scene.gravity.method, args.out, r.seconds)
           .c_str());
 }
 
@@ -72,19 +75,21 @@ void RegisterMesh(CLI::App& app) {
                   "Tracked people for dynamic.usda (time-sampled prims): "
                   "'gt' (the sequence's person layer) or the persons/ folder "
                   "written by 'semrec track <sequence> --out DIR'");
-  cmd->add_option("--voxel-size-m", args->options.meshing.tsdf.voxel_size_m,
+  cmd->add_option("--voxel-size-m",
+                  args->options.scene.meshing.tsdf.voxel_size_m,
                   "Voxel size of each object's TSDF (m)")
       ->capture_default_str();
-  cmd->add_option("--sdf-trunc-m", args->options.meshing.tsdf.sdf_trunc_m,
+  cmd->add_option("--sdf-trunc-m", args->options.scene.meshing.tsdf.sdf_trunc_m,
                   "SDF truncation distance (m)")
       ->capture_default_str();
-  cmd->add_option("--max-depth-m", args->options.meshing.tsdf.max_depth_m,
+  cmd->add_option("--max-depth-m", args->options.scene.meshing.tsdf.max_depth_m,
                   "Ignore depth beyond this (m)")
       ->capture_default_str();
-  cmd->add_option("--min-observations", args->options.meshing.min_observations,
+  cmd->add_option("--min-observations",
+                  args->options.scene.meshing.min_observations,
                   "Mesh only objects seen in at least this many frames")
       ->capture_default_str();
-  cmd->add_option("--alpha", args->options.fusion.alpha,
+  cmd->add_option("--alpha", args->options.scene.fusion.alpha,
                   "Fusion: merge when sigma > alpha")
       ->capture_default_str();
   cmd->add_option("--merge", args->merge,
@@ -93,7 +98,7 @@ void RegisterMesh(CLI::App& app) {
                   "object's class, fold fragments; see summary.json events)")
       ->check(CLI::IsMember({"paper", "evidence"}))
       ->capture_default_str();
-  cmd->add_option("--up-axis", args->options.stage.up_axis,
+  cmd->add_option("--up-axis", args->options.scene.stage.up_axis,
                   "USD up axis: Z or Y (the upright scene is turned so that "
                   "this axis points up; with --gravity none it is only "
                   "declared)")
@@ -110,7 +115,7 @@ void RegisterMesh(CLI::App& app) {
                 "Fuse stuff classes (wall, floor, ceiling...) like objects "
                 "instead of one /World/Structure prim per class");
   cmd->add_flag("--no-ply", args->no_ply, "Do not write PLY per object");
-  cmd->add_flag("--two-pass", args->options.two_pass,
+  cmd->add_flag("--two-pass", args->two_pass,
                 "Build the object volumes in a second pass over the frames "
                 "with fusion's final ids (the reference for the default "
                 "streaming volumes, which are combined when objects merge)");

@@ -16,14 +16,7 @@ namespace fs = std::filesystem;
 
 namespace semrec::pipeline {
 
-void ReconstructOptions::Check() const {
-  people_3d.Check();
-  fusion.Check();
-  extraction.Check();
-  meshing.Check();
-  stage.Check();
-  gravity.Check();
-}
+void ReconstructOptions::Check() const { scene.Check(); }
 
 ReconstructResult Reconstruct(const io::SequenceReader& reader,
                               const fuse::SegmentationSource& source,
@@ -39,15 +32,7 @@ ReconstructResult Reconstruct(const io::SequenceReader& reader,
     throw IoError(out_dir, "cannot create output folder: " + ec.message());
   }
 
-  SceneBuilderOptions scene;
-  scene.fusion = options.fusion;
-  scene.extraction = options.extraction;
-  scene.meshing = options.meshing;
-  scene.people_3d = options.people_3d;
-  scene.stage = options.stage;
-  scene.gravity = options.gravity;
-  scene.stream_volumes = !options.two_pass;
-  SceneBuilder builder(source.classes(), scene);
+  SceneBuilder builder(source.classes(), options.scene);
   std::optional<PersonMapSource> person_maps;
   if (!options.people.empty()) person_maps.emplace(options.people, reader);
   {
@@ -62,7 +47,8 @@ ReconstructResult Reconstruct(const io::SequenceReader& reader,
     }
   }
   builder.Finish();
-  if (options.two_pass) {
+  const bool two_pass = !options.scene.stream_volumes;
+  if (two_pass) {
     Progress progress("meshing (second pass)", reader.size(), progress_options);
     builder.RebuildVolumes(
         [&](size_t i) {
@@ -83,7 +69,10 @@ ReconstructResult Reconstruct(const io::SequenceReader& reader,
   SceneWriteOptions write =
       SceneWriteOptions::For(reader, options.write_ply, options.usdz);
   if (person_maps) write.custom_layer_data["people"] = options.people;
-  const SceneWriteResult written = builder.Write(out_dir, write);
+  ReconstructResult result;
+  result.frames = reader.size();
+  result.scene = builder.Write(out_dir, write);
+  const SceneWriteResult& written = result.scene;
   if (written.skipped_empty_objects > 0) {
     spdlog::warn("{} objects have no surface to mesh; skipped",
                  written.skipped_empty_objects);
@@ -93,14 +82,6 @@ ReconstructResult Reconstruct(const io::SequenceReader& reader,
                g.method, g.up_world.x(), g.up_world.y(), g.up_world.z(),
                g.floor_height_m);
 
-  ReconstructResult result;
-  result.frames = reader.size();
-  result.objects = written.objects;
-  result.structure = written.structure;
-  result.skipped_empty_objects = written.skipped_empty_objects;
-  result.triangles = written.triangles;
-  result.people = written.people;
-  result.gravity = written.gravity;
   result.seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start)
           .count();
@@ -109,14 +90,14 @@ ReconstructResult Reconstruct(const io::SequenceReader& reader,
       nlohmann::json(
           {{"input", write.custom_layer_data["input"]},
            {"options", written.options_text},
-           {"volumes", options.two_pass ? "two-pass" : "streaming"},
+           {"volumes", two_pass ? "two-pass" : "streaming"},
            {"objects", written.objects_json},
-           {"structure", result.structure},
-           {"gravity", GravityJson(result.gravity, written.upright_matrix)},
-           {"people", result.people},
+           {"structure", written.structure},
+           {"gravity", GravityJson(written.gravity, written.upright_matrix)},
+           {"people", written.people},
            {"fusion_events",
             fuse::FusionEventsJson(builder.fusion(), source.classes())},
-           {"skipped_empty_objects", result.skipped_empty_objects},
+           {"skipped_empty_objects", written.skipped_empty_objects},
            {"seconds", result.seconds}})
               .dump(2) +
           "\n");

@@ -5,7 +5,8 @@
 //
 // One pass: a SceneBuilder fuses each frame and integrates its objects'
 // volumes as it goes (volumes of objects that fusion merges are combined).
-// `two_pass` builds the volumes in a second pass with the final ids instead:
+// `scene.stream_volumes = false` builds the volumes in a second pass with the
+// final ids instead:
 // the reference the streaming result is tested against.
 #pragma once
 
@@ -13,49 +14,34 @@
 #include <string>
 
 #include "semrec/core/progress.h"
-#include "semrec/fuse/fusion.h"
-#include "semrec/fuse/gravity.h"
 #include "semrec/fuse/segments.h"
 #include "semrec/io/sequence_reader.h"
-#include "semrec/mesh/object_mesher.h"
-#include "semrec/pipeline/people_3d.h"
-#include "semrec/usd/usda_writer.h"
+#include "semrec/pipeline/scene_builder.h"
 
 namespace semrec::pipeline {
 
 struct ReconstructOptions {
-  fuse::FusionOptions fusion;
-  fuse::SegmentExtractionOptions extraction;
-  mesh::ObjectMeshingOptions meshing;
-  usd::StageOptions stage;
-  /// The scene is written upright (Z up, floor at z = 0) by this transform of
-  /// the sequence's world frame (see fuse/gravity.h).
-  fuse::GravityOptions gravity;
+  /// Fusion, volumes, people in 3-D, stage, gravity; `scene.stream_volumes =
+  /// false` integrates the volumes in a second pass over the frames with
+  /// fusion's final ids (reads every frame twice; the reference for
+  /// streaming).
+  SceneBuilderOptions scene;
   /// Tracked people for dynamic.usda: "" (none), "gt" (the sequence's person
   /// layer) or a folder of person id maps (semrec track's persons/).
   std::string people;
-  People3dOptions people_3d;
   /// Also write objects/<id>_<class>.ply for tools that do not read USD.
   bool write_ply = true;
   /// Also package the scene as scene.usdz (one flattened layer).
   bool usdz = false;
   /// Write into a non-empty output folder.
   bool overwrite = false;
-  /// Integrate the volumes in a second pass over the frames with fusion's
-  /// final ids (reads every frame twice; the reference for streaming).
-  bool two_pass = false;
   void Check() const;
 };
 
 struct ReconstructResult {
   size_t frames = 0;
-  size_t objects = 0;
-  size_t skipped_empty_objects = 0;
-  size_t triangles = 0;
-  size_t people = 0;
-  /// Structure prims (one per stuff class) among `objects`.
-  size_t structure = 0;
-  fuse::GravityEstimate gravity;
+  /// Objects, structure, triangles, people, gravity (what was written).
+  SceneWriteResult scene;
   double seconds = 0.0;
 };
 

@@ -64,7 +64,7 @@ TEST(Reconstruct, SixObjectsBecomeSixLabelledMeshPrims) {
   if (!report)
     GTEST_SKIP() << "tinyusdz (npm) or node missing: run scripts/setup";
   ASSERT_TRUE((*report)["ok"].get<bool>()) << (*report)["error"];
-  EXPECT_EQ((*report)["meshes"].size(), r.objects);
+  EXPECT_EQ((*report)["meshes"].size(), r.scene.objects);
   const std::string layer = (*report)["layer"];
   EXPECT_NE(layer.find("semantics:labels:class = [\"chair\"]"),
             std::string::npos);
@@ -83,8 +83,9 @@ TEST(Reconstruct, StructureIsOnePrimPerClassAndTheSceneIsUpright) {
   const auto source = fuse::SegmentationSource::Create("gt", reader);
   const ReconstructResult r =
       Reconstruct(reader, *source, {}, dir / "z", Quiet());
-  EXPECT_EQ(r.gravity.method, "already upright");
-  EXPECT_EQ(r.gravity.T_upright_world.Matrix(), Eigen::Matrix4d::Identity());
+  EXPECT_EQ(r.scene.gravity.method, "already upright");
+  EXPECT_EQ(r.scene.gravity.T_upright_world.Matrix(),
+            Eigen::Matrix4d::Identity());
   const auto summary =
       nlohmann::json::parse(ReadTextFile(dir / "z/summary.json"));
   EXPECT_EQ(summary["gravity"]["method"], "already upright");
@@ -94,7 +95,7 @@ TEST(Reconstruct, StructureIsOnePrimPerClassAndTheSceneIsUpright) {
   }
   EXPECT_EQ(structure["wall"], 1);
   EXPECT_EQ(structure["floor"], 1);
-  EXPECT_EQ(r.structure, structure.size());
+  EXPECT_EQ(r.scene.structure, structure.size());
   const std::string layer = ReadTextFile(dir / "z/static.usda");
   EXPECT_NE(layer.find("def Scope \"Structure\""), std::string::npos);
   EXPECT_NE(layer.find("def Mesh \"wall\""), std::string::npos);
@@ -104,7 +105,7 @@ TEST(Reconstruct, StructureIsOnePrimPerClassAndTheSceneIsUpright) {
   }
 
   ReconstructOptions y_up;
-  y_up.stage.up_axis = "Y";
+  y_up.scene.stage.up_axis = "Y";
   Reconstruct(reader, *source, y_up, dir / "y", Quiet());
   bool saw_floor = false, saw_table = false;
   for (const usd::MeshPrim& m : usd::ReadScene(dir / "y/scene.usda")) {
@@ -136,7 +137,7 @@ TEST(Reconstruct, PeopleBecomeTimeSampledPrimsOnTheirGroundTruthPaths) {
   options.usdz = true;
   const ReconstructResult r =
       Reconstruct(reader, *source, options, dir / "out", Quiet());
-  ASSERT_GE(r.people, 2u);
+  ASSERT_GE(r.scene.people, 2u);
 
   // Positions: the centroid of the visible points is within a body's width of
   // the person's floor position (partly visible people pull it sideways).
@@ -147,7 +148,7 @@ TEST(Reconstruct, PeopleBecomeTimeSampledPrimsOnTheirGroundTruthPaths) {
     if (const auto ids = maps.Get(i)) people.Add(reader.Read(i), *ids);
   }
   const auto tracks = people.Tracks();
-  ASSERT_EQ(tracks.size(), r.people);
+  ASSERT_EQ(tracks.size(), r.scene.people);
   std::vector<double> errors;
   for (const auto& track : tracks) {
     const synth::Person* truth = nullptr;
@@ -181,7 +182,7 @@ TEST(Reconstruct, PeopleBecomeTimeSampledPrimsOnTheirGroundTruthPaths) {
   ASSERT_TRUE((*dynamic)["ok"].get<bool>()) << (*dynamic)["error"];
   const auto package = testing::ValidateUsd(dir / "out/scene.usdz", dir.path());
   ASSERT_TRUE((*package)["ok"].get<bool>()) << (*package)["error"];
-  EXPECT_EQ((*package)["meshes"].size(), r.objects);
+  EXPECT_EQ((*package)["meshes"].size(), r.scene.objects);
   const std::string layer = (*dynamic)["layer"];
   for (const auto& track : tracks) {
     EXPECT_NE(layer.find("person_" + std::to_string(track.track_id)),
@@ -210,8 +211,8 @@ TEST(Reconstruct, RedwoodSingleLabelMatchesWholeSceneVolume) {
   ReconstructOptions options;
   const ReconstructResult r =
       Reconstruct(reader, *source, options, dir / "out", Quiet());
-  ASSERT_EQ(r.objects, 1u);
-  mesh::TsdfIntegrator whole(options.meshing.tsdf);
+  ASSERT_EQ(r.scene.objects, 1u);
+  mesh::TsdfIntegrator whole(options.scene.meshing.tsdf);
   for (size_t i = 0; i < reader.size(); ++i) whole.Integrate(reader.Read(i));
   const size_t reference = whole.ExtractMesh()->vertices_.size();
   const auto summary =

@@ -1,11 +1,11 @@
 #include "semrec/pipeline/scene_pipeline.h"
 
-#include <algorithm>
 #include <chrono>
 #include <map>
 #include <set>
 
 #include "semrec/core/error.h"
+#include "semrec/segment/mask.h"
 #include "semrec/segment/segment_io.h"
 
 namespace semrec::pipeline {
@@ -38,40 +38,23 @@ void ScenePipelineOptions::Check() const {
 }
 
 std::vector<PersonObservation> PeopleFromIdMap(const LabelMap& person_ids) {
-  const int w = person_ids.width(), h = person_ids.height();
-  std::map<uint16_t, segment::Box> boxes;
-  for (int y = 0; y < h; ++y) {
-    for (int x = 0; x < w; ++x) {
-      const uint16_t id = person_ids(x, y);
-      if (id == 0) continue;
-      auto [it, added] =
-          boxes.try_emplace(id, segment::Box{x, y, x + 1, y + 1});
-      segment::Box& b = it->second;
-      b.x0 = std::min(b.x0, x);
-      b.y0 = std::min(b.y0, y);
-      b.x1 = std::max(b.x1, x + 1);
-      b.y1 = std::max(b.y1, y + 1);
-    }
-  }
+  std::set<uint16_t> ids(person_ids.values().begin(),
+                         person_ids.values().end());
+  ids.erase(0);
   std::vector<PersonObservation> people;
-  for (const auto& [id, b] : boxes) {
-    PersonObservation p;
-    p.box.track_id = id;
-    p.box.box = {static_cast<double>(b.x0), static_cast<double>(b.y0),
-                 static_cast<double>(b.width()),
-                 static_cast<double>(b.height())};
-    p.mask.image_width = w;
-    p.mask.image_height = h;
-    p.mask.box = b;
-    p.mask.bits.assign(static_cast<size_t>(b.width()) * b.height(), 0);
-    for (int y = b.y0; y < b.y1; ++y) {
-      for (int x = b.x0; x < b.x1; ++x) {
-        if (person_ids(x, y) != id) continue;
-        p.mask.bits[static_cast<size_t>(y - b.y0) * b.width() + (x - b.x0)] = 1;
-        ++p.mask.area;
-      }
+  for (const uint16_t id : ids) {
+    Image<uint8_t> pixels(person_ids.width(), person_ids.height(), 1);
+    for (size_t p = 0; p < person_ids.NumPixels(); ++p) {
+      pixels.data()[p] = person_ids.data()[p] == id ? 1 : 0;
     }
-    people.push_back(std::move(p));
+    PersonObservation person;
+    person.mask = segment::MaskFromImage(pixels);
+    const segment::Box& b = person.mask.box;
+    person.box.track_id = id;
+    person.box.box = {static_cast<double>(b.x0), static_cast<double>(b.y0),
+                      static_cast<double>(b.width()),
+                      static_cast<double>(b.height())};
+    people.push_back(std::move(person));
   }
   return people;
 }

@@ -105,7 +105,7 @@ TEST(SceneBuilder, StreamingMatchesTwoPass) {
   ReconstructOptions options;
   const ReconstructResult streaming =
       Reconstruct(reader, *source, options, dir / "stream", Quiet());
-  options.two_pass = true;
+  options.scene.stream_volumes = false;
   const ReconstructResult two_pass =
       Reconstruct(reader, *source, options, dir / "two", Quiet());
   const auto s1 =
@@ -117,7 +117,7 @@ TEST(SceneBuilder, StreamingMatchesTwoPass) {
     merges += e["event"] != "dropped" ? 1 : 0;
   }
   EXPECT_GT(merges, 0u);
-  ASSERT_EQ(streaming.objects, two_pass.objects);
+  ASSERT_EQ(streaming.scene.objects, two_pass.scene.objects);
   ASSERT_EQ(s1["objects"].size(), s2["objects"].size());
   for (size_t k = 0; k < s1["objects"].size(); ++k) {
     const auto& a = s1["objects"][k];
