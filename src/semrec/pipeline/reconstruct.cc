@@ -1,6 +1,5 @@
 #include "semrec/pipeline/reconstruct.h"
 
-#include <chrono>
 #include <optional>
 
 #include <fmt/format.h>
@@ -9,6 +8,7 @@
 
 #include "semrec/core/error.h"
 #include "semrec/core/file_util.h"
+#include "semrec/core/stopwatch.h"
 #include "semrec/fuse/fuse_sequence.h"
 #include "semrec/pipeline/scene_builder.h"
 
@@ -24,7 +24,7 @@ ReconstructResult Reconstruct(const io::SequenceReader& reader,
                               const fs::path& out_dir,
                               const ProgressOptions& progress_options) {
   options.Check();
-  const auto start = std::chrono::steady_clock::now();
+  const Stopwatch run_time;
   RequireEmptyOrOverwrite(out_dir, options.overwrite);
   std::error_code ec;
   fs::create_directories(out_dir, ec);
@@ -82,9 +82,7 @@ ReconstructResult Reconstruct(const io::SequenceReader& reader,
                g.method, g.up_world.x(), g.up_world.y(), g.up_world.z(),
                g.floor_height_m);
 
-  result.seconds =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - start)
-          .count();
+  result.seconds = run_time.Elapsed();
   WriteTextFileAtomic(
       out_dir / "summary.json",
       nlohmann::json(

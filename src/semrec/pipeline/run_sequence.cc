@@ -2,7 +2,6 @@
 
 #include <sys/resource.h>
 
-#include <chrono>
 #include <exception>
 #include <fstream>
 #include <future>
@@ -18,6 +17,7 @@
 #include "semrec/core/error.h"
 #include "semrec/core/file_util.h"
 #include "semrec/core/sha256.h"
+#include "semrec/core/stopwatch.h"
 #include "semrec/fuse/fuse_sequence.h"
 #include "semrec/infer/onnx_model.h"
 #include "semrec/io/image_io.h"
@@ -126,7 +126,7 @@ RunResult RunSequence(const io::SequenceReader& reader,
                       const RunOptions& options, const fs::path& out_dir,
                       const ProgressOptions& progress_options) {
   options.Check();
-  const auto start = std::chrono::steady_clock::now();
+  const Stopwatch run_time;
   const bool models =
       options.pipeline.labels == ScenePipelineOptions::Labels::kModels;
   if (!options.resume) RequireEmptyOrOverwrite(out_dir, options.overwrite);
@@ -189,7 +189,7 @@ RunResult RunSequence(const io::SequenceReader& reader,
   };
   const auto load = [&](size_t i) {
     Loaded loaded;
-    const auto read_start = std::chrono::steady_clock::now();
+    const Stopwatch read_time;
     loaded.input.name =
         reader.index().frames[i].color_path.stem().string() + ".png";
     try {
@@ -201,9 +201,7 @@ RunResult RunSequence(const io::SequenceReader& reader,
     } catch (...) {
       loaded.error = std::current_exception();
     }
-    loaded.seconds = std::chrono::duration<double>(
-                         std::chrono::steady_clock::now() - read_start)
-                         .count();
+    loaded.seconds = read_time.Elapsed();
     return loaded;
   };
   std::future<Loaded> next;
@@ -256,10 +254,11 @@ RunResult RunSequence(const io::SequenceReader& reader,
         continue;
       }
     }
-    if (replay && models) input.replay = saved->outputs;
-    PreparedFrame prepared = pipeline.Prepare(input);
+    if (replay && models) input.replay = std::move(saved->outputs);
+    std::string name = input.name;
+    PreparedFrame prepared = pipeline.Prepare(std::move(input));
     wait_integrating();
-    const auto integrate = [&, i, replay, name = input.name,
+    const auto integrate = [&, i, replay, name = std::move(name),
                             prepared = std::move(prepared)]() mutable {
       const PipelineFrameResult frame = pipeline.Integrate(std::move(prepared));
       if (replay) {
@@ -300,9 +299,7 @@ RunResult RunSequence(const io::SequenceReader& reader,
   result.tracks = track_ids.size();
   result.frames = reader.size();
   result.skipped_frames = skipped.size();
-  result.seconds =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - start)
-          .count();
+  result.seconds = run_time.Elapsed();
 
   // Report.
   StageSeconds s = pipeline.seconds();

@@ -1,12 +1,13 @@
 #include "semrec/pipeline/scene_builder.h"
 
-#include <chrono>
 #include <cmath>
+#include <optional>
 
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
 #include "semrec/core/error.h"
+#include "semrec/core/stopwatch.h"
 #include "semrec/fuse/fuse_sequence.h"
 #include "semrec/io/ply_io.h"
 
@@ -14,11 +15,6 @@ namespace fs = std::filesystem;
 
 namespace semrec::pipeline {
 namespace {
-
-double SecondsSince(std::chrono::steady_clock::time_point start) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start)
-      .count();
-}
 
 std::vector<std::pair<uint16_t, uint32_t>> Assignments(
     const std::vector<fuse::FrameSegment>& segments,
@@ -151,15 +147,16 @@ SceneFrameStats SceneBuilder::Add(const Frame& frame,
   SceneFrameStats stats;
   if (labels == nullptr) return stats;
   ++labelled_frames_;
-  const fuse::FrameLabels static_labels =
-      person_ids != nullptr ? WithoutPeople(*labels, *person_ids) : *labels;
-  auto start = std::chrono::steady_clock::now();
+  // A copy only where people must be cleared from the labels.
+  std::optional<fuse::FrameLabels> cleared;
+  if (person_ids != nullptr) cleared = WithoutPeople(*labels, *person_ids);
+  const fuse::FrameLabels& static_labels = cleared ? *cleared : *labels;
+  Stopwatch watch;
   const auto segments = fuse::ExtractFrameSegments(
       frame, static_labels, classes_, options_.extraction);
   const fuse::FrameFusionStats fused = fusion_.Integrate(segments, frame.index);
   stats.segments = segments.size();
-  stats.fusion_seconds = SecondsSince(start);
-  start = std::chrono::steady_clock::now();
+  stats.fusion_seconds = watch.Lap();
   auto pairs = Assignments(segments, fused);
   if (options_.stream_volumes) {
     if (!pairs.empty()) {
@@ -170,7 +167,7 @@ SceneFrameStats SceneBuilder::Add(const Frame& frame,
   } else {
     assignments_.push_back(std::move(pairs));
   }
-  stats.volume_seconds = SecondsSince(start);
+  stats.volume_seconds = watch.Lap();
   return stats;
 }
 

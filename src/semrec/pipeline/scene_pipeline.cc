@@ -1,32 +1,14 @@
 #include "semrec/pipeline/scene_pipeline.h"
 
-#include <chrono>
 #include <map>
 #include <set>
 
 #include "semrec/core/error.h"
+#include "semrec/core/stopwatch.h"
 #include "semrec/segment/mask.h"
 #include "semrec/segment/segment_io.h"
 
 namespace semrec::pipeline {
-namespace {
-
-class Stopwatch {
- public:
-  double Lap() {
-    const auto now = std::chrono::steady_clock::now();
-    const double s = std::chrono::duration<double>(now - last_).count();
-    last_ = now;
-    return s;
-  }
-
- private:
-  std::chrono::steady_clock::time_point last_ =
-      std::chrono::steady_clock::now();
-};
-
-}  // namespace
-
 void ScenePipelineOptions::Check() const {
   CheckArgument(segment_every >= 1, "pipeline: segment_every must be >= 1");
   if (labels == Labels::kModels) {
@@ -84,23 +66,23 @@ ScenePipeline::ScenePipeline(const infer::ModelRegistry* registry,
 ScenePipeline::~ScenePipeline() = default;
 
 PipelineFrameResult ScenePipeline::Process(const PipelineInput& input) {
-  return Integrate(Prepare(input));
+  return Integrate(Prepare(PipelineInput(input)));
 }
 
-PreparedFrame ScenePipeline::Prepare(const PipelineInput& input) {
+PreparedFrame ScenePipeline::Prepare(PipelineInput input) {
   CheckArgument(!finished_, "pipeline: Process() after Finish()");
-  const Frame& frame = input.frame;
   const bool models = options_.labels == ScenePipelineOptions::Labels::kModels;
   PreparedFrame prepared;
-  prepared.frame = input.frame;
+  prepared.frame = std::move(input.frame);
   prepared.replay = input.replay.has_value();
+  const Frame& frame = prepared.frame;
   Stopwatch watch;
 
   // Segmentation: every segment_every-th frame (the first one always).
   std::optional<fuse::FrameLabels>& labels = prepared.labels;
   if (input.replay) {
     CheckArgument(models, "pipeline: replay is for model outputs");
-    labels = input.replay->labels;
+    labels = std::move(input.replay->labels);
   } else if (frames_ % options_.segment_every == 0) {
     if (models) {
       segment::HybridResult hybrid;
@@ -115,7 +97,7 @@ PreparedFrame ScenePipeline::Prepare(const PipelineInput& input) {
     } else {
       CheckArgument(input.labels.has_value(),
                     "pipeline: frame " + input.name + " came without labels");
-      labels = input.labels;
+      labels = std::move(input.labels);
     }
   }
   seconds_.segment += watch.Lap();
@@ -127,13 +109,13 @@ PreparedFrame ScenePipeline::Prepare(const PipelineInput& input) {
   if (options_.track_people) {
     if (input.replay) {
       const auto boxes = tracker_->Replay(input.replay->tracker_input);
-      person_ids = input.replay->person_ids;
+      person_ids = std::move(input.replay->person_ids);
       for (const track::TrackedBox& box : boxes) {
         PersonObservation p;
         p.box = box;
         people.push_back(std::move(p));
       }
-      prepared.tracker_input = input.replay->tracker_input;
+      prepared.tracker_input = std::move(input.replay->tracker_input);
     } else if (models) {
       PeopleFrame tracked;
       try {
@@ -145,7 +127,7 @@ PreparedFrame ScenePipeline::Prepare(const PipelineInput& input) {
       person_ids = PersonInstanceMap(people, w, h);
       prepared.tracker_input = std::move(tracked.tracker_input);
     } else if (input.person_ids) {
-      person_ids = input.person_ids;
+      person_ids = std::move(input.person_ids);
       people = PeopleFromIdMap(*person_ids);
     }
     for (const PersonObservation& p : people) {

@@ -129,7 +129,7 @@ class ScenePipeline {
   /// integrates the result. Prepare(frame i + 1) may run on one thread while
   /// Integrate(frame i) runs on another; each of the two must be called in
   /// frame order, one call at a time.
-  PreparedFrame Prepare(const PipelineInput& input);
+  PreparedFrame Prepare(PipelineInput input);
   PipelineFrameResult Integrate(PreparedFrame prepared);
 
   /// Ends the stream (fusion's end-of-sequence clean-up, the offline track
