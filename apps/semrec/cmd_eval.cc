@@ -124,7 +124,7 @@ struct SegArgs {
 };
 
 void RunSeg(const SegArgs& args) {
-  args.options.Check();
+  CheckUsage(args.options);
   const LabelSet labels = io::LoadLabelSet(args.labels);
   eval::SegEvaluator evaluator(args.options);
   for (const auto& [pred_file, gt_file] :

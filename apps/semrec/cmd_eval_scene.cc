@@ -85,7 +85,7 @@ Transform UprightTransform(const fs::path& result) {
 }
 
 void RunScene(const SceneArgs& args) {
-  args.options.Check();
+  CheckUsage(args.options);
   const fs::path result = args.result;
   const fs::path scene =
       fs::is_directory(result) ? result / "scene.usda" : result;
@@ -94,7 +94,7 @@ void RunScene(const SceneArgs& args) {
   if (classes_file.empty()) {
     classes_file = fs::path(args.gt).parent_path() / "classes.json";
     if (!fs::exists(classes_file)) {
-      throw InvalidArgument(
+      throw UsageError(
           fmt::format("no {} beside the ground truth: give its classes with "
                       "--gt-classes FILE",
                       classes_file.string()));

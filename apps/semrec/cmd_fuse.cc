@@ -27,16 +27,16 @@ struct FuseArgs {
 
 void RunFuse(FuseArgs args) {
   if (args.method != "fast" && args.method != "brute_force") {
-    throw InvalidArgument("--method must be 'fast' or 'brute_force', got '" +
-                          args.method + "'");
+    throw UsageError("--method must be 'fast' or 'brute_force', got '" +
+                     args.method + "'");
   }
   args.fusion.method = args.method == "fast"
                            ? fuse::FusionOptions::Method::kFast
                            : fuse::FusionOptions::Method::kBruteForce;
   args.fusion.label_gating = !args.no_gating;
   args.fusion.merge = fuse::ParseMerge(args.merge);
-  args.fusion.Check();
-  args.extraction.Check();
+  CheckUsage(args.fusion);
+  CheckUsage(args.extraction);
   io::SequenceReaderOptions reader_options = args.sequence.ReaderOptions();
   reader_options.max_depth_m = args.max_depth_m;
   const io::SequenceReader reader =

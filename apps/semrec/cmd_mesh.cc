@@ -28,7 +28,7 @@ void RunMesh(MeshArgs args) {
   args.options.scene.stream_volumes = !args.two_pass;
   args.options.scene.fusion.stuff_per_class = !args.no_structure;
   args.options.scene.fusion.merge = fuse::ParseMerge(args.merge);
-  args.options.Check();
+  CheckUsage(args.options);
   io::SequenceReaderOptions reader_options = args.sequence.ReaderOptions();
   reader_options.max_depth_m = args.options.scene.meshing.tsdf.max_depth_m;
   const io::SequenceReader reader =

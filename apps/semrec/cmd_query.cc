@@ -24,9 +24,8 @@ struct QueryArgs {
 };
 
 void RunQuery(const QueryArgs& args) {
-  CheckArgument(args.near.empty() || args.near.size() == 3,
-                "--near takes x,y,z");
-  CheckArgument(args.radius >= 0.0, "--radius must be >= 0");
+  CheckUsage(args.near.empty() || args.near.size() == 3, "--near takes x,y,z");
+  CheckUsage(args.radius >= 0.0, "--radius must be >= 0");
   nlohmann::json out = nlohmann::json::array();
   std::string table;
   for (const usd::MeshPrim& m : usd::ReadScene(args.scene)) {

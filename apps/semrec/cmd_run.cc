@@ -142,7 +142,7 @@ void RunRun(RunArgs& args, CLI::App* cmd) {
   p.scene.fusion.stuff_per_class = !args.no_structure;
   p.scene.fusion.merge = fuse::ParseMerge(args.merge);
   run.write_ply = !args.no_ply;
-  run.Check();
+  CheckUsage(run);
 
   io::SequenceReaderOptions reader_options = args.sequence.ReaderOptions();
   reader_options.max_depth_m = p.scene.meshing.tsdf.max_depth_m;

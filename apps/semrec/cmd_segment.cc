@@ -40,7 +40,7 @@ void RunSegment(SegmentArgs args) {
     options.masks.model = segment::PromptableOptions::FromRegistry(
         registry, args.masks, options.semantic.runtime);
   }
-  options.Check();
+  CheckUsage(options);
 
   const auto inputs =
       segment::ListSegmentInputs(args.input, args.stride, args.max_frames);

@@ -29,7 +29,12 @@ struct SynthArgs {
 };
 
 void RunSynth(const SynthArgs& args) {
-  synth::SynthOptions options = synth::SynthOptions::Preset(args.preset);
+  synth::SynthOptions options;
+  try {
+    options = synth::SynthOptions::Preset(args.preset);
+  } catch (const InvalidArgument& e) {
+    throw UsageError(e.what());
+  }
   options.frames = args.frames.value_or(options.frames);
   // A different resolution keeps the field of view: the focal length scales
   // with the width.
@@ -42,8 +47,8 @@ void RunSynth(const SynthArgs& args) {
       args.gt_spacing_m.value_or(options.gt_object_spacing_m);
   options.seed = args.seed;
   if (args.noise != "kinect" && args.noise != "none") {
-    throw InvalidArgument("--noise must be 'kinect' or 'none', got '" +
-                          args.noise + "'");
+    throw UsageError("--noise must be 'kinect' or 'none', got '" + args.noise +
+                     "'");
   }
   options.noise.enabled = args.noise == "kinect";
   options.noise.strength = args.noise_strength;
@@ -51,7 +56,7 @@ void RunSynth(const SynthArgs& args) {
   options.overwrite = args.overwrite;
   options.write_noisy_labels = args.label_noise;
   options.label_noise = args.label_noise_options;
-  options.Check();
+  CheckUsage(options);
   const synth::SynthSummary s =
       synth::WriteSyntheticSequence(options, args.out);
   std::string classes;

@@ -60,16 +60,16 @@ track::TrackerOptions TrackerOptionsFrom(const TrackArgs& args) {
   } else if (args.config == "improved") {
     options = track::TrackerOptions::Improved();
   } else {
-    throw InvalidArgument("--config must be 'paper' or 'improved', got '" +
-                          args.config + "'");
+    throw UsageError("--config must be 'paper' or 'improved', got '" +
+                     args.config + "'");
   }
   if (args.cost == "corners") {
     options.cost = track::TrackerOptions::Cost::kCorners;
   } else if (args.cost == "iou") {
     options.cost = track::TrackerOptions::Cost::kIou;
   } else if (!args.cost.empty()) {
-    throw InvalidArgument("--cost must be 'corners' or 'iou', got '" +
-                          args.cost + "'");
+    throw UsageError("--cost must be 'corners' or 'iou', got '" + args.cost +
+                     "'");
   }
   if (args.max_lost) options.max_lost_frames = *args.max_lost;
   if (args.motion == "static") {
@@ -79,7 +79,7 @@ track::TrackerOptions TrackerOptionsFrom(const TrackArgs& args) {
   } else if (args.motion == "kalman") {
     options.motion = track::TrackerOptions::Motion::kKalman;
   } else if (!args.motion.empty()) {
-    throw InvalidArgument(
+    throw UsageError(
         "--motion must be 'static', 'velocity' or 'kalman', got '" +
         args.motion + "'");
   }
@@ -91,11 +91,10 @@ track::TrackerOptions TrackerOptionsFrom(const TrackArgs& args) {
   if (args.reid_metric == "cosine") {
     options.reid.metric = track::ReidOptions::Metric::kCosine;
   } else if (!args.reid_metric.empty() && args.reid_metric != "euclidean") {
-    throw InvalidArgument(
-        "--reid-metric must be 'euclidean' or 'cosine', got '" +
-        args.reid_metric + "'");
+    throw UsageError("--reid-metric must be 'euclidean' or 'cosine', got '" +
+                     args.reid_metric + "'");
   }
-  options.Check();
+  CheckUsage(options);
   return options;
 }
 
@@ -105,7 +104,7 @@ track::OfflineOptions OfflineOptionsFrom(const TrackArgs& args) {
   if (args.backfill) options.backfill_tentative = *args.backfill;
   if (args.max_gap) options.max_gap_frames = *args.max_gap;
   if (args.min_track_frames) options.min_track_frames = *args.min_track_frames;
-  options.Check();
+  CheckUsage(options);
   return options;
 }
 
@@ -146,11 +145,10 @@ void RunTrackImages(const TrackArgs& args) {
     options.mask_model = segment::PromptableOptions::FromRegistry(
         registry, args.masks, options.detector.runtime);
   } else if (!args.fit_pca.empty()) {
-    throw InvalidArgument(
-        "--fit-pca needs masks (embeddings): drop --masks none");
+    throw UsageError("--fit-pca needs masks (embeddings): drop --masks none");
   }
-  options.Check();
-  CheckArgument(args.pca_dims >= 1, "--pca-dims must be >= 1");
+  CheckUsage(options);
+  CheckUsage(args.pca_dims >= 1, "--pca-dims must be >= 1");
   const track::PcaProjection pca = args.pca.empty()
                                        ? track::PcaProjection()
                                        : track::PcaProjection::Load(args.pca);
@@ -212,7 +210,7 @@ void RunTrackImages(const TrackArgs& args) {
 void RunTrack(const TrackArgs& args) {
   if (args.input.empty()) {
     if (args.detections.empty()) {
-      throw InvalidArgument(
+      throw UsageError(
           "give an image folder or sequence, or --detections det.txt");
     }
     RunTrackDetections(args);

@@ -20,7 +20,7 @@ struct TsdfArgs {
 };
 
 void RunTsdf(const TsdfArgs& args) {
-  args.tsdf.Check();  // before any expensive work
+  CheckUsage(args.tsdf);  // before any expensive work
   const auto start = std::chrono::steady_clock::now();
   const io::SequenceReader reader = io::SequenceReader::Open(
       args.sequence.path, args.sequence.ReaderOptions());

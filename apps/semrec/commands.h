@@ -1,17 +1,43 @@
 // Subcommands of the `semrec` CLI. Each Register* adds its CLI11 subcommand and
 // the callback that runs it; callbacks throw semrec::Error on bad input, which
-// main() turns into "error: ..." + exit 1.
+// main() turns into "error: ..." + exit 1, and UsageError for an invalid
+// command line (exit 2).
 #pragma once
 
 #include <string>
 
 #include <CLI/CLI.hpp>
 
+#include "semrec/core/error.h"
 #include "semrec/infer/model_registry.h"
 #include "semrec/infer/onnx_model.h"
 #include "semrec/io/sequence_reader.h"
 
 namespace semrec::cli {
+
+/// The command line asks for something invalid (an option value out of
+/// range, a missing input): main() prints it and exits with 2, like CLI11's
+/// own parse errors.
+class UsageError : public Error {
+ public:
+  using Error::Error;
+};
+
+/// Throws UsageError(message) unless `ok`.
+inline void CheckUsage(bool ok, const std::string& message) {
+  if (!ok) throw UsageError(message);
+}
+
+/// Checks options filled from the command line before any work: an invalid
+/// value is a usage error.
+template <typename Options>
+void CheckUsage(const Options& options) {
+  try {
+    options.Check();
+  } catch (const InvalidArgument& e) {
+    throw UsageError(e.what());
+  }
+}
 
 /// What every command that reads a sequence accepts: the sequence, --stride,
 /// --max-frames,

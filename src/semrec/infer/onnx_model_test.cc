@@ -159,10 +159,16 @@ TEST(OnnxModel, LoadsACheckedModelOnTheCpu) {
   semrec::testing::TempDir dir;
   const fs::path model = BuildDoubler(dir.path());
   ASSERT_FALSE(model.empty());
-  const OnnxModel loaded(DoublerEntry(model), In(dir.path()));
-  EXPECT_EQ(loaded.provider(), "cpu");  // no CUDA provider library here
+  OnnxModelOptions cpu = In(dir.path());
+  cpu.provider = "cpu";
+  const OnnxModel loaded(DoublerEntry(model), cpu);
+  EXPECT_EQ(loaded.provider(), "cpu");
   const auto out = loaded.Run({{"X", Tensor{{1, 3, 1, 1}, {1, 2, 3}}}});
   EXPECT_EQ(out.at("Y").data, (std::vector<float>{2, 4, 6}));
+  // "auto" without the CUDA provider library is the CPU, quietly.
+  if (!CudaProviderInstalled()) {
+    EXPECT_EQ(OnnxModel(DoublerEntry(model), In(dir.path())).provider(), "cpu");
+  }
 }
 
 TEST(OnnxModel, MissingCorruptAndMismatchedModelsSayWhatToDo) {
@@ -213,19 +219,40 @@ TEST(OnnxModel, MissingCorruptAndMismatchedModelsSayWhatToDo) {
   EXPECT_THROW(OnnxModel(garbage, In(dir.path())), FormatError);
 }
 
+// provider = "cuda" either runs on CUDA (and computes the right numbers) or
+// refuses with a message that says so; it never falls back to the CPU. Without
+// the CUDA provider library (the setup's CPU build) it must refuse; with
+// SEMREC_EXPECT_CUDA=1 (a GPU machine) it must run.
 TEST(OnnxModel, CudaIsUsedOrRefusedClearly) {
   semrec::testing::TempDir dir;
   const fs::path model = BuildDoubler(dir.path());
   ASSERT_FALSE(model.empty());
   OnnxModelOptions cuda = In(dir.path());
   cuda.provider = "cuda";
+  const char* expect_env = std::getenv("SEMREC_EXPECT_CUDA");
+  const bool expect_cuda =
+      expect_env != nullptr && std::string(expect_env) == "1";
+  std::string refusal;
   try {
     const OnnxModel loaded(DoublerEntry(model), cuda);
     EXPECT_EQ(loaded.provider(), "cuda");
+    const auto out = loaded.Run({{"X", Tensor{{1, 3, 1, 1}, {1, 2, 3}}}});
+    EXPECT_EQ(out.at("Y").data, (std::vector<float>{2, 4, 6}));
   } catch (const Error& e) {
-    EXPECT_NE(
-        std::string(e.what()).find("CUDA execution provider is unavailable"),
-        std::string::npos);
+    refusal = e.what();
+  }
+  if (!CudaProviderInstalled()) {
+    EXPECT_FALSE(refusal.empty()) << "CUDA cannot work without its provider";
+  }
+  if (expect_cuda) {
+    EXPECT_EQ(refusal, "") << "SEMREC_EXPECT_CUDA=1";
+  }
+  if (!refusal.empty()) {
+    EXPECT_NE(refusal.find("CUDA execution provider is unavailable"),
+              std::string::npos)
+        << refusal;
+    EXPECT_NE(refusal.find(model.filename().string()), std::string::npos)
+        << refusal;
   }
   OnnxModelOptions bad = In(dir.path());
   bad.provider = "tpu";
@@ -237,15 +264,21 @@ TEST(OnnxModel, EveryInstalledRegistryModelMatchesItsSignature) {
   int loaded = 0;
   for (const std::string& name : registry.Names()) {
     const ModelEntry& entry = registry.Get(name);
-    if (!fs::exists(semrec::testing::ModelDir() / entry.file)) continue;
+    if (!fs::exists(semrec::testing::ModelDir() / entry.file)) {
+      // scripts/setup installs every registry model; CI must have them all.
+      EXPECT_FALSE(semrec::testing::RequireAll())
+          << name << ": " << entry.file << " not installed in "
+          << semrec::testing::ModelDir();
+      continue;
+    }
     OnnxModelOptions options;
     options.model_dir = semrec::testing::ModelDir();
     EXPECT_NO_THROW(OnnxModel(entry, options)) << name;
     ++loaded;
   }
   if (loaded == 0) {
-    GTEST_SKIP() << "no model installed in " << semrec::testing::ModelDir()
-                 << ": run scripts/setup";
+    SEMREC_SKIP("no model installed in " << semrec::testing::ModelDir()
+                                         << ": run scripts/setup");
   }
 }
 

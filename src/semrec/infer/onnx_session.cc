@@ -58,6 +58,8 @@ TensorInfo Describe(const std::string& name, const Ort::TypeInfo& type) {
   return info;
 }
 
+}  // namespace
+
 // ONNX Runtime loads its CUDA provider from a library beside its own; looking
 // first avoids an error log on every CPU-only machine.
 bool CudaProviderInstalled() {
@@ -72,8 +74,6 @@ bool CudaProviderInstalled() {
   }();
   return installed;
 }
-
-}  // namespace
 
 OnnxSession::OnnxSession(const std::filesystem::path& model_path,
                          const OnnxSessionOptions& options)

@@ -26,6 +26,11 @@ struct OnnxSessionOptions {
   void Check() const;
 };
 
+/// Whether ONNX Runtime's CUDA provider library is installed beside
+/// libonnxruntime (it still needs a GPU and the CUDA runtime to work). The
+/// official CPU build that scripts/setup assembles has none.
+bool CudaProviderInstalled();
+
 /// A dense float32 tensor, row-major.
 struct Tensor {
   std::vector<int64_t> shape;

@@ -19,10 +19,11 @@ namespace fs = std::filesystem;
 namespace semrec::segment {
 namespace {
 
-#define SEMREC_REQUIRE_MODEL(file)                                        \
-  if (!fs::exists(semrec::testing::ModelDir() / (file))) {                \
-    GTEST_SKIP() << "model " << (file) << " not installed in "            \
-                 << semrec::testing::ModelDir() << ": run scripts/setup"; \
+#define SEMREC_REQUIRE_MODEL(file)                         \
+  if (!fs::exists(semrec::testing::ModelDir() / (file))) { \
+    SEMREC_SKIP("model " << (file) << " not installed in " \
+                         << semrec::testing::ModelDir()    \
+                         << ": run scripts/setup");        \
   }
 
 TEST(RealModels, DeeplabLabelsARedwoodFrameWithVocClasses) {

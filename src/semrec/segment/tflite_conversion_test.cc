@@ -94,13 +94,13 @@ TEST(TfliteConversion, AgreesWithArmNnAndTheClampsAreNeeded) {
         "mosaic_r4_ade20k_top31.tflite", "deeplabv3_mnv2_ade20k_top31.tflite",
         "tflite_schema.fbs"}) {
     if (!fs::exists(models / f)) {
-      GTEST_SKIP() << "model " << f << " not installed in " << models
-                   << ": run scripts/setup";
+      SEMREC_SKIP("model " << f << " not installed in " << models
+                           << ": run scripts/setup");
     }
   }
   if (std::system("/usr/bin/python3 -c 'import pyarmnn' >/dev/null 2>&1") !=
       0) {
-    GTEST_SKIP() << "python3-pyarmnn not installed: run scripts/setup";
+    SEMREC_SKIP("python3-pyarmnn not installed: run scripts/setup");
   }
   SEMREC_REQUIRE_SAMPLE_DATA(ade, "ade20k_val_3");
   SEMREC_REQUIRE_SAMPLE_DATA(chess, "7scenes_chess_0_99");
@@ -193,7 +193,7 @@ TEST(TfliteConversion, UnsupportedOperatorIsAClearError) {
   const fs::path models = semrec::testing::ModelDir();
   if (!fs::exists(models / "tflite_schema.fbs") ||
       !fs::exists(models / "mosaic_r4_ade20k_top31.tflite")) {
-    GTEST_SKIP() << "TFLite model or schema not installed: run scripts/setup";
+    SEMREC_SKIP("TFLite model or schema not installed: run scripts/setup");
   }
   const semrec::testing::TempDir tmp;
   const fs::path scripts = semrec::testing::SourceDir() / "scripts";

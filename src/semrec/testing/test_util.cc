@@ -27,6 +27,11 @@ TempDir::~TempDir() {
   fs::remove_all(path_, ec);
 }
 
+bool RequireAll() {
+  const char* env = std::getenv("SEMREC_REQUIRE_ALL");
+  return env != nullptr && std::string(env) == "1";
+}
+
 fs::path SourceDir() {
   const char* env = std::getenv("SEMREC_SOURCE_DIR");
   return env != nullptr ? fs::path(env) : fs::current_path();

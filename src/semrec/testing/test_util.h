@@ -3,6 +3,7 @@
 
 #include <filesystem>
 #include <optional>
+#include <sstream>
 #include <string>
 
 #include <gtest/gtest.h>
@@ -51,15 +52,34 @@ std::filesystem::path TinyModelDir();
 std::optional<nlohmann::json> ValidateUsd(const std::filesystem::path& file,
                                           const std::filesystem::path& scratch);
 
+/// True when SEMREC_REQUIRE_ALL=1 (set by .ci/run): then a test that would
+/// skip for missing sample data, models or tools fails instead, so CI cannot
+/// stay green without testing what it claims.
+bool RequireAll();
+
 }  // namespace semrec::testing
+
+/// Skips the current test with the reason `message` (a stream expression), or
+/// fails it under SEMREC_REQUIRE_ALL=1. Returns from the test body either way.
+#define SEMREC_SKIP(message)                                                \
+  do {                                                                      \
+    std::ostringstream semrec_skip_reason;                                  \
+    semrec_skip_reason << message; /* NOLINT(bugprone-macro-parentheses) */ \
+    if (::semrec::testing::RequireAll()) {                                  \
+      GTEST_FAIL() << semrec_skip_reason.str()                              \
+                   << " [a skip is a failure under SEMREC_REQUIRE_ALL=1]";  \
+    }                                                                       \
+    GTEST_SKIP() << semrec_skip_reason.str();                               \
+  } while (false)
 
 /// Skips the current test (with the reason) unless the sample data set `name`
 /// is present; binds `var` to its folder.
 #define SEMREC_REQUIRE_SAMPLE_DATA(var, name)                                \
   const auto var##_root = ::semrec::testing::SampleDataDir();                \
   if (!var##_root || !std::filesystem::is_directory(*var##_root / (name))) { \
-    GTEST_SKIP() << "sample data '" << (name)                                \
-                 << "' not found: set SEMREC_DATA to the shared "            \
-                 << "data folder (CI uses ../shared/data)";                  \
+    SEMREC_SKIP("sample data '" << (name)                                    \
+                                << "' not found: set SEMREC_DATA to the "    \
+                                << "shared data folder (CI uses "            \
+                                << "../shared/data)");                       \
   }                                                                          \
   const std::filesystem::path var = *var##_root / (name)

@@ -82,7 +82,7 @@ TEST(Yolox, RejectsOutputsThatDoNotMatchTheInput) {
 TEST(Yolox, RealModelFindsVehiclesInAStreetAndNothingInABlankImage) {
   if (!std::filesystem::exists(semrec::testing::ModelDir() /
                                "yolox_nano.onnx")) {
-    GTEST_SKIP() << "yolox_nano.onnx not installed: run scripts/setup";
+    SEMREC_SKIP("yolox_nano.onnx not installed: run scripts/setup");
   }
   SEMREC_REQUIRE_SAMPLE_DATA(ade, "ade20k_val_3");
   YoloxOptions options;
