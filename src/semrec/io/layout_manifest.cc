@@ -32,30 +32,8 @@ fs::path Resolve(const fs::path& base, const std::string& p) {
   return path.is_absolute() ? path : base / path;
 }
 
-}  // namespace
-
-std::optional<SequenceIndex> IndexManifest(
-    const fs::path& path, const SequenceReaderOptions& options) {
-  fs::path manifest;
-  if (fs::is_regular_file(path)) {
-    manifest = path;
-  } else {
-    for (const char* name :
-         {"sequence.yaml", "sequence.yml", "sequence.json"}) {
-      if (fs::is_regular_file(path / name)) {
-        manifest = path / name;
-        break;
-      }
-    }
-  }
-  if (manifest.empty()) return std::nullopt;
-
-  YAML::Node root;
-  try {
-    root = YAML::Load(ReadTextFile(manifest));
-  } catch (const YAML::Exception& e) {
-    throw FormatError(manifest, std::string("invalid YAML/JSON: ") + e.what());
-  }
+SequenceIndex IndexFromYaml(const YAML::Node& root, const fs::path& manifest,
+                            const SequenceReaderOptions& options) {
   if (!root.IsMap() || Get<std::string>(root, "format", manifest, "manifest") !=
                            "semrec-sequence") {
     throw FormatError(
@@ -151,6 +129,40 @@ std::optional<SequenceIndex> IndexManifest(
     index.frames.push_back(std::move(record));
   }
   return index;
+}
+
+}  // namespace
+
+std::optional<SequenceIndex> IndexManifest(
+    const fs::path& path, const SequenceReaderOptions& options) {
+  fs::path manifest;
+  if (fs::is_regular_file(path)) {
+    manifest = path;
+  } else {
+    for (const char* name :
+         {"sequence.yaml", "sequence.yml", "sequence.json"}) {
+      if (fs::is_regular_file(path / name)) {
+        manifest = path / name;
+        break;
+      }
+    }
+  }
+  if (manifest.empty()) return std::nullopt;
+
+  YAML::Node root;
+  try {
+    root = YAML::Load(ReadTextFile(manifest));
+  } catch (const YAML::Exception& e) {
+    throw FormatError(manifest, std::string("invalid YAML/JSON: ") + e.what());
+  }
+  // yaml-cpp throws for a node of the wrong kind anywhere (a scalar where a
+  // map is expected, ...): all of it is a broken manifest.
+  try {
+    return IndexFromYaml(root, manifest, options);
+  } catch (const YAML::Exception& e) {
+    throw FormatError(manifest,
+                      std::string("malformed manifest: ") + e.what());
+  }
 }
 
 }  // namespace semrec::io::internal

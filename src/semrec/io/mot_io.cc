@@ -7,6 +7,7 @@
 
 #include <fmt/format.h>
 
+#include "semrec/core/checked_cast.h"
 #include "semrec/core/error.h"
 #include "semrec/core/file_util.h"
 
@@ -41,7 +42,9 @@ std::vector<MotBox> ReadMotFile(const std::filesystem::path& path) {
                       "left, top, width, height)",
                       line_number, v.size()));
     }
-    if (v[0] != std::floor(v[0]) || v[1] != std::floor(v[1]) || v[0] < 1) {
+    const std::optional<int> frame = CheckedCast<int>(v[0]);
+    const std::optional<int> id = CheckedCast<int>(v[1]);
+    if (!frame || !id || *frame < 1) {
       throw FormatError(
           path,
           fmt::format("line {}: frame and id must be integers, frame >= 1",
@@ -53,8 +56,8 @@ std::vector<MotBox> ReadMotFile(const std::filesystem::path& path) {
                         fmt::format("line {}: box size must be finite and >= 0",
                                     line_number));
     }
-    boxes.push_back({static_cast<int>(v[0]), static_cast<int>(v[1]), v[2], v[3],
-                     v[4], v[5], v.size() > 6 ? v[6] : 1.0});
+    boxes.push_back(
+        {*frame, *id, v[2], v[3], v[4], v[5], v.size() > 6 ? v[6] : 1.0});
   }
   std::stable_sort(
       boxes.begin(), boxes.end(), [](const MotBox& a, const MotBox& b) {

@@ -1,5 +1,6 @@
 #include "semrec/io/ply_io.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <fstream>
@@ -10,6 +11,7 @@
 
 #include <fmt/format.h>
 
+#include "semrec/core/checked_cast.h"
 #include "semrec/core/error.h"
 #include "semrec/core/file_util.h"
 
@@ -121,6 +123,19 @@ double ReadBinaryValue(const char* p, const std::string& type) {
   return get(double{});
 }
 
+// A value of the file as T, or a FormatError naming the property.
+template <typename T>
+T As(double v, const fs::path& path, const std::string& property,
+     bool round = false) {
+  const std::optional<T> out = CheckedCast<T>(v, round);
+  if (!out) {
+    throw FormatError(path, fmt::format("property '{}': value {} is out of "
+                                        "range",
+                                        property, v));
+  }
+  return *out;
+}
+
 }  // namespace
 
 PlyData ReadPly(const fs::path& path) {
@@ -190,6 +205,17 @@ PlyData ReadPly(const fs::path& path) {
                                                "green", "blue", "label"};
   for (const Element& e : elements) {
     const bool vertex = e.name == "vertex", face = e.name == "face";
+    // Every item takes at least a byte (binary) or a character (ASCII), so a
+    // header count beyond the file's size is a lie: refuse it before looping
+    // or allocating.
+    const size_t remaining = bytes.size() - std::min(offset, bytes.size());
+    if (e.count > 0 && (e.properties.empty() || e.count > remaining)) {
+      throw FormatError(
+          path, fmt::format("element '{}' claims {} items{}, more than the "
+                            "file holds",
+                            e.name, e.count,
+                            e.properties.empty() ? " without properties" : ""));
+    }
     // Columns for the other scalar vertex properties.
     std::map<std::string, size_t> extra;
     if (vertex) {
@@ -208,9 +234,17 @@ PlyData ReadPly(const fs::path& path) {
       uint32_t label = 0;
       for (const Property& prop : e.properties) {
         if (prop.is_list) {
-          const auto k = static_cast<size_t>(next_value(prop.count_type));
+          const auto k = As<size_t>(next_value(prop.count_type), path,
+                                    prop.name);
+          if (k > bytes.size()) {
+            throw FormatError(path, fmt::format("a '{}' list claims {} items, "
+                                                "more than the file holds",
+                                                prop.name, k));
+          }
           std::vector<uint32_t> idx(k);
-          for (auto& v : idx) v = static_cast<uint32_t>(next_value(prop.type));
+          for (auto& v : idx) {
+            v = As<uint32_t>(next_value(prop.type), path, prop.name);
+          }
           if (face) {
             // Fan-triangulate polygons.
             for (size_t j = 2; j < k; ++j) {
@@ -222,22 +256,22 @@ PlyData ReadPly(const fs::path& path) {
         const double v = next_value(prop.type);
         if (!vertex) continue;
         if (prop.name == "x") {
-          p.x() = static_cast<float>(v);
+          p.x() = As<float>(v, path, prop.name);
         } else if (prop.name == "y") {
-          p.y() = static_cast<float>(v);
+          p.y() = As<float>(v, path, prop.name);
         } else if (prop.name == "z") {
-          p.z() = static_cast<float>(v);
+          p.z() = As<float>(v, path, prop.name);
         } else if (prop.name == "red") {
-          c[0] = static_cast<uint8_t>(v), has_color = true;
+          c[0] = As<uint8_t>(v, path, prop.name, true), has_color = true;
         } else if (prop.name == "green") {
-          c[1] = static_cast<uint8_t>(v);
+          c[1] = As<uint8_t>(v, path, prop.name, true);
         } else if (prop.name == "blue") {
-          c[2] = static_cast<uint8_t>(v);
+          c[2] = As<uint8_t>(v, path, prop.name, true);
         } else if (prop.name == "label") {
-          label = static_cast<uint32_t>(v), has_label = true;
+          label = As<uint32_t>(v, path, prop.name), has_label = true;
         } else if (const auto it = extra.find(prop.name); it != extra.end()) {
           out.int_properties[it->second].second.push_back(
-              static_cast<int32_t>(std::lround(v)));
+              As<int32_t>(v, path, prop.name, true));
         }
       }
       if (vertex) {

@@ -1,10 +1,14 @@
 #include "semrec/usd/usda_reader.h"
 
+#include <algorithm>
+#include <array>
+#include <optional>
 #include <regex>
 #include <sstream>
 
 #include <fmt/format.h>
 
+#include "semrec/core/checked_cast.h"
 #include "semrec/core/error.h"
 #include "semrec/core/file_util.h"
 
@@ -36,6 +40,20 @@ std::vector<double> Numbers(const std::string& line, const fs::path& path,
   return out;
 }
 
+// A scalar attribute value as T (an unsigned count or id, or a double).
+template <typename T>
+T Scalar(const std::string& value, const fs::path& path, int line_number) {
+  std::istringstream in(value);
+  double v = 0.0;
+  std::optional<T> out;
+  if (in >> v) out = CheckedCast<T>(v);
+  if (!out || (in >> std::ws, !in.eof())) {
+    throw FormatError(path, fmt::format("line {}: bad value '{}'", line_number,
+                                        value));
+  }
+  return *out;
+}
+
 std::string Unquote(const std::string& s) {
   std::string out;
   for (size_t i = 1; i + 1 < s.size(); ++i) {
@@ -45,10 +63,31 @@ std::string Unquote(const std::string& s) {
   return out;
 }
 
-void ReadLayer(const fs::path& path, std::vector<MeshPrim>* meshes, int depth) {
-  if (depth > 8) {
-    throw FormatError(path, "subLayers nested too deeply (a cycle?)");
+// Triangles must index the mesh's points: consumers index with them.
+void CheckMesh(const MeshPrim& mesh, const fs::path& path) {
+  for (const auto& t : mesh.triangles) {
+    for (uint32_t i : t) {
+      if (i >= mesh.points.size()) {
+        throw FormatError(path, fmt::format("mesh '{}': face index {} is out "
+                                            "of range ({} points)",
+                                            mesh.label, i,
+                                            mesh.points.size()));
+      }
+    }
   }
+}
+
+// `open` holds the layers being read, outermost first: a layer that names one
+// of them is a cycle.
+void ReadLayer(const fs::path& path, std::vector<MeshPrim>* meshes,
+               std::vector<fs::path>* open) {
+  std::error_code ec;
+  const fs::path canonical = fs::weakly_canonical(path, ec);
+  if (std::find(open->begin(), open->end(), canonical) != open->end()) {
+    throw FormatError(path, "subLayers form a cycle");
+  }
+  if (open->size() > 16) throw FormatError(path, "subLayers nested too deeply");
+  open->push_back(canonical);
   std::istringstream in(ReadTextFile(path));
   std::string line;
   if (!std::getline(in, line) || line.rfind("#usda 1.0", 0) != 0) {
@@ -58,7 +97,9 @@ void ReadLayer(const fs::path& path, std::vector<MeshPrim>* meshes, int depth) {
   static const std::regex mesh(R"re(^\s*def Mesh "([^"]+)")re");
   bool in_sublayers = false;
   int line_number = 1;
-  MeshPrim* current = nullptr;
+  // An index, not a pointer: sublayers read later append to `meshes`.
+  std::optional<size_t> current;
+  const size_t first = meshes->size();
   while (std::getline(in, line)) {
     ++line_number;
     std::smatch m;
@@ -66,7 +107,7 @@ void ReadLayer(const fs::path& path, std::vector<MeshPrim>* meshes, int depth) {
     if (in_sublayers) {
       for (auto it = std::sregex_iterator(line.begin(), line.end(), sublayer);
            it != std::sregex_iterator(); ++it) {
-        ReadLayer(path.parent_path() / (*it)[1].str(), meshes, depth + 1);
+        ReadLayer(path.parent_path() / (*it)[1].str(), meshes, open);
       }
       if (line.find(']') != std::string::npos) in_sublayers = false;
       continue;
@@ -74,13 +115,14 @@ void ReadLayer(const fs::path& path, std::vector<MeshPrim>* meshes, int depth) {
     if (line.find("def Mesh") != std::string::npos &&
         std::regex_search(line, m, mesh)) {
       meshes->emplace_back();
-      current = &meshes->back();
+      current = meshes->size() - 1;
       continue;
     }
     // "[custom|uniform] <type> <name> = <value>"; parsed by hand: value lines
     // of big meshes are megabytes long, too long for std::regex.
     const size_t eq = line.find(" = ");
-    if (current == nullptr || eq == std::string::npos) continue;
+    if (!current || eq == std::string::npos) continue;
+    MeshPrim& mesh = (*meshes)[*current];
     std::istringstream head(line.substr(0, eq));
     std::string word, name;
     while (head >> word) name = word;
@@ -91,7 +133,7 @@ void ReadLayer(const fs::path& path, std::vector<MeshPrim>* meshes, int depth) {
         throw FormatError(path, fmt::format("line {}: points", line_number));
       }
       for (size_t i = 0; i < v.size(); i += 3) {
-        current->points.emplace_back(static_cast<float>(v[i]),
+        mesh.points.emplace_back(static_cast<float>(v[i]),
                                      static_cast<float>(v[i + 1]),
                                      static_cast<float>(v[i + 2]));
       }
@@ -103,33 +145,43 @@ void ReadLayer(const fs::path& path, std::vector<MeshPrim>* meshes, int depth) {
             fmt::format("line {}: only triangles are supported", line_number));
       }
       for (size_t i = 0; i < v.size(); i += 3) {
-        current->triangles.push_back({static_cast<uint32_t>(v[i]),
-                                      static_cast<uint32_t>(v[i + 1]),
-                                      static_cast<uint32_t>(v[i + 2])});
+        std::array<uint32_t, 3> t{};
+        for (int k = 0; k < 3; ++k) {
+          const auto index = CheckedCast<uint32_t>(v[i + k]);
+          if (!index) {
+            throw FormatError(path, fmt::format("line {}: bad face index {}",
+                                                line_number, v[i + k]));
+          }
+          t[k] = *index;
+        }
+        mesh.triangles.push_back(t);
       }
     } else if (name == "semrec:label") {
-      current->label = Unquote(value);
+      mesh.label = Unquote(value);
     } else if (name == "semrec:kind") {
-      current->structure = Unquote(value) == "stuff";
+      mesh.structure = Unquote(value) == "stuff";
     } else if (name == "semrec:instanceId") {
-      current->instance_id = static_cast<uint32_t>(std::stoul(value));
+      mesh.instance_id = Scalar<uint32_t>(value, path, line_number);
     } else if (name == "semrec:pointCount") {
-      current->point_count = std::stoul(value);
+      mesh.point_count = Scalar<decltype(mesh.point_count)>(value, path, line_number);
     } else if (name == "semrec:firstSeenFrame") {
-      current->first_seen_frame = std::stoul(value);
+      mesh.first_seen_frame = Scalar<decltype(mesh.first_seen_frame)>(value, path, line_number);
     } else if (name == "semrec:lastSeenFrame") {
-      current->last_seen_frame = std::stoul(value);
+      mesh.last_seen_frame = Scalar<decltype(mesh.last_seen_frame)>(value, path, line_number);
     } else if (name == "semrec:confidence") {
-      current->confidence = std::stod(value);
+      mesh.confidence = Scalar<double>(value, path, line_number);
     }
   }
+  for (size_t i = first; i < meshes->size(); ++i) CheckMesh((*meshes)[i], path);
+  open->pop_back();
 }
 
 }  // namespace
 
 std::vector<MeshPrim> ReadScene(const fs::path& path) {
   std::vector<MeshPrim> meshes;
-  ReadLayer(path, &meshes, 0);
+  std::vector<fs::path> open;
+  ReadLayer(path, &meshes, &open);
   return meshes;
 }
 
