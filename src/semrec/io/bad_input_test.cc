@@ -7,6 +7,7 @@
 
 #include "semrec/core/error.h"
 #include "semrec/io/image_io.h"
+#include "semrec/io/ply_io.h"
 #include "semrec/io/pose_io.h"
 #include "semrec/io/sequence_reader.h"
 #include "semrec/io/test_sequences.h"
@@ -226,6 +227,80 @@ TEST_F(BadInput, BadOptions) {
   const SequenceReader reader = SequenceReader::Open(Dir());
   ExpectError<InvalidArgument>([&] { reader.Read(5); },
                                {"frame 5 out of range"});
+}
+
+// Headers that promise more than the file holds or more than any camera
+// makes are refused before anything is allocated: a few bytes never cost
+// gigabytes.
+TEST_F(BadInput, HostileSizesAreRefusedBeforeAllocating) {
+  auto write = [&](const std::string& name, const std::string& bytes) {
+    std::ofstream(Dir() / name, std::ios::binary) << bytes;
+    return Dir() / name;
+  };
+  // PNG: a valid IHDR of 1,000,000 x 1,000,000 16-bit RGBA, no image data.
+  auto chunk = [](const std::string& type, const std::string& data) {
+    const std::string body = type + data;
+    uint32_t crc = 0xFFFFFFFFu;  // CRC-32 of type + data, as PNG wants
+    for (unsigned char c : body) {
+      crc ^= c;
+      for (int k = 0; k < 8; ++k) crc = (crc >> 1) ^ (0xEDB88320u & -(crc & 1));
+    }
+    crc ^= 0xFFFFFFFFu;
+    std::string out;
+    for (uint32_t v : {static_cast<uint32_t>(data.size())}) {
+      for (int shift = 24; shift >= 0; shift -= 8) out += char(v >> shift);
+    }
+    out += body;
+    for (int shift = 24; shift >= 0; shift -= 8) out += char(crc >> shift);
+    return out;
+  };
+  auto png_with_size = [&](uint32_t width, uint32_t height) {
+    std::string ihdr;
+    for (uint32_t v : {width, height}) {
+      for (int shift = 24; shift >= 0; shift -= 8) ihdr += char(v >> shift);
+    }
+    ihdr += std::string("\x10\x06\x00\x00\x00", 5);
+    return std::string("\x89PNG\r\n\x1a\n", 8) + chunk("IHDR", ihdr) +
+           chunk("IDAT", std::string("\x78\x9c", 2));
+  };
+  ExpectError<FormatError>(
+      [&] { ReadDepthImage(write("big.png", png_with_size(1000000, 1000000))); },
+      {"big.png", "1000000 x 1000000", "megapixels"});
+  // A plausible size, but far more pixels than 47 bytes can inflate to.
+  ExpectError<FormatError>(
+      [&] { ReadColorImage(write("4k.png", png_with_size(4096, 4096))); },
+      {"4k.png", "more than the file holds"});
+  // PGM: 100000 x 100000 16-bit, four bytes of raster.
+  ExpectError<FormatError>(
+      [&] { ReadDepthImage(write("big.pgm", "P5\n100000 100000\n65535\n1234")); },
+      {"big.pgm", "megapixels"});
+  ExpectError<FormatError>(
+      [&] { ReadDepthImage(write("short.pgm", "P5\n# c\n640 480\n65535\n1234")); },
+      {"short.pgm", "truncated"});
+  // JPEG: a start-of-frame of 65000 x 65000.
+  const std::string sof("\xff\xd8\xff\xc0\x00\x11\x08\xfd\xe8\xfd\xe8\x03\x01\x22\x00\x02\x11\x01\x03\x11\x01", 21);
+  ExpectError<FormatError>([&] { ReadColorImage(write("big.jpg", sof)); },
+                           {"big.jpg", "65000 x 65000", "megapixels"});
+  // Content OpenCV could decode with a codec semrec does not use (DICOM
+  // preamble): refused by its signature, whatever the file name says.
+  ExpectError<FormatError>(
+      [&] { ReadColorImage(write("scan.jpg", std::string(128, '\0') + "DICM")); },
+      {"scan.jpg", "not an image semrec reads"});
+  // PLY: a billion vertices in a 60-byte file.
+  ExpectError<FormatError>(
+      [&] {
+        ReadPly(write("big.ply",
+                      "ply\nformat ascii 1.0\nelement vertex 1000000000\n"
+                      "property float x\nend_header\n1\n"));
+      },
+      {"big.ply", "1000000000", "more than the file holds"});
+  ExpectError<FormatError>(
+      [&] {
+        ReadPly(write("list.ply",
+                      "ply\nformat ascii 1.0\nelement face 1\nproperty list "
+                      "uint uint vertex_indices\nend_header\n4000000000 1 2\n"));
+      },
+      {"list.ply", "4000000000"});
 }
 
 }  // namespace

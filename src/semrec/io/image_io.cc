@@ -8,8 +8,11 @@
 #include <cstdio>
 #include <cstring>
 #include <memory>
+#include <optional>
+#include <utility>
 #include <string>
 
+#include <fmt/format.h>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
@@ -95,6 +98,21 @@ PngData ReadPng(const fs::path& path, bool header_only = false) {
   png_read_update_info(png, info);
   out.width = static_cast<int>(png_get_image_width(png, info));
   out.height = static_cast<int>(png_get_image_height(png, info));
+  // Before allocating the raster: the header's size within limits, and not
+  // more than zlib can inflate from the file (at most ~1032:1).
+  const int64_t raw_bytes =
+      (static_cast<int64_t>(png_get_rowbytes(png, info)) + 1) * out.height;
+  std::error_code size_ec;
+  const auto file_bytes = static_cast<int64_t>(fs::file_size(path, size_ec));
+  if (int64_t{out.width} * out.height > kMaxImagePixels ||
+      raw_bytes > 1100 * file_bytes + 4096) {
+    png_destroy_read_struct(&png, &info, nullptr);
+    throw FormatError(path, fmt::format("PNG header says {} x {} pixels: "
+                                        "beyond the limit of {} megapixels "
+                                        "or more than the file holds",
+                                        out.width, out.height,
+                                        kMaxImagePixels / (1 << 20)));
+  }
   out.channels = png_get_channels(png, info);
   out.bit_depth = bit_depth = png_get_bit_depth(png, info);
   if (!header_only) {
@@ -121,10 +139,107 @@ PngData ReadPng(const fs::path& path, bool header_only = false) {
   return out;
 }
 
+void CheckPixels(const fs::path& path, int64_t width, int64_t height) {
+  if (width <= 0 || height <= 0 || width * height > kMaxImagePixels) {
+    throw FormatError(path, fmt::format("image header says {} x {} pixels, "
+                                        "beyond the limit of {} megapixels",
+                                        width, height,
+                                        kMaxImagePixels / (1 << 20)));
+  }
+}
+
+// Width and height from a JPEG's start-of-frame marker; nullopt when the
+// markers end before one.
+std::optional<std::pair<int, int>> JpegSize(
+    const std::vector<unsigned char>& b) {
+  size_t i = 2;
+  while (i + 4 <= b.size()) {
+    if (b[i] != 0xFF) return std::nullopt;
+    const unsigned char marker = b[i + 1];
+    if (marker == 0xFF) {  // fill byte
+      ++i;
+      continue;
+    }
+    if (marker == 0x01 || (marker >= 0xD0 && marker <= 0xD8)) {
+      i += 2;  // markers without a length
+      continue;
+    }
+    const size_t length = (b[i + 2] << 8) | b[i + 3];
+    const bool sof = marker >= 0xC0 && marker <= 0xCF && marker != 0xC4 &&
+                     marker != 0xC8 && marker != 0xCC;
+    if (sof) {
+      if (i + 9 > b.size()) return std::nullopt;
+      return std::make_pair((b[i + 7] << 8) | b[i + 8],
+                            (b[i + 5] << 8) | b[i + 6]);
+    }
+    if (marker == 0xDA || length < 2) return std::nullopt;  // scan data
+    i += 2 + length;
+  }
+  return std::nullopt;
+}
+
+// Netpbm (P1-P6): the header's width and height, and whether the raster's
+// size is at least what they promise.
+void CheckNetpbm(const fs::path& path, const std::vector<unsigned char>& b) {
+  size_t i = 2;
+  auto next_number = [&]() -> int64_t {
+    while (i < b.size()) {
+      if (b[i] == '#') {
+        while (i < b.size() && b[i] != '\n') ++i;
+      } else if (std::isspace(b[i])) {
+        ++i;
+      } else {
+        break;
+      }
+    }
+    int64_t v = 0;
+    const size_t start = i;
+    while (i < b.size() && std::isdigit(b[i]) && v < (int64_t{1} << 40)) {
+      v = v * 10 + (b[i++] - '0');
+    }
+    if (i == start) throw FormatError(path, "corrupt PGM/PPM header");
+    return v;
+  };
+  const char kind = static_cast<char>(b[1]);
+  const int64_t width = next_number(), height = next_number();
+  CheckPixels(path, width, height);
+  const int64_t max_value = (kind == '1' || kind == '4') ? 1 : next_number();
+  const int64_t channels = (kind == '3' || kind == '6') ? 3 : 1;
+  const int64_t samples = width * height * channels;
+  // Raw rasters have a known size; ASCII ones take two characters a sample.
+  const int64_t need = kind == '4'   ? (width + 7) / 8 * height
+                       : kind >= '5' ? samples * (max_value > 255 ? 2 : 1)
+                                     : samples * 2 - 1;
+  if (static_cast<int64_t>(b.size() - i) < need) {
+    throw FormatError(path, fmt::format("PGM/PPM of {} x {} pixels is "
+                                        "truncated",
+                                        width, height));
+  }
+}
+
 cv::Mat ReadWithOpenCv(const fs::path& path, int flags) {
   RequireFile(path, "image");
   const std::vector<unsigned char> bytes = ReadFileBytes(path);
   if (bytes.empty()) throw FormatError(path, "image file is empty");
+  // OpenCV picks a decoder by content from every codec it was built with
+  // (DICOM, OpenEXR, JPEG 2000, ...), some of which abort on crafted files:
+  // only the formats semrec reads get through, sizes checked first.
+  const bool png = bytes.size() >= 8 && png_sig_cmp(bytes.data(), 0, 8) == 0;
+  const bool jpeg = bytes.size() >= 3 && bytes[0] == 0xFF && bytes[1] == 0xD8 &&
+                    bytes[2] == 0xFF;
+  const bool netpbm = bytes.size() >= 2 && bytes[0] == 'P' &&
+                      bytes[1] >= '1' && bytes[1] <= '6';
+  if (jpeg) {
+    const auto size = JpegSize(bytes);
+    if (!size) throw FormatError(path, "cannot decode image: corrupt JPEG (no frame header)");
+    CheckPixels(path, size->first, size->second);
+  } else if (netpbm) {
+    CheckNetpbm(path, bytes);
+  } else if (!png) {
+    throw FormatError(path,
+                      "not an image semrec reads (PNG, JPEG, PGM/PPM) or "
+                      "corrupt");
+  }
   cv::Mat mat;
   try {
     mat = cv::imdecode(bytes, flags);

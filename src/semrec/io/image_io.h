@@ -3,12 +3,17 @@
 // the file and the problem.
 #pragma once
 
+#include <cstdint>
 #include <filesystem>
 
 #include "semrec/core/image.h"
 #include "semrec/core/label_map.h"
 
 namespace semrec::io {
+
+/// The largest image the readers decode (64 megapixels, e.g. 8192 x 8192): a
+/// header claiming more is refused before anything is allocated.
+inline constexpr int64_t kMaxImagePixels = int64_t{1} << 26;
 
 /// Reads a colour image (PNG, JPEG, PPM, ...) as 8-bit RGB. Grey images are
 /// expanded to RGB and alpha is dropped. 16-bit colour PNGs are reduced to 8
