@@ -62,7 +62,8 @@ void ParseManifest(const fs::path& path) {
     io::WritePng(color, ColorImage(8, 6, 3));
     io::WritePng(path.parent_path() / "depth.png", DepthImage16(8, 6, 1));
   }
-  const io::SequenceReader reader = io::SequenceReader::Open(path.parent_path());
+  const io::SequenceReader reader =
+      io::SequenceReader::Open(path.parent_path());
   if (reader.size() > 0) reader.Read(0);
 }
 
@@ -104,8 +105,9 @@ const std::vector<Target> kTargets = {
 // read back thousands of times a second.
 const fs::path& ScratchDir() {
   static const fs::path dir = [] {
-    const fs::path base =
-        fs::is_directory("/dev/shm") ? fs::path("/dev/shm") : fs::temp_directory_path();
+    const fs::path base = fs::is_directory("/dev/shm")
+                              ? fs::path("/dev/shm")
+                              : fs::temp_directory_path();
     const fs::path d = base / ("semrec-fuzz-" + std::to_string(::getpid()));
     fs::create_directories(d);
     std::atexit([] {
@@ -135,7 +137,8 @@ bool RunOne(const Target& target, const uint8_t* data, size_t size) {
   if (f == nullptr) throw std::runtime_error("cannot write " + path.string());
   const size_t written = size == 0 ? 0 : std::fwrite(data, 1, size, f);
   std::fclose(f);
-  if (written != size) throw std::runtime_error("short write to " + path.string());
+  if (written != size)
+    throw std::runtime_error("short write to " + path.string());
   try {
     target.parse(path);
     return true;

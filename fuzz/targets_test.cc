@@ -36,7 +36,8 @@ TEST_P(FuzzRegression, SeedsAndPastFindingsAreHandled) {
   const Target& target = FindTarget(GetParam());
   const fs::path fuzz = semrec::testing::SourceDir() / "fuzz";
   const auto seeds = FilesIn(fuzz / "corpus" / target.name);
-  ASSERT_FALSE(seeds.empty()) << "no seed corpus in fuzz/corpus/" << target.name;
+  ASSERT_FALSE(seeds.empty())
+      << "no seed corpus in fuzz/corpus/" << target.name;
   int accepted = 0;
   for (const fs::path& file : seeds) {
     const auto bytes = Bytes(file);

@@ -178,7 +178,10 @@ ModelRegistry ModelRegistry::Load(const std::filesystem::path& path) {
   ModelRegistry registry;
   registry.path_ = path;
   for (const auto& kv : root["models"]) {
-    const std::string name = kv.first.as<std::string>();
+    if (!kv.first.IsScalar()) {
+      throw FormatError(path, "model names must be plain strings");
+    }
+    const std::string name = kv.first.Scalar();
     try {
       registry.Add(ParseEntry(name, kv.second));
     } catch (const EntryError& e) {

@@ -9,8 +9,8 @@
 #include <cstring>
 #include <memory>
 #include <optional>
-#include <utility>
 #include <string>
+#include <utility>
 
 #include <fmt/format.h>
 #include <opencv2/imgcodecs.hpp>
@@ -107,11 +107,11 @@ PngData ReadPng(const fs::path& path, bool header_only = false) {
   if (int64_t{out.width} * out.height > kMaxImagePixels ||
       raw_bytes > 1100 * file_bytes + 4096) {
     png_destroy_read_struct(&png, &info, nullptr);
-    throw FormatError(path, fmt::format("PNG header says {} x {} pixels: "
-                                        "beyond the limit of {} megapixels "
-                                        "or more than the file holds",
-                                        out.width, out.height,
-                                        kMaxImagePixels / (1 << 20)));
+    throw FormatError(
+        path, fmt::format("PNG header says {} x {} pixels: "
+                          "beyond the limit of {} megapixels "
+                          "or more than the file holds",
+                          out.width, out.height, kMaxImagePixels / (1 << 20)));
   }
   out.channels = png_get_channels(png, info);
   out.bit_depth = bit_depth = png_get_bit_depth(png, info);
@@ -140,11 +140,11 @@ PngData ReadPng(const fs::path& path, bool header_only = false) {
 }
 
 void CheckPixels(const fs::path& path, int64_t width, int64_t height) {
-  if (width <= 0 || height <= 0 || width * height > kMaxImagePixels) {
-    throw FormatError(path, fmt::format("image header says {} x {} pixels, "
-                                        "beyond the limit of {} megapixels",
-                                        width, height,
-                                        kMaxImagePixels / (1 << 20)));
+  if (width <= 0 || height <= 0 || width > kMaxImagePixels / height) {
+    throw FormatError(path,
+                      fmt::format("image header says {} x {} pixels, "
+                                  "beyond the limit of {} megapixels",
+                                  width, height, kMaxImagePixels / (1 << 20)));
   }
 }
 
@@ -227,11 +227,13 @@ cv::Mat ReadWithOpenCv(const fs::path& path, int flags) {
   const bool png = bytes.size() >= 8 && png_sig_cmp(bytes.data(), 0, 8) == 0;
   const bool jpeg = bytes.size() >= 3 && bytes[0] == 0xFF && bytes[1] == 0xD8 &&
                     bytes[2] == 0xFF;
-  const bool netpbm = bytes.size() >= 2 && bytes[0] == 'P' &&
-                      bytes[1] >= '1' && bytes[1] <= '6';
+  const bool netpbm = bytes.size() >= 2 && bytes[0] == 'P' && bytes[1] >= '1' &&
+                      bytes[1] <= '6';
   if (jpeg) {
     const auto size = JpegSize(bytes);
-    if (!size) throw FormatError(path, "cannot decode image: corrupt JPEG (no frame header)");
+    if (!size)
+      throw FormatError(path,
+                        "cannot decode image: corrupt JPEG (no frame header)");
     CheckPixels(path, size->first, size->second);
   } else if (netpbm) {
     CheckNetpbm(path, bytes);
