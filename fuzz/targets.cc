@@ -108,7 +108,7 @@ const fs::path& ScratchDir() {
     const fs::path base = fs::is_directory("/dev/shm")
                               ? fs::path("/dev/shm")
                               : fs::temp_directory_path();
-    const fs::path d = base / ("semrec-fuzz-" + std::to_string(::getpid()));
+    fs::path d = base / ("semrec-fuzz-" + std::to_string(::getpid()));
     fs::create_directories(d);
     std::atexit([] {
       std::error_code ec;
@@ -137,8 +137,9 @@ bool RunOne(const Target& target, const uint8_t* data, size_t size) {
   if (f == nullptr) throw std::runtime_error("cannot write " + path.string());
   const size_t written = size == 0 ? 0 : std::fwrite(data, 1, size, f);
   std::fclose(f);
-  if (written != size)
+  if (written != size) {
     throw std::runtime_error("short write to " + path.string());
+  }
   try {
     target.parse(path);
     return true;

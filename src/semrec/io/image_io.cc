@@ -231,9 +231,10 @@ cv::Mat ReadWithOpenCv(const fs::path& path, int flags) {
                       bytes[1] <= '6';
   if (jpeg) {
     const auto size = JpegSize(bytes);
-    if (!size)
+    if (!size) {
       throw FormatError(path,
                         "cannot decode image: corrupt JPEG (no frame header)");
+    }
     CheckPixels(path, size->first, size->second);
   } else if (netpbm) {
     CheckNetpbm(path, bytes);
