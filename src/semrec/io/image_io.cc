@@ -59,6 +59,15 @@ struct FileCloser {
 };
 using FilePtr = std::unique_ptr<std::FILE, FileCloser>;
 
+void CheckPixels(const fs::path& path, int64_t width, int64_t height) {
+  if (width <= 0 || height <= 0 || width > kMaxImagePixels / height) {
+    throw FormatError(path,
+                      fmt::format("image header says {} x {} pixels, "
+                                  "beyond the limit of {} megapixels",
+                                  width, height, kMaxImagePixels / (1 << 20)));
+  }
+}
+
 PngData ReadPng(const fs::path& path, bool header_only = false) {
   RequireFile(path, "image");
   FilePtr file(std::fopen(path.c_str(), "rb"));
@@ -107,11 +116,10 @@ PngData ReadPng(const fs::path& path, bool header_only = false) {
   if (int64_t{out.width} * out.height > kMaxImagePixels ||
       raw_bytes > 1100 * file_bytes + 4096) {
     png_destroy_read_struct(&png, &info, nullptr);
-    throw FormatError(
-        path, fmt::format("PNG header says {} x {} pixels: "
-                          "beyond the limit of {} megapixels "
-                          "or more than the file holds",
-                          out.width, out.height, kMaxImagePixels / (1 << 20)));
+    CheckPixels(path, out.width, out.height);  // the shared limit first
+    throw FormatError(path, fmt::format("PNG header says {} x {} pixels, "
+                                        "more than the file holds",
+                                        out.width, out.height));
   }
   out.channels = png_get_channels(png, info);
   out.bit_depth = bit_depth = png_get_bit_depth(png, info);
@@ -137,15 +145,6 @@ PngData ReadPng(const fs::path& path, bool header_only = false) {
   }
   png_destroy_read_struct(&png, &info, nullptr);
   return out;
-}
-
-void CheckPixels(const fs::path& path, int64_t width, int64_t height) {
-  if (width <= 0 || height <= 0 || width > kMaxImagePixels / height) {
-    throw FormatError(path,
-                      fmt::format("image header says {} x {} pixels, "
-                                  "beyond the limit of {} megapixels",
-                                  width, height, kMaxImagePixels / (1 << 20)));
-  }
 }
 
 // Width and height from a JPEG's start-of-frame marker; nullopt when the
