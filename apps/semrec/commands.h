@@ -76,5 +76,6 @@ void RegisterMesh(CLI::App& app);
 void RegisterQuery(CLI::App& app);
 void RegisterSegment(CLI::App& app);
 void RegisterRun(CLI::App& app);
+void RegisterView(CLI::App& app);
 
 }  // namespace semrec::cli

@@ -34,6 +34,7 @@ int Run(int argc, char** argv) {
   semrec::cli::RegisterQuery(app);
   semrec::cli::RegisterSegment(app);
   semrec::cli::RegisterRun(app);
+  semrec::cli::RegisterView(app);
   app.parse_complete_callback([&] { semrec::InitLogging(log_level); });
   try {
     app.parse(argc, argv);
