@@ -122,6 +122,10 @@ void RegisterMesh(CLI::App& app) {
   cmd->add_flag("--usdz", args->options.usdz,
                 "Also write scene.usdz: objects and people in one layer, "
                 "packaged per the USDZ spec (stored, 64-byte aligned)");
+  cmd->add_flag("--glb", args->options.glb,
+                "Also write scene.glb (glTF 2.0 binary, Y-up: Blender, three.js and most tools "
+                "open it): one node per object, vertex colours, class and id in extras, people "
+                "as animated nodes");
   cmd->add_flag("--overwrite", args->options.overwrite,
                 "Write into a non-empty output folder");
   cmd->callback([args] { RunMesh(*args); });

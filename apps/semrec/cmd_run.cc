@@ -80,7 +80,7 @@ void ApplyConfigFile(CLI::App* cmd, const std::string& path) {
 bool AffectsOnlyOutputs(const std::string& key) {
   for (const char* k :
        {"out", "snapshot-every", "checkpoint-every", "strict", "threads",
-        "provider", "no-overlays", "no-ply", "usdz"}) {
+        "provider", "no-overlays", "no-ply", "usdz", "glb", "report"}) {
     if (key == k) return true;
   }
   return false;
@@ -248,6 +248,8 @@ void RegisterRun(CLI::App& app) {
   cmd->add_flag("--no-overlays", args->no_overlays, "Do not write overlay/");
   cmd->add_flag("--no-ply", args->no_ply, "Do not write PLY per object");
   cmd->add_flag("--usdz", args->run.usdz, "Also write scene.usdz");
+  cmd->add_flag("--glb", args->run.glb,
+                "Also write scene.glb (glTF 2.0 binary, Y-up, for tools without USD)");
   cmd->add_flag("--overwrite", args->run.overwrite,
                 "Write into a non-empty output folder (a fresh run)");
   // By reference: --config sets the options through their bindings.

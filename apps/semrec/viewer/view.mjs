@@ -252,9 +252,11 @@ async function Headless(args, url) {
       return cdp.evaluate('window.semrecLoaded');
     })(), args.timeoutS, 'loading the scene in Chromium');
     result.console = cdp.console;
-    if (result.ok && args.screenshot) {
+    if (result.ok) {
       const view = { camera: args.camera, time: args.time };
       result.view = await cdp.evaluate(`window.semrecSetView(${JSON.stringify(view)})`);
+    }
+    if (result.ok && args.screenshot) {
       const shot = await cdp.send('Page.captureScreenshot', { format: 'png' });
       const tmp = `${args.screenshot}.tmp-${process.pid}`;
       fs.writeFileSync(tmp, Buffer.from(shot.data, 'base64'));

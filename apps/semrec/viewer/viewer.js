@@ -254,6 +254,8 @@ async function LoadGlb(config, root) {
     const person = extras.semrec_kind === 'person';
     node.traverse((child) => {
       if (!child.isMesh && !child.isPoints) return;
+      // glTF points are one pixel; draw people's clouds like the USD ones.
+      if (child.isPoints) child.material = new THREE.PointsMaterial({ size: 0.04, color: child.material.color });
       const item = {
         object: child, path: node.name, name: node.name, label: extras.semrec_class, person,
         instanceId: extras.semrec_instance_id ?? null,
@@ -323,6 +325,14 @@ function ApplyVisibility() {
     if (item.person) visible &&= VisibleAt(item.visibility, Viewer.time);
     item.object.visible = visible;
   }
+}
+
+// Shown in the picture: visible, and not scaled to nothing (how glTF hides people).
+function Shown(item) {
+  if (!item.object.visible) return false;
+  const scale = new THREE.Vector3();
+  item.object.getWorldScale(scale);
+  return Math.abs(scale.x * scale.y * scale.z) > 1e-12;
 }
 Viewer.hiddenClasses = new Set();
 
@@ -560,7 +570,8 @@ window.semrecSetView = async ({ camera: view = 'iso', time = null, classColors =
     width: renderer.domElement.width,
     height: renderer.domElement.height,
     floorScreen: centerOf(Viewer.items.filter((i) => i.label === 'floor')),
+    ceilingScreen: centerOf(Viewer.items.filter((i) => i.label === 'ceiling')),
     objectsScreen: centerOf(Viewer.items.filter((i) => !i.structure && !i.person)),
-    visiblePeople: Viewer.items.filter((i) => i.person && i.object.visible).map((i) => i.name),
+    visiblePeople: Viewer.items.filter((i) => i.person && Shown(i)).map((i) => i.name),
   };
 };

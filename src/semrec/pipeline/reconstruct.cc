@@ -68,6 +68,7 @@ ReconstructResult Reconstruct(const io::SequenceReader& reader,
 
   SceneWriteOptions write =
       SceneWriteOptions::For(reader, options.write_ply, options.usdz);
+  write.glb = options.glb;
   if (person_maps) write.custom_layer_data["people"] = options.people;
   ReconstructResult result;
   result.frames = reader.size();

@@ -33,6 +33,8 @@ struct ReconstructOptions {
   bool write_ply = true;
   /// Also package the scene as scene.usdz (one flattened layer).
   bool usdz = false;
+  /// Also write scene.glb (glTF 2.0 binary).
+  bool glb = false;
   /// Write into a non-empty output folder.
   bool overwrite = false;
   void Check() const;

@@ -175,6 +175,8 @@ RunResult RunSequence(const io::SequenceReader& reader,
   SceneWriteOptions snapshot = write;
   snapshot.write_ply = false;
   snapshot.usdz = false;
+  write.glb = options.glb;
+  snapshot.glb = false;
 
   RunResult result;
   nlohmann::json skipped = nlohmann::json::array();

@@ -42,6 +42,8 @@ struct RunOptions {
   bool strict = false;
   bool write_ply = true;
   bool usdz = false;
+  /// Also write scene.glb (glTF 2.0 binary).
+  bool glb = false;
   /// Write into a non-empty output folder (a fresh run).
   bool overwrite = false;
   /// The effective configuration as text (YAML): written to run.yaml, into

@@ -10,6 +10,7 @@
 #include "semrec/core/stopwatch.h"
 #include "semrec/fuse/fuse_sequence.h"
 #include "semrec/io/ply_io.h"
+#include "semrec/usd/glb_writer.h"
 
 namespace fs = std::filesystem;
 
@@ -333,6 +334,7 @@ SceneWriteResult SceneBuilder::Write(const fs::path& out_dir,
   if (write_options.usdz) {
     usd::WriteSceneUsdz(out_dir / "scene.usdz", prims, stage, tracks);
   }
+  if (write_options.glb) usd::WriteSceneGlb(out_dir / "scene.glb", prims, stage, tracks);
   return result;
 }
 

@@ -89,6 +89,8 @@ struct SceneWriteOptions {
   bool write_ply = true;
   /// Also package the scene as scene.usdz (one flattened layer).
   bool usdz = false;
+  /// Also write scene.glb (glTF 2.0 binary, Y-up) for tools without USD.
+  bool glb = false;
   /// Provenance for the USD layer metadata (customLayerData), e.g. "input".
   std::map<std::string, std::string> custom_layer_data;
   /// These options with "input" naming `reader`'s sequence.
