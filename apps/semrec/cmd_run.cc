@@ -4,9 +4,11 @@
 #include <sstream>
 
 #include <fmt/format.h>
+#include <spdlog/spdlog.h>
 #include <yaml-cpp/yaml.h>
 
 #include "commands.h"
+#include "report_html.h"
 #include "semrec/core/error.h"
 #include "semrec/pipeline/run_sequence.h"
 
@@ -32,6 +34,8 @@ struct RunArgs {
   pipeline::RunOptions run;
   bool no_ply = false;
   bool no_overlays = false;
+  bool no_report = false;
+  bool no_report_pictures = false;
 };
 
 // --config FILE: a YAML map whose keys are the long option names (without
@@ -80,7 +84,8 @@ void ApplyConfigFile(CLI::App* cmd, const std::string& path) {
 bool AffectsOnlyOutputs(const std::string& key) {
   for (const char* k :
        {"out", "snapshot-every", "checkpoint-every", "strict", "threads",
-        "provider", "no-overlays", "no-ply", "usdz", "glb", "report"}) {
+        "provider", "no-overlays", "no-ply", "usdz", "glb", "no-report",
+        "no-report-pictures"}) {
     if (key == k) return true;
   }
   return false;
@@ -151,6 +156,13 @@ void RunRun(RunArgs& args, CLI::App* cmd) {
   const pipeline::RunResult result = pipeline::RunSequence(
       reader, args.labels == "models" ? &registry : nullptr, run, args.out);
   std::printf("%s", pipeline::RunSummaryTable(result, args.out).c_str());
+  if (!args.no_report) {
+    const HtmlReportResult report = WriteHtmlReport(args.out, !args.no_report_pictures);
+    if (report.pictures == 0 && !args.no_report_pictures) {
+      spdlog::warn("report.html has no pictures of the scene: {}", report.no_pictures_reason);
+    }
+    std::printf("report: %s\n", (std::filesystem::path(args.out) / "report.html").c_str());
+  }
 }
 
 }  // namespace
@@ -247,6 +259,11 @@ void RegisterRun(CLI::App& app) {
                 "Stop at a corrupt or missing frame instead of skipping it");
   cmd->add_flag("--no-overlays", args->no_overlays, "Do not write overlay/");
   cmd->add_flag("--no-ply", args->no_ply, "Do not write PLY per object");
+  cmd->add_flag("--no-report", args->no_report,
+                "Do not write report.html (stage timings, classes, objects, pictures of the "
+                "scene from two angles rendered by OpenUSD in headless Chromium, overlays)");
+  cmd->add_flag("--no-report-pictures", args->no_report_pictures,
+                "Write report.html without the scene pictures (saves ~20 s)");
   cmd->add_flag("--usdz", args->run.usdz, "Also write scene.usdz");
   cmd->add_flag("--glb", args->run.glb,
                 "Also write scene.glb (glTF 2.0 binary, Y-up, for tools without USD)");

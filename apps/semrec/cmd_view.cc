@@ -59,6 +59,10 @@ void RegisterView(CLI::App& app) {
   cmd->add_option("--camera", args->options.camera, "Screenshot camera: iso, top, front or side")
       ->capture_default_str();
   cmd->add_option("--size", args->size, "Screenshot size WIDTHxHEIGHT")->capture_default_str();
+  cmd->add_flag("--class-colors", args->options.class_colors,
+                "Screenshot in class colours instead of the fused image colours");
+  cmd->add_flag("--no-panel", [args](int64_t) { args->options.panel = false; },
+                "Screenshot without the side panel (legend, toggles)");
   cmd->add_option("--probe", args->probe,
                   "Write what the viewer read (objects, classes, people, time range, up axis) "
                   "as JSON and exit");

@@ -60,6 +60,8 @@ std::vector<std::string> HostArgs(const fs::path& scene, const ViewerOptions& op
                                    fmt::format("{}x{}", options.width, options.height),
                                    "--timeout-s",
                                    std::to_string(options.timeout_s)};
+  args.insert(args.end(), {"--panel", options.panel ? "on" : "off", "--class-colors",
+                           options.class_colors ? "on" : "off"});
   if (options.time) {
     args.insert(args.end(), {"--time", fmt::format("{}", *options.time)});
   }

@@ -16,6 +16,9 @@ struct ViewerOptions {
   std::optional<double> time;
   int width = 1280;
   int height = 800;
+  /// Show the side panel (legend, toggles) in the picture; colour objects by class.
+  bool panel = true;
+  bool class_colors = false;
   /// Seconds the headless browser may take to load the scene.
   int timeout_s = 120;
   void Check() const;

@@ -4,6 +4,7 @@
 //
 //   node view.mjs --modules DIR --scene FILE [--port P]
 //       [--screenshot OUT.png] [--time T] [--camera iso|top|front|side] [--size WxH]
+//       [--panel on|off] [--class-colors on|off]
 //       [--probe OUT.json] [--timeout-s S] [--chromium PATH]
 //
 // --modules: the node_modules folder with three and three-usdz-loader (scripts/setup puts it in
@@ -25,11 +26,13 @@ function Fail(code, message) {
 }
 
 function ParseArgs(argv) {
-  const args = { port: 0, time: null, camera: 'iso', size: '1280x800', timeoutS: 90 };
+  const args = { port: 0, time: null, camera: 'iso', size: '1280x800', timeoutS: 90, panel: 'on',
+                 classColors: 'off' };
   const names = {
     '--modules': 'modules', '--scene': 'scene', '--port': 'port', '--screenshot': 'screenshot',
     '--time': 'time', '--camera': 'camera', '--size': 'size', '--probe': 'probe',
-    '--timeout-s': 'timeoutS', '--chromium': 'chromium',
+    '--timeout-s': 'timeoutS', '--chromium': 'chromium', '--panel': 'panel',
+    '--class-colors': 'classColors',
   };
   for (let i = 0; i < argv.length; i += 2) {
     const key = names[argv[i]];
@@ -45,6 +48,9 @@ function ParseArgs(argv) {
   }
   if (!['iso', 'top', 'front', 'side'].includes(args.camera)) {
     Fail(2, `--camera must be iso, top, front or side, not '${args.camera}'`);
+  }
+  for (const key of ['panel', 'classColors']) {
+    if (!['on', 'off'].includes(args[key])) Fail(2, `--${key} takes on or off, not '${args[key]}'`);
   }
   const size = /^(\d+)x(\d+)$/.exec(args.size);
   if (!size || +size[1] < 64 || +size[2] < 64 || +size[1] > 4096 || +size[2] > 4096) {
@@ -253,7 +259,8 @@ async function Headless(args, url) {
     })(), args.timeoutS, 'loading the scene in Chromium');
     result.console = cdp.console;
     if (result.ok) {
-      const view = { camera: args.camera, time: args.time };
+      const view = { camera: args.camera, time: args.time, panel: args.panel === 'on',
+                     classColors: args.classColors === 'on' };
       result.view = await cdp.evaluate(`window.semrecSetView(${JSON.stringify(view)})`);
     }
     if (result.ok && args.screenshot) {

@@ -12,11 +12,22 @@ import { GLTFLoader } from 'three/addons/loaders/GLTFLoader.js';
 
 const kStructureClasses = new Set(['wall', 'floor', 'ceiling']);
 
-// A stable, well-spread colour per class name (golden-ratio hue steps over a string hash).
+// Fixed, well-separated colours for common indoor classes (so they read the same in every
+// scene); any other class gets a stable colour from a hash of its name.
+const kClassColors = {
+  wall: '#b4b4a0', floor: '#8c6e50', ceiling: '#d2d2e6', person: '#e6194b', chair: '#3cb44b',
+  table: '#ffe119', sofa: '#4363d8', bed: '#f58231', cabinet: '#911eb4', shelf: '#46f0f0',
+  door: '#f032e6', windowpane: '#bcf60c', window: '#bcf60c', plant: '#008080',
+  curtain: '#e6beff', desk: '#9a6324', lamp: '#fffac8', monitor: '#800000', tv: '#800000',
+  box: '#aaffc3', book: '#808000', picture: '#ffd8b1', pillow: '#000075', bottle: '#a9a9a9',
+  cup: '#ff7f50', building: '#9aa5b1', rug: '#c71585', counter: '#5f9ea0', sink: '#4682b4',
+  refrigerator: '#2f4f4f', toilet: '#dda0dd', bathtub: '#87ceeb', mirror: '#708090',
+};
 function ClassColor(label) {
+  if (kClassColors[label]) return new THREE.Color(kClassColors[label]);
   let h = 2166136261;
   for (const c of label) h = Math.imul(h ^ c.charCodeAt(0), 16777619) >>> 0;
-  return new THREE.Color().setHSL(((h % 1000) * 0.618034) % 1, 0.6, 0.55);
+  return new THREE.Color().setHSL((h % 360) / 360, 0.65, 0.5);
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -366,7 +377,8 @@ function FrameCamera(name) {
     side: right.clone().add(up.clone().multiplyScalar(0.15)),
   };
   const dir = (dirs[name] || dirs.iso).normalize();
-  const distance = radius / Math.sin(THREE.MathUtils.degToRad(camera.fov / 2)) * 0.9;
+  // The bounding sphere just fits the vertical field of view; rooms are boxes, so come closer.
+  const distance = radius / Math.sin(THREE.MathUtils.degToRad(camera.fov / 2)) * 0.75;
   camera.up.copy(up);
   camera.position.copy(center).addScaledVector(dir, distance);
   camera.near = distance / 100;
@@ -519,6 +531,7 @@ async function Load() {
     timeRange: loaded.timeRange,
     animations: loaded.animations ?? 0,
     classes: legend,
+    classColors: Object.fromEntries(Object.keys(legend).map((c) => [c, `#${ClassColor(c).getHexString()}`])),
     unsupported: loaded.unsupported,
     objects: objects.map((i) => ({
       path: i.path, name: i.name, class: i.label, instanceId: i.instanceId, structure: i.structure,
@@ -542,8 +555,12 @@ window.semrecLoaded = Load().catch((e) => {
 });
 
 // Headless: frames the camera, sets the time, renders, and reports where things landed.
-window.semrecSetView = async ({ camera: view = 'iso', time = null, classColors = false } = {}) => {
+window.semrecSetView = async ({ camera: view = 'iso', time = null, classColors = false,
+                                panel = true } = {}) => {
   await window.semrecLoaded;
+  document.getElementById('panel').hidden = !panel;
+  container.style.right = panel ? '' : '0';
+  Resize();
   if (classColors !== Viewer.classColors) {
     const box = document.getElementById('classColors');
     box.checked = classColors;
