@@ -34,9 +34,12 @@ printf 'colour: red\n' >"$tmp/bad.yaml"
 
 args=("$bonn" --pose-correction "$SEMREC_SOURCE_DIR/data/poses/bonn_rgbd_dynamic.yaml"
       --intrinsics "$SEMREC_SOURCE_DIR/data/intrinsics/bonn_rgbd_dynamic.txt"
-      --stride 10 --max-frames 6 --segment-every 2 --points-per-side 8 --checkpoint-every 2)
+      --stride 10 --max-frames 6 --segment-every 2 --points-per-side 8 --checkpoint-every 2
+      --no-report-pictures)
 "$SEMREC" run "${args[@]}" --out "$tmp/clean" >"$tmp/clean.out" 2>"$tmp/clean.err" ||
   fail "clean run: $(tail -5 "$tmp/clean.err")"
+grep -q "No pictures: pictures were turned off" "$tmp/clean/report.html" ||
+  fail "clean run: report.html missing or with pictures"
 
 # Interrupted: SIGKILL once a checkpoint says 2 or 4 frames are done.
 "$SEMREC" run "${args[@]}" --out "$tmp/cut" >/dev/null 2>"$tmp/cut.err" &
@@ -106,6 +109,19 @@ chess="$data/7scenes_chess_0_99"
   fail "chess run: $(tail -5 "$tmp/chess.err")"
 grep -q "3 frames (3 segmented, 0 skipped)" "$tmp/chess.out" || fail "chess: $(cat "$tmp/chess.out")"
 [ "$(ls "$tmp/chess/overlay" | wc -l)" -eq 3 ] || fail "chess: overlays missing"
+# report.html: the scene pictured twice by OpenUSD in headless Chromium, the overlays, the classes.
+if [ -x /usr/bin/chromium ]; then
+  for cam in iso top; do
+    grep -q "src=\"report/scene_$cam.png\"" "$tmp/chess/report.html" ||
+      fail "chess: report.html lacks the $cam picture: $(grep -o 'No pictures: [^<]*' "$tmp/chess/report.html")"
+    [ "$(stat -c %s "$tmp/chess/report/scene_$cam.png")" -gt 20000 ] || fail "chess: $cam picture too small"
+  done
+  [ "$(grep -o 'src="overlay/' "$tmp/chess/report.html" | wc -l)" -eq 3 ] || fail "chess: report overlays"
+  grep -q '<td><span class="swatch" style="background:#[0-9a-f]*"></span>table</td>' "$tmp/chess/report.html" ||
+    fail "chess: report.html class table"
+else
+  report_skip="Chromium missing: report pictures not checked (run scripts/setup)"
+fi
 /usr/bin/python3 - "$tmp/chess/report.json" <<'PY' || fail "chess report"
 import json, sys
 r = json.load(open(sys.argv[1]))
@@ -122,4 +138,5 @@ if [ -f "$pkg/tinyusdz.wasm" ] && command -v node >/dev/null; then
 else
   skip "tinyusdz/node missing (run scripts/setup)"
 fi
+[ -z "${report_skip:-}" ] || skip "$report_skip"
 echo ok
