@@ -123,8 +123,10 @@ void RegisterMesh(CLI::App& app) {
                 "Also write scene.usdz: objects and people in one layer, "
                 "packaged per the USDZ spec (stored, 64-byte aligned)");
   cmd->add_flag("--glb", args->options.glb,
-                "Also write scene.glb (glTF 2.0 binary, Y-up: Blender, three.js and most tools "
-                "open it): one node per object, vertex colours, class and id in extras, people "
+                "Also write scene.glb (glTF 2.0 binary, Y-up: Blender, "
+                "three.js and most tools "
+                "open it): one node per object, vertex colours, class and id "
+                "in extras, people "
                 "as animated nodes");
   cmd->add_flag("--overwrite", args->options.overwrite,
                 "Write into a non-empty output folder");

@@ -82,10 +82,9 @@ void ApplyConfigFile(CLI::App* cmd, const std::string& path) {
 // Options that change where or how often things are written, not the scene:
 // a run may be resumed with other values.
 bool AffectsOnlyOutputs(const std::string& key) {
-  for (const char* k :
-       {"out", "snapshot-every", "checkpoint-every", "strict", "threads",
-        "provider", "no-overlays", "no-ply", "usdz", "glb", "no-report",
-        "no-report-pictures"}) {
+  for (const char* k : {"out", "snapshot-every", "checkpoint-every", "strict",
+                        "threads", "provider", "no-overlays", "no-ply", "usdz",
+                        "glb", "no-report", "no-report-pictures"}) {
     if (key == k) return true;
   }
   return false;
@@ -157,11 +156,14 @@ void RunRun(RunArgs& args, CLI::App* cmd) {
       reader, args.labels == "models" ? &registry : nullptr, run, args.out);
   std::printf("%s", pipeline::RunSummaryTable(result, args.out).c_str());
   if (!args.no_report) {
-    const HtmlReportResult report = WriteHtmlReport(args.out, !args.no_report_pictures);
+    const HtmlReportResult report =
+        WriteHtmlReport(args.out, !args.no_report_pictures);
     if (report.pictures == 0 && !args.no_report_pictures) {
-      spdlog::warn("report.html has no pictures of the scene: {}", report.no_pictures_reason);
+      spdlog::warn("report.html has no pictures of the scene: {}",
+                   report.no_pictures_reason);
     }
-    std::printf("report: %s\n", (std::filesystem::path(args.out) / "report.html").c_str());
+    std::printf("report: %s\n",
+                (std::filesystem::path(args.out) / "report.html").c_str());
   }
 }
 
@@ -260,13 +262,16 @@ void RegisterRun(CLI::App& app) {
   cmd->add_flag("--no-overlays", args->no_overlays, "Do not write overlay/");
   cmd->add_flag("--no-ply", args->no_ply, "Do not write PLY per object");
   cmd->add_flag("--no-report", args->no_report,
-                "Do not write report.html (stage timings, classes, objects, pictures of the "
-                "scene from two angles rendered by OpenUSD in headless Chromium, overlays)");
+                "Do not write report.html (stage timings, classes, objects, "
+                "pictures of the "
+                "scene from two angles rendered by OpenUSD in headless "
+                "Chromium, overlays)");
   cmd->add_flag("--no-report-pictures", args->no_report_pictures,
                 "Write report.html without the scene pictures (saves ~20 s)");
   cmd->add_flag("--usdz", args->run.usdz, "Also write scene.usdz");
-  cmd->add_flag("--glb", args->run.glb,
-                "Also write scene.glb (glTF 2.0 binary, Y-up, for tools without USD)");
+  cmd->add_flag(
+      "--glb", args->run.glb,
+      "Also write scene.glb (glTF 2.0 binary, Y-up, for tools without USD)");
   cmd->add_flag("--overwrite", args->run.overwrite,
                 "Write into a non-empty output folder (a fresh run)");
   // By reference: --config sets the options through their bindings.

@@ -431,8 +431,10 @@ function Describe(item) {
   const box = new THREE.Box3().setFromObject(item.object);
   const size = box.getSize(new THREE.Vector3());
   const unit = loaded.facts.metersPerUnit || 1;
+  // Width × depth × height, height along the scene's up axis.
+  const [w, d, h] = loaded.facts.upAxis === 'Z' ? [size.x, size.y, size.z] : [size.x, size.z, size.y];
   return `${item.label}${item.instanceId !== null ? `  #${item.instanceId}` : ''}\n${item.path}\n` +
-         `size ${(size.x * unit).toFixed(2)} × ${(size.y * unit).toFixed(2)} × ${(size.z * unit).toFixed(2)} m`;
+         `size ${(w * unit).toFixed(2)} × ${(d * unit).toFixed(2)} × ${(h * unit).toFixed(2)} m`;
 }
 
 function SetupPicking() {
@@ -581,7 +583,32 @@ window.semrecSetView = async ({ camera: view = 'iso', time = null, classColors =
     for (const i of items) box.expandByObject(i.object);
     return box.isEmpty() ? null : ScreenPoint(box.getCenter(new THREE.Vector3()));
   };
+  // Click on each object in the picture (real click events, as a user would: at up to 16 of its
+  // vertices, until the info box names it; others may hide it) and record what the box says.
+  const clicks = [];
+  const rect = renderer.domElement.getBoundingClientRect();
+  for (const item of Viewer.items.filter((i) => !i.structure && !i.person && Shown(i))) {
+    const positions = item.object.geometry.getAttribute('position');
+    if (!positions || positions.count === 0) continue;
+    let info = '';
+    let tries = 0;
+    for (let k = 0; k < 16; k++) {
+      const v = new THREE.Vector3().fromBufferAttribute(
+          positions, Math.floor((k + 0.5) * positions.count / 16) % positions.count);
+      const p = ScreenPoint(v.applyMatrix4(item.object.matrixWorld));
+      if (p.x < 0 || p.y < 0 || p.x >= rect.width || p.y >= rect.height) continue;
+      tries++;
+      document.getElementById('info').textContent = '';
+      renderer.domElement.dispatchEvent(new MouseEvent('click', {
+        clientX: rect.left + p.x, clientY: rect.top + p.y, bubbles: true,
+      }));
+      info = document.getElementById('info').textContent;
+      if (info.includes(item.path)) break;
+    }
+    clicks.push({ path: item.path, info, tries });
+  }
   return {
+    clicks,
     camera: view,
     time: Viewer.time,
     width: renderer.domElement.width,

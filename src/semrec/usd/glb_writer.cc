@@ -20,7 +20,8 @@ using tinygltf::Value;
 constexpr int kFloat = TINYGLTF_COMPONENT_TYPE_FLOAT;
 constexpr int kUint = TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT;
 
-// Appends buffer views and accessors to one binary buffer (the GLB's BIN chunk).
+// Appends buffer views and accessors to one binary buffer (the GLB's BIN
+// chunk).
 class Builder {
  public:
   Builder() {
@@ -45,10 +46,12 @@ class Builder {
   }
 
   // Float VEC3 accessor (with the min/max glTF requires for positions).
-  int Vec3(const std::vector<Eigen::Vector3f>& values, int target = TINYGLTF_TARGET_ARRAY_BUFFER) {
+  int Vec3(const std::vector<Eigen::Vector3f>& values,
+           int target = TINYGLTF_TARGET_ARRAY_BUFFER) {
     std::vector<float> flat;
     flat.reserve(values.size() * 3);
-    Eigen::Vector3f lo = Eigen::Vector3f::Constant(std::numeric_limits<float>::max());
+    Eigen::Vector3f lo =
+        Eigen::Vector3f::Constant(std::numeric_limits<float>::max());
     Eigen::Vector3f hi = -lo;
     for (const auto& v : values) {
       flat.insert(flat.end(), {v.x(), v.y(), v.z()});
@@ -94,11 +97,14 @@ class Builder {
   }
 
   int Material(const std::string& name, const std::array<double, 4>& color) {
-    const std::string key = fmt::format("{}/{}/{}/{}", color[0], color[1], color[2], color[3]);
-    if (const auto it = materials_.find(key); it != materials_.end()) return it->second;
+    const std::string key =
+        fmt::format("{}/{}/{}/{}", color[0], color[1], color[2], color[3]);
+    if (const auto it = materials_.find(key); it != materials_.end())
+      return it->second;
     tinygltf::Material m;
     m.name = name;
-    m.pbrMetallicRoughness.baseColorFactor = {color[0], color[1], color[2], color[3]};
+    m.pbrMetallicRoughness.baseColorFactor = {color[0], color[1], color[2],
+                                              color[3]};
     m.pbrMetallicRoughness.metallicFactor = 0.0;
     m.pbrMetallicRoughness.roughnessFactor = 0.9;
     m.doubleSided = true;  // fused surfaces are seen from both sides
@@ -138,7 +144,8 @@ void CheckMesh(const MeshPrim& m, const std::string& name) {
 
 int MeshNode(Builder* b, const MeshPrim& m) {
   const std::string name =
-      m.structure ? SanitizeName(m.label) : fmt::format("{}_{}", SanitizeName(m.label), m.instance_id);
+      m.structure ? SanitizeName(m.label)
+                  : fmt::format("{}_{}", SanitizeName(m.label), m.instance_id);
   CheckMesh(m, name);
   tinygltf::Primitive prim;
   prim.mode = TINYGLTF_MODE_TRIANGLES;
@@ -147,7 +154,8 @@ int MeshNode(Builder* b, const MeshPrim& m) {
   if (!m.vertex_colors.empty()) {
     std::vector<Eigen::Vector3f> colors;
     colors.reserve(m.vertex_colors.size());
-    for (const auto& c : m.vertex_colors) colors.emplace_back(c[0] / 255.f, c[1] / 255.f, c[2] / 255.f);
+    for (const auto& c : m.vertex_colors)
+      colors.emplace_back(c[0] / 255.f, c[1] / 255.f, c[2] / 255.f);
     prim.attributes["COLOR_0"] = b->Vec3(colors);
     prim.material = b->Material("vertex_color", {1.0, 1.0, 1.0, 1.0});
   } else {
@@ -166,7 +174,8 @@ int MeshNode(Builder* b, const MeshPrim& m) {
       {"semrec_class", Value(m.label)},
       {"semrec_instance_id", Value(static_cast<int>(m.instance_id))},
       {"semrec_kind", Value(std::string(m.structure ? "structure" : "thing"))},
-      {"semrec_point_count", Value(static_cast<int>(std::min<size_t>(m.point_count, INT32_MAX)))},
+      {"semrec_point_count",
+       Value(static_cast<int>(std::min<size_t>(m.point_count, INT32_MAX)))},
       {"semrec_first_seen_frame", Value(static_cast<int>(m.first_seen_frame))},
       {"semrec_last_seen_frame", Value(static_cast<int>(m.last_seen_frame))},
       {"semrec_confidence", Value(m.confidence)},
@@ -174,12 +183,15 @@ int MeshNode(Builder* b, const MeshPrim& m) {
   return b->Node(node);
 }
 
-// A person: a point cloud (their first observation with points, relative to the centroid) whose
-// node follows the centroid, scaled to 0 in the frames they are out of view.
-int PersonNode(Builder* b, const PersonTrack& person, const StageOptions& options,
-               tinygltf::Animation* animation) {
-  const std::string name = fmt::format("{}_{}", SanitizeName(person.label), person.track_id);
-  CheckArgument(!person.samples.empty(), name + ": a person needs at least one observation");
+// A person: a point cloud (their first observation with points, relative to the
+// centroid) whose node follows the centroid, scaled to 0 in the frames they are
+// out of view.
+int PersonNode(Builder* b, const PersonTrack& person,
+               const StageOptions& options, tinygltf::Animation* animation) {
+  const std::string name =
+      fmt::format("{}_{}", SanitizeName(person.label), person.track_id);
+  CheckArgument(!person.samples.empty(),
+                name + ": a person needs at least one observation");
   tinygltf::Node node;
   node.name = name;
   node.extras = Value(Value::Object{
@@ -188,13 +200,18 @@ int PersonNode(Builder* b, const PersonTrack& person, const StageOptions& option
       {"semrec_kind", Value(std::string("person"))},
       {"semrec_observations", Value(static_cast<int>(person.samples.size()))},
   });
-  const auto with_points =
-      std::find_if(person.samples.begin(), person.samples.end(),
-                   [](const PersonSample& s) { return !s.points_world.empty(); });
-  if (with_points != person.samples.end()) {
+  // glTF cannot change a cloud over time without morph targets of equal size: the person's
+  // fullest view stands for them (their first may show only an arm entering the picture).
+  const auto with_points = std::max_element(
+      person.samples.begin(), person.samples.end(),
+      [](const PersonSample& a, const PersonSample& b) {
+        return a.points_world.size() < b.points_world.size();
+      });
+  if (!with_points->points_world.empty()) {
     std::vector<Eigen::Vector3f> local;
     local.reserve(with_points->points_world.size());
-    for (const auto& p : with_points->points_world) local.push_back(p - with_points->centroid_world);
+    for (const auto& p : with_points->points_world)
+      local.push_back(p - with_points->centroid_world);
     tinygltf::Primitive prim;
     prim.mode = TINYGLTF_MODE_POINTS;
     prim.attributes["POSITION"] = b->Vec3(local);
@@ -212,17 +229,21 @@ int PersonNode(Builder* b, const PersonTrack& person, const StageOptions& option
   if (options.time_codes_per_second > 0) {
     std::map<size_t, const PersonSample*> by_frame;
     for (const PersonSample& s : person.samples) by_frame[s.frame] = &s;
-    const auto begin = static_cast<size_t>(std::max(0.0, options.start_time_code));
-    const auto end = std::max(begin, static_cast<size_t>(std::max(0.0, options.end_time_code)));
+    const auto begin =
+        static_cast<size_t>(std::max(0.0, options.start_time_code));
+    const auto end = std::max(
+        begin, static_cast<size_t>(std::max(0.0, options.end_time_code)));
     std::vector<float> times;
     std::vector<Eigen::Vector3f> translation, scale;
     Eigen::Vector3f at = first;
     for (size_t f = begin; f <= end; ++f) {
       const auto it = by_frame.find(f);
       if (it != by_frame.end()) at = it->second->centroid_world;
-      times.push_back(static_cast<float>((f - begin) / options.time_codes_per_second));
+      times.push_back(
+          static_cast<float>((f - begin) / options.time_codes_per_second));
       translation.push_back(at);
-      scale.push_back(Eigen::Vector3f::Constant(it != by_frame.end() ? 1.f : 0.f));
+      scale.push_back(
+          Eigen::Vector3f::Constant(it != by_frame.end() ? 1.f : 0.f));
     }
     const int input = b->Scalars(times);
     for (const auto& [path, values] :
@@ -251,20 +272,24 @@ tinygltf::Node Group(const std::string& name, std::vector<int> children) {
 
 }  // namespace
 
-std::string GlbBytes(const std::vector<MeshPrim>& meshes, const StageOptions& options,
+std::string GlbBytes(const std::vector<MeshPrim>& meshes,
+                     const StageOptions& options,
                      const std::vector<PersonTrack>& people) {
   options.Check();
   Builder b;
   std::vector<int> objects, structure, persons;
-  for (const MeshPrim& m : meshes) (m.structure ? structure : objects).push_back(MeshNode(&b, m));
+  for (const MeshPrim& m : meshes)
+    (m.structure ? structure : objects).push_back(MeshNode(&b, m));
   tinygltf::Animation animation;
   animation.name = "people";
-  for (const PersonTrack& p : people) persons.push_back(PersonNode(&b, p, options, &animation));
+  for (const PersonTrack& p : people)
+    persons.push_back(PersonNode(&b, p, options, &animation));
   if (!animation.channels.empty()) b.model().animations.push_back(animation);
 
   std::vector<int> groups;
   if (!objects.empty()) groups.push_back(b.Node(Group("Objects", objects)));
-  if (!structure.empty()) groups.push_back(b.Node(Group("Structure", structure)));
+  if (!structure.empty())
+    groups.push_back(b.Node(Group("Structure", structure)));
   if (!persons.empty()) groups.push_back(b.Node(Group("People", persons)));
   tinygltf::Node world = Group("World", groups);
   if (options.up_axis == "Z") {
@@ -272,17 +297,20 @@ std::string GlbBytes(const std::vector<MeshPrim>& meshes, const StageOptions& op
     world.rotation = {-0.7071067811865476, 0.0, 0.0, 0.7071067811865476};
   }
   if (options.meters_per_unit != 1.0) {
-    world.scale = {options.meters_per_unit, options.meters_per_unit, options.meters_per_unit};
+    world.scale = {options.meters_per_unit, options.meters_per_unit,
+                   options.meters_per_unit};
   }
-  world.extras = Value(Value::Object{{"semrec_up_axis", Value(options.up_axis)},
-                                     {"semrec_meters_per_unit", Value(options.meters_per_unit)}});
+  world.extras = Value(Value::Object{
+      {"semrec_up_axis", Value(options.up_axis)},
+      {"semrec_meters_per_unit", Value(options.meters_per_unit)}});
   const int root = b.Node(world);
   tinygltf::Scene scene;
   scene.name = "semrec";
   scene.nodes = {root};
   b.model().scenes.push_back(scene);
   b.model().defaultScene = 0;
-  b.model().buffers[0].data.resize((b.model().buffers[0].data.size() + 3) / 4 * 4, 0);
+  b.model().buffers[0].data.resize(
+      (b.model().buffers[0].data.size() + 3) / 4 * 4, 0);
 
   tinygltf::TinyGLTF gltf;
   std::ostringstream out;
@@ -293,8 +321,10 @@ std::string GlbBytes(const std::vector<MeshPrim>& meshes, const StageOptions& op
   return out.str();
 }
 
-void WriteSceneGlb(const std::filesystem::path& path, const std::vector<MeshPrim>& meshes,
-                   const StageOptions& options, const std::vector<PersonTrack>& people) {
+void WriteSceneGlb(const std::filesystem::path& path,
+                   const std::vector<MeshPrim>& meshes,
+                   const StageOptions& options,
+                   const std::vector<PersonTrack>& people) {
   WriteTextFileAtomic(path, GlbBytes(meshes, options, people));  // binary-safe
 }
 

@@ -2,42 +2,34 @@
 
 #include <cstring>
 
-#include <Eigen/Geometry>
 #include <gtest/gtest.h>
 #include <tiny_gltf.h>
+#include <Eigen/Geometry>
 
 #include "semrec/core/error.h"
 #include "semrec/core/file_util.h"
 #include "semrec/testing/test_util.h"
+#include "semrec/usd/usd_test_util.h"
 
 namespace semrec::usd {
 namespace {
 
-MeshPrim Box(const std::string& label, uint32_t id, bool structure, bool colors) {
+MeshPrim Box(const std::string& label, uint32_t id, bool structure,
+             bool colors) {
   MeshPrim m;
   m.label = label;
   m.instance_id = id;
   m.structure = structure;
   m.points = {{0, 0, 0}, {1, 0, 0}, {0, 2, 0}, {0, 0, 1.5f}};
   m.triangles = {{0, 2, 1}, {0, 1, 3}, {1, 2, 3}, {0, 3, 2}};
-  if (colors) m.vertex_colors = {{255, 0, 0}, {0, 255, 0}, {0, 0, 255}, {51, 102, 153}};
+  if (colors)
+    m.vertex_colors = {{255, 0, 0}, {0, 255, 0}, {0, 0, 255}, {51, 102, 153}};
   m.color = {10, 20, 30};
   m.point_count = 77;
   return m;
 }
 
-PersonTrack Walker(uint32_t id, const std::vector<size_t>& frames) {
-  PersonTrack p;
-  p.track_id = id;
-  for (size_t f : frames) {
-    PersonSample s;
-    s.frame = f;
-    s.centroid_world = {0.5f * f, 1.0f, 1.0f};
-    s.points_world = {{0.5f * f - 0.25f, 1.0f, 0.0f}, {0.5f * f + 0.25f, 1.0f, 2.0f}};
-    p.samples.push_back(s);
-  }
-  return p;
-}
+using test_scenes::Walker;
 
 tinygltf::Model Load(const std::string& bytes) {
   tinygltf::TinyGLTF loader;
@@ -51,7 +43,8 @@ tinygltf::Model Load(const std::string& bytes) {
   return model;
 }
 
-const tinygltf::Node* Named(const tinygltf::Model& model, const std::string& name) {
+const tinygltf::Node* Named(const tinygltf::Model& model,
+                            const std::string& name) {
   for (const auto& n : model.nodes) {
     if (n.name == name) return &n;
   }
@@ -65,15 +58,17 @@ std::vector<float> Floats(const tinygltf::Model& model, int accessor) {
   const auto& data = model.buffers.at(view.buffer).data;
   const size_t n = a.count * tinygltf::GetNumComponentsInType(a.type);
   std::vector<float> out(n);
-  std::memcpy(out.data(), data.data() + view.byteOffset + a.byteOffset, n * sizeof(float));
+  std::memcpy(out.data(), data.data() + view.byteOffset + a.byteOffset,
+              n * sizeof(float));
   return out;
 }
 
 TEST(Glb, ObjectsAreNamedNodesWithClassesColoursAndYUp) {
   StageOptions options;  // Z-up, metres
-  const auto model = Load(GlbBytes({Box("chair", 3, false, true), Box("dining table", 4, false, false),
-                                    Box("floor", 1, true, true)},
-                                   options));
+  const auto model = Load(GlbBytes(
+      {Box("chair", 3, false, true), Box("dining table", 4, false, false),
+       Box("floor", 1, true, true)},
+      options));
   ASSERT_EQ(model.scenes.size(), 1u);
   const auto* chair = Named(model, "chair_3");
   const auto* table = Named(model, "dining_table_4");
@@ -82,7 +77,8 @@ TEST(Glb, ObjectsAreNamedNodesWithClassesColoursAndYUp) {
   EXPECT_EQ(chair->extras.Get("semrec_class").Get<std::string>(), "chair");
   EXPECT_EQ(chair->extras.Get("semrec_instance_id").Get<int>(), 3);
   EXPECT_EQ(chair->extras.Get("semrec_kind").Get<std::string>(), "thing");
-  EXPECT_EQ(table->extras.Get("semrec_class").Get<std::string>(), "dining table");
+  EXPECT_EQ(table->extras.Get("semrec_class").Get<std::string>(),
+            "dining table");
   EXPECT_EQ(floor->extras.Get("semrec_kind").Get<std::string>(), "structure");
 
   const auto& prim = model.meshes.at(chair->mesh).primitives.at(0);
@@ -94,22 +90,25 @@ TEST(Glb, ObjectsAreNamedNodesWithClassesColoursAndYUp) {
   EXPECT_EQ(model.accessors.at(prim.attributes.at("POSITION")).maxValues,
             (std::vector<double>{1.0, 2.0, 1.5}));
   const auto colors = Floats(model, prim.attributes.at("COLOR_0"));
-  EXPECT_FLOAT_EQ(colors[9], 0.2f);  // 51/255
+  EXPECT_FLOAT_EQ(colors[9], 0.2f);   // 51/255
   EXPECT_FLOAT_EQ(colors[11], 0.6f);  // 153/255
   // Without vertex colours the material carries the constant colour.
   const auto& table_prim = model.meshes.at(table->mesh).primitives.at(0);
   EXPECT_EQ(table_prim.attributes.count("COLOR_0"), 0u);
-  EXPECT_NEAR(model.materials.at(table_prim.material).pbrMetallicRoughness.baseColorFactor[1],
+  EXPECT_NEAR(model.materials.at(table_prim.material)
+                  .pbrMetallicRoughness.baseColorFactor[1],
               20.0 / 255.0, 1e-9);
 
   // The root turns Z-up into glTF's Y-up: world up (0, 0, 1) becomes (0, 1, 0).
   const auto* world = Named(model, "World");
   ASSERT_TRUE(world);
   ASSERT_EQ(world->rotation.size(), 4u);
-  const Eigen::Quaterniond q(world->rotation[3], world->rotation[0], world->rotation[1],
-                             world->rotation[2]);
-  EXPECT_TRUE((q * Eigen::Vector3d(0, 0, 1)).isApprox(Eigen::Vector3d(0, 1, 0), 1e-12));
-  EXPECT_TRUE((q * Eigen::Vector3d(0, 1, 0)).isApprox(Eigen::Vector3d(0, 0, -1), 1e-12));
+  const Eigen::Quaterniond q(world->rotation[3], world->rotation[0],
+                             world->rotation[1], world->rotation[2]);
+  EXPECT_TRUE(
+      (q * Eigen::Vector3d(0, 0, 1)).isApprox(Eigen::Vector3d(0, 1, 0), 1e-12));
+  EXPECT_TRUE((q * Eigen::Vector3d(0, 1, 0))
+                  .isApprox(Eigen::Vector3d(0, 0, -1), 1e-12));
   EXPECT_TRUE(model.animations.empty());
 
   StageOptions y_up;
@@ -123,12 +122,13 @@ TEST(Glb, PeopleFollowTheirCentroidAndVanishOutOfView) {
   options.time_codes_per_second = 10.0;
   options.start_time_code = 0;
   options.end_time_code = 6;
-  const auto model =
-      Load(GlbBytes({Box("chair", 3, false, true)}, options, {Walker(7, {0, 1, 2, 5})}));
+  const auto model = Load(GlbBytes({Box("chair", 3, false, true)}, options,
+                                   {Walker(7, {0, 1, 2, 5})}));
   const auto* person = Named(model, "person_7");
   ASSERT_TRUE(person);
   EXPECT_EQ(person->extras.Get("semrec_kind").Get<std::string>(), "person");
-  EXPECT_EQ(model.meshes.at(person->mesh).primitives.at(0).mode, TINYGLTF_MODE_POINTS);
+  EXPECT_EQ(model.meshes.at(person->mesh).primitives.at(0).mode,
+            TINYGLTF_MODE_POINTS);
   ASSERT_EQ(model.animations.size(), 1u);
   const auto& anim = model.animations[0];
   ASSERT_EQ(anim.channels.size(), 2u);
@@ -137,14 +137,18 @@ TEST(Glb, PeopleFollowTheirCentroidAndVanishOutOfView) {
     const auto& sampler = anim.samplers.at(channel.sampler);
     EXPECT_EQ(sampler.interpolation, "STEP");
     times = Floats(model, sampler.input);
-    (channel.target_path == "scale" ? scale : translation) = Floats(model, sampler.output);
+    (channel.target_path == "scale" ? scale : translation) =
+        Floats(model, sampler.output);
   }
   ASSERT_EQ(times.size(), 7u);  // frames 0..6
   EXPECT_FLOAT_EQ(times[5], 0.5f);
-  // Seen at 0, 1, 2, 5: scale 1 there, 0 at 3, 4, 6; position held while out of view.
+  // Seen at 0, 1, 2, 5: scale 1 there, 0 at 3, 4, 6; position held while out of
+  // view.
   const std::vector<float> visible = {1, 1, 1, 0, 0, 1, 0};
-  for (size_t f = 0; f < 7; ++f) EXPECT_EQ(scale[3 * f], visible[f]) << "frame " << f;
-  EXPECT_FLOAT_EQ(translation[3 * 3], 1.0f);  // frame 3 holds frame 2's x = 0.5 * 2
+  for (size_t f = 0; f < 7; ++f)
+    EXPECT_EQ(scale[3 * f], visible[f]) << "frame " << f;
+  EXPECT_FLOAT_EQ(translation[3 * 3],
+                  1.0f);  // frame 3 holds frame 2's x = 0.5 * 2
   EXPECT_FLOAT_EQ(translation[3 * 5], 2.5f);
 }
 
@@ -157,7 +161,8 @@ TEST(Glb, BadInputIsRefusedAndTheFileWrittenAtomically) {
   EXPECT_THROW(GlbBytes({colours}, StageOptions{}), InvalidArgument);
   StageOptions bad_axis;
   bad_axis.up_axis = "X";
-  EXPECT_THROW(GlbBytes({Box("chair", 3, false, true)}, bad_axis), InvalidArgument);
+  EXPECT_THROW(GlbBytes({Box("chair", 3, false, true)}, bad_axis),
+               InvalidArgument);
 
   testing::TempDir dir;
   const auto path = dir.path() / "scene.glb";
@@ -165,7 +170,8 @@ TEST(Glb, BadInputIsRefusedAndTheFileWrittenAtomically) {
   const auto bytes = ReadFileBytes(path);
   ASSERT_GT(bytes.size(), 12u);
   EXPECT_EQ(std::string(bytes.begin(), bytes.begin() + 4), "glTF");
-  EXPECT_THROW(WriteSceneGlb(path / "sub.glb", {Box("chair", 3, false, true)}, StageOptions{}),
+  EXPECT_THROW(WriteSceneGlb(path / "sub.glb", {Box("chair", 3, false, true)},
+                             StageOptions{}),
                IoError);
 }
 

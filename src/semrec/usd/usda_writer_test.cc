@@ -12,6 +12,7 @@
 #include "semrec/core/error.h"
 #include "semrec/core/file_util.h"
 #include "semrec/testing/test_util.h"
+#include "semrec/usd/usd_test_util.h"
 
 namespace fs = std::filesystem;
 
@@ -79,20 +80,7 @@ TEST(Usda, IndependentParserReadsWhatWeWrite) {
   EXPECT_TRUE((*root)["ok"].get<bool>()) << (*root)["error"];
 }
 
-PersonTrack Walker(uint32_t id, const std::vector<size_t>& frames) {
-  PersonTrack p;
-  p.track_id = id;
-  for (size_t f : frames) {
-    PersonSample s;
-    s.frame = f;
-    // Exactly representable values, so the text is predictable.
-    s.centroid_world = {0.5f * f, 1.0f, 1.0f};
-    s.points_world = {{0.5f * f - 0.25f, 1.0f, 0.0f},
-                      {0.5f * f + 0.25f, 1.125f, 2.0f}};
-    p.samples.push_back(s);
-  }
-  return p;
-}
+using test_scenes::Walker;
 
 TEST(Usda, PeopleAreTimeSampledPrimsTheParserReads) {
   testing::TempDir dir;
