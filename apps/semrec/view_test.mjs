@@ -133,6 +133,7 @@ Run(['synth', '--preset', 'people', '--frames', '12', '--width', '320', '--heigh
      '--out', 'people-syn']);
 Run(['mesh', 'people-syn', '--people', 'people-syn/person', '--out', 'people', '--usdz', '--glb']);
 
+const timelines = {};
 for (const dir of ['six', 'people']) {
   const ours = JSON.parse(Run(['query', `${dir}/scene.usda`, '--json']).stdout);
   const summary = JSON.parse(fs.readFileSync(path.join(tmp, dir, 'summary.json'), 'utf8'));
@@ -160,6 +161,11 @@ for (const dir of ['six', 'people']) {
       Check(r.timeRange.end - r.timeRange.start === 11 || file === 'scene.glb' &&
             Math.abs(r.timeRange.end - 11) < 1e-3, `${what}: time range ${JSON.stringify(r.timeRange)}`);
       Check(r.view.visiblePeople.length > 0, `${what}: nobody visible at frame 6`);
+      timelines[file] = r.view.visibleByFrame;
+      // The picture at --time 6 shows whom the timeline says (after the sweep over all frames).
+      Check(JSON.stringify(r.view.visiblePeople) === JSON.stringify(r.view.visibleByFrame[6]),
+            `${what}: at frame 6 the picture shows ${r.view.visiblePeople}, the timeline ` +
+            `${r.view.visibleByFrame[6]}`);
     }
     // Upright in the picture: the floor below the objects and the ceiling (pixel rows grow down).
     Check(r.view.floorScreen && r.view.objectsScreen &&
@@ -188,17 +194,16 @@ for (const dir of ['six', 'people']) {
   }
 }
 
-// Who is in view agrees between OpenUSD (time-sampled visibility) and glTF (STEP scale), at
-// every frame where that changes something, and someone is out of view somewhere.
-const changes = [];
-for (const t of [0, 6]) {
-  const usd = Probe(path.join(tmp, 'people/scene.usdz'), { time: t }).view.visiblePeople;
-  const glb = Probe(path.join(tmp, 'people/scene.glb'), { time: t }).view.visiblePeople;
-  Check(JSON.stringify(usd) === JSON.stringify(glb), `frame ${t}: OpenUSD shows ${usd}, glTF ${glb}`);
-  changes.push(usd.length);
-}
-console.log(`people visible at frames 0 6: ${changes.join(' ')}`);
-Check(Math.min(...changes) < 2, 'the synthetic people scene should have someone out of view at frame 0');
+// Who is in view agrees between OpenUSD (time-sampled visibility) and glTF (STEP scale) at
+// every frame, matches the people's observations, and someone is out of view somewhere.
+Check(JSON.stringify(timelines['scene.usda']) === JSON.stringify(timelines['scene.glb']) &&
+      JSON.stringify(timelines['scene.usdz']) === JSON.stringify(timelines['scene.glb']),
+      `visibility per frame: OpenUSD ${JSON.stringify(timelines['scene.usda'])}, ` +
+      `glTF ${JSON.stringify(timelines['scene.glb'])}`);
+const counts = timelines['scene.usda'].map((names) => names.length);
+console.log(`people visible per frame: ${counts.join(' ')}`);
+Check(counts.length === 12 && Math.min(...counts) < Math.max(...counts) && Math.max(...counts) > 0,
+      'the synthetic people should enter or leave the view');
 
 // A malformed scene: a clear error from OpenUSD, exit 1; bad options: exit 2.
 fs.writeFileSync(path.join(tmp, 'broken.usda'), '#usda 1.0\ndef Mesh "m" { point3f[] points = [(0, 0');

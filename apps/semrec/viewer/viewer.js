@@ -278,7 +278,15 @@ async function LoadGlb(config, root) {
   });
   // glTF is Y-up by definition.
   const mixer = gltf.animations.length ? new THREE.AnimationMixer(gltf.scene) : null;
-  for (const clip of gltf.animations) mixer.clipAction(clip).play();
+  const actions = [];
+  for (const clip of gltf.animations) {
+    // The timeline drives the time; past the last key the last frame holds (no wrap to 0).
+    const action = mixer.clipAction(clip);
+    actions.push(action);
+    action.setLoop(THREE.LoopOnce);
+    action.clampWhenFinished = true;
+    action.play();
+  }
   const duration = Math.max(0, ...gltf.animations.map((c) => c.duration));
   const fps = 10;
   return {
@@ -288,7 +296,11 @@ async function LoadGlb(config, root) {
     animations: gltf.animations.length,
     timeRange: { start: 0, end: duration * fps, fps },
     setTime(t) {
-      if (mixer) mixer.setTime(t / fps);
+      // Keyframe times are float32 (0.2 is stored as 0.2000000030): a hair past the frame, so a
+      // STEP key at exactly this frame applies.
+      if (!mixer) return;
+      for (const action of actions) action.reset();  // a finished action would stay paused
+      mixer.setTime(t / fps + 1e-4);
     },
   };
 }
@@ -560,6 +572,20 @@ window.semrecLoaded = Load().catch((e) => {
 window.semrecSetView = async ({ camera: view = 'iso', time = null, classColors = false,
                                 panel = true } = {}) => {
   await window.semrecLoaded;
+  // Who is shown at every frame (up to 1000), for checks against the writer.
+  const visibleByFrame = [];
+  const range = loaded.timeRange;
+  if (Viewer.items.some((i) => i.person) && range.end > range.start) {
+    for (let t = Math.ceil(range.start); t <= range.end + 1e-6 && visibleByFrame.length < 1000; t++) {
+      Viewer.time = t;
+      loaded.setTime(t);
+      ApplyVisibility();
+      root.updateMatrixWorld(true);
+      visibleByFrame.push(Viewer.items.filter((i) => i.person && Shown(i)).map((i) => i.name));
+    }
+    Viewer.time = range.start;
+    loaded.setTime(range.start);
+  }
   document.getElementById('panel').hidden = !panel;
   container.style.right = panel ? '' : '0';
   Resize();
@@ -608,6 +634,7 @@ window.semrecSetView = async ({ camera: view = 'iso', time = null, classColors =
     clicks.push({ path: item.path, info, tries });
   }
   return {
+    visibleByFrame,
     clicks,
     camera: view,
     time: Viewer.time,
