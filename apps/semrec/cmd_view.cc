@@ -32,8 +32,9 @@ void RunView(ViewArgs args) {
   if (args.time >= 0.0) args.options.time = args.time;
   CheckUsage(args.options);
   const auto scene = ResolveScene(args.input);
-  if (args.screenshot.empty() && args.probe.empty())
+  if (args.screenshot.empty() && args.probe.empty()) {
     ServeViewer(scene, args.options);
+  }
   RenderScene(scene, args.screenshot, args.probe, args.options);
   if (!args.screenshot.empty()) fmt::print("wrote {}\n", args.screenshot);
   if (!args.probe.empty()) fmt::print("wrote {}\n", args.probe);

@@ -41,8 +41,10 @@ fs::path FindOnPath(const std::string& name) {
   const char* path = std::getenv("PATH");
   std::stringstream dirs(path != nullptr ? path : "/usr/bin:/bin");
   for (std::string dir; std::getline(dirs, dir, ':');) {
-    const fs::path candidate = fs::path(dir.empty() ? "." : dir) / name;
-    if (::access(candidate.c_str(), X_OK) == 0) return candidate;
+    fs::path candidate = fs::path(dir.empty() ? "." : dir) / name;
+    if (::access(candidate.c_str(), X_OK) == 0) {
+      return candidate;
+    }
   }
   return {};
 }
@@ -75,6 +77,7 @@ std::vector<std::string> HostArgs(const fs::path& scene,
 
 std::vector<char*> Argv(std::vector<std::string>& args) {
   std::vector<char*> argv;
+  argv.reserve(args.size() + 1);
   for (std::string& a : args) argv.push_back(a.data());
   argv.push_back(nullptr);
   return argv;
@@ -102,8 +105,9 @@ fs::path ResolveScene(const fs::path& input) {
   std::error_code ec;
   if (fs::is_directory(input, ec)) {
     for (const char* name : {"scene.usda", "scene.usdz", "scene.glb"}) {
-      if (fs::is_regular_file(input / name, ec))
+      if (fs::is_regular_file(input / name, ec)) {
         return fs::absolute(input / name);
+      }
     }
     throw IoError(
         input,
@@ -111,8 +115,9 @@ fs::path ResolveScene(const fs::path& input) {
         "`semrec run` or `semrec mesh` result?)");
   }
   if (!fs::exists(input, ec)) throw IoError(input, "no such file or folder");
-  if (!fs::is_regular_file(input, ec))
+  if (!fs::is_regular_file(input, ec)) {
     throw IoError(input, "not a file or a folder");
+  }
   const std::string ext = input.extension().string();
   if (ext != ".usda" && ext != ".usd" && ext != ".usdc" && ext != ".usdz" &&
       ext != ".glb") {
@@ -124,8 +129,9 @@ fs::path ResolveScene(const fs::path& input) {
 
 std::string ViewerUnavailableReason() {
   std::vector<std::string> missing;
-  if (FindOnPath("node").empty())
+  if (FindOnPath("node").empty()) {
     missing.push_back("Node.js (node) is not on PATH");
+  }
   if (!fs::is_regular_file(ViewerDir() / "view.mjs")) {
     missing.push_back("viewer files not found in " + ViewerDir().string() +
                       " (set SEMREC_VIEWER_DIR)");
@@ -139,8 +145,9 @@ std::string ViewerUnavailableReason() {
     }
   }
   std::string reason;
-  for (const std::string& m : missing)
+  for (const std::string& m : missing) {
     reason += (reason.empty() ? "" : "; ") + m;
+  }
   return reason;
 }
 
@@ -159,10 +166,12 @@ void RenderScene(const fs::path& scene, const fs::path& png,
   options.Check();
   RequireViewer();
   std::vector<std::string> args = HostArgs(scene, options);
-  if (!png.empty())
+  if (!png.empty()) {
     args.insert(args.end(), {"--screenshot", fs::absolute(png).string()});
-  if (!probe_json.empty())
+  }
+  if (!probe_json.empty()) {
     args.insert(args.end(), {"--probe", fs::absolute(probe_json).string()});
+  }
   // The host's messages (stderr) become the error; its summary line (stdout) is
   // dropped.
   const fs::path log =
@@ -195,15 +204,17 @@ void RenderScene(const fs::path& scene, const fs::path& png,
   std::string filtered;
   std::stringstream lines(message);
   for (std::string line; std::getline(lines, line);) {
-    if (line.find("Coding Error") != std::string::npos || line.empty())
+    if (line.find("Coding Error") != std::string::npos || line.empty()) {
       continue;
+    }
     const std::string prefix = "semrec view: ";
     if (line.rfind(prefix, 0) == 0) line = line.substr(prefix.size());
     filtered += line + "\n";
   }
   while (!filtered.empty() && filtered.back() == '\n') filtered.pop_back();
-  if (filtered.empty())
+  if (filtered.empty()) {
     throw IoError(scene, "the viewer failed without a message");
+  }
   throw Error(filtered);  // the host's message names the scene
 }
 

@@ -99,8 +99,9 @@ class Builder {
   int Material(const std::string& name, const std::array<double, 4>& color) {
     const std::string key =
         fmt::format("{}/{}/{}/{}", color[0], color[1], color[2], color[3]);
-    if (const auto it = materials_.find(key); it != materials_.end())
+    if (const auto it = materials_.find(key); it != materials_.end()) {
       return it->second;
+    }
     tinygltf::Material m;
     m.name = name;
     m.pbrMetallicRoughness.baseColorFactor = {color[0], color[1], color[2],
@@ -154,8 +155,9 @@ int MeshNode(Builder* b, const MeshPrim& m) {
   if (!m.vertex_colors.empty()) {
     std::vector<Eigen::Vector3f> colors;
     colors.reserve(m.vertex_colors.size());
-    for (const auto& c : m.vertex_colors)
+    for (const auto& c : m.vertex_colors) {
       colors.emplace_back(c[0] / 255.f, c[1] / 255.f, c[2] / 255.f);
+    }
     prim.attributes["COLOR_0"] = b->Vec3(colors);
     prim.material = b->Material("vertex_color", {1.0, 1.0, 1.0, 1.0});
   } else {
@@ -200,18 +202,20 @@ int PersonNode(Builder* b, const PersonTrack& person,
       {"semrec_kind", Value(std::string("person"))},
       {"semrec_observations", Value(static_cast<int>(person.samples.size()))},
   });
-  // glTF cannot change a cloud over time without morph targets of equal size: the person's
-  // fullest view stands for them (their first may show only an arm entering the picture).
-  const auto with_points = std::max_element(
-      person.samples.begin(), person.samples.end(),
-      [](const PersonSample& a, const PersonSample& b) {
-        return a.points_world.size() < b.points_world.size();
-      });
+  // glTF cannot change a cloud over time without morph targets of equal size:
+  // the person's fullest view stands for them (their first may show only an arm
+  // entering the picture).
+  const auto with_points =
+      std::max_element(person.samples.begin(), person.samples.end(),
+                       [](const PersonSample& a, const PersonSample& b) {
+                         return a.points_world.size() < b.points_world.size();
+                       });
   if (!with_points->points_world.empty()) {
     std::vector<Eigen::Vector3f> local;
     local.reserve(with_points->points_world.size());
-    for (const auto& p : with_points->points_world)
+    for (const auto& p : with_points->points_world) {
       local.push_back(p - with_points->centroid_world);
+    }
     tinygltf::Primitive prim;
     prim.mode = TINYGLTF_MODE_POINTS;
     prim.attributes["POSITION"] = b->Vec3(local);
@@ -278,18 +282,21 @@ std::string GlbBytes(const std::vector<MeshPrim>& meshes,
   options.Check();
   Builder b;
   std::vector<int> objects, structure, persons;
-  for (const MeshPrim& m : meshes)
+  for (const MeshPrim& m : meshes) {
     (m.structure ? structure : objects).push_back(MeshNode(&b, m));
+  }
   tinygltf::Animation animation;
   animation.name = "people";
-  for (const PersonTrack& p : people)
+  for (const PersonTrack& p : people) {
     persons.push_back(PersonNode(&b, p, options, &animation));
+  }
   if (!animation.channels.empty()) b.model().animations.push_back(animation);
 
   std::vector<int> groups;
   if (!objects.empty()) groups.push_back(b.Node(Group("Objects", objects)));
-  if (!structure.empty())
+  if (!structure.empty()) {
     groups.push_back(b.Node(Group("Structure", structure)));
+  }
   if (!persons.empty()) groups.push_back(b.Node(Group("People", persons)));
   tinygltf::Node world = Group("World", groups);
   if (options.up_axis == "Z") {

@@ -22,8 +22,9 @@ MeshPrim Box(const std::string& label, uint32_t id, bool structure,
   m.structure = structure;
   m.points = {{0, 0, 0}, {1, 0, 0}, {0, 2, 0}, {0, 0, 1.5f}};
   m.triangles = {{0, 2, 1}, {0, 1, 3}, {1, 2, 3}, {0, 3, 2}};
-  if (colors)
+  if (colors) {
     m.vertex_colors = {{255, 0, 0}, {0, 255, 0}, {0, 0, 255}, {51, 102, 153}};
+  }
   m.color = {10, 20, 30};
   m.point_count = 77;
   return m;
@@ -145,11 +146,12 @@ TEST(Glb, PeopleFollowTheirCentroidAndVanishOutOfView) {
   // Seen at 0, 1, 2, 5: scale 1 there, 0 at 3, 4, 6; position held while out of
   // view.
   const std::vector<float> visible = {1, 1, 1, 0, 0, 1, 0};
-  for (size_t f = 0; f < 7; ++f)
+  for (size_t f = 0; f < 7; ++f) {
     EXPECT_EQ(scale[3 * f], visible[f]) << "frame " << f;
-  EXPECT_FLOAT_EQ(translation[3 * 3],
-                  1.0f);  // frame 3 holds frame 2's x = 0.5 * 2
-  EXPECT_FLOAT_EQ(translation[3 * 5], 2.5f);
+  }
+  // Frame 3 holds frame 2's x = 0.5 * 2.
+  EXPECT_FLOAT_EQ(translation[size_t{3} * 3], 1.0f);
+  EXPECT_FLOAT_EQ(translation[size_t{3} * 5], 2.5f);
 }
 
 TEST(Glb, BadInputIsRefusedAndTheFileWrittenAtomically) {

@@ -35,11 +35,12 @@ MeshPrim Tetrahedron(const std::string& label, uint32_t id, bool per_vertex) {
   return m;
 }
 
-#define SEMREC_REQUIRE_VALIDATOR(var, file, dir)                              \
-  const auto var = testing::ValidateUsd(file, dir);                           \
-  if (!var)                                                                   \
-  SEMREC_SKIP("tinyusdz (npm) or node missing: run scripts/setup to install " \
-              "it")
+#define SEMREC_REQUIRE_VALIDATOR(var, file, dir)                      \
+  const auto var = testing::ValidateUsd(file, dir);                   \
+  if (!var)                                                           \
+  SEMREC_SKIP(                                                        \
+      "tinyusdz (npm) or node missing: run scripts/setup to install " \
+      "it")
 
 TEST(Usda, IndependentParserReadsWhatWeWrite) {
   testing::TempDir dir;
