@@ -1,0 +1,114 @@
+#include "semrec/fuse/map_projection.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "semrec/core/error.h"
+
+namespace semrec::fuse {
+namespace {
+
+// True when the 4-neighbours of (x, y) show the same object (not on its silhouette).
+bool Interior(const Image<uint32_t>& ids, int x, int y) {
+  const uint32_t id = ids(x, y);
+  return x > 0 && y > 0 && x + 1 < ids.width() && y + 1 < ids.height() &&
+         ids(x - 1, y) == id && ids(x + 1, y) == id && ids(x, y - 1) == id &&
+         ids(x, y + 1) == id;
+}
+
+}  // namespace
+
+void MapProjectionOptions::Check() const {
+  CheckArgument(splat_radius_m > 0 && std::isfinite(splat_radius_m),
+                "map projection: splat_radius_m must be > 0");
+  CheckArgument(max_splat_px >= 0, "map projection: max_splat_px must be >= 0");
+  CheckArgument(min_depth_m > 0, "map projection: min_depth_m must be > 0");
+  CheckArgument(depth_tolerance_m >= 0 && depth_tolerance_ratio >= 0,
+                "map projection: depth tolerances must be >= 0");
+}
+
+double ProjectedMap::UnexplainedShare() const {
+  if (valid_depth_pixels == 0) return 1.0;
+  return 1.0 - static_cast<double>(explained_pixels) /
+                   static_cast<double>(valid_depth_pixels);
+}
+
+ProjectedMap ProjectMap(const std::vector<SceneSegment>& objects,
+                        const CameraIntrinsics& intrinsics,
+                        const Transform& T_world_camera,
+                        const DepthImage& depth_m,
+                        const MapProjectionOptions& options) {
+  options.Check();
+  intrinsics.Check();
+  CheckArgument(
+      depth_m.SameSize(intrinsics.width, intrinsics.height),
+      "map projection: the depth image size differs from the intrinsics'");
+  const int w = intrinsics.width;
+  const int h = intrinsics.height;
+  ProjectedMap out;
+  out.object_id = Image<uint32_t>(w, h);
+  out.class_id = LabelMap(w, h);
+  out.depth_m = DepthImage(w, h);
+  out.state = Image<uint8_t>(w, h);
+  constexpr float kFar = std::numeric_limits<float>::infinity();
+  std::vector<float> zbuf(static_cast<size_t>(w) * h, kFar);
+
+  const Eigen::Matrix3f R = T_world_camera.rotation().transpose().cast<float>();
+  const Eigen::Vector3f t =
+      (-T_world_camera.rotation().transpose() * T_world_camera.translation())
+          .cast<float>();
+  const auto fx = static_cast<float>(intrinsics.fx);
+  const auto fy = static_cast<float>(intrinsics.fy);
+  const auto cx = static_cast<float>(intrinsics.cx);
+  const auto cy = static_cast<float>(intrinsics.cy);
+  for (const SceneSegment& object : objects) {
+    for (const Eigen::Vector3f& p_world : object.points) {
+      const Eigen::Vector3f p = R * p_world + t;
+      if (!(p.z() >= options.min_depth_m)) continue;
+      const float u = fx * p.x() / p.z() + cx;
+      const float v = fy * p.y() / p.z() + cy;
+      const int r = std::min(
+          options.max_splat_px,
+          static_cast<int>(std::lround(fx * options.splat_radius_m / p.z())));
+      const int u0 = static_cast<int>(std::floor(u));
+      const int v0 = static_cast<int>(std::floor(v));
+      if (u0 + r < 0 || v0 + r < 0 || u0 - r >= w || v0 - r >= h) continue;
+      for (int y = std::max(0, v0 - r); y <= std::min(h - 1, v0 + r); ++y) {
+        for (int x = std::max(0, u0 - r); x <= std::min(w - 1, u0 + r); ++x) {
+          float& z = zbuf[static_cast<size_t>(y) * w + x];
+          if (p.z() < z) {
+            z = p.z();
+            out.object_id(x, y) = object.id;
+            out.class_id(x, y) = object.class_id;
+          }
+        }
+      }
+    }
+  }
+
+  for (int y = 0; y < h; ++y) {
+    for (int x = 0; x < w; ++x) {
+      const float z_map = zbuf[static_cast<size_t>(y) * w + x];
+      if (z_map != kFar) out.depth_m(x, y) = z_map;
+      const float z = depth_m(x, y);
+      if (!(z > 0) || !std::isfinite(z)) continue;
+      ++out.valid_depth_pixels;
+      if (z_map == kFar) continue;
+      const float tolerance =
+          options.depth_tolerance_m + options.depth_tolerance_ratio * z;
+      if (std::abs(z - z_map) <= tolerance) {
+        out.state(x, y) = ProjectedMap::kExplained;
+        ++out.explained_pixels;
+      } else if (z > z_map + tolerance && Interior(out.object_id, x, y)) {
+        // The camera sees past where the map has a surface: it moved or is
+        // gone.
+        out.state(x, y) = ProjectedMap::kContradicted;
+        ++out.contradicted_pixels;
+      }
+    }
+  }
+  return out;
+}
+
+}  // namespace semrec::fuse

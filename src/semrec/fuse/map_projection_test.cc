@@ -1,0 +1,191 @@
+#include "semrec/fuse/map_projection.h"
+
+#include <gtest/gtest.h>
+
+#include "semrec/core/error.h"
+
+namespace semrec::fuse {
+namespace {
+
+// A fronto-parallel rectangle [x0, x1] x [y0, y1] at depth z (camera frame).
+struct Plate {
+  uint32_t id;
+  uint16_t class_id;
+  float x0, x1, y0, y1, z;
+  bool Hit(float x, float y) const {
+    return x >= x0 && x <= x1 && y >= y0 && y <= y1;
+  }
+};
+
+CameraIntrinsics Camera() {
+  CameraIntrinsics k;
+  k.width = 160;
+  k.height = 120;
+  k.fx = k.fy = 100;
+  k.cx = 80;
+  k.cy = 60;
+  return k;
+}
+
+// The map's object: the plate as the fusion stores it (centres of its 5 cm voxels), moved into
+// the world by T_world_camera.
+SceneSegment Object(const Plate& p, const Transform& T_world_camera) {
+  SceneSegment s;
+  s.id = p.id;
+  s.class_id = p.class_id;
+  for (float x = p.x0 + 0.025f; x < p.x1; x += 0.05f) {
+    for (float y = p.y0 + 0.025f; y < p.y1; y += 0.05f) {
+      s.points.push_back((T_world_camera * Eigen::Vector3d(x, y, p.z)).cast<float>());
+    }
+  }
+  return s;
+}
+
+// Measured depth: the nearest plate along each pixel's ray, else a wall at 4 m;
+// and the id of the plate seen (ground truth).
+DepthImage Render(const std::vector<Plate>& plates, Image<uint32_t>* gt_ids) {
+  const CameraIntrinsics k = Camera();
+  DepthImage depth(k.width, k.height, 1, 4.0f);
+  *gt_ids = Image<uint32_t>(k.width, k.height);
+  for (int v = 0; v < k.height; ++v) {
+    for (int u = 0; u < k.width; ++u) {
+      for (const Plate& p : plates) {
+        const float x = static_cast<float>((u - k.cx) * p.z / k.fx);
+        const float y = static_cast<float>((v - k.cy) * p.z / k.fy);
+        if (p.Hit(x, y) && p.z < depth(u, v)) {
+          depth(u, v) = p.z;
+          (*gt_ids)(u, v) = p.id;
+        }
+      }
+    }
+  }
+  return depth;
+}
+
+double Iou(const Image<uint32_t>& a, const Image<uint32_t>& b, uint32_t id) {
+  size_t inter = 0, uni = 0;
+  for (size_t i = 0; i < a.values().size(); ++i) {
+    const bool in_a = a.values()[i] == id;
+    const bool in_b = b.values()[i] == id;
+    inter += in_a && in_b;
+    uni += in_a || in_b;
+  }
+  return uni ? static_cast<double>(inter) / static_cast<double>(uni) : 0.0;
+}
+
+const Plate kTable{5, 3, -0.5f, 0.0f, -0.25f, 0.25f, 2.0f};
+const Plate kChair{7, 4, 0.2f, 0.6f, -0.2f, 0.2f, 2.5f};
+
+TEST(MapProjection, ExplainsKnownObjectsWithTheirIdsAndClasses) {
+  for (const Transform& T_world_camera :
+       {Transform(),
+        Transform::FromQuaternion(Eigen::Quaterniond(0.9, 0.1, -0.3, 0.2),
+                                  Eigen::Vector3d(1.0, -2.0, 0.5))}) {
+    Image<uint32_t> gt;
+    const DepthImage depth = Render({kTable, kChair}, &gt);
+    const ProjectedMap map = ProjectMap(
+        {Object(kTable, T_world_camera), Object(kChair, T_world_camera)},
+        Camera(), T_world_camera, depth);
+    EXPECT_GT(Iou(map.object_id, gt, 5), 0.85);
+    EXPECT_GT(Iou(map.object_id, gt, 7), 0.85);
+    size_t gt_pixels = 0, explained_on_gt = 0, explained_off_gt = 0;
+    for (int v = 0; v < depth.height(); ++v) {
+      for (int u = 0; u < depth.width(); ++u) {
+        const bool explained = map.state(u, v) == ProjectedMap::kExplained;
+        if (gt(u, v) != 0) {
+          ++gt_pixels;
+          explained_on_gt += explained;
+          if (map.object_id(u, v) == gt(u, v)) {
+            EXPECT_EQ(map.class_id(u, v), gt(u, v) == 5 ? 3 : 4);
+            EXPECT_NEAR(map.depth_m(u, v), depth(u, v), 0.01);
+          }
+        } else {
+          explained_off_gt += explained;
+        }
+      }
+    }
+    // The objects are explained; the wall behind them (not in the map) is not.
+    EXPECT_GT(explained_on_gt, 0.95 * static_cast<double>(gt_pixels));
+    EXPECT_LT(explained_off_gt, 0.02 * static_cast<double>(depth.NumPixels()));
+    EXPECT_EQ(map.valid_depth_pixels, depth.NumPixels());
+    EXPECT_NEAR(map.UnexplainedShare(),
+                1.0 - static_cast<double>(gt_pixels) /
+                          static_cast<double>(depth.NumPixels()),
+                0.03);
+    EXPECT_EQ(map.contradicted_pixels, 0u);
+  }
+}
+
+TEST(MapProjection, ANewObjectInFrontIsUnexplainedAndARemovedOneContradicts) {
+  // A box enters in front of part of the table: those pixels are new, not the
+  // table.
+  const Plate box{9, 6, -0.3f, 0.1f, 0.0f, 0.3f, 1.5f};
+  Image<uint32_t> gt;
+  const DepthImage depth = Render({kTable, kChair, box}, &gt);
+  const ProjectedMap map =
+      ProjectMap({Object(kTable, {}), Object(kChair, {})}, Camera(), {}, depth);
+  size_t box_pixels = 0, box_explained = 0, box_contradicted = 0;
+  for (size_t i = 0; i < gt.values().size(); ++i) {
+    if (gt.values()[i] != 9) continue;
+    ++box_pixels;
+    box_explained += map.state.values()[i] == ProjectedMap::kExplained;
+    box_contradicted += map.state.values()[i] == ProjectedMap::kContradicted;
+  }
+  ASSERT_GT(box_pixels, 500u);
+  EXPECT_EQ(box_explained, 0u);
+  EXPECT_EQ(box_contradicted,
+            0u);  // something in front of the map is new, not a contradiction
+
+  // The chair was taken away: the camera sees the wall where the map has the
+  // chair.
+  const DepthImage without_chair = Render({kTable}, &gt);
+  const ProjectedMap after = ProjectMap(
+      {Object(kTable, {}), Object(kChair, {})}, Camera(), {}, without_chair);
+  size_t chair_pixels = 0, chair_explained = 0, chair_contradicted = 0;
+  for (size_t i = 0; i < gt.values().size(); ++i) {
+    if (after.object_id.values()[i] != 7) continue;
+    ++chair_pixels;
+    chair_explained += after.state.values()[i] == ProjectedMap::kExplained;
+    chair_contradicted +=
+        after.state.values()[i] == ProjectedMap::kContradicted;
+  }
+  ASSERT_GT(chair_pixels, 200u);
+  EXPECT_EQ(chair_explained, 0u);
+  // All of it but the one-pixel rim of its silhouette, and nothing else.
+  EXPECT_GT(chair_contradicted, 0.7 * static_cast<double>(chair_pixels)) << chair_pixels;
+  EXPECT_EQ(after.contradicted_pixels, chair_contradicted);
+}
+
+TEST(MapProjection, NearerObjectsHideFartherOnesAndBadInputIsRefused) {
+  // The chair moved behind the table's plane: where both project, the nearer
+  // (table) wins.
+  const Plate behind{7, 4, -0.4f, 0.0f, -0.2f, 0.2f, 3.0f};
+  Image<uint32_t> gt;
+  const DepthImage depth = Render({kTable, behind}, &gt);
+  const ProjectedMap map =
+      ProjectMap({Object(behind, {}), Object(kTable, {})}, Camera(), {}, depth);
+  EXPECT_EQ(map.object_id(70, 60), 5u);  // this ray passes through both plates
+  EXPECT_NEAR(map.depth_m(70, 60), 2.0, 1e-5);
+  EXPECT_EQ(map.state(70, 60), ProjectedMap::kExplained);
+
+  // Behind the camera or without depth: nothing projects, nothing is valid.
+  const ProjectedMap empty = ProjectMap(
+      {Object(kTable, Transform::FromQuaternion(Eigen::Quaterniond(0, 1, 0, 0),
+                                                Eigen::Vector3d::Zero()))},
+      Camera(), {}, DepthImage(160, 120));
+  EXPECT_EQ(empty.valid_depth_pixels, 0u);
+  EXPECT_DOUBLE_EQ(empty.UnexplainedShare(), 1.0);
+  for (uint32_t id : empty.object_id.values()) ASSERT_EQ(id, 0u);
+
+  EXPECT_THROW(ProjectMap({}, Camera(), {}, DepthImage(10, 10)),
+               InvalidArgument);
+  MapProjectionOptions bad;
+  bad.splat_radius_m = 0;
+  EXPECT_THROW(bad.Check(), InvalidArgument);
+  bad = {};
+  bad.depth_tolerance_ratio = -1;
+  EXPECT_THROW(bad.Check(), InvalidArgument);
+}
+
+}  // namespace
+}  // namespace semrec::fuse
