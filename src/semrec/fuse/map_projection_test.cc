@@ -1,5 +1,7 @@
 #include "semrec/fuse/map_projection.h"
 
+#include <cmath>
+
 #include <gtest/gtest.h>
 
 #include "semrec/core/error.h"
@@ -27,15 +29,19 @@ CameraIntrinsics Camera() {
   return k;
 }
 
-// The map's object: the plate as the fusion stores it (centres of its 5 cm voxels), moved into
-// the world by T_world_camera.
+// The map's object: the plate as the fusion stores it (centres of its 5 cm
+// voxels), moved into the world by T_world_camera.
 SceneSegment Object(const Plate& p, const Transform& T_world_camera) {
   SceneSegment s;
   s.id = p.id;
   s.class_id = p.class_id;
-  for (float x = p.x0 + 0.025f; x < p.x1; x += 0.05f) {
-    for (float y = p.y0 + 0.025f; y < p.y1; y += 0.05f) {
-      s.points.push_back((T_world_camera * Eigen::Vector3d(x, y, p.z)).cast<float>());
+  const int nx = static_cast<int>(std::lround((p.x1 - p.x0) / 0.05f));
+  const int ny = static_cast<int>(std::lround((p.y1 - p.y0) / 0.05f));
+  for (int i = 0; i < nx; ++i) {
+    for (int j = 0; j < ny; ++j) {
+      const Eigen::Vector3d p_camera(p.x0 + 0.05 * (i + 0.5),
+                                     p.y0 + 0.05 * (j + 0.5), p.z);
+      s.points.push_back((T_world_camera * p_camera).cast<float>());
     }
   }
   return s;
@@ -152,7 +158,8 @@ TEST(MapProjection, ANewObjectInFrontIsUnexplainedAndARemovedOneContradicts) {
   ASSERT_GT(chair_pixels, 200u);
   EXPECT_EQ(chair_explained, 0u);
   // All of it but the one-pixel rim of its silhouette, and nothing else.
-  EXPECT_GT(chair_contradicted, 0.7 * static_cast<double>(chair_pixels)) << chair_pixels;
+  EXPECT_GT(chair_contradicted, 0.7 * static_cast<double>(chair_pixels))
+      << chair_pixels;
   EXPECT_EQ(after.contradicted_pixels, chair_contradicted);
 }
 
