@@ -254,6 +254,23 @@ class AutomaticMaskGenerator : public MaskGenerator {
     model_ = PromptableSegmenter::Create(registry, options_.model);
   }
 
+  std::vector<Mask> GenerateWhere(
+      const ColorImage& rgb, const Image<uint8_t>& prompt_region) override {
+    CheckArgument(
+        prompt_region.SameSize(rgb) && prompt_region.channels() == 1,
+        "mask generator: the prompt region must be a one-channel image of the "
+        "frame's size");
+    region_ = &prompt_region;
+    try {
+      std::vector<Mask> masks = Generate(rgb);
+      region_ = nullptr;
+      return masks;
+    } catch (...) {
+      region_ = nullptr;
+      throw;
+    }
+  }
+
   std::vector<Mask> Generate(const ColorImage& rgb) override {
     stats_ = {};
     std::vector<int> layers;
@@ -268,7 +285,7 @@ class AutomaticMaskGenerator : public MaskGenerator {
       for (int l = 0; l < layers[k]; ++l) {
         n = std::max(1, n / options_.crop_points_downscale);
       }
-      std::vector<Mask> masks = GenerateInCrop(CropImage(rgb, crop), n);
+      std::vector<Mask> masks = GenerateInCrop(CropImage(rgb, crop), n, crop);
       for (Mask& m : masks) {
         if (layers[k] > 0 &&
             NearCropEdge(m.box, crop, rgb.width(), rgb.height())) {
@@ -310,12 +327,34 @@ class AutomaticMaskGenerator : public MaskGenerator {
 
  private:
   // Encode, decode the grid, filter and NMS within one image (or crop).
-  std::vector<Mask> GenerateInCrop(const ColorImage& rgb, int points_per_side) {
+  std::vector<Mask> GenerateInCrop(const ColorImage& rgb, int points_per_side,
+                                   const Box& crop) {
+    auto points = GridPoints(points_per_side, rgb.width(), rgb.height(),
+                             &levels_, &cells_);
+    if (region_ != nullptr) {
+      // Only the prompts the region allows (their order, levels and cells kept
+      // aligned).
+      size_t kept = 0;
+      for (size_t p = 0; p < points.size(); ++p) {
+        const int x = std::clamp(static_cast<int>(points[p][0]) + crop.x0, 0,
+                                 region_->width() - 1);
+        const int y = std::clamp(static_cast<int>(points[p][1]) + crop.y0, 0,
+                                 region_->height() - 1);
+        if ((*region_)(x, y) == 0) continue;
+        points[kept] = points[p];
+        levels_[kept] = levels_[p];
+        cells_[kept] = cells_[p];
+        ++kept;
+      }
+      points.resize(kept);
+      levels_.resize(kept);
+      cells_.resize(kept);
+      if (points.empty())
+        return {};  // nothing new here: no encoder, no decoder
+    }
     const auto t0 = Clock::now();
     model_->SetImage(rgb);
     const auto t1 = Clock::now();
-    const auto points = GridPoints(points_per_side, rgb.width(), rgb.height(),
-                                   &levels_, &cells_);
     grid_side_ = points_per_side;
     stats_.prompts_total += static_cast<int>(points.size());
     std::vector<Mask> candidates =
@@ -510,6 +549,7 @@ class AutomaticMaskGenerator : public MaskGenerator {
   bool reference_;
   std::unique_ptr<PromptableSegmenter> model_;
   MaskGeneratorStats stats_;
+  const Image<uint8_t>* region_ = nullptr;  // GenerateWhere's prompt region
   std::vector<int> levels_;  // grid level per point (see GridPoints)
   int grid_side_ = 0;        // points per side of the current grid
   std::vector<std::array<int, 2>> cells_;  // grid column and row per point

@@ -96,6 +96,13 @@ class MaskGenerator {
   /// Masks of `rgb`, sorted by area (largest first), non-empty, each with its
   /// predicted IoU, stability and prompt point.
   virtual std::vector<Mask> Generate(const ColorImage& rgb) = 0;
+  /// As Generate, with grid prompts only where `prompt_region` (same size as
+  /// `rgb`) is non-zero: map-guided segmentation prompts only where the map
+  /// cannot explain the frame. A region without any grid point returns no masks
+  /// without running the encoder. Throws InvalidArgument for a region of
+  /// another size.
+  virtual std::vector<Mask> GenerateWhere(
+      const ColorImage& rgb, const Image<uint8_t>& prompt_region) = 0;
   virtual const MaskGeneratorStats& stats() const = 0;
   /// The underlying promptable model (for box prompts, embeddings).
   virtual PromptableSegmenter& model() = 0;

@@ -174,6 +174,49 @@ TEST_P(TinyAmg, FindsEveryColourRegionLikeTheReference) {
 
 INSTANTIATE_TEST_SUITE_P(Backends, TinyAmg, ::testing::Values("sam", "sam2"));
 
+TEST(TinyModels, PromptsOnlyWhereTheRegionAllows) {
+  ASSERT_FALSE(semrec::testing::TinyModelDir().empty());
+  MaskGeneratorOptions options;
+  options.model.encoder = "tiny_sam_encoder";
+  options.model.decoder = "tiny_sam_decoder";
+  options.model.runtime = Runtime();
+  options.points_per_side = 16;
+  auto generator = MaskGenerator::Create(TinyRegistry(), options);
+  const Scene s = MakeScene();
+  // What the map cannot explain: the second rectangle only (say, an object that
+  // just entered).
+  const Box& fresh = s.boxes[1];
+  Image<uint8_t> region(320, 240);
+  for (int y = fresh.y0; y < fresh.y1; ++y) {
+    for (int x = fresh.x0; x < fresh.x1; ++x) region(x, y) = 1;
+  }
+  const std::vector<Mask> masks = generator->GenerateWhere(s.rgb, region);
+  // The grid points inside the rectangle: columns 8..14 (x = 20 * i + 10 in
+  // [160, 300)), rows 2..6 (y = 15 * j + 7.5 in [30, 110)).
+  EXPECT_EQ(generator->stats().prompts_total, 7 * 5);
+  ASSERT_FALSE(masks.empty());
+  for (const Mask& m : masks) {
+    EXPECT_NE(region(static_cast<int>(m.point_x), static_cast<int>(m.point_y)),
+              0);
+  }
+  EXPECT_GT(BestIou(BoxMask(320, 240, fresh), masks), 0.9);
+  EXPECT_LT(BestIou(BoxMask(320, 240, s.boxes[0]), masks),
+            0.1);  // not prompted: not found
+
+  // Nothing unexplained: no masks and no encoder run.
+  const std::vector<Mask> none =
+      generator->GenerateWhere(s.rgb, Image<uint8_t>(320, 240));
+  EXPECT_TRUE(none.empty());
+  EXPECT_EQ(generator->stats().prompts_total, 0);
+  EXPECT_EQ(generator->stats().encode_seconds, 0.0);
+  // The whole frame: as Generate.
+  const std::vector<Mask> all =
+      generator->GenerateWhere(s.rgb, Image<uint8_t>(320, 240, 1, 1));
+  EXPECT_EQ(all.size(), generator->Generate(s.rgb).size());
+  EXPECT_THROW(generator->GenerateWhere(s.rgb, Image<uint8_t>(32, 24)),
+               InvalidArgument);
+}
+
 TEST(TinyModels, CropLayersStillFindEveryRegionOnce) {
   ASSERT_FALSE(semrec::testing::TinyModelDir().empty());
   MaskGeneratorOptions options;
