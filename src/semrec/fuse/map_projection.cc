@@ -9,7 +9,8 @@
 namespace semrec::fuse {
 namespace {
 
-// True when the 4-neighbours of (x, y) show the same object (not on its silhouette).
+// True when the 4-neighbours of (x, y) show the same object (not on its
+// silhouette).
 bool Interior(const Image<uint32_t>& ids, int x, int y) {
   const uint32_t id = ids(x, y);
   return x > 0 && y > 0 && x + 1 < ids.width() && y + 1 < ids.height() &&
@@ -92,7 +93,10 @@ ProjectedMap ProjectMap(const std::vector<SceneSegment>& objects,
       const float z_map = zbuf[static_cast<size_t>(y) * w + x];
       if (z_map != kFar) out.depth_m(x, y) = z_map;
       const float z = depth_m(x, y);
-      if (!(z > 0) || !std::isfinite(z)) continue;
+      if (!(z > 0) || !std::isfinite(z)) {
+        out.state(x, y) = ProjectedMap::kNoDepth;
+        continue;
+      }
       ++out.valid_depth_pixels;
       if (z_map == kFar) continue;
       const float tolerance =

@@ -44,9 +44,10 @@ struct ProjectedMap {
   LabelMap class_id;
   /// Depth of that object's surface (m; 0: none).
   DepthImage depth_m;
-  /// 1 where explained (object present and depth agrees), 2 where the map is
-  /// contradicted (the camera sees past the object, inside its silhouette: on
-  /// the one-pixel rim the splats' spill is no evidence), 0 elsewhere.
+  /// Per pixel: kExplained (an object is there and the depth agrees),
+  /// kContradicted (the camera sees past the object, inside its silhouette: on
+  /// the one-pixel rim the splats' spill is no evidence), kNoDepth (no valid
+  /// measured depth), else kUnexplained.
   Image<uint8_t> state;
   size_t valid_depth_pixels = 0;
   size_t explained_pixels = 0;
@@ -55,6 +56,7 @@ struct ProjectedMap {
   static constexpr uint8_t kUnexplained = 0;
   static constexpr uint8_t kExplained = 1;
   static constexpr uint8_t kContradicted = 2;
+  static constexpr uint8_t kNoDepth = 3;
   /// Share of the valid-depth pixels the map does not explain (1 without valid
   /// depth).
   double UnexplainedShare() const;

@@ -1,0 +1,125 @@
+#include "semrec/pipeline/map_guidance.h"
+
+#include <cmath>
+
+#include <opencv2/core.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "semrec/core/error.h"
+
+namespace semrec::pipeline {
+namespace {
+
+Image<uint8_t> Filled(int w, int h, uint8_t value) {
+  return Image<uint8_t>(w, h, 1, value);
+}
+
+}  // namespace
+
+void MapGuidanceOptions::Check() const {
+  CheckArgument(projection_only_below >= 0 && projection_only_below <= 1,
+                "map guidance: projection_only_below must be in [0, 1]");
+  CheckArgument(refresh_every >= 1, "map guidance: refresh_every must be >= 1");
+  CheckArgument(
+      refresh_angle_deg > 0 && refresh_distance_m > 0,
+      "map guidance: refresh_angle_deg and refresh_distance_m must be > 0");
+  CheckArgument(
+      min_region_px >= 0 && region_margin_px >= 0,
+      "map guidance: min_region_px and region_margin_px must be >= 0");
+}
+
+const char* FrameModeName(FrameMode mode) {
+  switch (mode) {
+    case FrameMode::kFull:
+      return "full";
+    case FrameMode::kPartial:
+      return "partial";
+    case FrameMode::kProjectionOnly:
+      return "projection";
+  }
+  return "?";
+}
+
+GuidanceDecision DecideFrame(const fuse::ProjectedMap& projected,
+                             const Transform& T_world_camera,
+                             const std::optional<Transform>& T_world_last_full,
+                             size_t frames_since_full,
+                             const MapGuidanceOptions& options) {
+  options.Check();
+  const int w = projected.state.width();
+  const int h = projected.state.height();
+  GuidanceDecision d;
+  const auto full = [&](const char* reason) {
+    d.mode = FrameMode::kFull;
+    d.reason = reason;
+    d.prompt_region = Filled(w, h, 1);
+    return d;
+  };
+  if (!T_world_last_full) return full("first frame");
+  if (frames_since_full >= static_cast<size_t>(options.refresh_every))
+    return full("refresh");
+  const Transform motion = T_world_last_full->Inverse() * T_world_camera;
+  if (motion.AngleRad() * 180.0 / M_PI > options.refresh_angle_deg ||
+      motion.translation().norm() > options.refresh_distance_m) {
+    return full("camera moved");
+  }
+
+  // Unexplained: valid depth, not explained by the map (contradicted pixels
+  // included: what is there now must be segmented anew).
+  cv::Mat unexplained(h, w, CV_8U, cv::Scalar(0));
+  for (int y = 0; y < h; ++y) {
+    for (int x = 0; x < w; ++x) {
+      const uint8_t state = projected.state(x, y);
+      unexplained.at<uint8_t>(y, x) =
+          state == fuse::ProjectedMap::kUnexplained ||
+                  state == fuse::ProjectedMap::kContradicted
+              ? 1
+              : 0;
+    }
+  }
+  cv::Mat labels, stats, centroids;
+  const int n = cv::connectedComponentsWithStats(unexplained, labels, stats,
+                                                 centroids, 8);
+  std::vector<uint8_t> keep(static_cast<size_t>(n), 0);
+  size_t unexplained_px = 0;
+  for (int i = 1; i < n; ++i) {
+    const int area = stats.at<int>(i, cv::CC_STAT_AREA);
+    if (area >= options.min_region_px) {
+      keep[static_cast<size_t>(i)] = 1;
+      unexplained_px += static_cast<size_t>(area);
+    }
+  }
+  d.unexplained_share =
+      projected.valid_depth_pixels == 0
+          ? 1.0
+          : static_cast<double>(unexplained_px) /
+                static_cast<double>(projected.valid_depth_pixels);
+  if (d.unexplained_share < options.projection_only_below) {
+    d.mode = FrameMode::kProjectionOnly;
+    d.reason = "explained";
+    d.prompt_region = Filled(w, h, 0);
+    return d;
+  }
+  cv::Mat region(h, w, CV_8U, cv::Scalar(0));
+  for (int y = 0; y < h; ++y) {
+    for (int x = 0; x < w; ++x) {
+      region.at<uint8_t>(y, x) =
+          keep[static_cast<size_t>(labels.at<int>(y, x))];
+    }
+  }
+  if (options.region_margin_px > 0) {
+    const int k = 2 * options.region_margin_px + 1;
+    cv::dilate(region, region,
+               cv::getStructuringElement(cv::MORPH_RECT, cv::Size(k, k)));
+  }
+  d.mode = FrameMode::kPartial;
+  d.reason = "new content";
+  d.prompt_region = Image<uint8_t>(w, h);
+  for (int y = 0; y < h; ++y) {
+    for (int x = 0; x < w; ++x)
+      d.prompt_region(x, y) = region.at<uint8_t>(y, x);
+  }
+  return d;
+}
+
+}  // namespace semrec::pipeline

@@ -1,0 +1,100 @@
+#include "semrec/pipeline/map_guidance.h"
+
+#include <gtest/gtest.h>
+
+#include "semrec/core/error.h"
+
+namespace semrec::pipeline {
+namespace {
+
+using fuse::ProjectedMap;
+
+// A 200 x 100 frame: all explained except `blob` (unexplained) and `specks`
+// 1-pixel holes; the bottom 10 rows have no depth.
+ProjectedMap Projected(int blob_x0, int blob_x1, bool specks) {
+  ProjectedMap p;
+  p.state = Image<uint8_t>(200, 100, 1, ProjectedMap::kExplained);
+  for (int y = 90; y < 100; ++y) {
+    for (int x = 0; x < 200; ++x) p.state(x, y) = ProjectedMap::kNoDepth;
+  }
+  for (int y = 20; y < 60; ++y) {
+    for (int x = blob_x0; x < blob_x1; ++x)
+      p.state(x, y) = ProjectedMap::kUnexplained;
+  }
+  if (specks) {
+    for (int x = 5; x < 200; x += 20)
+      p.state(x, 5) = ProjectedMap::kContradicted;
+  }
+  p.valid_depth_pixels = 200 * 90;
+  return p;
+}
+
+Transform Moved(double dx, double angle_deg) {
+  return Transform(
+      Eigen::AngleAxisd(angle_deg * M_PI / 180.0, Eigen::Vector3d::UnitY())
+          .toRotationMatrix(),
+      Eigen::Vector3d(dx, 0, 0));
+}
+
+TEST(MapGuidance, PromptsOnlyWhereNewContentIsAndSkipsExplainedFrames) {
+  MapGuidanceOptions options;
+  options.min_region_px = 50;
+  options.region_margin_px = 3;
+  // A 40 x 40 unexplained blob (a new object): partial, prompts on it and a
+  // 3-pixel margin; the specks are noise.
+  const GuidanceDecision d = DecideFrame(
+      Projected(100, 140, true), Moved(0.1, 5), Transform(), 3, options);
+  EXPECT_EQ(d.mode, FrameMode::kPartial);
+  EXPECT_EQ(d.reason, "new content");
+  EXPECT_NEAR(d.unexplained_share, 1600.0 / (200 * 90), 1e-12);
+  size_t region_px = 0;
+  for (uint8_t v : d.prompt_region.values()) region_px += v;
+  EXPECT_EQ(region_px, 46u * 46u);
+  EXPECT_EQ(d.prompt_region(120, 40), 1);
+  EXPECT_EQ(d.prompt_region(97, 17), 1);  // in the margin
+  EXPECT_EQ(d.prompt_region(96, 40), 0);
+  EXPECT_EQ(d.prompt_region(5, 5), 0);  // a speck
+  // A tiny blob only: explained enough to skip the models.
+  const GuidanceDecision quiet = DecideFrame(
+      Projected(100, 101, true), Moved(0.1, 5), Transform(), 3, options);
+  EXPECT_EQ(quiet.mode, FrameMode::kProjectionOnly);
+  EXPECT_EQ(quiet.unexplained_share, 0.0);
+  for (uint8_t v : quiet.prompt_region.values()) ASSERT_EQ(v, 0);
+  // A blob of 10% of the frame under a 15% threshold: also projection only.
+  options.projection_only_below = 0.15;
+  EXPECT_EQ(DecideFrame(Projected(100, 140, false), Transform(), Transform(), 1,
+                        options)
+                .mode,
+            FrameMode::kProjectionOnly);
+}
+
+TEST(MapGuidance, DriftGuardForcesFullFrames) {
+  MapGuidanceOptions options;
+  const ProjectedMap explained = Projected(0, 0, false);
+  const auto decide = [&](const std::optional<Transform>& last, size_t since,
+                          const Transform& now) {
+    return DecideFrame(explained, now, last, since, options);
+  };
+  EXPECT_EQ(decide(std::nullopt, 0, Transform()).reason, "first frame");
+  EXPECT_EQ(decide(Transform(), 10, Transform()).reason, "refresh");
+  EXPECT_EQ(decide(Transform(), 9, Transform()).mode,
+            FrameMode::kProjectionOnly);
+  EXPECT_EQ(decide(Transform(), 1, Moved(0.0, 30)).reason, "camera moved");
+  EXPECT_EQ(decide(Transform(), 1, Moved(0.8, 0)).reason, "camera moved");
+  EXPECT_EQ(decide(Moved(0.5, 30), 1, Moved(0.8, 0)).mode,
+            FrameMode::kFull);  // turned back 30 degrees
+  EXPECT_EQ(decide(Moved(0.5, 10), 1, Moved(0.8, 0)).mode,
+            FrameMode::kProjectionOnly);
+  const GuidanceDecision full = decide(std::nullopt, 0, Transform());
+  for (uint8_t v : full.prompt_region.values()) ASSERT_EQ(v, 1);
+  EXPECT_STREQ(FrameModeName(FrameMode::kPartial), "partial");
+
+  options.refresh_every = 0;
+  EXPECT_THROW(options.Check(), InvalidArgument);
+  options = {};
+  options.projection_only_below = 1.5;
+  EXPECT_THROW(options.Check(), InvalidArgument);
+}
+
+}  // namespace
+}  // namespace semrec::pipeline
