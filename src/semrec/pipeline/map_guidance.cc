@@ -56,8 +56,9 @@ GuidanceDecision DecideFrame(const fuse::ProjectedMap& projected,
     return d;
   };
   if (!T_world_last_full) return full("first frame");
-  if (frames_since_full >= static_cast<size_t>(options.refresh_every))
+  if (frames_since_full >= static_cast<size_t>(options.refresh_every)) {
     return full("refresh");
+  }
   const Transform motion = T_world_last_full->Inverse() * T_world_camera;
   if (motion.AngleRad() * 180.0 / M_PI > options.refresh_angle_deg ||
       motion.translation().norm() > options.refresh_distance_m) {
@@ -116,8 +117,9 @@ GuidanceDecision DecideFrame(const fuse::ProjectedMap& projected,
   d.reason = "new content";
   d.prompt_region = Image<uint8_t>(w, h);
   for (int y = 0; y < h; ++y) {
-    for (int x = 0; x < w; ++x)
+    for (int x = 0; x < w; ++x) {
       d.prompt_region(x, y) = region.at<uint8_t>(y, x);
+    }
   }
   return d;
 }

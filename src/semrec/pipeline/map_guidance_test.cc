@@ -18,14 +18,16 @@ ProjectedMap Projected(int blob_x0, int blob_x1, bool specks) {
     for (int x = 0; x < 200; ++x) p.state(x, y) = ProjectedMap::kNoDepth;
   }
   for (int y = 20; y < 60; ++y) {
-    for (int x = blob_x0; x < blob_x1; ++x)
+    for (int x = blob_x0; x < blob_x1; ++x) {
       p.state(x, y) = ProjectedMap::kUnexplained;
+    }
   }
   if (specks) {
-    for (int x = 5; x < 200; x += 20)
+    for (int x = 5; x < 200; x += 20) {
       p.state(x, 5) = ProjectedMap::kContradicted;
+    }
   }
-  p.valid_depth_pixels = 200 * 90;
+  p.valid_depth_pixels = size_t{200} * 90;
   return p;
 }
 

@@ -349,8 +349,9 @@ class AutomaticMaskGenerator : public MaskGenerator {
       points.resize(kept);
       levels_.resize(kept);
       cells_.resize(kept);
-      if (points.empty())
+      if (points.empty()) {
         return {};  // nothing new here: no encoder, no decoder
+      }
     }
     const auto t0 = Clock::now();
     model_->SetImage(rgb);
