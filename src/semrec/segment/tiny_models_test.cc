@@ -174,14 +174,19 @@ TEST_P(TinyAmg, FindsEveryColourRegionLikeTheReference) {
 
 INSTANTIATE_TEST_SUITE_P(Backends, TinyAmg, ::testing::Values("sam", "sam2"));
 
-TEST(TinyModels, PromptsOnlyWhereTheRegionAllows) {
-  ASSERT_FALSE(semrec::testing::TinyModelDir().empty());
+// The tiny SAM on a 16 x 16 prompt grid.
+MaskGeneratorOptions TinySamOptions() {
   MaskGeneratorOptions options;
   options.model.encoder = "tiny_sam_encoder";
   options.model.decoder = "tiny_sam_decoder";
   options.model.runtime = Runtime();
   options.points_per_side = 16;
-  auto generator = MaskGenerator::Create(TinyRegistry(), options);
+  return options;
+}
+
+TEST(TinyModels, PromptsOnlyWhereTheRegionAllows) {
+  ASSERT_FALSE(semrec::testing::TinyModelDir().empty());
+  auto generator = MaskGenerator::Create(TinyRegistry(), TinySamOptions());
   const Scene s = MakeScene();
   // What the map cannot explain: the second rectangle only (say, an object that
   // just entered).
@@ -219,11 +224,7 @@ TEST(TinyModels, PromptsOnlyWhereTheRegionAllows) {
 
 TEST(TinyModels, CropLayersStillFindEveryRegionOnce) {
   ASSERT_FALSE(semrec::testing::TinyModelDir().empty());
-  MaskGeneratorOptions options;
-  options.model.encoder = "tiny_sam_encoder";
-  options.model.decoder = "tiny_sam_decoder";
-  options.model.runtime = Runtime();
-  options.points_per_side = 16;
+  MaskGeneratorOptions options = TinySamOptions();
   options.crop_layers = 1;  // the image + 2 x 2 overlapping crops
   options.crop_points_downscale = 2;
   auto generator = MaskGenerator::Create(TinyRegistry(), options);
