@@ -135,6 +135,9 @@ void RunRun(RunArgs& args, CLI::App* cmd) {
     if (p.people.masks) p.people.mask_model = p.segmenter.masks.model;
     p.people.tracker = track::TrackerOptions::Improved();
   } else {
+    CheckUsage(!p.map_guidance,
+               "--map-guidance guides the segmentation models: it needs "
+               "--labels models");
     p.labels = pipeline::ScenePipelineOptions::Labels::kGiven;
     run.given_labels = args.labels;
     run.given_people = args.people;
@@ -217,6 +220,34 @@ void RegisterRun(CLI::App& app) {
   cmd->add_option("--points-per-side",
                   args->run.pipeline.segmenter.masks.points_per_side,
                   "Mask generation: point-prompt grid size")
+      ->capture_default_str();
+  pipeline::ScenePipelineOptions& pipe = args->run.pipeline;
+  cmd->add_flag("--map-guidance", pipe.map_guidance,
+                "Segment only what the map cannot explain: the fused map is "
+                "projected into each frame; masks are prompted only in the "
+                "unexplained regions, frames the map explains are labelled by "
+                "projection alone (no segmentation model), and a full "
+                "segmentation runs every --refresh-every frames and after "
+                "large camera motion (report.json: map_guidance)");
+  cmd->add_option("--projection-only-below",
+                  pipe.guidance.projection_only_below,
+                  "Map guidance: label a frame by projection alone when less "
+                  "than this share of its valid depth is unexplained")
+      ->check(CLI::Range(0.0, 1.0))
+      ->capture_default_str();
+  cmd->add_option("--refresh-every", pipe.guidance.refresh_every,
+                  "Map guidance: a full segmentation at least every n "
+                  "segmented frames")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  cmd->add_option("--refresh-angle-deg", pipe.guidance.refresh_angle_deg,
+                  "Map guidance: ... and when the camera turned this much "
+                  "since the last full one")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  cmd->add_option("--refresh-distance-m", pipe.guidance.refresh_distance_m,
+                  "Map guidance: ... or moved this far")
+      ->check(CLI::PositiveNumber)
       ->capture_default_str();
   cmd->add_option("--detector", args->detector, "Person detector (registry)")
       ->capture_default_str();

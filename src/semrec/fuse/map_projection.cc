@@ -63,6 +63,17 @@ ProjectedMap ProjectMap(const std::vector<SceneSegment>& objects,
   const auto fy = static_cast<float>(intrinsics.fy);
   const auto cx = static_cast<float>(intrinsics.cx);
   const auto cy = static_cast<float>(intrinsics.cy);
+  // Per pixel the nearest splat (what the map would show) and, apart, the
+  // splat whose depth is closest to the measured depth within the tolerance
+  // (what explains the measurement): near a silhouette a nearer object's
+  // splat spills over the background, which the map explains all the same.
+  std::vector<float> match_diff(static_cast<size_t>(w) * h, kFar);
+  std::vector<uint32_t> match_id(static_cast<size_t>(w) * h, 0);
+  std::vector<uint16_t> match_class(static_cast<size_t>(w) * h, 0);
+  std::vector<float> match_z(static_cast<size_t>(w) * h, 0.0f);
+  const auto tolerance = [&](float z) {
+    return options.depth_tolerance_m + options.depth_tolerance_ratio * z;
+  };
   for (const SceneSegment& object : objects) {
     for (const Eigen::Vector3f& p_world : object.points) {
       const Eigen::Vector3f p = R * p_world + t;
@@ -77,20 +88,30 @@ ProjectedMap ProjectMap(const std::vector<SceneSegment>& objects,
       if (u0 + r < 0 || v0 + r < 0 || u0 - r >= w || v0 - r >= h) continue;
       for (int y = std::max(0, v0 - r); y <= std::min(h - 1, v0 + r); ++y) {
         for (int x = std::max(0, u0 - r); x <= std::min(w - 1, u0 + r); ++x) {
-          float& z = zbuf[static_cast<size_t>(y) * w + x];
-          if (p.z() < z) {
-            z = p.z();
+          const size_t i = static_cast<size_t>(y) * w + x;
+          if (p.z() < zbuf[i]) {
+            zbuf[i] = p.z();
             out.object_id(x, y) = object.id;
             out.class_id(x, y) = object.class_id;
+          }
+          const float z = depth_m(x, y);
+          const float diff = std::abs(z - p.z());
+          if (z > 0 && diff <= tolerance(z) && diff < match_diff[i]) {
+            match_diff[i] = diff;
+            match_id[i] = object.id;
+            match_class[i] = object.class_id;
+            match_z[i] = p.z();
           }
         }
       }
     }
   }
 
+  const Image<uint32_t> nearest_id = out.object_id;
   for (int y = 0; y < h; ++y) {
     for (int x = 0; x < w; ++x) {
-      const float z_map = zbuf[static_cast<size_t>(y) * w + x];
+      const size_t i = static_cast<size_t>(y) * w + x;
+      const float z_map = zbuf[i];
       if (z_map != kFar) out.depth_m(x, y) = z_map;
       const float z = depth_m(x, y);
       if (!(z > 0) || !std::isfinite(z)) {
@@ -98,15 +119,16 @@ ProjectedMap ProjectMap(const std::vector<SceneSegment>& objects,
         continue;
       }
       ++out.valid_depth_pixels;
-      if (z_map == kFar) continue;
-      const float tolerance =
-          options.depth_tolerance_m + options.depth_tolerance_ratio * z;
-      if (std::abs(z - z_map) <= tolerance) {
+      if (match_diff[i] != kFar) {
         out.state(x, y) = ProjectedMap::kExplained;
+        out.object_id(x, y) = match_id[i];
+        out.class_id(x, y) = match_class[i];
+        out.depth_m(x, y) = match_z[i];
         ++out.explained_pixels;
-      } else if (z > z_map + tolerance && Interior(out.object_id, x, y)) {
-        // The camera sees past where the map has a surface: it moved or is
-        // gone.
+      } else if (z_map != kFar && z > z_map + tolerance(z) &&
+                 Interior(nearest_id, x, y)) {
+        // The camera sees past where the map has a surface and nothing of
+        // the map lies at the measured depth: it moved or is gone.
         out.state(x, y) = ProjectedMap::kContradicted;
         ++out.contradicted_pixels;
       }

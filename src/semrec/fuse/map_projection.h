@@ -38,16 +38,20 @@ struct MapProjectionOptions {
 };
 
 struct ProjectedMap {
-  /// Nearest map object per pixel (SceneSegment::id; 0: none) and its class (0:
-  /// none).
+  /// Per pixel the map object that explains the measured depth (explained
+  /// pixels: of the objects projecting there, the one whose depth is closest
+  /// to the measurement), else the nearest one projecting there
+  /// (SceneSegment::id; 0: none), and its class (0: none).
   Image<uint32_t> object_id;
   LabelMap class_id;
   /// Depth of that object's surface (m; 0: none).
   DepthImage depth_m;
-  /// Per pixel: kExplained (an object is there and the depth agrees),
-  /// kContradicted (the camera sees past the object, inside its silhouette: on
-  /// the one-pixel rim the splats' spill is no evidence), kNoDepth (no valid
-  /// measured depth), else kUnexplained.
+  /// Per pixel: kExplained (an object projects there at the measured depth,
+  /// within the tolerance; a nearer object's splat spilling over a silhouette
+  /// does not hide it), kContradicted (the camera sees past the nearest object
+  /// and no object lies at the measured depth, inside the nearest object's
+  /// silhouette: on its one-pixel rim the splats' spill is no evidence),
+  /// kNoDepth (no valid measured depth), else kUnexplained.
   Image<uint8_t> state;
   size_t valid_depth_pixels = 0;
   size_t explained_pixels = 0;

@@ -110,6 +110,7 @@ void CheckpointStore::Record(size_t position,
     j["tracker_input"] = DetectionsJson(o.tracker_input);
     j["labels"] = o.labels.has_value();
     j["people"] = o.person_ids.NumPixels() > 0;
+    if (!o.guidance.empty()) j["guidance"] = o.guidance;
     if (o.labels) {
       j["labels_source"] = o.labels->source;
       io::WritePng(FramePath(position, "_semantic.png"), o.labels->semantic);
@@ -144,6 +145,7 @@ CheckpointFrame CheckpointStore::Load(size_t position) const {
             io::ReadLabelImage(FramePath(position, "_semantic.png")),
             j.at("labels_source").get<std::string>()};
       }
+      if (j.contains("guidance")) o.guidance = j["guidance"].get<std::string>();
       if (j.at("people").get<bool>()) {
         o.person_ids = io::ReadLabelImage(FramePath(position, "_person.png"));
       }

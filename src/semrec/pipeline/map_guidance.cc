@@ -1,6 +1,8 @@
 #include "semrec/pipeline/map_guidance.h"
 
+#include <algorithm>
 #include <cmath>
+#include <map>
 
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
@@ -44,10 +46,13 @@ GuidanceDecision DecideFrame(const fuse::ProjectedMap& projected,
                              const Transform& T_world_camera,
                              const std::optional<Transform>& T_world_last_full,
                              size_t frames_since_full,
-                             const MapGuidanceOptions& options) {
+                             const MapGuidanceOptions& options,
+                             const Image<uint8_t>* ignore) {
   options.Check();
   const int w = projected.state.width();
   const int h = projected.state.height();
+  CheckArgument(ignore == nullptr || ignore->SameSize(w, h),
+                "map guidance: the ignore mask's size differs from the frame's");
   GuidanceDecision d;
   const auto full = [&](const char* reason) {
     d.mode = FrameMode::kFull;
@@ -72,8 +77,9 @@ GuidanceDecision DecideFrame(const fuse::ProjectedMap& projected,
     for (int x = 0; x < w; ++x) {
       const uint8_t state = projected.state(x, y);
       unexplained.at<uint8_t>(y, x) =
-          state == fuse::ProjectedMap::kUnexplained ||
-                  state == fuse::ProjectedMap::kContradicted
+          (state == fuse::ProjectedMap::kUnexplained ||
+           state == fuse::ProjectedMap::kContradicted) &&
+                  (ignore == nullptr || (*ignore)(x, y) == 0)
               ? 1
               : 0;
     }
@@ -122,6 +128,60 @@ GuidanceDecision DecideFrame(const fuse::ProjectedMap& projected,
     }
   }
   return d;
+}
+
+fuse::FrameLabels ComposeFrameLabels(const fuse::ProjectedMap& projected,
+                                     const GuidanceDecision& decision,
+                                     const segment::VoteResult* fresh,
+                                     const std::string& source) {
+  const int w = projected.state.width();
+  const int h = projected.state.height();
+  CheckArgument(decision.prompt_region.SameSize(w, h),
+                "map guidance: the prompt region's size differs from the "
+                "projected map's");
+  CheckArgument(decision.mode == FrameMode::kProjectionOnly || fresh != nullptr,
+                std::string("map guidance: a ") +
+                    FrameModeName(decision.mode) +
+                    " frame needs the fresh segmentation");
+  if (fresh != nullptr) {
+    CheckArgument(
+        fresh->semantic.SameSize(w, h) && fresh->instance.SameSize(w, h),
+        "map guidance: the fresh segmentation's size differs from the frame's");
+  }
+  if (decision.mode == FrameMode::kFull) {
+    return {fresh->instance, fresh->semantic, source};
+  }
+  fuse::FrameLabels labels{LabelMap(w, h), LabelMap(w, h), source};
+  // Fresh instances keep their ids; map objects follow them, in id order.
+  uint32_t next_id = 1;
+  if (fresh != nullptr) {
+    for (const uint16_t v : fresh->instance.values()) {
+      next_id = std::max<uint32_t>(next_id, uint32_t{v} + 1);
+    }
+  }
+  std::map<uint32_t, uint16_t> instance_of_object;
+  for (size_t p = 0; p < projected.state.NumPixels(); ++p) {
+    if (projected.state.data()[p] == fuse::ProjectedMap::kExplained) {
+      instance_of_object.emplace(projected.object_id.data()[p], 0);
+    }
+  }
+  for (auto& [object_id, instance] : instance_of_object) {
+    CheckArgument(next_id <= 65535,
+                  "map guidance: more than 65535 instances in one frame");
+    instance = static_cast<uint16_t>(next_id++);
+  }
+  for (int y = 0; y < h; ++y) {
+    for (int x = 0; x < w; ++x) {
+      if (projected.state(x, y) == fuse::ProjectedMap::kExplained) {
+        labels.instance(x, y) = instance_of_object.at(projected.object_id(x, y));
+        labels.semantic(x, y) = projected.class_id(x, y);
+      } else if (fresh != nullptr && decision.prompt_region(x, y) != 0) {
+        labels.instance(x, y) = fresh->instance(x, y);
+        labels.semantic(x, y) = fresh->semantic(x, y);
+      }
+    }
+  }
+  return labels;
 }
 
 }  // namespace semrec::pipeline

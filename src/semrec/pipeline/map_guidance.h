@@ -11,6 +11,8 @@
 #include "semrec/core/image.h"
 #include "semrec/core/transform.h"
 #include "semrec/fuse/map_projection.h"
+#include "semrec/fuse/segments.h"
+#include "semrec/segment/vote.h"
 
 namespace semrec::pipeline {
 
@@ -52,11 +54,27 @@ struct GuidanceDecision {
 
 /// The decision for a frame with the map projected into it (`projected`, from
 /// fuse::ProjectMap), its pose, the pose of the last fully segmented frame
-/// (none yet: full) and how many frames ago that was.
+/// (none yet: full) and how many segmented frames ago that was. Non-zero
+/// pixels of `ignore` (same size; may be null) are never unexplained: people,
+/// whom the tracker segments and fusion leaves out.
 GuidanceDecision DecideFrame(const fuse::ProjectedMap& projected,
                              const Transform& T_world_camera,
                              const std::optional<Transform>& T_world_last_full,
                              size_t frames_since_full,
-                             const MapGuidanceOptions& options);
+                             const MapGuidanceOptions& options,
+                             const Image<uint8_t>* ignore = nullptr);
+
+/// The labels fusion sees for a map-guided frame (kPartial, kProjectionOnly):
+/// pixels the map explains take their object's class, one instance per map
+/// object; pixels of the prompt region the map does not explain take `fresh`
+/// (the vote of the masks prompted there; pixels in no mask keep the semantic
+/// branch's class); everything else is unlabelled (0), so fusion sees nothing
+/// it cannot vouch for. `fresh` may be null (projection only); a kFull
+/// decision returns `fresh` as it is. Throws InvalidArgument when the sizes
+/// differ or a kFull/kPartial decision comes without `fresh`.
+fuse::FrameLabels ComposeFrameLabels(const fuse::ProjectedMap& projected,
+                                     const GuidanceDecision& decision,
+                                     const segment::VoteResult* fresh,
+                                     const std::string& source);
 
 }  // namespace semrec::pipeline

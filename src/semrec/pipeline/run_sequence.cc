@@ -349,6 +349,19 @@ RunResult RunSequence(const io::SequenceReader& reader,
       {"scene", result.scene.objects_json},
       {"fusion_events",
        fuse::FusionEventsJson(pipeline.scene().fusion(), pipeline.classes())}};
+  if (models && options.pipeline.map_guidance) {
+    const GuidanceCounts& g = pipeline.guidance_counts();
+    const size_t guided = g.partial + g.projection;
+    result.report["map_guidance"] = {
+        {"full_frames", g.full},
+        {"partial_frames", g.partial},
+        {"projection_frames", g.projection},
+        {"encoder_calls", g.encoder_calls},
+        {"prompts_decoded", g.prompts_decoded},
+        {"mean_unexplained_share",
+         guided > 0 ? g.unexplained_share_sum / static_cast<double>(guided)
+                    : 0.0}};
+  }
   WriteTextFileAtomic(out_dir / "report.json", result.report.dump(2) + "\n");
   return result;
 }
@@ -380,6 +393,16 @@ std::string RunSummaryTable(const RunResult& result, const fs::path& out_dir) {
     out += fmt::format(" {} {}", count.get<int>(), name);
   }
   out += "\n";
+  if (r.contains("map_guidance")) {
+    const nlohmann::json& g = r.at("map_guidance");
+    out += fmt::format(
+        "  map guidance: {} full, {} partial, {} by projection alone; {} "
+        "encoder calls, {} prompts decoded\n",
+        g.at("full_frames").get<size_t>(), g.at("partial_frames").get<size_t>(),
+        g.at("projection_frames").get<size_t>(),
+        g.at("encoder_calls").get<size_t>(),
+        g.at("prompts_decoded").get<size_t>());
+  }
   out += fmt::format("  {} people prims, {} tracks in tracks.txt\n",
                      result.scene.people, result.tracks);
   out += fmt::format(

@@ -13,6 +13,10 @@ void ScenePipelineOptions::Check() const {
   CheckArgument(segment_every >= 1, "pipeline: segment_every must be >= 1");
   if (labels == Labels::kModels) {
     segmenter.Check();
+    if (map_guidance) {
+      guidance.Check();
+      projection.Check();
+    }
     if (track_people) people.Check();
   }
   offline.Check();
@@ -74,35 +78,12 @@ PreparedFrame ScenePipeline::Prepare(PipelineInput input) {
   const bool models = options_.labels == ScenePipelineOptions::Labels::kModels;
   PreparedFrame prepared;
   prepared.frame = std::move(input.frame);
+  prepared.position = frames_;
   prepared.replay = input.replay.has_value();
   const Frame& frame = prepared.frame;
   Stopwatch watch;
 
-  // Segmentation: every segment_every-th frame (the first one always).
-  std::optional<fuse::FrameLabels>& labels = prepared.labels;
-  if (input.replay) {
-    CheckArgument(models, "pipeline: replay is for model outputs");
-    labels = std::move(input.replay->labels);
-  } else if (frames_ % options_.segment_every == 0) {
-    if (models) {
-      segment::HybridResult hybrid;
-      try {
-        hybrid = segmenter_->Segment(frame.color);
-      } catch (const InvalidArgument& e) {
-        throw FormatError(frame.color_path, e.what());
-      }
-      labels = fuse::FrameLabels{std::move(hybrid.vote.instance),
-                                 std::move(hybrid.vote.semantic),
-                                 frame.color_path.string()};
-    } else {
-      CheckArgument(input.labels.has_value(),
-                    "pipeline: frame " + input.name + " came without labels");
-      labels = std::move(input.labels);
-    }
-  }
-  seconds_.segment += watch.Lap();
-
-  // People: every frame.
+  // People first (every frame): map guidance leaves their pixels to them.
   std::vector<PersonObservation>& people = prepared.people;
   std::optional<LabelMap>& person_ids = prepared.person_ids;
   const int w = frame.color.width(), h = frame.color.height();
@@ -136,8 +117,149 @@ PreparedFrame ScenePipeline::Prepare(PipelineInput input) {
     }
   }
   seconds_.track += watch.Lap();
+
+  // Segmentation: every segment_every-th frame (the first one always).
+  std::optional<fuse::FrameLabels>& labels = prepared.labels;
+  if (input.replay) {
+    CheckArgument(models, "pipeline: replay is for model outputs");
+    labels = std::move(input.replay->labels);
+    prepared.guidance = input.replay->guidance;
+    if (labels) CountGuidance(prepared.guidance, frame.T_world_camera);
+  } else if (frames_ % options_.segment_every == 0) {
+    if (models) {
+      labels =
+          SegmentFrame(frame, prepared.position, person_ids, &prepared.guidance);
+    } else {
+      CheckArgument(input.labels.has_value(),
+                    "pipeline: frame " + input.name + " came without labels");
+      labels = std::move(input.labels);
+    }
+  }
+  seconds_.segment += watch.Lap();
   ++frames_;
   return prepared;
+}
+
+fuse::FrameLabels ScenePipeline::SegmentFrame(
+    const Frame& frame, size_t position,
+    const std::optional<LabelMap>& person_ids, std::string* mode) {
+  const auto segment = [&](const Image<uint8_t>* region) {
+    try {
+      segment::HybridResult hybrid =
+          region ? segmenter_->SegmentWhere(frame.color, *region)
+                 : segmenter_->Segment(frame.color);
+      guidance_counts_.encoder_calls +=
+          static_cast<size_t>(hybrid.mask_stats.encoder_calls);
+      guidance_counts_.prompts_decoded +=
+          static_cast<size_t>(hybrid.mask_stats.prompts_decoded);
+      return hybrid;
+    } catch (const InvalidArgument& e) {
+      throw FormatError(frame.color_path, e.what());
+    }
+  };
+  if (!options_.map_guidance) {
+    segment::HybridResult hybrid = segment(nullptr);
+    return {std::move(hybrid.vote.instance), std::move(hybrid.vote.semantic),
+            frame.color_path.string()};
+  }
+  const std::shared_ptr<const std::vector<fuse::SceneSegment>> map =
+      MapFor(position);
+  if (map->empty()) {  // nothing to project yet
+    *mode = FrameModeName(FrameMode::kFull);
+    CountGuidance(*mode, frame.T_world_camera);
+    segment::HybridResult hybrid = segment(nullptr);
+    return {std::move(hybrid.vote.instance), std::move(hybrid.vote.semantic),
+            frame.color_path.string()};
+  }
+  fuse::ProjectedMap projected;
+  GuidanceDecision decision;
+  try {
+    projected = fuse::ProjectMap(*map, frame.intrinsics, frame.T_world_camera,
+                                 frame.depth, options_.projection);
+    Image<uint8_t> ignore;
+    if (person_ids && person_ids->NumPixels() > 0) {
+      ignore = Image<uint8_t>(person_ids->width(), person_ids->height());
+      for (size_t p = 0; p < ignore.NumPixels(); ++p) {
+        ignore.data()[p] = person_ids->data()[p] != 0 ? 1 : 0;
+      }
+    }
+    decision = DecideFrame(projected, frame.T_world_camera, T_world_last_full_,
+                           frames_since_full_ + 1, options_.guidance,
+                           ignore.NumPixels() > 0 ? &ignore : nullptr);
+  } catch (const InvalidArgument& e) {
+    throw FormatError(frame.depth_path, e.what());
+  }
+  *mode = FrameModeName(decision.mode);
+  CountGuidance(*mode, frame.T_world_camera);
+  if (decision.mode != FrameMode::kFull) {
+    guidance_counts_.unexplained_share_sum += decision.unexplained_share;
+  }
+  const std::string source = frame.color_path.string();
+  switch (decision.mode) {
+    case FrameMode::kFull: {
+      segment::HybridResult hybrid = segment(nullptr);
+      return {std::move(hybrid.vote.instance), std::move(hybrid.vote.semantic),
+              source};
+    }
+    case FrameMode::kPartial: {
+      const segment::HybridResult hybrid = segment(&decision.prompt_region);
+      return ComposeFrameLabels(projected, decision, &hybrid.vote,
+                                source + " (map-guided)");
+    }
+    case FrameMode::kProjectionOnly:
+      break;
+  }
+  return ComposeFrameLabels(projected, decision, nullptr,
+                            source + " (map projection)");
+}
+
+void ScenePipeline::CountGuidance(const std::string& mode,
+                                  const Transform& T_world_camera) {
+  if (mode.empty()) return;
+  if (mode == FrameModeName(FrameMode::kFull)) {
+    ++guidance_counts_.full;
+    T_world_last_full_ = T_world_camera;
+    frames_since_full_ = 0;
+    return;
+  }
+  ++frames_since_full_;
+  if (mode == FrameModeName(FrameMode::kPartial)) {
+    ++guidance_counts_.partial;
+  } else {
+    ++guidance_counts_.projection;
+  }
+}
+
+std::shared_ptr<const std::vector<fuse::SceneSegment>> ScenePipeline::MapFor(
+    size_t position) {
+  std::lock_guard<std::mutex> lock(maps_mutex_);
+  // The newest map published after a frame at least two places back.
+  std::shared_ptr<const std::vector<fuse::SceneSegment>> map;
+  while (!maps_.empty() && maps_.front().first + 2 <= position) {
+    map = maps_.front().second;
+    if (maps_.size() > 1 && maps_[1].first + 2 <= position) {
+      maps_.pop_front();
+    } else {
+      break;
+    }
+  }
+  if (!map) map = std::make_shared<const std::vector<fuse::SceneSegment>>();
+  return map;
+}
+
+void ScenePipeline::PublishMap(size_t position) {
+  // Only what projection needs: ids, classes and stored clouds.
+  auto map = std::make_shared<std::vector<fuse::SceneSegment>>();
+  for (const fuse::SceneSegment& s : builder_->fusion().segments()) {
+    fuse::SceneSegment copy;
+    copy.id = s.id;
+    copy.class_id = s.class_id;
+    copy.kind = s.kind;
+    copy.points = s.points;
+    map->push_back(std::move(copy));
+  }
+  std::lock_guard<std::mutex> lock(maps_mutex_);
+  maps_.emplace_back(position, std::move(map));
 }
 
 PipelineFrameResult ScenePipeline::Integrate(PreparedFrame prepared) {
@@ -151,6 +273,7 @@ PipelineFrameResult ScenePipeline::Integrate(PreparedFrame prepared) {
                     person_ids ? &*person_ids : nullptr);
   seconds_.fuse += stats.fusion_seconds;
   seconds_.volumes += stats.volume_seconds;
+  if (options_.map_guidance && labels) PublishMap(prepared.position);
   watch.Lap();
 
   if (options_.overlays && !prepared.replay) {
@@ -165,6 +288,7 @@ PipelineFrameResult ScenePipeline::Integrate(PreparedFrame prepared) {
   if (models) {
     result.outputs.tracker_input = std::move(prepared.tracker_input);
     result.outputs.labels = labels;
+    result.outputs.guidance = prepared.guidance;
     if (person_ids) result.outputs.person_ids = *person_ids;
   }
   result.segmented = labels.has_value();

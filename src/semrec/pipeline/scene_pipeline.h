@@ -10,8 +10,10 @@
 // Hypersim): then no model runs.
 #pragma once
 
+#include <deque>
 #include <filesystem>
 #include <memory>
+#include <mutex>
 #include <optional>
 #include <string>
 #include <vector>
@@ -19,7 +21,9 @@
 #include "semrec/core/frame.h"
 #include "semrec/core/label_map.h"
 #include "semrec/fuse/segments.h"
+#include "semrec/fuse/map_projection.h"
 #include "semrec/infer/model_registry.h"
+#include "semrec/pipeline/map_guidance.h"
 #include "semrec/pipeline/people_tracker.h"
 #include "semrec/pipeline/scene_builder.h"
 #include "semrec/segment/hybrid_segmenter.h"
@@ -39,6 +43,14 @@ struct ScenePipelineOptions {
   /// Fusion and volumes use the segmented frames only.
   int segment_every = 1;
   segment::HybridSegmenterOptions segmenter;
+  /// Map guidance (models only): the map is projected into each frame to be
+  /// segmented; masks are prompted only where it cannot explain the frame,
+  /// and frames it explains almost wholly skip the segmentation models. Frame
+  /// i sees the map after frame i - 2 (what the overlapped loop of
+  /// RunSequence guarantees, so results do not depend on timing).
+  bool map_guidance = false;
+  MapGuidanceOptions guidance;
+  fuse::MapProjectionOptions projection;
   /// Track people (models) or take the frames' person maps (given).
   bool track_people = true;
   PeopleTrackerOptions people;
@@ -60,6 +72,9 @@ struct ModelOutputs {
   std::vector<track::Detection> tracker_input;
   /// Tracked people's masks (track id per pixel; empty without people).
   LabelMap person_ids;
+  /// Map guidance: how the frame was segmented ("full", "partial",
+  /// "projection"; empty without guidance or labels).
+  std::string guidance;
 };
 
 /// One frame and what comes with it.
@@ -90,6 +105,21 @@ struct StageSeconds {
   }
 };
 
+/// Map guidance over the frames so far.
+struct GuidanceCounts {
+  /// Segmented frames by how they were segmented.
+  size_t full = 0;
+  size_t partial = 0;
+  size_t projection = 0;
+  /// Of the frames this process segmented (not replayed): encoder calls and
+  /// prompts decoded.
+  size_t encoder_calls = 0;
+  size_t prompts_decoded = 0;
+  /// Summed over guided (partial and projection) frames: the share of valid
+  /// depth the map did not explain.
+  double unexplained_share_sum = 0.0;
+};
+
 /// What one frame gave.
 struct PipelineFrameResult {
   bool segmented = false;
@@ -104,11 +134,15 @@ struct PipelineFrameResult {
 /// A frame after the models (segmentation, people), before fusion.
 struct PreparedFrame {
   Frame frame;
+  /// Its place in the stream (Prepare() calls before it).
+  size_t position = 0;
   bool replay = false;
   std::optional<fuse::FrameLabels> labels;
   std::vector<PersonObservation> people;
   std::optional<LabelMap> person_ids;
   std::vector<track::Detection> tracker_input;
+  /// Map guidance: the frame's mode (ModelOutputs::guidance).
+  std::string guidance;
 };
 
 class ScenePipeline {
@@ -150,9 +184,21 @@ class ScenePipeline {
   /// Frames prepared, and segmented frames integrated.
   size_t frames() const { return frames_; }
   size_t segmented_frames() const { return segmented_frames_; }
+  const GuidanceCounts& guidance_counts() const { return guidance_counts_; }
   const ScenePipelineOptions& options() const { return options_; }
 
  private:
+  /// The models' labels for a frame (with map guidance when on); sets `mode`.
+  fuse::FrameLabels SegmentFrame(const Frame& frame, size_t position,
+                                 const std::optional<LabelMap>& person_ids,
+                                 std::string* mode);
+  /// Map guidance bookkeeping for a segmented frame's mode.
+  void CountGuidance(const std::string& mode, const Transform& T_world_camera);
+  /// The map frame `position` is guided by (after frame position - 2).
+  std::shared_ptr<const std::vector<fuse::SceneSegment>> MapFor(
+      size_t position);
+  void PublishMap(size_t position);
+
   ScenePipelineOptions options_;
   std::unique_ptr<segment::HybridSegmenter> segmenter_;
   std::unique_ptr<PeopleTracker> tracker_;
@@ -163,6 +209,16 @@ class ScenePipeline {
   StageSeconds seconds_;
   size_t frames_ = 0;
   size_t segmented_frames_ = 0;
+  // Map guidance: Prepare() side.
+  GuidanceCounts guidance_counts_;
+  std::optional<Transform> T_world_last_full_;
+  size_t frames_since_full_ = 0;
+  // Maps published by Integrate() (tagged with the frame's position) for
+  // Prepare() on another thread.
+  std::mutex maps_mutex_;
+  std::deque<std::pair<size_t,
+                       std::shared_ptr<const std::vector<fuse::SceneSegment>>>>
+      maps_;
 };
 
 /// The people in a person id map as boxes (one per id, tight around its

@@ -23,6 +23,22 @@ HybridSegmenter::HybridSegmenter(const infer::ModelRegistry& registry,
 }
 
 HybridResult HybridSegmenter::Segment(const ColorImage& rgb) {
+  return Run(rgb, nullptr);
+}
+
+HybridResult HybridSegmenter::SegmentWhere(
+    const ColorImage& rgb, const Image<uint8_t>& prompt_region) {
+  CheckArgument(prompt_region.SameSize(rgb.width(), rgb.height()),
+                "hybrid segmenter: the prompt region is " +
+                    std::to_string(prompt_region.width()) + "x" +
+                    std::to_string(prompt_region.height()) +
+                    ", the image " + std::to_string(rgb.width()) + "x" +
+                    std::to_string(rgb.height()));
+  return Run(rgb, &prompt_region);
+}
+
+HybridResult HybridSegmenter::Run(const ColorImage& rgb,
+                                  const Image<uint8_t>* prompt_region) {
   using Clock = std::chrono::steady_clock;
   // Below this the models see a few pixels blown up to their input size and
   // return noise; say so instead.
@@ -37,7 +53,8 @@ HybridResult HybridSegmenter::Segment(const ColorImage& rgb) {
   const auto t1 = Clock::now();
   result.semantic_seconds = std::chrono::duration<double>(t1 - t0).count();
   if (masks_) {
-    result.masks = masks_->Generate(rgb);
+    result.masks = prompt_region ? masks_->GenerateWhere(rgb, *prompt_region)
+                                 : masks_->Generate(rgb);
     result.mask_stats = masks_->stats();
   }
   const auto t2 = Clock::now();

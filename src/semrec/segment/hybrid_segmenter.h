@@ -36,9 +36,17 @@ class HybridSegmenter {
   HybridSegmenter(const infer::ModelRegistry& registry,
                   const HybridSegmenterOptions& options);
   HybridResult Segment(const ColorImage& rgb);
+  /// Segment() with mask prompts only where `prompt_region` is non-zero (map
+  /// guidance: where the map cannot explain the frame); the semantic branch
+  /// still sees the whole image, so pixels outside every mask keep its label.
+  /// Throws InvalidArgument when the region's size differs from the image's.
+  HybridResult SegmentWhere(const ColorImage& rgb,
+                            const Image<uint8_t>& prompt_region);
   const LabelSet& label_set() const { return semantic_->label_set(); }
 
  private:
+  HybridResult Run(const ColorImage& rgb, const Image<uint8_t>* prompt_region);
+
   HybridSegmenterOptions options_;
   std::unique_ptr<SemanticSegmenter> semantic_;
   std::unique_ptr<MaskGenerator> masks_;

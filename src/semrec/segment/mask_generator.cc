@@ -355,6 +355,7 @@ class AutomaticMaskGenerator : public MaskGenerator {
     }
     const auto t0 = Clock::now();
     model_->SetImage(rgb);
+    ++stats_.encoder_calls;
     const auto t1 = Clock::now();
     grid_side_ = points_per_side;
     stats_.prompts_total += static_cast<int>(points.size());

@@ -78,6 +78,8 @@ struct MaskGeneratorStats {
   int prompts_rejected_early = 0;
   int candidates = 0;  // passed the IoU and stability filters
   int kept = 0;        // after NMS and clean-up
+  /// Image encoder runs (one per crop that had prompts).
+  int encoder_calls = 0;
   double encode_seconds = 0;
   double decode_seconds = 0;
   double postprocess_seconds = 0;

@@ -214,6 +214,7 @@ TEST(TinyModels, PromptsOnlyWhereTheRegionAllows) {
   EXPECT_TRUE(none.empty());
   EXPECT_EQ(generator->stats().prompts_total, 0);
   EXPECT_EQ(generator->stats().encode_seconds, 0.0);
+  EXPECT_EQ(generator->stats().encoder_calls, 0);
   // The whole frame: as Generate.
   const std::vector<Mask> all =
       generator->GenerateWhere(s.rgb, Image<uint8_t>(320, 240, 1, 1));
