@@ -5,6 +5,7 @@
 #include <chrono>
 #include <map>
 #include <numeric>
+#include <optional>
 #include <set>
 
 #include <fmt/format.h>
@@ -77,8 +78,11 @@ std::vector<FrameSegment> JoinStuffPerClass(
     if (s.kind == ClassKind::kStuff) {
       const auto [it, added] = stuff_index.emplace(s.class_id, joined.size());
       if (!added) {
-        Cloud& into = joined[it->second].points_world;
+        FrameSegment& joint = joined[it->second];
+        Cloud& into = joint.points_world;
         into.insert(into.end(), s.points_world.begin(), s.points_world.end());
+        // Projected and found pixels together: a segment found in the frame.
+        if (joint.map_object != s.map_object) joint.map_object = 0;
         (*origin)[i] = it->second;
         continue;
       }
@@ -142,12 +146,32 @@ FrameFusionStats SceneFusion::Integrate(
     }
   }
 
+  // Map-guided segments belong to the object the map says they are (while it
+  // exists; merged: the object it went into).
+  std::vector<std::optional<size_t>> map_object(frame_segments.size());
+  for (size_t f = 0; f < frame_segments.size(); ++f) {
+    if (frame_segments[f].map_object == 0) continue;
+    const uint32_t id = ResolveId(frame_segments[f].map_object);
+    const auto it =
+        std::find_if(segments_.begin(), segments_.end(),
+                     [id](const SceneSegment& s) { return s.id == id; });
+    if (it != segments_.end()) {
+      map_object[f] = static_cast<size_t>(it - segments_.begin());
+    }
+  }
+
   // Evidence: where the frame's object masks fall on the scene's objects.
   double evidence_seconds = 0.0;
   FrameCoverage coverage;
   if (evidence_on()) {
     const auto t0 = std::chrono::steady_clock::now();
     coverage = Coverage(frame_segments, frame_corr, frame_bounds);
+    // The map seeing itself is neither a class vote nor a view.
+    for (size_t f = 0; f < frame_segments.size(); ++f) {
+      if (!map_object[f]) continue;
+      std::fill(coverage.on[f].begin(), coverage.on[f].end(), 0u);
+      std::fill(coverage.nearest[f].begin(), coverage.nearest[f].end(), 0u);
+    }
     evidence_seconds += Seconds(t0);
   }
 
@@ -167,6 +191,10 @@ FrameFusionStats SceneFusion::Integrate(
   std::vector<Candidate> candidates;
   std::vector<std::vector<size_t>> matches(frame_segments.size());
   for (size_t f = 0; f < frame_segments.size(); ++f) {
+    if (map_object[f]) {
+      matches[f].push_back(*map_object[f]);
+      continue;
+    }
     const bool stuff = frame_segments[f].kind == ClassKind::kStuff;
     for (size_t s = 0; s < segments_.size(); ++s) {
       const bool same_class =
@@ -313,6 +341,9 @@ FrameFusionStats SceneFusion::Integrate(
       class_points[frame_segments[f].class_id] += p.size();
       merged.points.insert(merged.points.end(), p.begin(), p.end());
       ++merged.observations;
+      // The map's own projection is no new sighting (fragments seen once
+      // stay fragments) and no class vote.
+      if (map_object[f]) continue;
       SortedInsert(&merged.frames_seen, static_cast<uint32_t>(frame_index));
       // With evidence the coverage counted this segment's vote already.
       if (!evidence_on()) {

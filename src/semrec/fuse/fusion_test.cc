@@ -154,6 +154,44 @@ TEST(Fusion, OneFrameSegmentMatchingTwoSceneSegmentsMergesThem) {
   EXPECT_EQ(stats.removed_by_merge, 1u);
 }
 
+// Map-guided labels: pixels the map's projection labelled join the object it
+// named, even where a fresh segment of that class would not, and count as no
+// vote and no sighting (the map seeing itself); a found segment of another
+// class lying on the same points does vote.
+TEST(Fusion, MapProjectedSegmentsJoinTheirObjectWithoutVoting) {
+  std::mt19937 rng(5);
+  SceneFusion fusion;  // evidence merging (the default)
+  const Cloud table = BoxSurface({0, 0, 0.7f}, {1, 1, 0.75f}, rng, 3000, 0.002f);
+  fusion.Integrate({{15, 1, table}}, 0);
+  ASSERT_EQ(fusion.segments().size(), 1u);
+  const uint32_t id = fusion.segments()[0].id;
+  const auto votes = fusion.segments()[0].class_votes;
+  // Frames 1-5 labelled by projection: the same surface, "table" by the map.
+  for (size_t frame = 1; frame <= 5; ++frame) {
+    FrameSegment projected{
+        15, 1, BoxSurface({0, 0, 0.7f}, {1, 1, 0.75f}, rng, 3000, 0.002f)};
+    projected.map_object = id;
+    const FrameFusionStats stats = fusion.Integrate({projected}, frame);
+    EXPECT_EQ(stats.assigned_ids[0], id);
+    EXPECT_EQ(stats.compared_pairs, 0u);
+  }
+  ASSERT_EQ(fusion.segments().size(), 1u);
+  const SceneSegment& s = fusion.segments()[0];
+  EXPECT_EQ(s.class_votes, votes);
+  EXPECT_EQ(s.frames_seen, std::vector<uint32_t>{0});
+  EXPECT_EQ(s.observations, 6u);
+  EXPECT_EQ(s.last_seen_frame, 5u);
+  // A named object that is gone (here: never existed) is an ordinary segment.
+  FrameSegment stale{
+      15, 1, BoxSurface({0, 0, 0.7f}, {1, 1, 0.75f}, rng, 3000, 0.002f)};
+  stale.map_object = 999;
+  fusion.Integrate({stale}, 6);
+  ASSERT_EQ(fusion.segments().size(), 1u);
+  EXPECT_EQ(fusion.segments()[0].frames_seen,
+            (std::vector<uint32_t>{0, 6}));
+  EXPECT_GT(fusion.segments()[0].class_votes.at(15), votes.at(15));
+}
+
 TEST(Fusion, OptionsAreChecked) {
   FusionOptions o;
   o.alpha = 1.0;

@@ -4,9 +4,11 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <map>
 #include <memory>
 #include <set>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "semrec/core/frame.h"
@@ -19,10 +21,23 @@ namespace semrec::fuse {
 /// A frame's segmentation: pixels with the same non-zero instance id form one
 /// segment; its class is the semantic label its pixels carry (majority).
 struct FrameLabels {
+  FrameLabels() = default;
+  FrameLabels(LabelMap instance_map, LabelMap semantic_map,
+              std::string source_name,
+              std::map<uint16_t, uint32_t> projected_objects = {})
+      : instance(std::move(instance_map)),
+        semantic(std::move(semantic_map)),
+        source(std::move(source_name)),
+        map_objects(std::move(projected_objects)) {}
+
   LabelMap instance;
   LabelMap semantic;
   /// Where the labels came from, for messages.
   std::string source;
+  /// Map-guided labels: the instances the map's projection labelled, with the
+  /// map object each one is (fusion attaches them to it without counting
+  /// them as a new view: the map seeing itself is no evidence).
+  std::map<uint16_t, uint32_t> map_objects;
 };
 
 class SegmentationSource {
@@ -59,6 +74,9 @@ struct FrameSegment {
   Cloud points_world;
   /// Structure (wall, floor...) or an object; from the class table.
   ClassKind kind = ClassKind::kThing;
+  /// The map object these pixels were labelled as by projection
+  /// (FrameLabels::map_objects; 0: found in the frame itself).
+  uint32_t map_object = 0;
 };
 
 struct SegmentExtractionOptions {

@@ -113,6 +113,13 @@ void CheckpointStore::Record(size_t position,
     if (!o.guidance.empty()) j["guidance"] = o.guidance;
     if (o.labels) {
       j["labels_source"] = o.labels->source;
+      if (!o.labels->map_objects.empty()) {
+        nlohmann::json objects = nlohmann::json::array();
+        for (const auto& [instance, object] : o.labels->map_objects) {
+          objects.push_back({instance, object});
+        }
+        j["map_objects"] = std::move(objects);
+      }
       io::WritePng(FramePath(position, "_semantic.png"), o.labels->semantic);
       io::WritePng(FramePath(position, "_instance.png"), o.labels->instance);
     }
@@ -144,6 +151,12 @@ CheckpointFrame CheckpointStore::Load(size_t position) const {
             io::ReadLabelImage(FramePath(position, "_instance.png")),
             io::ReadLabelImage(FramePath(position, "_semantic.png")),
             j.at("labels_source").get<std::string>()};
+        if (j.contains("map_objects")) {
+          for (const auto& pair : j["map_objects"]) {
+            o.labels->map_objects[pair.at(0).get<uint16_t>()] =
+                pair.at(1).get<uint32_t>();
+          }
+        }
       }
       if (j.contains("guidance")) o.guidance = j["guidance"].get<std::string>();
       if (j.at("people").get<bool>()) {

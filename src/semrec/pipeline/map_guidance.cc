@@ -169,6 +169,7 @@ fuse::FrameLabels ComposeFrameLabels(const fuse::ProjectedMap& projected,
     CheckArgument(next_id <= 65535,
                   "map guidance: more than 65535 instances in one frame");
     instance = static_cast<uint16_t>(next_id++);
+    labels.map_objects[instance] = object_id;
   }
   for (int y = 0; y < h; ++y) {
     for (int x = 0; x < w; ++x) {
@@ -182,6 +183,31 @@ fuse::FrameLabels ComposeFrameLabels(const fuse::ProjectedMap& projected,
     }
   }
   return labels;
+}
+
+ColorImage RenderGuidanceOverlay(const ColorImage& overlay,
+                                 const GuidanceDecision& decision) {
+  ColorImage out = overlay;
+  const int w = out.width(), h = out.height();
+  cv::Mat canvas(h, w, CV_8UC3, out.data());
+  if (decision.mode == FrameMode::kPartial &&
+      decision.prompt_region.SameSize(w, h)) {
+    cv::Mat region(h, w, CV_8U,
+                   const_cast<uint8_t*>(decision.prompt_region.data()));
+    std::vector<std::vector<cv::Point>> contours;
+    cv::findContours(region.clone(), contours, cv::RETR_EXTERNAL,
+                     cv::CHAIN_APPROX_SIMPLE);
+    cv::drawContours(canvas, contours, -1, cv::Scalar(255, 220, 0), 2,
+                     cv::LINE_AA);
+  }
+  const std::string text = std::string("map: ") + FrameModeName(decision.mode);
+  const double scale = std::max(0.4, h / 960.0);
+  const cv::Point at(6, 6 + static_cast<int>(24 * scale));
+  cv::putText(canvas, text, at, cv::FONT_HERSHEY_SIMPLEX, scale,
+              cv::Scalar(0, 0, 0), 3, cv::LINE_AA);
+  cv::putText(canvas, text, at, cv::FONT_HERSHEY_SIMPLEX, scale,
+              cv::Scalar(255, 220, 0), 1, cv::LINE_AA);
+  return out;
 }
 
 }  // namespace semrec::pipeline

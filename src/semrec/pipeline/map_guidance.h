@@ -66,7 +66,7 @@ GuidanceDecision DecideFrame(const fuse::ProjectedMap& projected,
 
 /// The labels fusion sees for a map-guided frame (kPartial, kProjectionOnly):
 /// pixels the map explains take their object's class, one instance per map
-/// object; pixels of the prompt region the map does not explain take `fresh`
+/// object (listed in FrameLabels::map_objects); pixels of the prompt region the map does not explain take `fresh`
 /// (the vote of the masks prompted there; pixels in no mask keep the semantic
 /// branch's class); everything else is unlabelled (0), so fusion sees nothing
 /// it cannot vouch for. `fresh` may be null (projection only); a kFull
@@ -76,5 +76,10 @@ fuse::FrameLabels ComposeFrameLabels(const fuse::ProjectedMap& projected,
                                      const GuidanceDecision& decision,
                                      const segment::VoteResult* fresh,
                                      const std::string& source);
+
+/// Marks a map-guided frame's overlay: the prompt region's outline (yellow;
+/// kPartial) and the mode in the top-left corner ("map: partial" etc.).
+ColorImage RenderGuidanceOverlay(const ColorImage& overlay,
+                                 const GuidanceDecision& decision);
 
 }  // namespace semrec::pipeline

@@ -252,6 +252,11 @@ TEST(MapGuidedPipeline, SegmentsOnlyWhatTheMapCannotExplain) {
   std::map<uint16_t, int> per_class;
   for (const fuse::SceneSegment& s : pipeline.scene().fusion().segments()) {
     ++per_class[s.class_id];
+    // Frames labelled by the map are no sightings of what it already held:
+    // the cabinet was seen in the full frames only.
+    if (s.class_id == kCabinet + 1) {
+      EXPECT_EQ(s.frames_seen, (std::vector<uint32_t>{0, 1, 7}));
+    }
   }
   EXPECT_EQ(per_class[kCabinet + 1], 1);
   EXPECT_EQ(per_class[kTable + 1], 1);
@@ -287,6 +292,8 @@ TEST(MapGuidedPipeline, ComposedLabelsTakeTheMapWhereItExplains) {
   EXPECT_EQ(l.instance(2, 0), 2);
   EXPECT_EQ(l.semantic(3, 0), 0);  // unexplained, outside it: nothing
   EXPECT_EQ(l.instance(3, 0), 0);
+  // Fusion learns which map object each projected instance is.
+  EXPECT_EQ(l.map_objects, (std::map<uint16_t, uint32_t>{{3, 7}, {4, 9}}));
   // Projection only: the map alone.
   d.mode = FrameMode::kProjectionOnly;
   const fuse::FrameLabels p = ComposeFrameLabels(projected, d, nullptr, "f");

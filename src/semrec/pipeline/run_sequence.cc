@@ -349,11 +349,16 @@ RunResult RunSequence(const io::SequenceReader& reader,
       {"scene", result.scene.objects_json},
       {"fusion_events",
        fuse::FusionEventsJson(pipeline.scene().fusion(), pipeline.classes())}};
-  if (models && options.pipeline.map_guidance) {
+  if (models) {
+    // Without guidance every segmented frame is full; the counts of encoder
+    // calls and prompts compare the two.
     const GuidanceCounts& g = pipeline.guidance_counts();
     const size_t guided = g.partial + g.projection;
     result.report["map_guidance"] = {
-        {"full_frames", g.full},
+        {"enabled", options.pipeline.map_guidance},
+        {"full_frames", options.pipeline.map_guidance
+                            ? g.full
+                            : pipeline.segmented_frames()},
         {"partial_frames", g.partial},
         {"projection_frames", g.projection},
         {"encoder_calls", g.encoder_calls},
@@ -393,7 +398,7 @@ std::string RunSummaryTable(const RunResult& result, const fs::path& out_dir) {
     out += fmt::format(" {} {}", count.get<int>(), name);
   }
   out += "\n";
-  if (r.contains("map_guidance")) {
+  if (r.contains("map_guidance") && r["map_guidance"].value("enabled", false)) {
     const nlohmann::json& g = r.at("map_guidance");
     out += fmt::format(
         "  map guidance: {} full, {} partial, {} by projection alone; {} "

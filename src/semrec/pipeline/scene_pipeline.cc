@@ -127,8 +127,9 @@ PreparedFrame ScenePipeline::Prepare(PipelineInput input) {
     if (labels) CountGuidance(prepared.guidance, frame.T_world_camera);
   } else if (frames_ % options_.segment_every == 0) {
     if (models) {
-      labels =
-          SegmentFrame(frame, prepared.position, person_ids, &prepared.guidance);
+      labels = SegmentFrame(frame, prepared.position, person_ids,
+                            &prepared.guidance,
+                            options_.overlays ? &prepared.decision : nullptr);
     } else {
       CheckArgument(input.labels.has_value(),
                     "pipeline: frame " + input.name + " came without labels");
@@ -142,7 +143,8 @@ PreparedFrame ScenePipeline::Prepare(PipelineInput input) {
 
 fuse::FrameLabels ScenePipeline::SegmentFrame(
     const Frame& frame, size_t position,
-    const std::optional<LabelMap>& person_ids, std::string* mode) {
+    const std::optional<LabelMap>& person_ids, std::string* mode,
+    std::optional<GuidanceDecision>* decision_out) {
   const auto segment = [&](const Image<uint8_t>* region) {
     try {
       segment::HybridResult hybrid =
@@ -166,6 +168,9 @@ fuse::FrameLabels ScenePipeline::SegmentFrame(
       MapFor(position);
   if (map->empty()) {  // nothing to project yet
     *mode = FrameModeName(FrameMode::kFull);
+    if (decision_out != nullptr) {
+      *decision_out = GuidanceDecision{FrameMode::kFull, "no map yet", {}, 1.0};
+    }
     CountGuidance(*mode, frame.T_world_camera);
     segment::HybridResult hybrid = segment(nullptr);
     return {std::move(hybrid.vote.instance), std::move(hybrid.vote.semantic),
@@ -195,6 +200,7 @@ fuse::FrameLabels ScenePipeline::SegmentFrame(
     guidance_counts_.unexplained_share_sum += decision.unexplained_share;
   }
   const std::string source = frame.color_path.string();
+  if (decision_out != nullptr) *decision_out = decision;
   switch (decision.mode) {
     case FrameMode::kFull: {
       segment::HybridResult hybrid = segment(nullptr);
@@ -282,6 +288,9 @@ PipelineFrameResult ScenePipeline::Integrate(PreparedFrame prepared) {
                                          labels->instance, classes())
                                    : prepared.frame.color;
     result.overlay = RenderPeopleOverlay(base, prepared.people);
+    if (prepared.decision) {
+      result.overlay = RenderGuidanceOverlay(result.overlay, *prepared.decision);
+    }
   }
   seconds_.overlay += watch.Lap();
 

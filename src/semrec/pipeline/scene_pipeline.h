@@ -141,8 +141,10 @@ struct PreparedFrame {
   std::vector<PersonObservation> people;
   std::optional<LabelMap> person_ids;
   std::vector<track::Detection> tracker_input;
-  /// Map guidance: the frame's mode (ModelOutputs::guidance).
+  /// Map guidance: the frame's mode (ModelOutputs::guidance) and, for the
+  /// overlay, the decision (with the prompt region).
   std::string guidance;
+  std::optional<GuidanceDecision> decision;
 };
 
 class ScenePipeline {
@@ -191,7 +193,8 @@ class ScenePipeline {
   /// The models' labels for a frame (with map guidance when on); sets `mode`.
   fuse::FrameLabels SegmentFrame(const Frame& frame, size_t position,
                                  const std::optional<LabelMap>& person_ids,
-                                 std::string* mode);
+                                 std::string* mode,
+                                 std::optional<GuidanceDecision>* decision);
   /// Map guidance bookkeeping for a segmented frame's mode.
   void CountGuidance(const std::string& mode, const Transform& T_world_camera);
   /// The map frame `position` is guided by (after frame position - 2).
