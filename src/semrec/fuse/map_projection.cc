@@ -27,6 +27,10 @@ void MapProjectionOptions::Check() const {
   CheckArgument(min_depth_m > 0, "map projection: min_depth_m must be > 0");
   CheckArgument(depth_tolerance_m >= 0 && depth_tolerance_ratio >= 0,
                 "map projection: depth tolerances must be >= 0");
+  CheckArgument(ambiguity_ratio >= 0 && ambiguity_ratio <= 1,
+                "map projection: ambiguity_ratio must be in [0, 1]");
+  CheckArgument(ambiguity_window_px >= 0,
+                "map projection: ambiguity_window_px must be >= 0");
 }
 
 double ProjectedMap::UnexplainedShare() const {
@@ -67,10 +71,15 @@ ProjectedMap ProjectMap(const std::vector<SceneSegment>& objects,
   // splat whose depth is closest to the measured depth within the tolerance
   // (what explains the measurement): near a silhouette a nearer object's
   // splat spills over the background, which the map explains all the same.
-  std::vector<float> match_diff(static_cast<size_t>(w) * h, kFar);
-  std::vector<uint32_t> match_id(static_cast<size_t>(w) * h, 0);
-  std::vector<uint16_t> match_class(static_cast<size_t>(w) * h, 0);
-  std::vector<float> match_z(static_cast<size_t>(w) * h, 0.0f);
+  // The best and the second-best object (distinct) per pixel.
+  struct Match {
+    float diff = kFar;
+    uint32_t id = 0;
+    uint16_t class_id = 0;
+    float z = 0.0f;
+  };
+  std::vector<Match> best(static_cast<size_t>(w) * h);
+  std::vector<Match> second(static_cast<size_t>(w) * h);
   const auto tolerance = [&](float z) {
     return options.depth_tolerance_m + options.depth_tolerance_ratio * z;
   };
@@ -96,14 +105,51 @@ ProjectedMap ProjectMap(const std::vector<SceneSegment>& objects,
           }
           const float z = depth_m(x, y);
           const float diff = std::abs(z - p.z());
-          if (z > 0 && diff <= tolerance(z) && diff < match_diff[i]) {
-            match_diff[i] = diff;
-            match_id[i] = object.id;
-            match_class[i] = object.class_id;
-            match_z[i] = p.z();
+          if (!(z > 0) || diff > tolerance(z)) continue;
+          const Match m{diff, object.id, object.class_id, p.z()};
+          if (object.id == best[i].id) {
+            if (diff < best[i].diff) best[i] = m;
+          } else if (diff < best[i].diff) {
+            second[i] = best[i];
+            best[i] = m;
+          } else if (object.id == second[i].id) {
+            if (diff < second[i].diff) second[i] = m;
+          } else if (diff < second[i].diff) {
+            second[i] = m;
           }
         }
       }
+    }
+  }
+
+  // Where two objects explain a pixel about equally well they are one surface
+  // to the camera (a surface fused twice under two classes): the pixel goes
+  // to the one that explains more of its neighbourhood, so that the frame's
+  // labels do not speckle between them (the whole frame would favour the
+  // largest object, a structure class gathering every mislabelled pixel).
+  const auto ambiguous = [&](size_t i) {
+    return second[i].id != 0 &&
+           second[i].diff - best[i].diff <=
+               options.ambiguity_ratio * tolerance(depth_m.data()[i]);
+  };
+  std::vector<uint32_t> best_id(best.size());
+  for (size_t i = 0; i < best.size(); ++i) best_id[i] = best[i].id;
+  const int radius = options.ambiguity_window_px;
+  for (int y = 0; y < h; ++y) {
+    for (int x = 0; x < w; ++x) {
+      const size_t i = static_cast<size_t>(y) * w + x;
+      if (best[i].id == 0 || !ambiguous(i)) continue;
+      int votes_best = 0, votes_second = 0;
+      for (int v = std::max(0, y - radius); v <= std::min(h - 1, y + radius);
+           v += 2) {
+        for (int u = std::max(0, x - radius); u <= std::min(w - 1, x + radius);
+             u += 2) {
+          const uint32_t id = best_id[static_cast<size_t>(v) * w + u];
+          votes_best += id == best[i].id ? 1 : 0;
+          votes_second += id == second[i].id ? 1 : 0;
+        }
+      }
+      if (votes_second > votes_best) best[i] = second[i];
     }
   }
 
@@ -119,11 +165,11 @@ ProjectedMap ProjectMap(const std::vector<SceneSegment>& objects,
         continue;
       }
       ++out.valid_depth_pixels;
-      if (match_diff[i] != kFar) {
+      if (best[i].id != 0) {
         out.state(x, y) = ProjectedMap::kExplained;
-        out.object_id(x, y) = match_id[i];
-        out.class_id(x, y) = match_class[i];
-        out.depth_m(x, y) = match_z[i];
+        out.object_id(x, y) = best[i].id;
+        out.class_id(x, y) = best[i].class_id;
+        out.depth_m(x, y) = best[i].z;
         ++out.explained_pixels;
       } else if (z_map != kFar && z > z_map + tolerance(z) &&
                  Interior(nearest_id, x, y)) {

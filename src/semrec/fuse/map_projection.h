@@ -34,6 +34,14 @@ struct MapProjectionOptions {
   /// voxels).
   float depth_tolerance_m = 0.05f;
   float depth_tolerance_ratio = 0.03f;
+  /// Two objects whose depths explain a pixel within this share of the
+  /// tolerance of each other are one surface to the camera (e.g. a wall fused
+  /// once as wall, once as cabinet): the pixel goes to the object that
+  /// explains more pixels within `ambiguity_window_px` of it, not to
+  /// whichever noise favours. A book a few centimetres above a table stays
+  /// the book.
+  float ambiguity_ratio = 0.2f;
+  int ambiguity_window_px = 8;
   void Check() const;
 };
 

@@ -31,16 +31,17 @@ CameraIntrinsics Camera() {
 
 // The map's object: the plate as the fusion stores it (centres of its 5 cm
 // voxels), moved into the world by T_world_camera.
-SceneSegment Object(const Plate& p, const Transform& T_world_camera) {
+SceneSegment Object(const Plate& p, const Transform& T_world_camera,
+                    float spacing_m = 0.05f) {
   SceneSegment s;
   s.id = p.id;
   s.class_id = p.class_id;
-  const int nx = static_cast<int>(std::lround((p.x1 - p.x0) / 0.05f));
-  const int ny = static_cast<int>(std::lround((p.y1 - p.y0) / 0.05f));
+  const int nx = static_cast<int>(std::lround((p.x1 - p.x0) / spacing_m));
+  const int ny = static_cast<int>(std::lround((p.y1 - p.y0) / spacing_m));
   for (int i = 0; i < nx; ++i) {
     for (int j = 0; j < ny; ++j) {
-      const Eigen::Vector3d p_camera(p.x0 + 0.05 * (i + 0.5),
-                                     p.y0 + 0.05 * (j + 0.5), p.z);
+      const Eigen::Vector3d p_camera(p.x0 + spacing_m * (i + 0.5),
+                                     p.y0 + spacing_m * (j + 0.5), p.z);
       s.points.push_back((T_world_camera * p_camera).cast<float>());
     }
   }
@@ -163,6 +164,47 @@ TEST(MapProjection, ANewObjectInFrontIsUnexplainedAndARemovedOneContradicts) {
   EXPECT_EQ(after.contradicted_pixels, chair_contradicted);
 }
 
+TEST(MapProjection, OneSurfaceFusedTwiceDoesNotSpeckle) {
+  // A wall fused once as "wall" (dense, 4 mm behind the measured surface) and
+  // in places as "cabinet" (sparse, on the surface): to the camera one
+  // surface. Each cabinet splat explains its pixels a little better, but the
+  // wall explains most of every neighbourhood: the wall gets them all. A book
+  // 4 cm in front of the wall is no such tie: it keeps its pixels.
+  const Plate wall{1, 1, -0.6f, 0.6f, -0.4f, 0.4f, 2.004f};
+  const Plate cabinet{2, 11, -0.6f, 0.0f, -0.4f, 0.4f, 2.0f};
+  const Plate book{3, 67, 0.2f, 0.4f, -0.1f, 0.1f, 1.96f};
+  const Plate measured{1, 1, -0.6f, 0.6f, -0.4f, 0.4f, 2.0f};
+  Image<uint32_t> gt;
+  const DepthImage depth = Render({measured, book}, &gt);
+  const std::vector<SceneSegment> map = {Object(wall, {}),
+                                         Object(cabinet, {}, 0.1f),
+                                         Object(book, {})};
+  size_t cabinet_px = 0, covered = 0;
+  for (const float ratio : {0.0f, 0.2f}) {
+    MapProjectionOptions options;
+    options.ambiguity_ratio = ratio;
+    const ProjectedMap p = ProjectMap(map, Camera(), {}, depth, options);
+    cabinet_px = covered = 0;
+    for (int v = 43; v < 77; ++v) {  // inside the wall plate
+      for (int u = 53; u < 77; ++u) {  // ... where the cabinet lies too
+        ASSERT_EQ(p.state(u, v), ProjectedMap::kExplained) << u << "," << v;
+        ++covered;
+        cabinet_px += p.object_id(u, v) == 2 ? 1 : 0;
+      }
+    }
+    if (ratio == 0.0f) {
+      // Without the rule: speckle, a third of the pixels go to the cabinet.
+      EXPECT_GT(cabinet_px, covered / 5);
+    } else {
+      EXPECT_LT(cabinet_px, covered / 50);
+    }
+    // The book's interior (x 0.2..0.4 m, y -0.1..0.1 m at 1.96 m) is the book.
+    for (int v = 57; v < 63; ++v) {
+      for (int u = 92; u < 99; ++u) EXPECT_EQ(p.object_id(u, v), 3u);
+    }
+  }
+}
+
 TEST(MapProjection, NearerObjectsHideFartherOnesAndBadInputIsRefused) {
   // The chair moved behind the table's plane: where both project, the nearer
   // (table) wins.
@@ -193,6 +235,9 @@ TEST(MapProjection, NearerObjectsHideFartherOnesAndBadInputIsRefused) {
   EXPECT_THROW(bad.Check(), InvalidArgument);
   bad = {};
   bad.depth_tolerance_ratio = -1;
+  EXPECT_THROW(bad.Check(), InvalidArgument);
+  bad = {};
+  bad.ambiguity_ratio = 2;
   EXPECT_THROW(bad.Check(), InvalidArgument);
 }
 
