@@ -129,6 +129,22 @@ assert r["objects"] >= 2 and r["structure"] >= 1, (r["objects"], r["structure"])
 assert {"floor", "table"} <= set(r["objects_per_class"]), r["objects_per_class"]
 assert all(m["sha256"] for m in r["models"]) and len(r["models"]) >= 3, r["models"]
 PY
+# Map guidance on consecutive chess frames: the map explains most of each frame, so after the
+# first frames few are segmented in full; the summary, report.json and the overlays say how.
+"$SEMREC" run "$chess" --max-frames 8 --points-per-side 8 --map-guidance --no-people --no-report \
+  --out "$tmp/guided" >"$tmp/guided.out" 2>"$tmp/guided.err" || fail "guided run: $(tail -5 "$tmp/guided.err")"
+grep -q "map guidance: .* full, .* partial, .* by projection alone" "$tmp/guided.out" ||
+  fail "guided: no map guidance line: $(cat "$tmp/guided.out")"
+/usr/bin/python3 - "$tmp/guided/report.json" <<'PY' || fail "guided report"
+import json, sys
+g = json.load(open(sys.argv[1]))["map_guidance"]
+assert g["enabled"], g
+assert g["full_frames"] + g["partial_frames"] + g["projection_frames"] == 8, g
+assert g["full_frames"] >= 2 and g["projection_frames"] >= 1, g  # frame 1 has no map yet
+assert g["encoder_calls"] <= g["full_frames"] + g["partial_frames"], g
+PY
+[ "$(ls "$tmp/guided/overlay" | wc -l)" -eq 8 ] || fail "guided: overlays missing"
+
 pkg="$SEMREC_SOURCE_DIR/.deps/node/node_modules/tinyusdz"
 if [ -f "$pkg/tinyusdz.wasm" ] && command -v node >/dev/null; then
   node "$SEMREC_SOURCE_DIR/src/semrec/usd/validate_usd.mjs" "$pkg" "$tmp/chess/static.usda" >"$tmp/usd.json" ||
