@@ -10,6 +10,7 @@
 //  - the objects per class of both scenes (for the 3D scores run `semrec eval
 //    scene` on the two output folders it prints).
 // Usage: bench_map_guidance [frames=100] [office_frames=40] [parts=12]
+//   SEMREC_BENCH_REFRESH_EVERY=n: the guided runs' refresh_every.
 //   SEMREC_BENCH_REUSE=all (or full): take the runs (or the full runs) of the
 //   last invocation instead of running them again (no new timings for those:
 //   for trying guidance options; report ratios from a fresh invocation).
@@ -62,6 +63,9 @@ pipeline::RunOptions Options(const infer::ModelRegistry& registry,
   p.track_people = false;
   p.overlays = false;
   p.map_guidance = guided;
+  if (const char* every = std::getenv("SEMREC_BENCH_REFRESH_EVERY")) {
+    p.guidance.refresh_every = std::atoi(every);
+  }
   run.overwrite = true;
   run.checkpoint_every = 0;  // records are still written for every frame
   run.config_text = guided ? "bench guided\n" : "bench full\n";

@@ -263,6 +263,55 @@ TEST(MapGuidedPipeline, SegmentsOnlyWhatTheMapCannotExplain) {
   EXPECT_EQ(per_class[kChair + 1], 1);
 }
 
+// A resumed run replays the first frames' recorded outputs (no model runs):
+// the guidance state (last full frame, frames since) and fusion's map objects
+// come back with them, so the rest of the run decides and fuses as before.
+TEST(MapGuidedPipeline, ReplayedFramesRestoreTheGuidance) {
+  ASSERT_FALSE(semrec::testing::TinyModelDir().empty());
+  const auto palette =
+      nlohmann::json::parse(ReadTextFile(semrec::testing::TinyModelDir() /
+                                         "tiny_palette150.json"))
+          .get<std::vector<std::array<uint8_t, 3>>>();
+  const infer::ModelRegistry registry = infer::ModelRegistry::Load(
+      semrec::testing::TinyModelDir() / "registry.yaml");
+  const auto run = [&](const std::vector<ModelOutputs>* recorded,
+                       size_t replay_frames) {
+    ScenePipeline pipeline(&registry, nullptr, GuidedOptions());
+    std::vector<ModelOutputs> outputs;
+    for (size_t i = 0; i < 12; ++i) {
+      PipelineInput input;
+      input.frame = Render(i, palette).frame;
+      input.name = "frame.png";
+      if (i < replay_frames) input.replay = (*recorded)[i];
+      outputs.push_back(pipeline.Process(input).outputs);
+    }
+    pipeline.Finish();
+    std::vector<std::pair<uint16_t, size_t>> objects;
+    for (const fuse::SceneSegment& s : pipeline.scene().fusion().segments()) {
+      objects.emplace_back(s.class_id, s.points.size());
+    }
+    return std::make_tuple(outputs, objects, pipeline.guidance_counts());
+  };
+  const auto [outputs, objects, counts] = run(nullptr, 0);
+  // Resumed after frame 5 (frame 4 was partial, 5 too): frames 6.. decide as
+  // before (6 projection, 7 the refresh, ...).
+  const auto [outputs2, objects2, counts2] = run(&outputs, 6);
+  ASSERT_EQ(outputs2.size(), outputs.size());
+  for (size_t i = 0; i < outputs.size(); ++i) {
+    EXPECT_EQ(outputs2[i].guidance, outputs[i].guidance) << i;
+    ASSERT_TRUE(outputs2[i].labels.has_value());
+    EXPECT_EQ(outputs2[i].labels->map_objects, outputs[i].labels->map_objects)
+        << i;
+    EXPECT_EQ(outputs2[i].labels->semantic.values(),
+              outputs[i].labels->semantic.values())
+        << i;
+  }
+  EXPECT_EQ(objects2, objects);
+  EXPECT_EQ(counts2.full, counts.full);
+  EXPECT_EQ(counts2.partial, counts.partial);
+  EXPECT_EQ(counts2.projection, counts.projection);
+}
+
 TEST(MapGuidedPipeline, ComposedLabelsTakeTheMapWhereItExplains) {
   fuse::ProjectedMap projected;
   projected.state = Image<uint8_t>(4, 1, 1, fuse::ProjectedMap::kExplained);
