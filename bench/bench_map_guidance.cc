@@ -10,7 +10,8 @@
 //  - the objects per class of both scenes (for the 3D scores run `semrec eval
 //    scene` on the two output folders it prints).
 // Usage: bench_map_guidance [frames=100] [office_frames=40] [parts=12]
-//   SEMREC_BENCH_REFRESH_EVERY=n: the guided runs' refresh_every.
+//   SEMREC_BENCH_REFRESH_EVERY=n: the guided runs' refresh_every;
+//   SEMREC_BENCH_DISAGREEMENT=1: with prompt_on_disagreement.
 //   SEMREC_BENCH_REUSE=all (or full): take the runs (or the full runs) of the
 //   last invocation instead of running them again (no new timings for those:
 //   for trying guidance options; report ratios from a fresh invocation).
@@ -63,6 +64,8 @@ pipeline::RunOptions Options(const infer::ModelRegistry& registry,
   p.track_people = false;
   p.overlays = false;
   p.map_guidance = guided;
+  p.guidance.prompt_on_disagreement =
+      std::getenv("SEMREC_BENCH_DISAGREEMENT") != nullptr;
   if (const char* every = std::getenv("SEMREC_BENCH_REFRESH_EVERY")) {
     p.guidance.refresh_every = std::atoi(every);
   }
@@ -166,7 +169,8 @@ void Run(const std::string& name, const fs::path& sequence, size_t frames,
     const fs::path out = Scratch() / (name + (guided ? "_guided" : "_full"));
     const char* reuse = std::getenv("SEMREC_BENCH_REUSE");
     if (reuse != nullptr &&
-        (std::string(reuse) == "all" || (!guided && std::string(reuse) == "full")) &&
+        (std::string(reuse) == "all" ||
+         (!guided && std::string(reuse) == "full")) &&
         fs::exists(out / "report.json")) {
       // Compare the runs of an earlier invocation again (no new timings).
       results[guided].report = io::ReadJsonFile(out / "report.json");
@@ -179,11 +183,13 @@ void Run(const std::string& name, const fs::path& sequence, size_t frames,
     }
     const nlohmann::json& r = results[guided].report;
     const nlohmann::json& g = r.at("map_guidance");
-    const double n = static_cast<double>(r.at("processed_frames").get<size_t>());
+    const double n =
+        static_cast<double>(r.at("processed_frames").get<size_t>());
     std::printf(
         "  %-7s segment %6.3f s/frame | %.2f encoder calls, %6.1f prompts "
         "decoded per frame | frames: %zu full, %zu partial, %zu projection "
-        "(mean unexplained %.3f) | run %.3f frames/s, %.0f s | %zu objects:%s\n"
+        "(mean unexplained %.3f; %zu partial by disagreement) | run %.3f "
+        "frames/s, %.0f s | %zu objects:%s\n"
         "          -> %s\n",
         guided ? "guided" : "full",
         r.at("seconds_per_frame").at("segment").get<double>(),
@@ -192,6 +198,7 @@ void Run(const std::string& name, const fs::path& sequence, size_t frames,
         g.at("full_frames").get<size_t>(), g.at("partial_frames").get<size_t>(),
         g.at("projection_frames").get<size_t>(),
         g.at("mean_unexplained_share").get<double>(),
+        g.value("disagreement_frames", size_t{0}),
         r.at("frames_per_second").get<double>(), r.at("seconds").get<double>(),
         results[guided].scene.objects, PerClass(r).c_str(), out.c_str());
     std::fflush(stdout);
@@ -212,8 +219,7 @@ void Run(const std::string& name, const fs::path& sequence, size_t frames,
       "(%zu frames): %.1f%% of the full run's labelled pixels same class, "
       "%zu/%zu masks (%.1f%%) recovered at IoU >= 0.5\n",
       seg(true) > 0 ? seg(false) / seg(true) : 0.0,
-      fps(false) > 0 ? fps(true) / fps(false) : 0.0, a.frames,
-      100.0 * a.pixels,
+      fps(false) > 0 ? fps(true) / fps(false) : 0.0, a.frames, 100.0 * a.pixels,
       a.recovered, a.masks,
       a.masks ? 100.0 * static_cast<double>(a.recovered) / a.masks : 0.0);
   std::printf(

@@ -235,6 +235,12 @@ void RegisterRun(CLI::App& app) {
                   "than this share of its valid depth is unexplained")
       ->check(CLI::Range(0.0, 1.0))
       ->capture_default_str();
+  cmd->add_flag("--prompt-on-disagreement",
+                pipe.guidance.prompt_on_disagreement,
+                "Map guidance: also prompt masks where the semantic model "
+                "disagrees with the map's class (runs the semantic model on "
+                "every guided frame; fixes the map before the next full "
+                "frame)");
   cmd->add_option("--refresh-every", pipe.guidance.refresh_every,
                   "Map guidance: a full segmentation at least every n "
                   "segmented frames")

@@ -161,7 +161,8 @@ TEST(Fusion, OneFrameSegmentMatchingTwoSceneSegmentsMergesThem) {
 TEST(Fusion, MapProjectedSegmentsJoinTheirObjectWithoutVoting) {
   std::mt19937 rng(5);
   SceneFusion fusion;  // evidence merging (the default)
-  const Cloud table = BoxSurface({0, 0, 0.7f}, {1, 1, 0.75f}, rng, 3000, 0.002f);
+  const Cloud table =
+      BoxSurface({0, 0, 0.7f}, {1, 1, 0.75f}, rng, 3000, 0.002f);
   fusion.Integrate({{15, 1, table}}, 0);
   ASSERT_EQ(fusion.segments().size(), 1u);
   const uint32_t id = fusion.segments()[0].id;
@@ -187,8 +188,7 @@ TEST(Fusion, MapProjectedSegmentsJoinTheirObjectWithoutVoting) {
   stale.map_object = 999;
   fusion.Integrate({stale}, 6);
   ASSERT_EQ(fusion.segments().size(), 1u);
-  EXPECT_EQ(fusion.segments()[0].frames_seen,
-            (std::vector<uint32_t>{0, 6}));
+  EXPECT_EQ(fusion.segments()[0].frames_seen, (std::vector<uint32_t>{0, 6}));
   EXPECT_GT(fusion.segments()[0].class_votes.at(15), votes.at(15));
 }
 

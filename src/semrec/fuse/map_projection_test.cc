@@ -176,16 +176,15 @@ TEST(MapProjection, OneSurfaceFusedTwiceDoesNotSpeckle) {
   const Plate measured{1, 1, -0.6f, 0.6f, -0.4f, 0.4f, 2.0f};
   Image<uint32_t> gt;
   const DepthImage depth = Render({measured, book}, &gt);
-  const std::vector<SceneSegment> map = {Object(wall, {}),
-                                         Object(cabinet, {}, 0.1f),
-                                         Object(book, {})};
+  const std::vector<SceneSegment> map = {
+      Object(wall, {}), Object(cabinet, {}, 0.1f), Object(book, {})};
   size_t cabinet_px = 0, covered = 0;
   for (const float ratio : {0.0f, 0.2f}) {
     MapProjectionOptions options;
     options.ambiguity_ratio = ratio;
     const ProjectedMap p = ProjectMap(map, Camera(), {}, depth, options);
     cabinet_px = covered = 0;
-    for (int v = 43; v < 77; ++v) {  // inside the wall plate
+    for (int v = 43; v < 77; ++v) {    // inside the wall plate
       for (int u = 53; u < 77; ++u) {  // ... where the cabinet lies too
         ASSERT_EQ(p.state(u, v), ProjectedMap::kExplained) << u << "," << v;
         ++covered;

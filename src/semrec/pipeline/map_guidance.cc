@@ -16,6 +16,42 @@ Image<uint8_t> Filled(int w, int h, uint8_t value) {
   return Image<uint8_t>(w, h, 1, value);
 }
 
+// The connected regions (8-connected) of `mask` with at least min_region_px
+// pixels, grown by region_margin_px; `kept_px` gets their size before growing.
+cv::Mat KeptRegions(const cv::Mat& mask, const MapGuidanceOptions& options,
+                    size_t* kept_px) {
+  cv::Mat labels, stats, centroids;
+  const int n =
+      cv::connectedComponentsWithStats(mask, labels, stats, centroids, 8);
+  std::vector<uint8_t> keep(static_cast<size_t>(n), 0);
+  *kept_px = 0;
+  for (int i = 1; i < n; ++i) {
+    const int area = stats.at<int>(i, cv::CC_STAT_AREA);
+    if (area >= options.min_region_px) {
+      keep[static_cast<size_t>(i)] = 1;
+      *kept_px += static_cast<size_t>(area);
+    }
+  }
+  cv::Mat region(mask.rows, mask.cols, CV_8U, cv::Scalar(0));
+  for (int y = 0; y < mask.rows; ++y) {
+    for (int x = 0; x < mask.cols; ++x) {
+      region.at<uint8_t>(y, x) =
+          keep[static_cast<size_t>(labels.at<int>(y, x))];
+    }
+  }
+  if (options.region_margin_px > 0) {
+    const int k = 2 * options.region_margin_px + 1;
+    cv::dilate(region, region,
+               cv::getStructuringElement(cv::MORPH_RECT, cv::Size(k, k)));
+  }
+  return region;
+}
+
+double Share(size_t pixels, size_t valid) {
+  return valid == 0 ? 1.0
+                    : static_cast<double>(pixels) / static_cast<double>(valid);
+}
+
 }  // namespace
 
 void MapGuidanceOptions::Check() const {
@@ -51,8 +87,9 @@ GuidanceDecision DecideFrame(const fuse::ProjectedMap& projected,
   options.Check();
   const int w = projected.state.width();
   const int h = projected.state.height();
-  CheckArgument(ignore == nullptr || ignore->SameSize(w, h),
-                "map guidance: the ignore mask's size differs from the frame's");
+  CheckArgument(
+      ignore == nullptr || ignore->SameSize(w, h),
+      "map guidance: the ignore mask's size differs from the frame's");
   GuidanceDecision d;
   const auto full = [&](const char* reason) {
     d.mode = FrameMode::kFull;
@@ -84,40 +121,14 @@ GuidanceDecision DecideFrame(const fuse::ProjectedMap& projected,
               : 0;
     }
   }
-  cv::Mat labels, stats, centroids;
-  const int n = cv::connectedComponentsWithStats(unexplained, labels, stats,
-                                                 centroids, 8);
-  std::vector<uint8_t> keep(static_cast<size_t>(n), 0);
   size_t unexplained_px = 0;
-  for (int i = 1; i < n; ++i) {
-    const int area = stats.at<int>(i, cv::CC_STAT_AREA);
-    if (area >= options.min_region_px) {
-      keep[static_cast<size_t>(i)] = 1;
-      unexplained_px += static_cast<size_t>(area);
-    }
-  }
-  d.unexplained_share =
-      projected.valid_depth_pixels == 0
-          ? 1.0
-          : static_cast<double>(unexplained_px) /
-                static_cast<double>(projected.valid_depth_pixels);
+  const cv::Mat region = KeptRegions(unexplained, options, &unexplained_px);
+  d.unexplained_share = Share(unexplained_px, projected.valid_depth_pixels);
   if (d.unexplained_share < options.projection_only_below) {
     d.mode = FrameMode::kProjectionOnly;
     d.reason = "explained";
     d.prompt_region = Filled(w, h, 0);
     return d;
-  }
-  cv::Mat region(h, w, CV_8U, cv::Scalar(0));
-  for (int y = 0; y < h; ++y) {
-    for (int x = 0; x < w; ++x) {
-      region.at<uint8_t>(y, x) =
-          keep[static_cast<size_t>(labels.at<int>(y, x))];
-    }
-  }
-  if (options.region_margin_px > 0) {
-    const int k = 2 * options.region_margin_px + 1;
-    cv::dilate(region, region,
-               cv::getStructuringElement(cv::MORPH_RECT, cv::Size(k, k)));
   }
   d.mode = FrameMode::kPartial;
   d.reason = "new content";
@@ -130,6 +141,50 @@ GuidanceDecision DecideFrame(const fuse::ProjectedMap& projected,
   return d;
 }
 
+double AddDisagreement(const fuse::ProjectedMap& projected,
+                       const LabelMap& semantic,
+                       const MapGuidanceOptions& options,
+                       GuidanceDecision* decision) {
+  options.Check();
+  const int w = projected.state.width();
+  const int h = projected.state.height();
+  CheckArgument(
+      semantic.SameSize(w, h) && decision->prompt_region.SameSize(w, h),
+      "map guidance: the semantic labels' or the prompt region's "
+      "size differs from the projected map's");
+  if (decision->mode == FrameMode::kFull) return 0.0;
+  cv::Mat disagree(h, w, CV_8U, cv::Scalar(0));
+  for (int y = 0; y < h; ++y) {
+    for (int x = 0; x < w; ++x) {
+      disagree.at<uint8_t>(y, x) =
+          projected.state(x, y) == fuse::ProjectedMap::kExplained &&
+                  semantic(x, y) != projected.class_id(x, y)
+              ? 1
+              : 0;
+    }
+  }
+  // Semantic borders are blurred: a band of a few pixels along every
+  // silhouette disagrees; only areas count.
+  cv::morphologyEx(disagree, disagree, cv::MORPH_OPEN,
+                   cv::getStructuringElement(cv::MORPH_RECT, cv::Size(5, 5)));
+  size_t disagree_px = 0;
+  const cv::Mat region = KeptRegions(disagree, options, &disagree_px);
+  if (disagree_px == 0) return 0.0;
+  decision->override_region = Image<uint8_t>(w, h);
+  for (int y = 0; y < h; ++y) {
+    for (int x = 0; x < w; ++x) {
+      if (region.at<uint8_t>(y, x) == 0) continue;
+      decision->override_region(x, y) = 1;
+      decision->prompt_region(x, y) = 1;
+    }
+  }
+  if (decision->mode == FrameMode::kProjectionOnly) {
+    decision->mode = FrameMode::kPartial;
+    decision->reason = "disagreement";
+  }
+  return Share(disagree_px, projected.valid_depth_pixels);
+}
+
 fuse::FrameLabels ComposeFrameLabels(const fuse::ProjectedMap& projected,
                                      const GuidanceDecision& decision,
                                      const segment::VoteResult* fresh,
@@ -140,8 +195,7 @@ fuse::FrameLabels ComposeFrameLabels(const fuse::ProjectedMap& projected,
                 "map guidance: the prompt region's size differs from the "
                 "projected map's");
   CheckArgument(decision.mode == FrameMode::kProjectionOnly || fresh != nullptr,
-                std::string("map guidance: a ") +
-                    FrameModeName(decision.mode) +
+                std::string("map guidance: a ") + FrameModeName(decision.mode) +
                     " frame needs the fresh segmentation");
   if (fresh != nullptr) {
     CheckArgument(
@@ -173,8 +227,13 @@ fuse::FrameLabels ComposeFrameLabels(const fuse::ProjectedMap& projected,
   }
   for (int y = 0; y < h; ++y) {
     for (int x = 0; x < w; ++x) {
-      if (projected.state(x, y) == fuse::ProjectedMap::kExplained) {
-        labels.instance(x, y) = instance_of_object.at(projected.object_id(x, y));
+      const bool fresh_wins = fresh != nullptr &&
+                              !decision.override_region.empty() &&
+                              decision.override_region(x, y) != 0;
+      if (projected.state(x, y) == fuse::ProjectedMap::kExplained &&
+          !fresh_wins) {
+        labels.instance(x, y) =
+            instance_of_object.at(projected.object_id(x, y));
         labels.semantic(x, y) = projected.class_id(x, y);
       } else if (fresh != nullptr && decision.prompt_region(x, y) != 0) {
         labels.instance(x, y) = fresh->instance(x, y);

@@ -33,6 +33,11 @@ struct MapGuidanceOptions {
   /// Regions grow by this much so that prompts near an object's border still
   /// land on it.
   int region_margin_px = 8;
+  /// Also prompt where the semantic branch disagrees with the map's class (a
+  /// region of at least min_region_px): the map's errors get fixed before the
+  /// next full frame, at the price of the semantic model on every guided
+  /// frame (AddDisagreement).
+  bool prompt_on_disagreement = false;
   void Check() const;
 };
 
@@ -50,6 +55,9 @@ struct GuidanceDecision {
   /// Share of valid-depth pixels in unexplained regions (after dropping small
   /// ones).
   double unexplained_share = 1.0;
+  /// Where the fresh segmentation wins over the projection although the map
+  /// explains the depth (AddDisagreement; empty: nowhere).
+  Image<uint8_t> override_region;
 };
 
 /// The decision for a frame with the map projected into it (`projected`, from
@@ -64,14 +72,27 @@ GuidanceDecision DecideFrame(const fuse::ProjectedMap& projected,
                              const MapGuidanceOptions& options,
                              const Image<uint8_t>* ignore = nullptr);
 
+/// With options.prompt_on_disagreement: adds to a kPartial or kProjectionOnly
+/// decision the explained regions where `semantic` (the frame's semantic
+/// branch) disagrees with the projected class (areas: bands under 5 pixels,
+/// blurred borders, do not count), kept and grown as unexplained ones are; they
+/// join the prompt region and the override region, and a projection-only frame
+/// with such a region becomes partial ("disagreement"). Returns the share of
+/// valid-depth pixels in those regions.
+double AddDisagreement(const fuse::ProjectedMap& projected,
+                       const LabelMap& semantic,
+                       const MapGuidanceOptions& options,
+                       GuidanceDecision* decision);
+
 /// The labels fusion sees for a map-guided frame (kPartial, kProjectionOnly):
 /// pixels the map explains take their object's class, one instance per map
-/// object (listed in FrameLabels::map_objects); pixels of the prompt region the map does not explain take `fresh`
-/// (the vote of the masks prompted there; pixels in no mask keep the semantic
-/// branch's class); everything else is unlabelled (0), so fusion sees nothing
-/// it cannot vouch for. `fresh` may be null (projection only); a kFull
-/// decision returns `fresh` as it is. Throws InvalidArgument when the sizes
-/// differ or a kFull/kPartial decision comes without `fresh`.
+/// object (listed in FrameLabels::map_objects); pixels of the prompt region the
+/// map does not explain take `fresh` (the vote of the masks prompted there;
+/// pixels in no mask keep the semantic branch's class); everything else is
+/// unlabelled (0), so fusion sees nothing it cannot vouch for. `fresh` may be
+/// null (projection only); a kFull decision returns `fresh` as it is. Throws
+/// InvalidArgument when the sizes differ or a kFull/kPartial decision comes
+/// without `fresh`.
 fuse::FrameLabels ComposeFrameLabels(const fuse::ProjectedMap& projected,
                                      const GuidanceDecision& decision,
                                      const segment::VoteResult* fresh,

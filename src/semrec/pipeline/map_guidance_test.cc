@@ -70,6 +70,51 @@ TEST(MapGuidance, PromptsOnlyWhereNewContentIsAndSkipsExplainedFrames) {
             FrameMode::kProjectionOnly);
 }
 
+TEST(MapGuidance, DisagreementWithTheSemanticBranchIsPromptedAndWins) {
+  MapGuidanceOptions options;
+  options.min_region_px = 50;
+  options.region_margin_px = 2;
+  options.prompt_on_disagreement = true;
+  ProjectedMap p = Projected(0, 0, false);  // all explained ...
+  p.class_id = LabelMap(200, 100, 1, 5);    // ... as class 5
+  p.object_id = Image<uint32_t>(200, 100, 1, 9);
+  // The semantic branch says 7 on a 30 x 30 block, on a 2-pixel band (a
+  // blurred border) and on specks.
+  LabelMap semantic(200, 100, 1, 5);
+  for (int y = 10; y < 40; ++y) {
+    for (int x = 20; x < 50; ++x) semantic(x, y) = 7;
+  }
+  for (int x = 60; x < 190; ++x) semantic(x, 70) = semantic(x, 71) = 7;
+  for (int x = 5; x < 200; x += 20) semantic(x, 5) = 7;
+  GuidanceDecision d = DecideFrame(p, Transform(), Transform(), 1, options);
+  ASSERT_EQ(d.mode, FrameMode::kProjectionOnly);
+  const double share = AddDisagreement(p, semantic, options, &d);
+  EXPECT_NEAR(share, 900.0 / (200 * 90), 1e-12);
+  EXPECT_EQ(d.mode, FrameMode::kPartial);
+  EXPECT_EQ(d.reason, "disagreement");
+  size_t region_px = 0;
+  for (uint8_t v : d.prompt_region.values()) region_px += v;
+  EXPECT_EQ(region_px, 34u * 34u);  // the block and its margin only
+  EXPECT_EQ(d.override_region(30, 20), 1);
+  EXPECT_EQ(d.override_region(100, 70), 0);  // the band
+  // The fresh segmentation wins there over the projection; elsewhere the map.
+  segment::VoteResult fresh;
+  fresh.instance = LabelMap(200, 100, 1, 1);
+  fresh.semantic = semantic;
+  const fuse::FrameLabels l = ComposeFrameLabels(p, d, &fresh, "f");
+  EXPECT_EQ(l.semantic(30, 20), 7);
+  EXPECT_EQ(l.instance(30, 20), 1);
+  EXPECT_EQ(l.semantic(100, 70), 5);
+  EXPECT_EQ(l.semantic(5, 5), 5);
+  // Full frames are left alone; without disagreement nothing changes.
+  GuidanceDecision full = DecideFrame(p, Transform(), std::nullopt, 0, options);
+  EXPECT_EQ(AddDisagreement(p, semantic, options, &full), 0.0);
+  EXPECT_TRUE(full.override_region.empty());
+  GuidanceDecision quiet = DecideFrame(p, Transform(), Transform(), 1, options);
+  EXPECT_EQ(AddDisagreement(p, LabelMap(200, 100, 1, 5), options, &quiet), 0.0);
+  EXPECT_EQ(quiet.mode, FrameMode::kProjectionOnly);
+}
+
 TEST(MapGuidance, DriftGuardForcesFullFrames) {
   MapGuidanceOptions options;
   const ProjectedMap explained = Projected(0, 0, false);

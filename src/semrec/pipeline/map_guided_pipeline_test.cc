@@ -56,8 +56,8 @@ Rendered Render(size_t i, const std::vector<std::array<uint8_t, 3>>& palette) {
   f.intrinsics.cx = 160;
   f.intrinsics.cy = 120;
   const double camera_x = 0.005 * static_cast<double>(i);
-  f.T_world_camera = Transform(Eigen::Matrix3d::Identity(),
-                               Eigen::Vector3d(camera_x, 0, 0));
+  f.T_world_camera =
+      Transform(Eigen::Matrix3d::Identity(), Eigen::Vector3d(camera_x, 0, 0));
   f.color = ColorImage(kWidth, kHeight, 3);
   f.depth = DepthImage(kWidth, kHeight);
   r.gt_id = Image<uint8_t>(kWidth, kHeight);
@@ -78,7 +78,8 @@ Rendered Render(size_t i, const std::vector<std::array<uint8_t, 3>>& palette) {
       }
       f.depth(u, v) = nearest->z;
       r.gt_id(u, v) = static_cast<uint8_t>(nearest->id);
-      for (int c = 0; c < 3; ++c) f.color(u, v, c) = palette[nearest->colour][c];
+      for (int c = 0; c < 3; ++c)
+        f.color(u, v, c) = palette[nearest->colour][c];
     }
   }
   return r;
@@ -127,7 +128,11 @@ std::pair<double, double> Agreement(const fuse::FrameLabels& labels,
   return {static_cast<double>(same) / total, static_cast<double>(top) / total};
 }
 
-TEST(MapGuidedPipeline, SegmentsOnlyWhatTheMapCannotExplain) {
+class MapGuidedPipeline : public ::testing::TestWithParam<bool> {};
+
+// Param: prompt_on_disagreement (the tiny semantic branch agrees with the map
+// but for blurred borders: nothing changes).
+TEST_P(MapGuidedPipeline, SegmentsOnlyWhatTheMapCannotExplain) {
   ASSERT_FALSE(semrec::testing::TinyModelDir().empty());
   const auto palette =
       nlohmann::json::parse(ReadTextFile(semrec::testing::TinyModelDir() /
@@ -135,7 +140,9 @@ TEST(MapGuidedPipeline, SegmentsOnlyWhatTheMapCannotExplain) {
           .get<std::vector<std::array<uint8_t, 3>>>();
   const infer::ModelRegistry registry = infer::ModelRegistry::Load(
       semrec::testing::TinyModelDir() / "registry.yaml");
-  ScenePipeline pipeline(&registry, nullptr, GuidedOptions());
+  ScenePipelineOptions options = GuidedOptions();
+  options.guidance.prompt_on_disagreement = GetParam();
+  ScenePipeline pipeline(&registry, nullptr, options);
 
   std::vector<std::string> modes;
   std::vector<size_t> prompts;
@@ -151,8 +158,9 @@ TEST(MapGuidedPipeline, SegmentsOnlyWhatTheMapCannotExplain) {
       const fuse::ProjectedMap projected = fuse::ProjectMap(
           pipeline.scene().fusion().segments(), r.frame.intrinsics,
           r.frame.T_world_camera, r.frame.depth);
-      const GuidanceDecision d = DecideFrame(
-          projected, r.frame.T_world_camera, Transform(), 1, MapGuidanceOptions());
+      const GuidanceDecision d =
+          DecideFrame(projected, r.frame.T_world_camera, Transform(), 1,
+                      MapGuidanceOptions());
       ASSERT_EQ(d.mode, FrameMode::kPartial);
       size_t chair = 0, chair_in_region = 0, others_in_region = 0;
       for (int v = 0; v < kHeight; ++v) {
@@ -217,6 +225,7 @@ TEST(MapGuidedPipeline, SegmentsOnlyWhatTheMapCannotExplain) {
   EXPECT_EQ(counts.partial, 4u);
   EXPECT_EQ(counts.projection, 5u);
   EXPECT_EQ(counts.encoder_calls, 3u + 4u);
+  EXPECT_EQ(counts.disagreement, 0u);
   for (size_t i = 0; i < modes.size(); ++i) {
     if (modes[i] == "projection") {
       EXPECT_EQ(prompts[i], 0u) << i;
@@ -263,10 +272,12 @@ TEST(MapGuidedPipeline, SegmentsOnlyWhatTheMapCannotExplain) {
   EXPECT_EQ(per_class[kChair + 1], 1);
 }
 
+INSTANTIATE_TEST_SUITE_P(Disagreement, MapGuidedPipeline, ::testing::Bool());
+
 // A resumed run replays the first frames' recorded outputs (no model runs):
 // the guidance state (last full frame, frames since) and fusion's map objects
 // come back with them, so the rest of the run decides and fuses as before.
-TEST(MapGuidedPipeline, ReplayedFramesRestoreTheGuidance) {
+TEST(MapGuidedReplay, ReplayedFramesRestoreTheGuidance) {
   ASSERT_FALSE(semrec::testing::TinyModelDir().empty());
   const auto palette =
       nlohmann::json::parse(ReadTextFile(semrec::testing::TinyModelDir() /
@@ -312,7 +323,7 @@ TEST(MapGuidedPipeline, ReplayedFramesRestoreTheGuidance) {
   EXPECT_EQ(counts2.projection, counts.projection);
 }
 
-TEST(MapGuidedPipeline, ComposedLabelsTakeTheMapWhereItExplains) {
+TEST(MapGuidedLabels, ComposedLabelsTakeTheMapWhereItExplains) {
   fuse::ProjectedMap projected;
   projected.state = Image<uint8_t>(4, 1, 1, fuse::ProjectedMap::kExplained);
   projected.object_id = Image<uint32_t>(4, 1);
@@ -349,8 +360,7 @@ TEST(MapGuidedPipeline, ComposedLabelsTakeTheMapWhereItExplains) {
   EXPECT_EQ(p.instance(0, 0), 1);
   EXPECT_EQ(p.semantic(2, 0), 0);
   d.mode = FrameMode::kPartial;
-  EXPECT_THROW(ComposeFrameLabels(projected, d, nullptr, "f"),
-               InvalidArgument);
+  EXPECT_THROW(ComposeFrameLabels(projected, d, nullptr, "f"), InvalidArgument);
 }
 
 }  // namespace

@@ -356,11 +356,11 @@ RunResult RunSequence(const io::SequenceReader& reader,
     const size_t guided = g.partial + g.projection;
     result.report["map_guidance"] = {
         {"enabled", options.pipeline.map_guidance},
-        {"full_frames", options.pipeline.map_guidance
-                            ? g.full
-                            : pipeline.segmented_frames()},
+        {"full_frames",
+         options.pipeline.map_guidance ? g.full : pipeline.segmented_frames()},
         {"partial_frames", g.partial},
         {"projection_frames", g.projection},
+        {"disagreement_frames", g.disagreement},
         {"encoder_calls", g.encoder_calls},
         {"prompts_decoded", g.prompts_decoded},
         {"mean_unexplained_share",

@@ -127,9 +127,9 @@ PreparedFrame ScenePipeline::Prepare(PipelineInput input) {
     if (labels) CountGuidance(prepared.guidance, frame.T_world_camera);
   } else if (frames_ % options_.segment_every == 0) {
     if (models) {
-      labels = SegmentFrame(frame, prepared.position, person_ids,
-                            &prepared.guidance,
-                            options_.overlays ? &prepared.decision : nullptr);
+      labels =
+          SegmentFrame(frame, prepared.position, person_ids, &prepared.guidance,
+                       options_.overlays ? &prepared.decision : nullptr);
     } else {
       CheckArgument(input.labels.has_value(),
                     "pipeline: frame " + input.name + " came without labels");
@@ -145,11 +145,14 @@ fuse::FrameLabels ScenePipeline::SegmentFrame(
     const Frame& frame, size_t position,
     const std::optional<LabelMap>& person_ids, std::string* mode,
     std::optional<GuidanceDecision>* decision_out) {
+  std::optional<segment::SemanticResult> semantic;
   const auto segment = [&](const Image<uint8_t>* region) {
     try {
       segment::HybridResult hybrid =
-          region ? segmenter_->SegmentWhere(frame.color, *region)
-                 : segmenter_->Segment(frame.color);
+          region == nullptr ? segmenter_->Segment(frame.color)
+          : semantic        ? segmenter_->SegmentWhere(frame.color, *region,
+                                                       std::move(*semantic))
+                            : segmenter_->SegmentWhere(frame.color, *region);
       guidance_counts_.encoder_calls +=
           static_cast<size_t>(hybrid.mask_stats.encoder_calls);
       guidance_counts_.prompts_decoded +=
@@ -169,7 +172,9 @@ fuse::FrameLabels ScenePipeline::SegmentFrame(
   if (map->empty()) {  // nothing to project yet
     *mode = FrameModeName(FrameMode::kFull);
     if (decision_out != nullptr) {
-      *decision_out = GuidanceDecision{FrameMode::kFull, "no map yet", {}, 1.0};
+      GuidanceDecision none;
+      none.reason = "no map yet";
+      *decision_out = std::move(none);
     }
     CountGuidance(*mode, frame.T_world_camera);
     segment::HybridResult hybrid = segment(nullptr);
@@ -193,6 +198,16 @@ fuse::FrameLabels ScenePipeline::SegmentFrame(
                            ignore.NumPixels() > 0 ? &ignore : nullptr);
   } catch (const InvalidArgument& e) {
     throw FormatError(frame.depth_path, e.what());
+  }
+  if (options_.guidance.prompt_on_disagreement &&
+      decision.mode != FrameMode::kFull) {
+    try {
+      semantic = segmenter_->SegmentSemantic(frame.color);
+    } catch (const InvalidArgument& e) {
+      throw FormatError(frame.color_path, e.what());
+    }
+    AddDisagreement(projected, semantic->labels, options_.guidance, &decision);
+    if (decision.reason == "disagreement") ++guidance_counts_.disagreement;
   }
   *mode = FrameModeName(decision.mode);
   CountGuidance(*mode, frame.T_world_camera);
@@ -289,7 +304,8 @@ PipelineFrameResult ScenePipeline::Integrate(PreparedFrame prepared) {
                                    : prepared.frame.color;
     result.overlay = RenderPeopleOverlay(base, prepared.people);
     if (prepared.decision) {
-      result.overlay = RenderGuidanceOverlay(result.overlay, *prepared.decision);
+      result.overlay =
+          RenderGuidanceOverlay(result.overlay, *prepared.decision);
     }
   }
   seconds_.overlay += watch.Lap();

@@ -20,8 +20,8 @@
 
 #include "semrec/core/frame.h"
 #include "semrec/core/label_map.h"
-#include "semrec/fuse/segments.h"
 #include "semrec/fuse/map_projection.h"
+#include "semrec/fuse/segments.h"
 #include "semrec/infer/model_registry.h"
 #include "semrec/pipeline/map_guidance.h"
 #include "semrec/pipeline/people_tracker.h"
@@ -111,6 +111,9 @@ struct GuidanceCounts {
   size_t full = 0;
   size_t partial = 0;
   size_t projection = 0;
+  /// Of the partial frames, those made partial only by the semantic branch
+  /// disagreeing with the map (MapGuidanceOptions::prompt_on_disagreement).
+  size_t disagreement = 0;
   /// Of the frames this process segmented (not replayed): encoder calls and
   /// prompts decoded.
   size_t encoder_calls = 0;
@@ -219,8 +222,8 @@ class ScenePipeline {
   // Maps published by Integrate() (tagged with the frame's position) for
   // Prepare() on another thread.
   std::mutex maps_mutex_;
-  std::deque<std::pair<size_t,
-                       std::shared_ptr<const std::vector<fuse::SceneSegment>>>>
+  std::deque<
+      std::pair<size_t, std::shared_ptr<const std::vector<fuse::SceneSegment>>>>
       maps_;
 };
 

@@ -23,7 +23,23 @@ HybridSegmenter::HybridSegmenter(const infer::ModelRegistry& registry,
 }
 
 HybridResult HybridSegmenter::Segment(const ColorImage& rgb) {
-  return Run(rgb, nullptr);
+  return Run(rgb, nullptr, std::nullopt);
+}
+
+SemanticResult HybridSegmenter::SegmentSemantic(const ColorImage& rgb) {
+  return semantic_->Segment(rgb);
+}
+
+HybridResult HybridSegmenter::SegmentWhere(const ColorImage& rgb,
+                                           const Image<uint8_t>& prompt_region,
+                                           SemanticResult semantic) {
+  CheckArgument(semantic.labels.SameSize(rgb.width(), rgb.height()),
+                "hybrid segmenter: the semantic labels' size differs from the "
+                "image's");
+  CheckArgument(prompt_region.SameSize(rgb.width(), rgb.height()),
+                "hybrid segmenter: the prompt region's size differs from the "
+                "image's");
+  return Run(rgb, &prompt_region, std::move(semantic));
 }
 
 HybridResult HybridSegmenter::SegmentWhere(
@@ -31,14 +47,15 @@ HybridResult HybridSegmenter::SegmentWhere(
   CheckArgument(prompt_region.SameSize(rgb.width(), rgb.height()),
                 "hybrid segmenter: the prompt region is " +
                     std::to_string(prompt_region.width()) + "x" +
-                    std::to_string(prompt_region.height()) +
-                    ", the image " + std::to_string(rgb.width()) + "x" +
+                    std::to_string(prompt_region.height()) + ", the image " +
+                    std::to_string(rgb.width()) + "x" +
                     std::to_string(rgb.height()));
-  return Run(rgb, &prompt_region);
+  return Run(rgb, &prompt_region, std::nullopt);
 }
 
 HybridResult HybridSegmenter::Run(const ColorImage& rgb,
-                                  const Image<uint8_t>* prompt_region) {
+                                  const Image<uint8_t>* prompt_region,
+                                  std::optional<SemanticResult> semantic) {
   using Clock = std::chrono::steady_clock;
   // Below this the models see a few pixels blown up to their input size and
   // return noise; say so instead.
@@ -49,7 +66,8 @@ HybridResult HybridSegmenter::Run(const ColorImage& rgb,
                     " pixels; segmentation needs at least 16x16");
   HybridResult result;
   const auto t0 = Clock::now();
-  result.semantic_branch = semantic_->Segment(rgb);
+  result.semantic_branch =
+      semantic ? std::move(*semantic) : semantic_->Segment(rgb);
   const auto t1 = Clock::now();
   result.semantic_seconds = std::chrono::duration<double>(t1 - t0).count();
   if (masks_) {

@@ -2,6 +2,7 @@
 #pragma once
 
 #include <memory>
+#include <optional>
 #include <vector>
 
 #include "semrec/segment/mask_generator.h"
@@ -42,10 +43,17 @@ class HybridSegmenter {
   /// Throws InvalidArgument when the region's size differs from the image's.
   HybridResult SegmentWhere(const ColorImage& rgb,
                             const Image<uint8_t>& prompt_region);
+  /// The semantic branch alone, and SegmentWhere() reusing its result (map
+  /// guidance looks at the semantic labels before it chooses the region).
+  SemanticResult SegmentSemantic(const ColorImage& rgb);
+  HybridResult SegmentWhere(const ColorImage& rgb,
+                            const Image<uint8_t>& prompt_region,
+                            SemanticResult semantic);
   const LabelSet& label_set() const { return semantic_->label_set(); }
 
  private:
-  HybridResult Run(const ColorImage& rgb, const Image<uint8_t>* prompt_region);
+  HybridResult Run(const ColorImage& rgb, const Image<uint8_t>* prompt_region,
+                   std::optional<SemanticResult> semantic);
 
   HybridSegmenterOptions options_;
   std::unique_ptr<SemanticSegmenter> semantic_;
