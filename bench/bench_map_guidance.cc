@@ -37,10 +37,10 @@
 #include "semrec/pipeline/run_sequence.h"
 #include "semrec/synth/generator.h"
 
-namespace fs = std::filesystem;
-using namespace semrec;
-
+namespace semrec {
 namespace {
+
+namespace fs = std::filesystem;
 
 ProgressOptions Quiet() {
   ProgressOptions p;
@@ -246,9 +246,7 @@ void Run(const std::string& name, const fs::path& sequence, size_t frames,
   std::fflush(stdout);
 }
 
-}  // namespace
-
-int main(int argc, char** argv) try {
+int Main(int argc, char** argv) {
   const size_t frames = argc > 1 ? std::strtoul(argv[1], nullptr, 10) : 100;
   const int office_frames = argc > 2 ? std::atoi(argv[2]) : 40;
   const std::string parts = argc > 3 ? argv[3] : "12";
@@ -289,6 +287,13 @@ int main(int argc, char** argv) try {
         office.c_str(), office.c_str());
   }
   return 0;
+}
+
+}  // namespace
+}  // namespace semrec
+
+int main(int argc, char** argv) try {
+  return semrec::Main(argc, argv);
 } catch (const std::exception& e) {
   std::fprintf(stderr, "bench_map_guidance: %s\n", e.what());
   return 1;

@@ -223,8 +223,9 @@ TEST(MapProjection, NearerObjectsHideFartherOnesAndBadInputIsRefused) {
       Camera(), {}, DepthImage(160, 120));
   EXPECT_EQ(empty.valid_depth_pixels, 0u);
   EXPECT_DOUBLE_EQ(empty.UnexplainedShare(), 1.0);
-  for (uint8_t state : empty.state.values())
+  for (uint8_t state : empty.state.values()) {
     ASSERT_EQ(state, ProjectedMap::kNoDepth);
+}
   for (uint32_t id : empty.object_id.values()) ASSERT_EQ(id, 0u);
 
   EXPECT_THROW(ProjectMap({}, Camera(), {}, DepthImage(10, 10)),

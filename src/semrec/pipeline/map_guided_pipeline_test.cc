@@ -76,10 +76,12 @@ Rendered Render(size_t i, const std::vector<std::array<uint8_t, 3>>& palette) {
         }
         if (nearest == nullptr || rect.z < nearest->z) nearest = &rect;
       }
+      if (nearest == nullptr) continue;  // (the wall fills every view)
       f.depth(u, v) = nearest->z;
       r.gt_id(u, v) = static_cast<uint8_t>(nearest->id);
-      for (int c = 0; c < 3; ++c)
+      for (int c = 0; c < 3; ++c) {
         f.color(u, v, c) = palette[nearest->colour][c];
+      }
     }
   }
   return r;

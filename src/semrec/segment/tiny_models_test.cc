@@ -58,8 +58,9 @@ Scene MakeScene() {
       int colour = 0;
       for (size_t b = 0; b < s.boxes.size(); ++b) {
         const Box& r = s.boxes[b];
-        if (x >= r.x0 && x < r.x1 && y >= r.y0 && y < r.y1)
+        if (x >= r.x0 && x < r.x1 && y >= r.y0 && y < r.y1) {
           colour = s.colours[b];
+        }
       }
       for (int c = 0; c < 3; ++c) s.rgb(x, y, c) = palette[colour][c];
     }
@@ -239,8 +240,9 @@ TEST(TinyModels, CropLayersStillFindEveryRegionOnce) {
   // No rectangle twice: crop duplicates are removed by the cross-crop NMS.
   for (const Box& b : s.boxes) {
     int copies = 0;
-    for (const Mask& m : masks)
+    for (const Mask& m : masks) {
       copies += MaskIoU(BoxMask(320, 240, b), m) > 0.5;
+    }
     EXPECT_EQ(copies, 1);
   }
   for (const Mask& m : masks) {
@@ -426,7 +428,8 @@ TEST(TinyModels, MaskPartAndPreviewGiveTheExportsChosenMask) {
     for (int y = 0; y < 4; ++y) {
       for (int x = 0; x < 4; ++x) {
         expected.data[static_cast<size_t>(y) * 4 + x] =
-            low_res.data[static_cast<size_t>(4 * y + 2) * 16 + 4 * x + 2];
+            low_res.data[static_cast<size_t>(4 * y + 2) * 16 +
+                         static_cast<size_t>(4 * x + 2)];
       }
     }
     ExpectSameValues(expected, preview, "mask_preview");
