@@ -87,6 +87,18 @@ Rendered Render(size_t i, const std::vector<std::array<uint8_t, 3>>& palette) {
   return r;
 }
 
+// The tiny models' colours (by class index) and registry.
+std::vector<std::array<uint8_t, 3>> TinyPalette() {
+  return nlohmann::json::parse(ReadTextFile(semrec::testing::TinyModelDir() /
+                                            "tiny_palette150.json"))
+      .get<std::vector<std::array<uint8_t, 3>>>();
+}
+
+infer::ModelRegistry TinyRegistry() {
+  return infer::ModelRegistry::Load(semrec::testing::TinyModelDir() /
+                                    "registry.yaml");
+}
+
 ScenePipelineOptions GuidedOptions() {
   ScenePipelineOptions o;
   o.labels = ScenePipelineOptions::Labels::kModels;
@@ -136,12 +148,8 @@ class MapGuidedPipeline : public ::testing::TestWithParam<bool> {};
 // but for blurred borders: nothing changes).
 TEST_P(MapGuidedPipeline, SegmentsOnlyWhatTheMapCannotExplain) {
   ASSERT_FALSE(semrec::testing::TinyModelDir().empty());
-  const auto palette =
-      nlohmann::json::parse(ReadTextFile(semrec::testing::TinyModelDir() /
-                                         "tiny_palette150.json"))
-          .get<std::vector<std::array<uint8_t, 3>>>();
-  const infer::ModelRegistry registry = infer::ModelRegistry::Load(
-      semrec::testing::TinyModelDir() / "registry.yaml");
+  const auto palette = TinyPalette();
+  const infer::ModelRegistry registry = TinyRegistry();
   ScenePipelineOptions options = GuidedOptions();
   options.guidance.prompt_on_disagreement = GetParam();
   ScenePipeline pipeline(&registry, nullptr, options);
@@ -281,12 +289,8 @@ INSTANTIATE_TEST_SUITE_P(Disagreement, MapGuidedPipeline, ::testing::Bool());
 // come back with them, so the rest of the run decides and fuses as before.
 TEST(MapGuidedReplay, ReplayedFramesRestoreTheGuidance) {
   ASSERT_FALSE(semrec::testing::TinyModelDir().empty());
-  const auto palette =
-      nlohmann::json::parse(ReadTextFile(semrec::testing::TinyModelDir() /
-                                         "tiny_palette150.json"))
-          .get<std::vector<std::array<uint8_t, 3>>>();
-  const infer::ModelRegistry registry = infer::ModelRegistry::Load(
-      semrec::testing::TinyModelDir() / "registry.yaml");
+  const auto palette = TinyPalette();
+  const infer::ModelRegistry registry = TinyRegistry();
   const auto run = [&](const std::vector<ModelOutputs>* recorded,
                        size_t replay_frames) {
     ScenePipeline pipeline(&registry, nullptr, GuidedOptions());
