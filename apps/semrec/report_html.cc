@@ -154,6 +154,18 @@ HtmlReportResult WriteHtmlReport(const fs::path& out_dir, bool pictures) {
       Escape(report.contains("gravity") ? Text(report["gravity"], "method")
                                         : ""));
 
+  if (report.contains("map_guidance") &&
+      report["map_guidance"].value("enabled", false)) {
+    const nlohmann::json& g = report["map_guidance"];
+    html += fmt::format(
+        "<p class=\"meta\">map guidance: {} frames segmented in full, {} in "
+        "part (masks only where the map could not explain the frame), {} "
+        "labelled by projection alone; {} encoder calls, {} prompts "
+        "decoded</p>\n",
+        Number(g, "full_frames"), Number(g, "partial_frames"),
+        Number(g, "projection_frames"), Number(g, "encoder_calls"),
+        Number(g, "prompts_decoded"));
+  }
   html += "<h2>The scene</h2>\n";
   if (!figures.empty()) {
     html += "<div class=\"pics\">";

@@ -131,8 +131,9 @@ assert all(m["sha256"] for m in r["models"]) and len(r["models"]) >= 3, r["model
 PY
 # Map guidance on consecutive chess frames: the map explains most of each frame, so after the
 # first frames few are segmented in full; the summary, report.json and the overlays say how.
-"$SEMREC" run "$chess" --max-frames 8 --points-per-side 8 --map-guidance --no-people --no-report \
+"$SEMREC" run "$chess" --max-frames 8 --points-per-side 8 --map-guidance --no-people --no-report-pictures \
   --out "$tmp/guided" >"$tmp/guided.out" 2>"$tmp/guided.err" || fail "guided run: $(tail -5 "$tmp/guided.err")"
+grep -q "map guidance: [0-9]* frames segmented in full" "$tmp/guided/report.html" || fail "guided: report.html"
 grep -q "map guidance: .* full, .* partial, .* by projection alone" "$tmp/guided.out" ||
   fail "guided: no map guidance line: $(cat "$tmp/guided.out")"
 /usr/bin/python3 - "$tmp/guided/report.json" <<'PY' || fail "guided report"
