@@ -18,8 +18,8 @@ Image<uint8_t> Filled(int w, int h, uint8_t value) {
 
 // The connected regions (8-connected) of `mask` with at least min_region_px
 // pixels, grown by region_margin_px; `kept_px` gets their size before growing.
-cv::Mat KeptRegions(const cv::Mat& mask, const MapGuidanceOptions& options,
-                    size_t* kept_px) {
+Image<uint8_t> KeptRegions(const cv::Mat& mask,
+                           const MapGuidanceOptions& options, size_t* kept_px) {
   cv::Mat labels, stats, centroids;
   const int n =
       cv::connectedComponentsWithStats(mask, labels, stats, centroids, 8);
@@ -32,16 +32,16 @@ cv::Mat KeptRegions(const cv::Mat& mask, const MapGuidanceOptions& options,
       *kept_px += static_cast<size_t>(area);
     }
   }
-  cv::Mat region(mask.rows, mask.cols, CV_8U, cv::Scalar(0));
+  Image<uint8_t> region(mask.cols, mask.rows);
   for (int y = 0; y < mask.rows; ++y) {
     for (int x = 0; x < mask.cols; ++x) {
-      region.at<uint8_t>(y, x) =
-          keep[static_cast<size_t>(labels.at<int>(y, x))];
+      region(x, y) = keep[static_cast<size_t>(labels.at<int>(y, x))];
     }
   }
   if (options.region_margin_px > 0) {
     const int k = 2 * options.region_margin_px + 1;
-    cv::dilate(region, region,
+    cv::Mat view(mask.rows, mask.cols, CV_8U, region.data());
+    cv::dilate(view, view,
                cv::getStructuringElement(cv::MORPH_RECT, cv::Size(k, k)));
   }
   return region;
@@ -83,7 +83,7 @@ GuidanceDecision DecideFrame(const fuse::ProjectedMap& projected,
                              const std::optional<Transform>& T_world_last_full,
                              size_t frames_since_full,
                              const MapGuidanceOptions& options,
-                             const Image<uint8_t>* ignore) {
+                             const LabelMap* ignore) {
   options.Check();
   const int w = projected.state.width();
   const int h = projected.state.height();
@@ -122,7 +122,7 @@ GuidanceDecision DecideFrame(const fuse::ProjectedMap& projected,
     }
   }
   size_t unexplained_px = 0;
-  const cv::Mat region = KeptRegions(unexplained, options, &unexplained_px);
+  Image<uint8_t> region = KeptRegions(unexplained, options, &unexplained_px);
   d.unexplained_share = Share(unexplained_px, projected.valid_depth_pixels);
   if (d.unexplained_share < options.projection_only_below) {
     d.mode = FrameMode::kProjectionOnly;
@@ -132,12 +132,7 @@ GuidanceDecision DecideFrame(const fuse::ProjectedMap& projected,
   }
   d.mode = FrameMode::kPartial;
   d.reason = "new content";
-  d.prompt_region = Image<uint8_t>(w, h);
-  for (int y = 0; y < h; ++y) {
-    for (int x = 0; x < w; ++x) {
-      d.prompt_region(x, y) = region.at<uint8_t>(y, x);
-    }
-  }
+  d.prompt_region = std::move(region);
   return d;
 }
 
@@ -168,16 +163,12 @@ double AddDisagreement(const fuse::ProjectedMap& projected,
   cv::morphologyEx(disagree, disagree, cv::MORPH_OPEN,
                    cv::getStructuringElement(cv::MORPH_RECT, cv::Size(5, 5)));
   size_t disagree_px = 0;
-  const cv::Mat region = KeptRegions(disagree, options, &disagree_px);
+  Image<uint8_t> region = KeptRegions(disagree, options, &disagree_px);
   if (disagree_px == 0) return 0.0;
-  decision->override_region = Image<uint8_t>(w, h);
-  for (int y = 0; y < h; ++y) {
-    for (int x = 0; x < w; ++x) {
-      if (region.at<uint8_t>(y, x) == 0) continue;
-      decision->override_region(x, y) = 1;
-      decision->prompt_region(x, y) = 1;
-    }
+  for (size_t p = 0; p < region.NumPixels(); ++p) {
+    decision->prompt_region.data()[p] |= region.data()[p];
   }
+  decision->override_region = std::move(region);
   if (decision->mode == FrameMode::kProjectionOnly) {
     decision->mode = FrameMode::kPartial;
     decision->reason = "disagreement";

@@ -9,6 +9,7 @@
 #include <string>
 
 #include "semrec/core/image.h"
+#include "semrec/core/label_map.h"
 #include "semrec/core/transform.h"
 #include "semrec/fuse/map_projection.h"
 #include "semrec/fuse/segments.h"
@@ -63,14 +64,15 @@ struct GuidanceDecision {
 /// The decision for a frame with the map projected into it (`projected`, from
 /// fuse::ProjectMap), its pose, the pose of the last fully segmented frame
 /// (none yet: full) and how many segmented frames ago that was. Non-zero
-/// pixels of `ignore` (same size; may be null) are never unexplained: people,
-/// whom the tracker segments and fusion leaves out.
+/// pixels of `ignore` (same size; may be null; the tracked people's id map)
+/// are never unexplained: the tracker segments people and fusion leaves them
+/// out.
 GuidanceDecision DecideFrame(const fuse::ProjectedMap& projected,
                              const Transform& T_world_camera,
                              const std::optional<Transform>& T_world_last_full,
                              size_t frames_since_full,
                              const MapGuidanceOptions& options,
-                             const Image<uint8_t>* ignore = nullptr);
+                             const LabelMap* ignore = nullptr);
 
 /// With options.prompt_on_disagreement: adds to a kPartial or kProjectionOnly
 /// decision the explained regions where `semantic` (the frame's semantic

@@ -56,6 +56,19 @@ TEST(MapGuidance, PromptsOnlyWhereNewContentIsAndSkipsExplainedFrames) {
   EXPECT_EQ(d.prompt_region(97, 17), 1);  // in the margin
   EXPECT_EQ(d.prompt_region(96, 40), 0);
   EXPECT_EQ(d.prompt_region(5, 5), 0);  // a speck
+  // The blob is a tracked person (their id map): theirs, not prompted.
+  LabelMap person(200, 100);
+  for (int y = 20; y < 60; ++y) {
+    for (int x = 100; x < 140; ++x) person(x, y) = 3;
+  }
+  EXPECT_EQ(DecideFrame(Projected(100, 140, true), Moved(0.1, 5), Transform(),
+                        3, options, &person)
+                .mode,
+            FrameMode::kProjectionOnly);
+  const LabelMap wrong_size(10, 10);
+  EXPECT_THROW(DecideFrame(Projected(100, 140, true), Moved(0.1, 5),
+                           Transform(), 3, options, &wrong_size),
+               InvalidArgument);
   // A tiny blob only: explained enough to skip the models.
   const GuidanceDecision quiet = DecideFrame(
       Projected(100, 101, true), Moved(0.1, 5), Transform(), 3, options);

@@ -145,93 +145,71 @@ fuse::FrameLabels ScenePipeline::SegmentFrame(
     const Frame& frame, size_t position,
     const std::optional<LabelMap>& person_ids, std::string* mode,
     std::optional<GuidanceDecision>* decision_out) {
-  std::optional<segment::SemanticResult> semantic;
-  const auto segment = [&](const Image<uint8_t>* region) {
-    try {
-      segment::HybridResult hybrid =
-          region == nullptr ? segmenter_->Segment(frame.color)
-          : semantic        ? segmenter_->SegmentWhere(frame.color, *region,
-                                                       std::move(*semantic))
-                            : segmenter_->SegmentWhere(frame.color, *region);
-      guidance_counts_.encoder_calls +=
-          static_cast<size_t>(hybrid.mask_stats.encoder_calls);
-      guidance_counts_.prompts_decoded +=
-          static_cast<size_t>(hybrid.mask_stats.prompts_decoded);
-      return hybrid;
-    } catch (const InvalidArgument& e) {
-      throw FormatError(frame.color_path, e.what());
-    }
-  };
-  if (!options_.map_guidance) {
-    segment::HybridResult hybrid = segment(nullptr);
-    return {std::move(hybrid.vote.instance), std::move(hybrid.vote.semantic),
-            frame.color_path.string()};
-  }
-  const std::shared_ptr<const std::vector<fuse::SceneSegment>> map =
-      MapFor(position);
-  if (map->empty()) {  // nothing to project yet
-    *mode = FrameModeName(FrameMode::kFull);
-    if (decision_out != nullptr) {
-      GuidanceDecision none;
-      none.reason = "no map yet";
-      *decision_out = std::move(none);
-    }
-    CountGuidance(*mode, frame.T_world_camera);
-    segment::HybridResult hybrid = segment(nullptr);
-    return {std::move(hybrid.vote.instance), std::move(hybrid.vote.semantic),
-            frame.color_path.string()};
-  }
-  fuse::ProjectedMap projected;
+  const std::string source = frame.color_path.string();
+  // Without guidance, or before there is a map: a full frame.
   GuidanceDecision decision;
-  try {
-    projected = fuse::ProjectMap(*map, frame.intrinsics, frame.T_world_camera,
-                                 frame.depth, options_.projection);
-    Image<uint8_t> ignore;
-    if (person_ids && person_ids->NumPixels() > 0) {
-      ignore = Image<uint8_t>(person_ids->width(), person_ids->height());
-      for (size_t p = 0; p < ignore.NumPixels(); ++p) {
-        ignore.data()[p] = person_ids->data()[p] != 0 ? 1 : 0;
+  fuse::ProjectedMap projected;
+  std::optional<segment::SemanticResult> semantic;
+  if (options_.map_guidance) {
+    const std::shared_ptr<const std::vector<fuse::SceneSegment>> map =
+        MapFor(position);
+    if (map->empty()) {
+      decision.reason = "no map yet";
+    } else {
+      try {
+        projected =
+            fuse::ProjectMap(*map, frame.intrinsics, frame.T_world_camera,
+                             frame.depth, options_.projection);
+        const bool people = person_ids && person_ids->NumPixels() > 0;
+        decision =
+            DecideFrame(projected, frame.T_world_camera, T_world_last_full_,
+                        frames_since_full_ + 1, options_.guidance,
+                        people ? &*person_ids : nullptr);
+      } catch (const InvalidArgument& e) {
+        throw FormatError(frame.depth_path, e.what());
       }
     }
-    decision = DecideFrame(projected, frame.T_world_camera, T_world_last_full_,
-                           frames_since_full_ + 1, options_.guidance,
-                           ignore.NumPixels() > 0 ? &ignore : nullptr);
+    if (options_.guidance.prompt_on_disagreement &&
+        decision.mode != FrameMode::kFull) {
+      try {
+        semantic = segmenter_->SegmentSemantic(frame.color);
+      } catch (const InvalidArgument& e) {
+        throw FormatError(frame.color_path, e.what());
+      }
+      AddDisagreement(projected, semantic->labels, options_.guidance,
+                      &decision);
+      if (decision.reason == "disagreement") ++guidance_counts_.disagreement;
+    }
+    *mode = FrameModeName(decision.mode);
+    CountGuidance(*mode, frame.T_world_camera);
+    if (decision.mode != FrameMode::kFull) {
+      guidance_counts_.unexplained_share_sum += decision.unexplained_share;
+    }
+    if (decision_out != nullptr) *decision_out = decision;
+  }
+  if (decision.mode == FrameMode::kProjectionOnly) {
+    return ComposeFrameLabels(projected, decision, nullptr,
+                              source + " (map projection)");
+  }
+  segment::HybridResult hybrid;
+  try {
+    hybrid = decision.mode == FrameMode::kFull
+                 ? segmenter_->Segment(frame.color)
+                 : segmenter_->SegmentWhere(frame.color, decision.prompt_region,
+                                            std::move(semantic));
   } catch (const InvalidArgument& e) {
-    throw FormatError(frame.depth_path, e.what());
+    throw FormatError(frame.color_path, e.what());
   }
-  if (options_.guidance.prompt_on_disagreement &&
-      decision.mode != FrameMode::kFull) {
-    try {
-      semantic = segmenter_->SegmentSemantic(frame.color);
-    } catch (const InvalidArgument& e) {
-      throw FormatError(frame.color_path, e.what());
-    }
-    AddDisagreement(projected, semantic->labels, options_.guidance, &decision);
-    if (decision.reason == "disagreement") ++guidance_counts_.disagreement;
+  guidance_counts_.encoder_calls +=
+      static_cast<size_t>(hybrid.mask_stats.encoder_calls);
+  guidance_counts_.prompts_decoded +=
+      static_cast<size_t>(hybrid.mask_stats.prompts_decoded);
+  if (decision.mode == FrameMode::kFull) {
+    return {std::move(hybrid.vote.instance), std::move(hybrid.vote.semantic),
+            source};
   }
-  *mode = FrameModeName(decision.mode);
-  CountGuidance(*mode, frame.T_world_camera);
-  if (decision.mode != FrameMode::kFull) {
-    guidance_counts_.unexplained_share_sum += decision.unexplained_share;
-  }
-  const std::string source = frame.color_path.string();
-  if (decision_out != nullptr) *decision_out = decision;
-  switch (decision.mode) {
-    case FrameMode::kFull: {
-      segment::HybridResult hybrid = segment(nullptr);
-      return {std::move(hybrid.vote.instance), std::move(hybrid.vote.semantic),
-              source};
-    }
-    case FrameMode::kPartial: {
-      const segment::HybridResult hybrid = segment(&decision.prompt_region);
-      return ComposeFrameLabels(projected, decision, &hybrid.vote,
-                                source + " (map-guided)");
-    }
-    case FrameMode::kProjectionOnly:
-      break;
-  }
-  return ComposeFrameLabels(projected, decision, nullptr,
-                            source + " (map projection)");
+  return ComposeFrameLabels(projected, decision, &hybrid.vote,
+                            source + " (map-guided)");
 }
 
 void ScenePipeline::CountGuidance(const std::string& mode,

@@ -30,27 +30,19 @@ SemanticResult HybridSegmenter::SegmentSemantic(const ColorImage& rgb) {
   return semantic_->Segment(rgb);
 }
 
-HybridResult HybridSegmenter::SegmentWhere(const ColorImage& rgb,
-                                           const Image<uint8_t>& prompt_region,
-                                           SemanticResult semantic) {
-  CheckArgument(semantic.labels.SameSize(rgb.width(), rgb.height()),
-                "hybrid segmenter: the semantic labels' size differs from the "
-                "image's");
-  CheckArgument(prompt_region.SameSize(rgb.width(), rgb.height()),
-                "hybrid segmenter: the prompt region's size differs from the "
-                "image's");
-  return Run(rgb, &prompt_region, std::move(semantic));
-}
-
 HybridResult HybridSegmenter::SegmentWhere(
-    const ColorImage& rgb, const Image<uint8_t>& prompt_region) {
+    const ColorImage& rgb, const Image<uint8_t>& prompt_region,
+    std::optional<SemanticResult> semantic) {
   CheckArgument(prompt_region.SameSize(rgb.width(), rgb.height()),
                 "hybrid segmenter: the prompt region is " +
                     std::to_string(prompt_region.width()) + "x" +
                     std::to_string(prompt_region.height()) + ", the image " +
                     std::to_string(rgb.width()) + "x" +
                     std::to_string(rgb.height()));
-  return Run(rgb, &prompt_region, std::nullopt);
+  CheckArgument(
+      !semantic || semantic->labels.SameSize(rgb.width(), rgb.height()),
+      "hybrid segmenter: the semantic labels' size differs from the image's");
+  return Run(rgb, &prompt_region, std::move(semantic));
 }
 
 HybridResult HybridSegmenter::Run(const ColorImage& rgb,

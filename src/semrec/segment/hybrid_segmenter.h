@@ -37,18 +37,17 @@ class HybridSegmenter {
   HybridSegmenter(const infer::ModelRegistry& registry,
                   const HybridSegmenterOptions& options);
   HybridResult Segment(const ColorImage& rgb);
+  /// The semantic branch alone (map guidance looks at its labels before it
+  /// chooses where to prompt).
+  SemanticResult SegmentSemantic(const ColorImage& rgb);
   /// Segment() with mask prompts only where `prompt_region` is non-zero (map
   /// guidance: where the map cannot explain the frame); the semantic branch
-  /// still sees the whole image, so pixels outside every mask keep its label.
-  /// Throws InvalidArgument when the region's size differs from the image's.
-  HybridResult SegmentWhere(const ColorImage& rgb,
-                            const Image<uint8_t>& prompt_region);
-  /// The semantic branch alone, and SegmentWhere() reusing its result (map
-  /// guidance looks at the semantic labels before it chooses the region).
-  SemanticResult SegmentSemantic(const ColorImage& rgb);
-  HybridResult SegmentWhere(const ColorImage& rgb,
-                            const Image<uint8_t>& prompt_region,
-                            SemanticResult semantic);
+  /// still sees the whole image (or its given result, from SegmentSemantic),
+  /// so pixels outside every mask keep its label. Throws InvalidArgument when
+  /// the region's or the given labels' size differs from the image's.
+  HybridResult SegmentWhere(
+      const ColorImage& rgb, const Image<uint8_t>& prompt_region,
+      std::optional<SemanticResult> semantic = std::nullopt);
   const LabelSet& label_set() const { return semantic_->label_set(); }
 
  private:
