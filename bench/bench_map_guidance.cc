@@ -28,7 +28,7 @@
 
 #include <fmt/format.h>
 
-#include "semrec/core/file_util.h"
+#include "bench_util.h"
 #include "semrec/infer/model_registry.h"
 #include "semrec/io/json_file.h"
 #include "semrec/io/label_set_io.h"
@@ -42,11 +42,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-ProgressOptions Quiet() {
-  ProgressOptions p;
-  p.mode = ProgressOptions::Mode::kOff;
-  return p;
-}
+using bench::Quiet;
 
 fs::path Scratch() {
   return fs::temp_directory_path() / "semrec_bench_map_guidance";
@@ -255,10 +251,7 @@ int Main(int argc, char** argv) {
       "bench_map_guidance: map-guided vs full segmentation of every frame "
       "(%u hardware threads)\n",
       std::thread::hardware_concurrency());
-  const fs::path data =
-      std::getenv("SEMREC_DATA") != nullptr
-          ? fs::path(std::getenv("SEMREC_DATA"))
-          : ProjectDataDir().parent_path().parent_path() / "shared" / "data";
+  const fs::path data = bench::SampleDataDir();
   const infer::ModelRegistry registry = infer::ModelRegistry::LoadDefault();
   const LabelSet classes = io::LoadLabelSet(
       registry.Get(segment::SemanticSegmenterOptions().model).label_set);

@@ -23,7 +23,7 @@
 #include <thread>
 #include <vector>
 
-#include "semrec/core/file_util.h"
+#include "bench_util.h"
 #include "semrec/infer/model_registry.h"
 #include "semrec/io/sequence_reader.h"
 #include "semrec/pipeline/run_sequence.h"
@@ -36,11 +36,7 @@ using namespace semrec;
 
 namespace {
 
-ProgressOptions Quiet() {
-  ProgressOptions p;
-  p.mode = ProgressOptions::Mode::kOff;
-  return p;
-}
+using bench::Quiet;
 
 fs::path Scratch() {
   return fs::temp_directory_path() / "semrec_bench_pipeline";
@@ -146,10 +142,7 @@ int main(int argc, char** argv) try {
               std::thread::hardware_concurrency());
 
   // 1. Real models, segment every 1st / 5th / 10th frame.
-  const fs::path data =
-      std::getenv("SEMREC_DATA") != nullptr
-          ? fs::path(std::getenv("SEMREC_DATA"))
-          : ProjectDataDir().parent_path().parent_path() / "shared" / "data";
+  const fs::path data = bench::SampleDataDir();
   const infer::ModelRegistry registry = infer::ModelRegistry::LoadDefault();
   std::vector<std::pair<std::string, fs::path>> sequences;
   if (fs::is_directory(data / "7scenes_chess_0_99")) {
