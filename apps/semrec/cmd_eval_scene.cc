@@ -2,9 +2,11 @@
 // of a reconstructed scene against a labelled ground-truth cloud.
 #include <cstdio>
 #include <map>
+#include <optional>
 #include <sstream>
 
 #include <fmt/format.h>
+#include <spdlog/spdlog.h>
 #include <nlohmann/json.hpp>
 
 #include "commands.h"
@@ -65,23 +67,96 @@ std::map<std::string, int32_t> LoadClassMap(const std::string& path,
   return map;
 }
 
-// The transform `semrec mesh` applied to its output (summary.json's gravity),
-// identity when there is none.
-Transform UprightTransform(const fs::path& result) {
-  const fs::path summary =
-      (fs::is_directory(result) ? result : result.parent_path()) /
-      "summary.json";
-  if (!fs::exists(summary)) return Transform();
-  const nlohmann::json j = io::ReadJsonFile(summary);
-  if (!j.contains("gravity")) return Transform();
-  std::istringstream in(j["gravity"].value("T_upright_world", ""));
+// 16 numbers, row-major, as a rigid transform; FormatError naming `file` and
+// `what` (where in it the text is) otherwise.
+Transform ParseUpright(const std::string& text, const fs::path& file,
+                       const std::string& what) {
+  std::istringstream in(text);
   Eigen::Matrix4d T;
   for (int k = 0; k < 16; ++k) {
     if (!(in >> T(k / 4, k % 4))) {
-      throw FormatError(summary, "gravity.T_upright_world is not 16 numbers");
+      throw FormatError(file, fmt::format("{} is not 16 numbers (a row-major "
+                                          "4x4 transform): '{}'",
+                                          what, text));
     }
   }
-  return Transform::FromMatrix(T, summary.string() + " T_upright_world");
+  if (in >> std::ws, !in.eof()) {
+    throw FormatError(
+        file, fmt::format("{} has more than 16 numbers: '{}'", what, text));
+  }
+  try {
+    return Transform::FromMatrix(T, what);
+  } catch (const InvalidArgument& e) {
+    throw FormatError(file, e.what());
+  }
+}
+
+// An upright transform and the file that gave it.
+struct Upright {
+  Transform T;
+  fs::path file;
+};
+
+// The transform that turned the result upright (T_upright_world), so that the
+// ground truth can be brought into the result's frame. Every result with a
+// scene (`semrec run`, `semrec mesh`) writes it into its layers'
+// customLayerData; summary.json's gravity (mesh only) is the fallback. The
+// scene wins when both have it. Identity only when neither says the result
+// was turned: guessing would score in the wrong frame without a word.
+Transform UprightTransform(const fs::path& scene) {
+  std::optional<Upright> from_scene;
+  std::string gravity;  // the layers' "gravity" method, if any
+  for (const fs::path& layer : {scene, scene.parent_path() / "static.usda"}) {
+    if (!fs::exists(layer)) continue;
+    const auto data = usd::ReadCustomLayerData(layer);
+    if (const auto it = data.find("gravity"); it != data.end()) {
+      gravity = it->second;
+    }
+    if (const auto it = data.find("T_upright_world"); it != data.end()) {
+      from_scene = {
+          ParseUpright(it->second, layer, "customLayerData T_upright_world"),
+          layer};
+      break;
+    }
+  }
+  std::optional<Upright> from_summary;
+  const fs::path summary = scene.parent_path() / "summary.json";
+  if (fs::exists(summary)) {
+    const nlohmann::json j = io::ReadJsonFile(summary);
+    if (j.contains("gravity") && j["gravity"].is_object()) {
+      const nlohmann::json& g = j["gravity"];
+      if (gravity.empty() && g.contains("method") && g["method"].is_string()) {
+        gravity = g["method"].get<std::string>();
+      }
+      if (g.contains("T_upright_world")) {
+        if (!g["T_upright_world"].is_string()) {
+          throw FormatError(summary,
+                            "gravity.T_upright_world is not a string "
+                            "of 16 numbers");
+        }
+        from_summary = {ParseUpright(g["T_upright_world"].get<std::string>(),
+                                     summary, "gravity.T_upright_world"),
+                        summary};
+      }
+    }
+  }
+  if (from_scene) {
+    if (from_summary && !from_scene->T.IsApprox(from_summary->T, 1e-4)) {
+      spdlog::warn("{} and {} disagree on T_upright_world; using the scene's",
+                   from_scene->file.string(), from_summary->file.string());
+    }
+    return from_scene->T;
+  }
+  if (from_summary) return from_summary->T;
+  if (!gravity.empty() && gravity != "none") {
+    throw FormatError(
+        scene, fmt::format("the result was turned upright (gravity: {}) but "
+                           "neither its layers' customLayerData nor a "
+                           "summary.json beside it has T_upright_world: "
+                           "cannot bring the ground truth into its frame",
+                           gravity));
+  }
+  return Transform();
 }
 
 void RunScene(const SceneArgs& args) {
@@ -89,6 +164,9 @@ void RunScene(const SceneArgs& args) {
   const fs::path result = args.result;
   const fs::path scene =
       fs::is_directory(result) ? result / "scene.usda" : result;
+  // The result is written upright: the ground truth goes into its frame
+  // (read first: a result without its transform fails before the slow work).
+  const Transform T_upright_world = UprightTransform(scene);
   eval::SceneGroundTruth gt = eval::ReadSceneGroundTruth(args.gt);
   fs::path classes_file = args.gt_classes;
   if (classes_file.empty()) {
@@ -110,8 +188,6 @@ void RunScene(const SceneArgs& args) {
         io::SequenceReader::Open(args.observed_in, reader_options);
     gt = eval::Subset(gt, eval::ObservedPoints(gt.points, reader));
   }
-  // The result is written upright: bring the ground truth into its frame.
-  const Transform T_upright_world = UprightTransform(result);
   for (auto& p : gt.points) {
     p = (T_upright_world * p.cast<double>()).cast<float>();
   }
@@ -234,7 +310,8 @@ void AddEvalScene(CLI::App* eval) {
       "definition, thing classes, confidence = fused points), recall and "
       "precision at 0.5, predicted objects per ground-truth object.");
   cmd->add_option("result", args->result,
-                  "A `semrec mesh` output folder or its scene.usda")
+                  "A `semrec run` or `semrec mesh` output folder, or its "
+                  "scene.usda")
       ->required();
   cmd->add_option("gt", args->gt,
                   "Ground-truth PLY with per-point 'semantic' and 'instance' "

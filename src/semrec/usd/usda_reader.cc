@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <array>
+#include <fstream>
 #include <optional>
 #include <regex>
 #include <sstream>
@@ -48,8 +49,8 @@ T Scalar(const std::string& value, const fs::path& path, int line_number) {
   std::optional<T> out;
   if (in >> v) out = CheckedCast<T>(v);
   if (!out || (in >> std::ws, !in.eof())) {
-    throw FormatError(path, fmt::format("line {}: bad value '{}'", line_number,
-                                        value));
+    throw FormatError(
+        path, fmt::format("line {}: bad value '{}'", line_number, value));
   }
   return *out;
 }
@@ -70,8 +71,7 @@ void CheckMesh(const MeshPrim& mesh, const fs::path& path) {
       if (i >= mesh.points.size()) {
         throw FormatError(path, fmt::format("mesh '{}': face index {} is out "
                                             "of range ({} points)",
-                                            mesh.label, i,
-                                            mesh.points.size()));
+                                            mesh.label, i, mesh.points.size()));
       }
     }
   }
@@ -134,8 +134,8 @@ void ReadLayer(const fs::path& path, std::vector<MeshPrim>* meshes,
       }
       for (size_t i = 0; i < v.size(); i += 3) {
         mesh.points.emplace_back(static_cast<float>(v[i]),
-                                     static_cast<float>(v[i + 1]),
-                                     static_cast<float>(v[i + 2]));
+                                 static_cast<float>(v[i + 1]),
+                                 static_cast<float>(v[i + 2]));
       }
     } else if (name == "faceVertexIndices") {
       const auto v = Numbers(value, path, line_number);
@@ -163,11 +163,14 @@ void ReadLayer(const fs::path& path, std::vector<MeshPrim>* meshes,
     } else if (name == "semrec:instanceId") {
       mesh.instance_id = Scalar<uint32_t>(value, path, line_number);
     } else if (name == "semrec:pointCount") {
-      mesh.point_count = Scalar<decltype(mesh.point_count)>(value, path, line_number);
+      mesh.point_count =
+          Scalar<decltype(mesh.point_count)>(value, path, line_number);
     } else if (name == "semrec:firstSeenFrame") {
-      mesh.first_seen_frame = Scalar<decltype(mesh.first_seen_frame)>(value, path, line_number);
+      mesh.first_seen_frame =
+          Scalar<decltype(mesh.first_seen_frame)>(value, path, line_number);
     } else if (name == "semrec:lastSeenFrame") {
-      mesh.last_seen_frame = Scalar<decltype(mesh.last_seen_frame)>(value, path, line_number);
+      mesh.last_seen_frame =
+          Scalar<decltype(mesh.last_seen_frame)>(value, path, line_number);
     } else if (name == "semrec:confidence") {
       mesh.confidence = Scalar<double>(value, path, line_number);
     }
@@ -183,6 +186,60 @@ std::vector<MeshPrim> ReadScene(const fs::path& path) {
   std::vector<fs::path> open;
   ReadLayer(path, &meshes, &open);
   return meshes;
+}
+
+std::map<std::string, std::string> ReadCustomLayerData(const fs::path& path) {
+  // Line by line: the metadata is at the top, the prims below can be large.
+  std::ifstream in(path);
+  if (!in) throw IoError(path, "cannot open the layer");
+  std::string line;
+  int line_number = 0;
+  const auto next = [&] {
+    if (!std::getline(in, line)) return false;
+    ++line_number;
+    const size_t b = line.find_first_not_of(" \t\r");
+    line = b == std::string::npos
+               ? std::string()
+               : line.substr(b, line.find_last_not_of(" \t\r") - b + 1);
+    return true;
+  };
+  if (!next() || line.rfind("#usda 1.0", 0) != 0) {
+    throw FormatError(path, "not a USDA file (missing '#usda 1.0' header)");
+  }
+  std::map<std::string, std::string> data;
+  // Layer metadata is a "( ... )" block right after the header, if any.
+  while (next() && line.empty()) {
+  }
+  if (line != "(") return data;
+  // Depth inside customLayerData's braces; nested dictionaries are skipped.
+  int depth = 0;
+  while (next()) {
+    if (depth == 0) {
+      if (line == ")") return data;
+      if (line.rfind("customLayerData", 0) == 0 && line.back() == '{')
+        depth = 1;
+      continue;
+    }
+    if (line == "}") {
+      --depth;
+      continue;
+    }
+    if (!line.empty() && line.back() == '{') ++depth;
+    if (depth > 1) continue;  // a nested dictionary or its entries
+    // "<type> <name> = <value>"
+    const size_t eq = line.find(" = ");
+    std::istringstream head(line.substr(0, eq));
+    std::string type, name;
+    if (eq == std::string::npos || !(head >> type >> name)) {
+      throw FormatError(path,
+                        fmt::format("line {}: bad customLayerData entry '{}'",
+                                    line_number, line));
+    }
+    const std::string value = line.substr(eq + 3);
+    data[name] =
+        value.size() >= 2 && value.front() == '"' ? Unquote(value) : value;
+  }
+  throw FormatError(path, "layer metadata '(' is never closed");
 }
 
 }  // namespace semrec::usd

@@ -207,5 +207,55 @@ TEST(Usda, RoundTripThroughOurReader) {
   EXPECT_THROW(ReadScene(dir / "x.usda"), FormatError);
 }
 
+TEST(Usda, CustomLayerDataReadsBack) {
+  testing::TempDir dir;
+  StageOptions options;
+  options.custom_layer_data = {
+      {"T_upright_world", "1 0 0 0 0 0 -1 0.5 0 1 0 0 0 0 0 1"},
+      {"input", "C:\\data \"tilted\" (semrec layout)"}};
+  WriteScene(dir.path(), {Tetrahedron("chair", 5, false)}, options);
+  // Every layer carries it: the root and the layer with the meshes.
+  for (const char* layer : {"scene.usda", "static.usda", "dynamic.usda"}) {
+    EXPECT_EQ(ReadCustomLayerData(dir / layer), options.custom_layer_data)
+        << layer;
+  }
+  testing::TempDir plain;
+  WriteScene(plain.path(), {}, {});
+  EXPECT_TRUE(ReadCustomLayerData(plain / "static.usda").empty());
+  // Other tools' layers: typed values as written, nested dictionaries skipped.
+  testing::WriteText(dir / "other.usda",
+                     "#usda 1.0\n\n(\n    customLayerData = {\n"
+                     "        double scale = 2.5\n"
+                     "        dictionary nested = {\n"
+                     "            string inner = \"x\"\n        }\n"
+                     "        string after = \"y\"\n    }\n)\n"
+                     "def Xform \"World\" {}\n");
+  const std::map<std::string, std::string> other =
+      ReadCustomLayerData(dir / "other.usda");
+  EXPECT_EQ(other, (std::map<std::string, std::string>{{"after", "y"},
+                                                       {"scale", "2.5"}}));
+  testing::WriteText(dir / "none.usda", "#usda 1.0\ndef Xform \"World\" {}\n");
+  EXPECT_TRUE(ReadCustomLayerData(dir / "none.usda").empty());
+
+  testing::WriteText(dir / "x.usda", "hello");
+  EXPECT_THROW(ReadCustomLayerData(dir / "x.usda"), FormatError);
+  testing::WriteText(dir / "open.usda",
+                     "#usda 1.0\n(\n    customLayerData = {\n");
+  EXPECT_THROW(ReadCustomLayerData(dir / "open.usda"), FormatError);
+  testing::WriteText(dir / "bad.usda",
+                     "#usda 1.0\n(\n    customLayerData = {\n        junk\n"
+                     "    }\n)\n");
+  try {
+    ReadCustomLayerData(dir / "bad.usda");
+    ADD_FAILURE() << "no error";
+  } catch (const FormatError& e) {
+    EXPECT_NE(std::string(e.what()).find("bad.usda: line 4: bad "
+                                         "customLayerData entry 'junk'"),
+              std::string::npos)
+        << e.what();
+  }
+  EXPECT_THROW(ReadCustomLayerData(dir / "missing.usda"), IoError);
+}
+
 }  // namespace
 }  // namespace semrec::usd
