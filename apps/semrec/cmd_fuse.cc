@@ -22,7 +22,7 @@ struct FuseArgs {
   std::string method = "fast";
   double max_depth_m = 4.0;
   bool overwrite = false;
-  std::string merge = "evidence";
+  std::string merge = "voxel";
 };
 
 void RunFuse(FuseArgs args) {
@@ -102,8 +102,11 @@ void RegisterFuse(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--merge", args->merge,
                   "paper: the paper's rule alone; evidence: also merge what "
-                  "views show inside one mask, vote classes, fold fragments")
-      ->check(CLI::IsMember({"paper", "evidence"}))
+                  "views show inside one mask, vote classes, fold fragments; "
+                  "voxel: evidence, then objects decided per map voxel by "
+                  "every view (structure only on its planes, fragments by "
+                  "visibility)")
+      ->check(CLI::IsMember({"paper", "evidence", "voxel"}))
       ->capture_default_str();
   cmd->add_flag("--no-gating", args->no_gating,
                 "Compare segments of all classes (for comparison)");

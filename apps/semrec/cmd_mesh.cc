@@ -18,7 +18,7 @@ struct MeshArgs {
   bool no_ply = false;
   std::string gravity = "auto";
   bool no_structure = false;
-  std::string merge = "evidence";
+  std::string merge = "voxel";
   bool two_pass = false;
 };
 
@@ -93,10 +93,13 @@ void RegisterMesh(CLI::App& app) {
                   "Fusion: merge when sigma > alpha")
       ->capture_default_str();
   cmd->add_option("--merge", args->merge,
-                  "Fusion: paper (sigma > alpha alone) or evidence (also "
+                  "Fusion: paper (sigma > alpha alone), evidence (also "
                   "merge parts that views show inside one mask, vote each "
-                  "object's class, fold fragments; see summary.json events)")
-      ->check(CLI::IsMember({"paper", "evidence"}))
+                  "object's class, fold fragments; see summary.json events) "
+                  "or voxel (evidence, then classes and objects decided per "
+                  "5 cm map voxel by every view: structure only on its "
+                  "planes, fragments judged by visibility)")
+      ->check(CLI::IsMember({"paper", "evidence", "voxel"}))
       ->capture_default_str();
   cmd->add_option("--up-axis", args->options.scene.stage.up_axis,
                   "USD up axis: Z or Y (the upright scene is turned so that "

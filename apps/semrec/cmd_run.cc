@@ -28,7 +28,7 @@ struct RunArgs {
   std::string detector = "yolox_nano";
   float detector_score = 0.3f;
   ModelArgs model;
-  std::string merge = "evidence";
+  std::string merge = "voxel";
   std::string gravity = "auto";
   bool no_structure = false;
   pipeline::RunOptions run;
@@ -262,8 +262,11 @@ void RegisterRun(CLI::App& app) {
       ->capture_default_str();
   AddModelArgs(cmd, &args->model);
   cmd->add_option("--merge", args->merge,
-                  "Fusion: paper (sigma > alpha alone) or evidence")
-      ->check(CLI::IsMember({"paper", "evidence"}))
+                  "Fusion: paper (sigma > alpha alone), evidence (multi-view "
+                  "merges, class votes per object, fragment rule) or voxel "
+                  "(evidence, then objects decided per map voxel; see mesh "
+                  "--help)")
+      ->check(CLI::IsMember({"paper", "evidence", "voxel"}))
       ->capture_default_str();
   cmd->add_option("--alpha", args->run.pipeline.scene.fusion.alpha,
                   "Fusion: merge when sigma > alpha")

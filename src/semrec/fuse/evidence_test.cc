@@ -232,11 +232,19 @@ TEST(FusionEvidence, ClassIsTheVoteOfEveryView) {
   }
 }
 
+// The evidence rule's fragment clean-up (the voxel rule judges fragments by
+// visibility instead: map_objects_test.cc).
+FusionOptions EvidenceRule() {
+  FusionOptions o;
+  o.merge = FusionOptions::Merge::kEvidence;
+  return o;
+}
+
 // A speck seen once beside an object of its class is folded into it; one far
 // from anything is dropped; ids resolve accordingly.
 TEST(FusionEvidence, FragmentsAreFoldedOrDropped) {
   std::mt19937 rng(10);
-  SceneFusion fusion;
+  SceneFusion fusion(EvidenceRule());
   for (size_t f = 0; f < 3; ++f) {
     fusion.Integrate({Segment(1, 1, Patch(0.0f, 1.0f, rng))}, f);
   }
@@ -270,7 +278,7 @@ TEST(FusionEvidence, FragmentsAreFoldedOrDropped) {
 // far from anything else, is dropped.
 TEST(FusionEvidence, MasksOfOneViewAreOneSighting) {
   std::mt19937 rng(11);
-  SceneFusion fusion;
+  SceneFusion fusion(EvidenceRule());
   Cloud left = Patch(0.0f, 0.1f, rng, 0.2f);
   Cloud right = Patch(0.1f, 0.25f, rng, 0.2f);
   fusion.Integrate({Segment(1, 1, left), Segment(1, 2, right)}, 0);

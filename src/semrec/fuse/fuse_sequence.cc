@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <optional>
+#include <vector>
 
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
@@ -10,6 +12,7 @@
 
 #include "semrec/core/error.h"
 #include "semrec/core/file_util.h"
+#include "semrec/fuse/gravity.h"
 #include "semrec/io/ply_io.h"
 
 namespace fs = std::filesystem;
@@ -89,16 +92,28 @@ FuseSequenceResult FuseSequence(const io::SequenceReader& reader,
   const auto start = std::chrono::steady_clock::now();
   FuseSequenceResult result;
   Progress progress("fusing", reader.size(), progress_options);
+  std::vector<Transform> cameras;
   for (size_t i = 0; i < reader.size(); ++i) {
     const Frame frame = reader.Read(i);
-    const std::vector<FrameSegment> segments = ExtractFrameSegments(
-        frame, source.Get(reader, i), source.classes(), extraction);
+    const FrameLabels labels = source.Get(reader, i);
+    const std::vector<FrameSegment> segments =
+        ExtractFrameSegments(frame, labels, source.classes(), extraction);
+    cameras.push_back(frame.T_world_camera);
     if (segments.empty()) {
       ++result.empty_frames;
       spdlog::debug("frame {} ({}): no segment with valid depth, skipped", i,
                     frame.depth_path.string());
     }
-    result.frames.push_back(fusion->Integrate(segments, i));
+    std::optional<FrameObservation> observation;
+    if (fusion->voxel_evidence() != nullptr) {
+      observation.emplace();
+      observation->camera_position_world =
+          frame.T_world_camera.translation().cast<float>();
+      observation->observed_world =
+          ObservedPoints(frame, labels, nullptr, extraction.pixel_stride);
+    }
+    result.frames.push_back(fusion->Integrate(
+        segments, i, observation ? &*observation : nullptr));
     progress.Tick();
   }
   progress.Finish();
@@ -108,6 +123,18 @@ FuseSequenceResult FuseSequence(const io::SequenceReader& reader,
         "end of sequence: {} objects merged or dropped (evidence, "
         "fragments)",
         cleaned);
+  }
+  if (fusion->voxel_evidence() != nullptr) {
+    // Up decides which planes are walls and floors.
+    std::vector<const Cloud*> clouds;
+    std::vector<bool> is_floor;
+    for (const SceneSegment& s : fusion->segments()) {
+      clouds.push_back(&s.points);
+      is_floor.push_back(source.classes().Get(s.class_id).name == "floor");
+    }
+    const GravityEstimate gravity =
+        EstimateGravity(clouds, is_floor, cameras, GravityOptions{});
+    fusion->ResolveMap(MakeMapContext(source.classes(), gravity.up_world));
   }
   if (result.empty_frames > 0) {
     spdlog::warn("{} of {} frames had no segment with valid depth",

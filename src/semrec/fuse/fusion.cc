@@ -34,21 +34,35 @@ void FusionOptions::Check() const {
   CheckArgument(max_corr_dist_m > 0.0, "fusion: max_corr_dist_m must be > 0");
   CheckArgument(alpha >= 0.0 && alpha < 1.0, "fusion: alpha must be in [0, 1)");
   evidence.Check();
+  voxel_evidence.Check();
+  map_objects.Check();
 }
 
 const char* MergeName(FusionOptions::Merge merge) {
-  return merge == FusionOptions::Merge::kPaper ? "paper" : "evidence";
+  switch (merge) {
+    case FusionOptions::Merge::kPaper:
+      return "paper";
+    case FusionOptions::Merge::kEvidence:
+      return "evidence";
+    case FusionOptions::Merge::kVoxel:
+      break;
+  }
+  return "voxel";
 }
 
 FusionOptions::Merge ParseMerge(const std::string& name) {
   if (name == "paper") return FusionOptions::Merge::kPaper;
   if (name == "evidence") return FusionOptions::Merge::kEvidence;
-  throw InvalidArgument("merge rule must be 'paper' or 'evidence', got '" +
-                        name + "'");
+  if (name == "voxel") return FusionOptions::Merge::kVoxel;
+  throw InvalidArgument(
+      "merge rule must be 'paper', 'evidence' or 'voxel', got '" + name + "'");
 }
 
 SceneFusion::SceneFusion(const FusionOptions& options) : options_(options) {
   options_.Check();
+  if (options_.merge == FusionOptions::Merge::kVoxel) {
+    voxel_map_.emplace(options_.store_voxel_size_m, options_.voxel_evidence);
+  }
 }
 
 namespace {
@@ -96,7 +110,8 @@ std::vector<FrameSegment> JoinStuffPerClass(
 }  // namespace
 
 FrameFusionStats SceneFusion::Integrate(
-    const std::vector<FrameSegment>& input_segments, size_t frame_index) {
+    const std::vector<FrameSegment>& input_segments, size_t frame_index,
+    const FrameObservation* observation) {
   const auto start = std::chrono::steady_clock::now();
   last_frame_ = frame_index;
   // Joined stuff segments only when there is something to join: a copy of
@@ -383,6 +398,12 @@ FrameFusionStats SceneFusion::Integrate(
     const auto t0 = std::chrono::steady_clock::now();
     for (SceneSegment& s : segments_) UpdateClass(&s);
     stats.evidence_merges = MergeByEvidence(frame_index);
+    evidence_seconds += Seconds(t0);
+  }
+  if (voxel_map_) {
+    const auto t0 = std::chrono::steady_clock::now();
+    voxel_map_->AddFrame(input_segments, stats.assigned_ids, observation,
+                         frame_index);
     evidence_seconds += Seconds(t0);
   }
   stats.evidence_seconds = evidence_seconds;

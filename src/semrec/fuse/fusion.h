@@ -29,18 +29,27 @@
 // object of another class merges into it on a strong overlap (sigma >
 // cross_class_alpha), and Finish() folds fragments into the object they touch
 // or drops them. Every such decision is listed in events().
+//
+// Voxel (Merge::kVoxel, the default): the evidence rule while streaming, and
+// every frame's labels also vote per map voxel (fuse/voxel_evidence.h); at the
+// end ResolveMap() decides the objects per place from those votes
+// (fuse/map_objects.h: structure only on its planes, objects split where
+// apart, fragments judged by visibility) instead of the fragment rule.
 #pragma once
 
 #include <cstdint>
 #include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include <Eigen/Geometry>
 
 #include "semrec/fuse/evidence.h"
+#include "semrec/fuse/map_objects.h"
 #include "semrec/fuse/segments.h"
 #include "semrec/fuse/voxel.h"
+#include "semrec/fuse/voxel_evidence.h"
 
 namespace semrec::fuse {
 
@@ -75,14 +84,19 @@ struct FusionOptions {
     /// The paper's rule, then multi-view evidence, class votes, cross-class
     /// merges on strong overlap and fragment cleanup (see above).
     kEvidence,
+    /// Evidence while streaming, then objects decided per map voxel from
+    /// every view's labels (ResolveMap).
+    kVoxel,
   };
-  Merge merge = Merge::kEvidence;
+  Merge merge = Merge::kVoxel;
   EvidenceOptions evidence;
+  VoxelEvidenceOptions voxel_evidence;
+  MapObjectOptions map_objects;
 
   void Check() const;
 };
 
-/// "paper" or "evidence"; ParseMerge throws InvalidArgument for anything else.
+/// "paper", "evidence" or "voxel"; ParseMerge throws InvalidArgument for anything else.
 const char* MergeName(FusionOptions::Merge merge);
 FusionOptions::Merge ParseMerge(const std::string& name);
 
@@ -174,13 +188,31 @@ class SceneFusion {
   explicit SceneFusion(const FusionOptions& options = {});
 
   /// Fuses one frame's segments (from ExtractFrameSegments) into the scene.
+  /// `observation`: what the frame saw, for the voxel evidence (Merge::kVoxel;
+  /// null: only labelled voxels count as observed).
   FrameFusionStats Integrate(const std::vector<FrameSegment>& frame_segments,
-                             size_t frame_index);
+                             size_t frame_index,
+                             const FrameObservation* observation = nullptr);
 
   /// Ends the sequence: evidence merges re-checked over all pairs, fragments
   /// merged or dropped (Merge::kEvidence; nothing for the paper's rule).
-  /// Returns the number of objects merged or dropped.
+  /// Returns the number of objects merged or dropped. Merge::kVoxel: evidence
+  /// merges only; ResolveMap() follows.
   size_t Finish();
+
+  /// Merge::kVoxel, after Finish(): replaces the objects by those the voxel
+  /// evidence decides (`context`: up and the classes' kinds and geometry; its
+  /// objects are filled here). Ids of objects that keep most of their place
+  /// stay; ResolveId is not changed (volumes keep their fusion ids: see
+  /// map_resolution()'s owners). Returns the resolution, also kept.
+  const MapResolution& ResolveMap(MapContext context);
+  /// The last ResolveMap() result, or nullptr.
+  const MapResolution* map_resolution() const {
+    return resolution_ ? &*resolution_ : nullptr;
+  }
+  const VoxelEvidenceMap* voxel_evidence() const {
+    return voxel_map_ ? &*voxel_map_ : nullptr;
+  }
 
   /// Scene segments, sorted by id.
   const std::vector<SceneSegment>& segments() const { return segments_; }
@@ -195,7 +227,7 @@ class SceneFusion {
 
  private:
   bool evidence_on() const {
-    return options_.merge == FusionOptions::Merge::kEvidence;
+    return options_.merge != FusionOptions::Merge::kPaper;
   }
   /// Where a frame's object masks fall on the scene's objects (structure
   /// excluded), per frame segment f and scene object s: `on[f][s]` counts f's
@@ -239,6 +271,8 @@ class SceneFusion {
   uint32_t next_id_ = 1;
   /// Absorbed segment id -> the id it was merged into.
   std::map<uint32_t, uint32_t> merged_into_;
+  std::optional<VoxelEvidenceMap> voxel_map_;
+  std::optional<MapResolution> resolution_;
 };
 
 }  // namespace semrec::fuse

@@ -274,7 +274,48 @@ size_t SceneFusion::CleanFragments() {
 
 size_t SceneFusion::Finish() {
   if (!evidence_on()) return 0;
-  return MergeByEvidence(last_frame_) + CleanFragments();
+  const size_t merged = MergeByEvidence(last_frame_);
+  // With voxel evidence, fragments are judged by visibility (ResolveMap).
+  if (voxel_map_) return merged;
+  return merged + CleanFragments();
+}
+
+const MapResolution& SceneFusion::ResolveMap(MapContext context) {
+  CheckArgument(voxel_map_.has_value(),
+                "SceneFusion::ResolveMap: only with merge 'voxel'");
+  std::map<uint32_t, const SceneSegment*> by_id;
+  for (const SceneSegment& s : segments_) {
+    context.objects[s.id] = {s.class_id, s.kind};
+    by_id[s.id] = &s;
+  }
+  resolution_ = ResolveMapObjects(
+      *voxel_map_, context, options_.map_objects,
+      [this](uint32_t id) { return ResolveId(id); }, &next_id_);
+  std::vector<SceneSegment> next;
+  for (const MapObject& o : resolution_->objects) {
+    SceneSegment s;
+    s.id = o.id;
+    s.class_id = o.class_id;
+    s.kind = o.kind;
+    s.class_votes = o.class_votes;
+    s.first_seen_frame = last_frame_;
+    for (uint32_t source : o.sources) {
+      const auto it = by_id.find(source);
+      if (it == by_id.end()) continue;
+      const SceneSegment& from = *it->second;
+      s.first_seen_frame = std::min(s.first_seen_frame, from.first_seen_frame);
+      s.last_seen_frame = std::max(s.last_seen_frame, from.last_seen_frame);
+      s.observations += from.observations;
+      s.frames_seen = SortedUnion(s.frames_seen, from.frames_seen);
+    }
+    for (uint64_t key : o.voxels) {
+      s.points.push_back(voxel_map_->voxels().at(key).Centroid());
+    }
+    Rebuild(&s);
+    next.push_back(std::move(s));
+  }
+  segments_ = std::move(next);
+  return *resolution_;
 }
 
 }  // namespace semrec::fuse

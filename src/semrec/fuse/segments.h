@@ -99,4 +99,11 @@ std::vector<FrameSegment> ExtractFrameSegments(
     const Frame& frame, const FrameLabels& labels, const LabelSet& classes,
     const SegmentExtractionOptions& options);
 
+/// Every `pixel_stride`-th pixel with depth, back-projected into the world
+/// frame: what the frame observed, labelled or not (fusion's visibility).
+/// Left out: pixels of tracked people (`person_ids` != 0, may be null) and
+/// pixels the map's projection labelled (labels.map_objects).
+Cloud ObservedPoints(const Frame& frame, const FrameLabels& labels,
+                     const LabelMap* person_ids, int pixel_stride);
+
 }  // namespace semrec::fuse

@@ -10,6 +10,7 @@
 #include "semrec/core/stopwatch.h"
 #include "semrec/fuse/fuse_sequence.h"
 #include "semrec/io/ply_io.h"
+#include "semrec/pipeline/object_surfaces.h"
 #include "semrec/usd/glb_writer.h"
 
 namespace fs = std::filesystem;
@@ -155,7 +156,17 @@ SceneFrameStats SceneBuilder::Add(const Frame& frame,
   Stopwatch watch;
   const auto segments = fuse::ExtractFrameSegments(
       frame, static_labels, classes_, options_.extraction);
-  const fuse::FrameFusionStats fused = fusion_.Integrate(segments, frame.index);
+  // Voxel evidence: what the frame saw, labelled or not (visibility).
+  std::optional<fuse::FrameObservation> observation;
+  if (options_.fusion.merge == fuse::FusionOptions::Merge::kVoxel) {
+    observation.emplace();
+    observation->camera_position_world =
+        frame.T_world_camera.translation().cast<float>();
+    observation->observed_world = fuse::ObservedPoints(
+        frame, static_labels, person_ids, options_.extraction.pixel_stride);
+  }
+  const fuse::FrameFusionStats fused = fusion_.Integrate(
+      segments, frame.index, observation ? &*observation : nullptr);
   stats.segments = segments.size();
   stats.fusion_seconds = watch.Lap();
   auto pairs = Assignments(segments, fused);
@@ -182,6 +193,27 @@ void SceneBuilder::Finish() {
         cleaned);
   }
   mesher_.Reconcile([&](uint32_t id) { return fusion_.ResolveId(id); });
+  if (options_.fusion.merge == fuse::FusionOptions::Merge::kVoxel) {
+    const fuse::GravityEstimate gravity = EstimateGravityNow();
+    const fuse::MapResolution& r =
+        fusion_.ResolveMap(fuse::MakeMapContext(classes_, gravity.up_world));
+    spdlog::info(
+        "objects decided per map voxel: {} objects, {} structure planes, {} "
+        "voxels moved off structure, {} split, {} new, fragments {} folded / "
+        "{} dropped",
+        r.objects.size(), r.planes.size(), r.gated_voxels, r.split_objects,
+        r.new_objects, r.fragments_folded, r.fragments_dropped);
+  }
+}
+
+fuse::GravityEstimate SceneBuilder::EstimateGravityNow() const {
+  std::vector<const fuse::Cloud*> clouds;
+  std::vector<bool> is_floor;
+  for (const fuse::SceneSegment& s : fusion_.segments()) {
+    clouds.push_back(&s.points);
+    is_floor.push_back(classes_.Get(s.class_id).name == "floor");
+  }
+  return fuse::EstimateGravity(clouds, is_floor, cameras_, options_.gravity);
 }
 
 void SceneBuilder::RebuildVolumes(
@@ -203,20 +235,15 @@ void SceneBuilder::RebuildVolumes(
 SceneWriteResult SceneBuilder::Write(const fs::path& out_dir,
                                      const SceneWriteOptions& write_options) {
   SceneWriteResult result;
-  const auto meshes = mesher_.UpdateMeshes();
+  MeshMap meshes = mesher_.UpdateMeshes();
   result.remeshed = mesher_.remeshed_last_update();
+  // Objects decided per voxel: each takes the surface of its own voxels.
+  if (const fuse::MapResolution* r = fusion_.map_resolution()) {
+    meshes = CutMeshesByOwner(meshes, *r, options_.fusion.store_voxel_size_m);
+  }
 
   // Upright: the scene's points and the cameras decide which way is up.
-  {
-    std::vector<const fuse::Cloud*> clouds;
-    std::vector<bool> is_floor;
-    for (const fuse::SceneSegment& s : fusion_.segments()) {
-      clouds.push_back(&s.points);
-      is_floor.push_back(classes_.Get(s.class_id).name == "floor");
-    }
-    result.gravity =
-        fuse::EstimateGravity(clouds, is_floor, cameras_, options_.gravity);
-  }
+  result.gravity = EstimateGravityNow();
   // An upright scene declared Y-up gets its axes turned: (x, y, z) -> (x, z,
   // -y). With gravity "none" the stage only declares the user's own axis.
   if (options_.stage.up_axis == "Y" &&

@@ -1,0 +1,123 @@
+// The map's final objects, decided per place from the voxel evidence
+// (fuse/voxel_evidence.h) at the end of a sequence.
+//
+//  1. Each voxel's class is its histogram's winner (distance-weighted view
+//     shares; ties: the smaller class id).
+//  2. Structure only where the geometry says so: a wall vote counts only on a
+//     large vertical plane, a floor vote only on the lowest large horizontal
+//     plane, a ceiling vote only on the highest (planes fitted to the voxels
+//     that vote for the class; gravity known). Elsewhere that class's
+//     evidence is set aside and the next class wins: a chair against a wall
+//     that some views call wall stays a chair. A class with no plane large
+//     enough is not gated (too little seen to tell).
+//  3. Each thing voxel belongs to the fusion object of its class that most
+//     views put it in; structure voxels to their class's structure object.
+//     Thing voxels no object of their class claimed (they were fused into the
+//     wall) join the touching object of their class, or form a new one.
+//  4. An object's voxels that are not connected (26-neighbourhood) are split
+//     into objects; a small piece joins the object of its class it touches.
+//  5. Fragments are judged by visibility: an object is a fragment when the
+//     views that labelled its voxels as its class are few compared with the
+//     views that observed those voxels at all (a part seen once where five
+//     views looked at it). One seen in the only view that covers it is kept.
+//     Fragments fold into the object of their class they touch, or are
+//     dropped.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <functional>
+#include <map>
+#include <string>
+#include <unordered_map>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "semrec/core/label_map.h"
+#include "semrec/fuse/structure_planes.h"
+#include "semrec/fuse/voxel_evidence.h"
+
+namespace semrec::fuse {
+
+struct MapObjectOptions {
+  /// Gate structure classes by planes (off: the histogram winner as it is).
+  bool structure_planes = true;
+  StructurePlaneOptions planes;
+  /// Fragments: labelled views / observing views, summed over the object's
+  /// voxels, below this.
+  double min_seen_ratio = 0.3;
+  /// Objects with fewer voxels are fragments whatever their visibility.
+  size_t min_voxels = 8;
+  /// A split-off piece with fewer voxels than this joins a touching object of
+  /// its class instead of standing alone.
+  size_t min_piece_voxels = 20;
+
+  void Check() const;
+};
+
+/// What the map knows besides its evidence.
+struct MapContext {
+  /// Up (world frame).
+  Eigen::Vector3d up_world = Eigen::Vector3d::UnitZ();
+  /// Per class id: kind (thing/stuff) and where structure lives.
+  std::map<uint16_t, ClassKind> kinds;
+  std::map<uint16_t, StructureGeometry> geometry;
+  /// The fusion objects' current class and kind, by (current) id.
+  struct Object {
+    uint16_t class_id = 0;
+    ClassKind kind = ClassKind::kThing;
+  };
+  std::map<uint32_t, Object> objects;
+};
+
+/// Kinds and structure geometry of every class in `classes`.
+MapContext MakeMapContext(const LabelSet& classes,
+                          const Eigen::Vector3d& up_world);
+
+struct MapObject {
+  uint32_t id = 0;
+  uint16_t class_id = 0;
+  ClassKind kind = ClassKind::kThing;
+  /// Its voxels (keys, sorted).
+  std::vector<uint64_t> voxels;
+  /// Votes per class over its voxels (distance-weighted view shares x 100).
+  std::map<uint16_t, uint64_t> class_votes;
+  /// Fusion objects whose points it took.
+  std::vector<uint32_t> sources;
+  /// Labelled views / observing views (see above).
+  double seen_ratio = 0.0;
+  /// Views labelling it (max over voxels): 1 = seen once.
+  uint32_t max_views = 0;
+};
+
+/// Voxel -> final object, and which fusion object's volume has its surface
+/// (the one most views put it in, whatever the class): a mesh cut by these
+/// gives each object its own surface once.
+struct VoxelOwner {
+  uint32_t owner = 0;
+  uint32_t source = 0;
+};
+
+struct MapResolution {
+  std::vector<MapObject> objects;  // sorted by id
+  std::unordered_map<uint64_t, VoxelOwner> owners;
+  std::vector<StructurePlane> planes;
+  /// Voxels whose class changed by the structure gate; objects split off,
+  /// made from unclaimed voxels, and dropped or folded as fragments.
+  size_t gated_voxels = 0;
+  size_t split_objects = 0;
+  size_t new_objects = 0;
+  size_t fragments_folded = 0;
+  size_t fragments_dropped = 0;
+};
+
+/// Decides the objects. `resolve`: a fusion id's current id (0: dropped). `next_id`: the first id free for new
+/// objects (advanced).
+MapResolution ResolveMapObjects(const VoxelEvidenceMap& map,
+                                const MapContext& context,
+                                const MapObjectOptions& options,
+                                const std::function<uint32_t(uint32_t)>& resolve,
+                                uint32_t* next_id);
+
+}  // namespace semrec::fuse

@@ -1,0 +1,210 @@
+#include "semrec/fuse/structure_planes.h"
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <numbers>
+#include <random>
+
+#include <Eigen/Eigenvalues>
+
+#include "semrec/core/error.h"
+
+namespace semrec::fuse {
+
+StructureGeometry StructureGeometryOf(const std::string& class_name) {
+  static const std::map<std::string, StructureGeometry> kByName = {
+      {"wall", StructureGeometry::kVertical},
+      {"building", StructureGeometry::kVertical},
+      {"house", StructureGeometry::kVertical},
+      {"floor", StructureGeometry::kFloor},
+      {"rug", StructureGeometry::kFloor},
+      {"floor mat", StructureGeometry::kFloor},
+      {"road", StructureGeometry::kFloor},
+      {"sidewalk", StructureGeometry::kFloor},
+      {"grass", StructureGeometry::kFloor},
+      {"earth", StructureGeometry::kFloor},
+      {"field", StructureGeometry::kFloor},
+      {"ceiling", StructureGeometry::kCeiling},
+  };
+  const auto it = kByName.find(class_name);
+  return it == kByName.end() ? StructureGeometry::kNone : it->second;
+}
+
+void StructurePlaneOptions::Check() const {
+  CheckArgument(tolerance_m > 0.0, "structure planes: tolerance_m must be > 0");
+  CheckArgument(min_area_m2 > 0.0, "structure planes: min_area_m2 must be > 0");
+  CheckArgument(min_wall_height_m >= 0.0,
+                "structure planes: min_wall_height_m must be >= 0");
+  CheckArgument(max_wall_tilt_deg >= 0.0 && max_wall_tilt_deg < 90.0,
+                "structure planes: max_wall_tilt_deg must be in [0, 90)");
+  CheckArgument(max_planes > 0, "structure planes: max_planes must be > 0");
+  CheckArgument(ransac_iterations > 0,
+                "structure planes: ransac_iterations must be > 0");
+}
+
+bool OnAnyPlane(const Eigen::Vector3f& p,
+                const std::vector<StructurePlane>& planes, double tolerance_m) {
+  const Eigen::Vector3d q = p.cast<double>();
+  return std::any_of(planes.begin(), planes.end(), [&](const auto& plane) {
+    return std::abs(plane.normal.dot(q) - plane.offset) <= tolerance_m;
+  });
+}
+
+namespace {
+
+// Floor or ceiling: heights along `up` in bins of the tolerance; the lowest
+// (highest) run of three bins holding enough points is the plane, at their
+// mean height.
+std::vector<StructurePlane> HorizontalPlane(const Cloud& points, bool lowest,
+                                            const Eigen::Vector3d& up,
+                                            size_t min_support,
+                                            const StructurePlaneOptions& o) {
+  std::map<int64_t, std::pair<size_t, double>> bins;  // count, height sum
+  for (const Eigen::Vector3f& p : points) {
+    const double h = up.dot(p.cast<double>());
+    auto& bin = bins[static_cast<int64_t>(std::floor(h / o.tolerance_m))];
+    ++bin.first;
+    bin.second += h;
+  }
+  auto window = [&](int64_t b) {
+    std::pair<size_t, double> sum{0, 0.0};
+    for (int64_t d = -1; d <= 1; ++d) {
+      if (const auto it = bins.find(b + d); it != bins.end()) {
+        sum.first += it->second.first;
+        sum.second += it->second.second;
+      }
+    }
+    return sum;
+  };
+  std::vector<int64_t> order;
+  for (const auto& [b, unused] : bins) order.push_back(b);
+  if (!lowest) std::reverse(order.begin(), order.end());
+  for (int64_t b : order) {
+    // The window's centre must be its densest bin: the run's middle, not its
+    // edge.
+    const auto [count, height_sum] = window(b);
+    if (count < min_support) continue;
+    int64_t best = b;
+    for (int64_t c = b - 1; c <= b + 1; ++c) {
+      if (window(c).first > window(best).first) best = c;
+    }
+    const auto [n, sum] = window(best);
+    StructurePlane plane;
+    plane.geometry =
+        lowest ? StructureGeometry::kFloor : StructureGeometry::kCeiling;
+    plane.normal = up;
+    plane.offset = sum / static_cast<double>(n);
+    plane.support = n;
+    return {plane};
+  }
+  return {};
+}
+
+// Sequential RANSAC over planes containing `up`: two points fix one.
+std::vector<StructurePlane> VerticalPlanes(Cloud points,
+                                           const Eigen::Vector3d& up,
+                                           size_t min_support,
+                                           const StructurePlaneOptions& o) {
+  std::vector<StructurePlane> planes;
+  std::mt19937_64 rng(o.seed);
+  const double max_dot =
+      std::sin(o.max_wall_tilt_deg * std::numbers::pi / 180.0);
+  // Rejected candidates (too low for a wall) count as attempts too.
+  for (int attempt = 0; attempt < 2 * o.max_planes &&
+                        static_cast<int>(planes.size()) < o.max_planes &&
+                        points.size() >= min_support;
+       ++attempt) {
+    std::uniform_int_distribution<size_t> pick(0, points.size() - 1);
+    // Hypotheses are scored on a sample (the winner on every point below):
+    // rooms have tens of thousands of wall voxels.
+    constexpr size_t kSample = 4000;
+    Cloud sample;
+    if (points.size() > kSample) {
+      for (size_t i = 0; i < kSample; ++i) sample.push_back(points[pick(rng)]);
+    }
+    const Cloud& scored = points.size() > kSample ? sample : points;
+    StructurePlane best;
+    for (int it = 0; it < o.ransac_iterations; ++it) {
+      const Eigen::Vector3d a = points[pick(rng)].cast<double>();
+      const Eigen::Vector3d b = points[pick(rng)].cast<double>();
+      Eigen::Vector3d n = (b - a).cross(up);
+      if (n.norm() < 0.1) continue;  // too close, or one above the other
+      n.normalize();
+      const double offset = n.dot(a);
+      size_t support = 0;
+      for (const Eigen::Vector3f& p : scored) {
+        if (std::abs(n.dot(p.cast<double>()) - offset) <= o.tolerance_m) {
+          ++support;
+        }
+      }
+      if (support > best.support) {
+        best.normal = n, best.offset = offset, best.support = support;
+      }
+    }
+    best.support = static_cast<size_t>(
+        std::count_if(points.begin(), points.end(), [&](const Eigen::Vector3f& p) {
+          return std::abs(best.normal.dot(p.cast<double>()) - best.offset) <=
+                 o.tolerance_m;
+        }));
+    if (best.support < min_support) break;
+    // Least squares over the inliers (normal kept horizontal within the tilt
+    // allowed): centroid and the smallest principal direction.
+    Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+    std::vector<Eigen::Vector3d> inliers;
+    std::vector<double> heights;
+    for (const Eigen::Vector3f& p : points) {
+      const Eigen::Vector3d q = p.cast<double>();
+      if (std::abs(best.normal.dot(q) - best.offset) <= o.tolerance_m) {
+        inliers.push_back(q);
+        heights.push_back(up.dot(q));
+        mean += q;
+      }
+    }
+    std::sort(heights.begin(), heights.end());
+    const double height = heights[heights.size() * 95 / 100] -
+                          heights[heights.size() * 5 / 100];
+    mean /= static_cast<double>(inliers.size());
+    Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+    for (const auto& q : inliers) cov += (q - mean) * (q - mean).transpose();
+    Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(cov);
+    Eigen::Vector3d n = eig.eigenvectors().col(0);
+    if (std::abs(n.dot(up)) <= max_dot) {
+      best.normal = n.normalized();
+      best.offset = best.normal.dot(mean);
+    }
+    best.geometry = StructureGeometry::kVertical;
+    std::erase_if(points, [&](const Eigen::Vector3f& p) {
+      return std::abs(best.normal.dot(p.cast<double>()) - best.offset) <=
+             o.tolerance_m;
+    });
+    if (height >= o.min_wall_height_m) planes.push_back(best);
+  }
+  return planes;
+}
+
+}  // namespace
+
+std::vector<StructurePlane> FindStructurePlanes(
+    const Cloud& points, StructureGeometry geometry,
+    const Eigen::Vector3d& up_world, double voxel_area_m2,
+    const StructurePlaneOptions& options) {
+  options.Check();
+  CheckArgument(voxel_area_m2 > 0.0, "structure planes: voxel area must be > 0");
+  const Eigen::Vector3d up = up_world.normalized();
+  const auto min_support = static_cast<size_t>(
+      std::ceil(options.min_area_m2 / voxel_area_m2));
+  switch (geometry) {
+    case StructureGeometry::kVertical:
+      return VerticalPlanes(points, up, min_support, options);
+    case StructureGeometry::kFloor:
+      return HorizontalPlane(points, true, up, min_support, options);
+    case StructureGeometry::kCeiling:
+      return HorizontalPlane(points, false, up, min_support, options);
+    case StructureGeometry::kNone:
+      break;
+  }
+  return {};
+}
+
+}  // namespace semrec::fuse

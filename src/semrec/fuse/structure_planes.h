@@ -1,0 +1,73 @@
+// Large planes of the room, for telling structure from things: a wall vote
+// counts only on a large vertical plane, a floor vote only on the lowest large
+// horizontal plane, a ceiling vote only on the highest. A 2D model calls the
+// lower part of a chair floor and a table against the wall wall; an RGB-D map
+// knows where the floor and the walls actually are.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "semrec/fuse/voxel.h"
+
+namespace semrec::fuse {
+
+/// Which plane a structure class lives on.
+enum class StructureGeometry { kNone, kVertical, kFloor, kCeiling };
+
+/// By name: wall/building/house -> vertical; floor, rug, floor mat and ground
+/// classes (road, sidewalk, grass, earth, field) -> floor; ceiling ->
+/// ceiling; anything else -> none (not gated).
+StructureGeometry StructureGeometryOf(const std::string& class_name);
+
+struct StructurePlaneOptions {
+  /// Points within this distance of a plane lie on it (a voxel and some depth
+  /// noise).
+  double tolerance_m = 0.06;
+  /// A plane must hold at least this much of its class's surface (points x
+  /// voxel area).
+  double min_area_m2 = 1.0;
+  /// A wall's points span at least this height (5th to 95th percentile along
+  /// up): the side of a table or a cabinet's front is vertical and can be
+  /// large, but a wall reaches well above the furniture.
+  double min_wall_height_m = 1.0;
+  /// Vertical planes: normals within this angle of horizontal.
+  double max_wall_tilt_deg = 10.0;
+  /// At most this many vertical planes per class.
+  int max_planes = 16;
+  /// RANSAC hypotheses per vertical plane.
+  int ransac_iterations = 300;
+  uint64_t seed = 1;
+
+  void Check() const;
+};
+
+struct StructurePlane {
+  /// The class it holds (set by the caller).
+  uint16_t class_id = 0;
+  StructureGeometry geometry = StructureGeometry::kNone;
+  /// normal . p = offset (world frame).
+  Eigen::Vector3d normal = Eigen::Vector3d::UnitZ();
+  double offset = 0.0;
+  /// Points (voxels) of the class on it.
+  size_t support = 0;
+};
+
+/// Planes of `geometry` among `points` (one per voxel of area
+/// `voxel_area_m2`, all voting for the class): vertical planes by sequential
+/// RANSAC with the plane containing `up`, floor/ceiling as the lowest/highest
+/// height (along `up`) holding enough points. Empty when none is large enough.
+std::vector<StructurePlane> FindStructurePlanes(
+    const Cloud& points, StructureGeometry geometry,
+    const Eigen::Vector3d& up_world, double voxel_area_m2,
+    const StructurePlaneOptions& options);
+
+/// True when `p` lies within the tolerance of one of `planes`.
+bool OnAnyPlane(const Eigen::Vector3f& p,
+                const std::vector<StructurePlane>& planes, double tolerance_m);
+
+}  // namespace semrec::fuse

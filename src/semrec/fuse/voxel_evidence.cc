@@ -1,0 +1,146 @@
+#include "semrec/fuse/voxel_evidence.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "semrec/core/error.h"
+
+namespace semrec::fuse {
+
+void VoxelEvidenceOptions::Check() const {
+  CheckArgument(full_weight_distance_m > 0.0,
+                "voxel evidence: full_weight_distance_m must be > 0");
+  CheckArgument(view_class_share > 0.0 && view_class_share <= 1.0,
+                "voxel evidence: view_class_share must be in (0, 1]");
+}
+
+const ClassEvidence* VoxelEvidence::Find(uint16_t class_id) const {
+  for (const ClassEvidence& c : classes) {
+    if (c.class_id == class_id) return &c;
+  }
+  return nullptr;
+}
+
+Eigen::Vector3i UnpackVoxel(uint64_t key) {
+  constexpr int64_t kOffset = 1 << 20;
+  constexpr uint64_t kMask = (1u << 21) - 1;
+  return {static_cast<int>(static_cast<int64_t>((key >> 42) & kMask) - kOffset),
+          static_cast<int>(static_cast<int64_t>((key >> 21) & kMask) - kOffset),
+          static_cast<int>(static_cast<int64_t>(key & kMask) - kOffset)};
+}
+
+VoxelEvidenceMap::VoxelEvidenceMap(double voxel_size_m,
+                                   const VoxelEvidenceOptions& options)
+    : voxel_size_m_(voxel_size_m),
+      inv_voxel_(static_cast<float>(1.0 / voxel_size_m)),
+      options_((options.Check(), options)) {
+  CheckArgument(voxel_size_m > 0.0, "voxel evidence: voxel size must be > 0");
+}
+
+size_t VoxelEvidenceMap::labelled_voxels() const {
+  return static_cast<size_t>(
+      std::count_if(voxels_.begin(), voxels_.end(),
+                    [](const auto& kv) { return !kv.second.classes.empty(); }));
+}
+
+namespace {
+
+// One labelled pixel of the frame: its voxel, class and object.
+struct Vote {
+  uint64_t key;
+  uint32_t object;
+  uint16_t class_id;
+  Eigen::Vector3f p;
+};
+
+template <typename T, typename Key>
+T* FindOrAdd(std::vector<T>* items, Key T::*field, Key value) {
+  for (T& item : *items) {
+    if (item.*field == value) return &item;
+  }
+  items->push_back({});
+  items->back().*field = value;
+  return &items->back();
+}
+
+}  // namespace
+
+void VoxelEvidenceMap::AddFrame(const std::vector<FrameSegment>& segments,
+                                const std::vector<uint32_t>& object_ids,
+                                const FrameObservation* observation,
+                                size_t frame_index) {
+  CheckArgument(object_ids.size() == segments.size(),
+                "voxel evidence: one object id per segment");
+  std::vector<Vote> votes;
+  size_t total = 0;
+  for (const FrameSegment& s : segments) total += s.points_world.size();
+  votes.reserve(total);
+  for (size_t f = 0; f < segments.size(); ++f) {
+    const FrameSegment& s = segments[f];
+    if (s.map_object != 0) continue;
+    for (const Eigen::Vector3f& p : s.points_world) {
+      votes.push_back({VoxelKey(p, inv_voxel_), object_ids[f], s.class_id, p});
+    }
+  }
+  // Grouped by voxel, then class and object: one pass casts each voxel's vote.
+  std::sort(votes.begin(), votes.end(), [](const Vote& a, const Vote& b) {
+    return a.key != b.key ? a.key < b.key
+           : a.class_id != b.class_id ? a.class_id < b.class_id
+                                      : a.object < b.object;
+  });
+  const Eigen::Vector3f eye = observation ? observation->camera_position_world
+                                          : Eigen::Vector3f::Zero();
+  const auto frame = static_cast<uint32_t>(frame_index);
+  std::unordered_map<uint64_t, uint32_t> seen_this_frame;
+  for (size_t i = 0; i < votes.size();) {
+    size_t end = i;
+    while (end < votes.size() && votes[end].key == votes[i].key) ++end;
+    VoxelEvidence& v = voxels_[votes[i].key];
+    const auto n = static_cast<float>(end - i);
+    Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+    for (size_t k = i; k < end; ++k) sum += votes[k].p.cast<double>();
+    v.point_sum += sum;
+    v.points += static_cast<uint32_t>(end - i);
+    float weight = 1.0f;
+    if (observation != nullptr) {
+      const float d = ((sum / n).cast<float>() - eye).norm();
+      const auto full = static_cast<float>(options_.full_weight_distance_m);
+      if (d > full) weight = full / d;
+    }
+    for (size_t k = i; k < end;) {  // per class
+      size_t class_end = k;
+      while (class_end < end && votes[class_end].class_id == votes[k].class_id) {
+        ++class_end;
+      }
+      const float share = static_cast<float>(class_end - k) / n;
+      ClassEvidence* c =
+          FindOrAdd(&v.classes, &ClassEvidence::class_id, votes[k].class_id);
+      c->weight += weight * share;
+      if (share >= options_.view_class_share) ++c->views;
+      for (size_t o = k; o < class_end;) {  // per object within the class
+        size_t object_end = o;
+        while (object_end < class_end &&
+               votes[object_end].object == votes[o].object) {
+          ++object_end;
+        }
+        if (votes[o].object != 0) {
+          FindOrAdd(&v.objects, &ObjectVote::id, votes[o].object)->views +=
+              static_cast<float>(object_end - o) / n;
+        }
+        o = object_end;
+      }
+      k = class_end;
+    }
+    ++v.views;
+    seen_this_frame.emplace(votes[i].key, frame);
+    i = end;
+  }
+  if (observation == nullptr) return;
+  for (const Eigen::Vector3f& p : observation->observed_world) {
+    const uint64_t key = VoxelKey(p, inv_voxel_);
+    if (!seen_this_frame.emplace(key, frame).second) continue;
+    ++voxels_[key].views;
+  }
+}
+
+}  // namespace semrec::fuse

@@ -1,0 +1,113 @@
+// Class evidence per map voxel: every view that sees a place votes on it.
+//
+// A segment's class is decided per view by a 2D model whose mistakes are
+// correlated with place (the lower part of a chair called floor, a table
+// against the wall called wall). The object a mislabelled segment joined must
+// not keep those points forever, so the map keeps, per stored voxel (the 5 cm
+// map), a class histogram and the objects its points were assigned to, from
+// every frame that labelled it, and how many frames observed it at all
+// (labelled or not). The final objects are decided from these at the end
+// (fuse/map_objects.h).
+//
+// Each view casts one vote per voxel, split over the classes its pixels in
+// that voxel carry (a voxel on a mask border is half chair, half wall in that
+// view), weighted by distance: beyond `full_weight_distance_m` a pixel covers
+// more of the surface and a 2D model's boundaries blur (it sees the frame at
+// ~512 px), so far views count less. Counting views rather than pixels keeps a
+// single close-up view from outvoting every other view of the place.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <unordered_map>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "semrec/fuse/segments.h"
+#include "semrec/fuse/voxel.h"
+
+namespace semrec::fuse {
+
+struct VoxelEvidenceOptions {
+  /// Views closer than this vote with weight 1; farther, weight
+  /// full_weight_distance_m / distance.
+  double full_weight_distance_m = 2.0;
+  /// A view counts as showing class c in a voxel (for visibility, see
+  /// map_objects.h) when at least this share of its pixels there carry c.
+  double view_class_share = 0.5;
+
+  void Check() const;
+};
+
+struct ClassEvidence {
+  uint16_t class_id = 0;
+  /// Views in which the class held view_class_share of the voxel's pixels.
+  uint16_t views = 0;
+  /// Summed distance-weighted view shares.
+  float weight = 0.0f;
+};
+
+struct ObjectVote {
+  /// Fusion object id at the time of the view (resolve it through merges).
+  uint32_t id = 0;
+  /// Summed view shares (1 per view that put all its pixels here into it).
+  float views = 0.0f;
+};
+
+struct VoxelEvidence {
+  /// Centroid of the labelled points that fell into the voxel.
+  Eigen::Vector3d point_sum = Eigen::Vector3d::Zero();
+  uint32_t points = 0;
+  /// Frames that observed the voxel (a pixel with depth in it, labelled or
+  /// not).
+  uint32_t views = 0;
+  std::vector<ClassEvidence> classes;
+  std::vector<ObjectVote> objects;
+
+  Eigen::Vector3f Centroid() const {
+    if (points == 0) return Eigen::Vector3f::Zero();
+    return (point_sum / static_cast<double>(points)).cast<float>();
+  }
+  const ClassEvidence* Find(uint16_t class_id) const;
+};
+
+/// What one frame shows: where the camera was and every surface point it
+/// measured (world frame), labelled or not. Pixels the map's projection
+/// labelled are left out: the map seeing itself is no view.
+struct FrameObservation {
+  Eigen::Vector3f camera_position_world = Eigen::Vector3f::Zero();
+  Cloud observed_world;
+};
+
+class VoxelEvidenceMap {
+ public:
+  VoxelEvidenceMap(double voxel_size_m, const VoxelEvidenceOptions& options);
+
+  /// Adds one frame: `segments` with the object each ended in (`object_ids`,
+  /// parallel; 0: not fused) cast their votes, `observation` marks what the
+  /// frame saw (may be null: only the labelled voxels count as observed).
+  /// Segments with `map_object` set are the map's own projection: no vote.
+  void AddFrame(const std::vector<FrameSegment>& segments,
+                const std::vector<uint32_t>& object_ids,
+                const FrameObservation* observation, size_t frame_index);
+
+  const std::unordered_map<uint64_t, VoxelEvidence>& voxels() const {
+    return voxels_;
+  }
+  double voxel_size_m() const { return voxel_size_m_; }
+  float inv_voxel_size() const { return inv_voxel_; }
+  /// Voxels with class evidence.
+  size_t labelled_voxels() const;
+
+ private:
+  double voxel_size_m_;
+  float inv_voxel_;
+  VoxelEvidenceOptions options_;
+  std::unordered_map<uint64_t, VoxelEvidence> voxels_;
+};
+
+/// Integer voxel coordinates of a key (inverse of PackVoxel).
+Eigen::Vector3i UnpackVoxel(uint64_t key);
+
+}  // namespace semrec::fuse
