@@ -27,6 +27,17 @@ grep -q "error: /nonexistent/seq: sequence path does not exist" "$tmp/err" || fa
 [ "$rc" -eq 2 ] && grep -q "frames must be > 0" "$tmp/err" || fail "zero frames: exit $rc, $(cat "$tmp/err")"
 "$SEMREC" synth --noise-strength -1 --out "$tmp/s" 2>"$tmp/err"; rc=$?
 [ "$rc" -eq 2 ] && grep -q "strength must be >= 0" "$tmp/err" || fail "negative noise: exit $rc"
+"$SEMREC" synth --views diagonal --out "$tmp/s" 2>"$tmp/err"; rc=$?
+[ "$rc" -eq 2 ] && grep -q "views must be 'video' or 'sparse'" "$tmp/err" || fail "bad views: exit $rc, $(cat "$tmp/err")"
+"$SEMREC" synth --label-bleed --out "$tmp/s" 2>"$tmp/err"; rc=$?
+[ "$rc" -eq 2 ] && grep -q "use it with --label-noise" "$tmp/err" || fail "bleed without noise: exit $rc, $(cat "$tmp/err")"
+"$SEMREC" synth --label-noise --label-bleed --label-bleed-share 1.5 --out "$tmp/s" 2>"$tmp/err"; rc=$?
+[ "$rc" -eq 2 ] && grep -q "bleed share must be in \[0, 1\]" "$tmp/err" || fail "bleed share: exit $rc, $(cat "$tmp/err")"
+"$SEMREC" synth --preset office --views sparse --frames 2 --width 160 --height 120 --gt-spacing-m 0.05 \
+  --label-noise --label-bleed --out "$tmp/sparse" >"$tmp/sparse.out" 2>"$tmp/err" ||
+  fail "synth sparse failed: $(cat "$tmp/err")"
+grep -q "sparse views" "$tmp/sparse.out" && [ -f "$tmp/sparse/labels_noisy/semantic/000001.png" ] &&
+  grep -q '"views": "sparse"' "$tmp/sparse/gt/scene.json" || fail "synth sparse: $(cat "$tmp/sparse.out")"
 "$SEMREC" synth --frames 3 --width 160 --height 120 --gt-spacing-m 0.02 --out "$tmp/syn" \
   >"$tmp/synth.out" 2>"$tmp/synth.err" || fail "synth failed: $(cat "$tmp/synth.err")"
 grep -q "rendering 3/3" "$tmp/synth.err" || fail "synth: no progress report"

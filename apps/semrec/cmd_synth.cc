@@ -16,6 +16,7 @@ struct SynthArgs {
   std::string preset = "six-objects";
   std::string out;
   std::optional<int> frames;
+  std::string views = "video";
   uint64_t seed = 1;
   std::string noise = "kinect";
   double noise_strength = 1.0;
@@ -36,6 +37,11 @@ void RunSynth(const SynthArgs& args) {
     throw UsageError(e.what());
   }
   options.frames = args.frames.value_or(options.frames);
+  CheckUsage(args.views == "video" || args.views == "sparse",
+             "--views must be 'video' or 'sparse', got '" + args.views + "'");
+  if (args.views == "sparse") {
+    options.trajectory.kind = synth::TrajectoryOptions::Kind::kSparse;
+  }
   // A different resolution keeps the field of view: the focal length scales
   // with the width.
   const int default_width = options.width;
@@ -56,6 +62,9 @@ void RunSynth(const SynthArgs& args) {
   options.overwrite = args.overwrite;
   options.write_noisy_labels = args.label_noise;
   options.label_noise = args.label_noise_options;
+  CheckUsage(!options.label_noise.bleed || args.label_noise,
+             "--label-bleed changes the noisy labels: use it with "
+             "--label-noise");
   CheckUsage(options);
   const synth::SynthSummary s =
       synth::WriteSyntheticSequence(options, args.out);
@@ -69,15 +78,17 @@ void RunSynth(const SynthArgs& args) {
                           count, n);
   }
   std::printf(
-      "%s", fmt::format("preset {} (seed {}): {} frames {}x{}, noise {} -> {}\n"
-                        "objects: {}\n"
-                        "people: {}{}\n"
-                        "wrote {:.1f} MB in {:.1f} s\n",
-                        args.preset, args.seed, s.frames, options.width,
-                        options.height, args.noise, args.out, classes, s.people,
-                        s.people > 0 ? " (" + people + ")" : "",
-                        s.bytes_written / 1e6, s.seconds)
-                .c_str());
+      "%s",
+      fmt::format("preset {} (seed {}): {} frames {}x{}, {} views, "
+                  "noise {} -> {}\n"
+                  "objects: {}\n"
+                  "people: {}{}\n"
+                  "wrote {:.1f} MB in {:.1f} s\n",
+                  args.preset, args.seed, s.frames, options.width,
+                  options.height, args.views, args.noise, args.out, classes,
+                  s.people, s.people > 0 ? " (" + people + ")" : "",
+                  s.bytes_written / 1e6, s.seconds)
+          .c_str());
 }
 
 }  // namespace
@@ -98,6 +109,11 @@ void RegisterSynth(CLI::App& app) {
       ->required();
   cmd->add_option("--frames", args->frames,
                   "Frame count (default: the preset's)");
+  cmd->add_option("--views", args->views,
+                  "video: the preset's smooth camera path; sparse: independent "
+                  "views at robot height (0.6-1.2 m, random heading, slight "
+                  "pitch down), many objects seen once or twice")
+      ->capture_default_str();
   cmd->add_option("--seed", args->seed,
                   "Random seed; equal seeds give identical files")
       ->capture_default_str();
@@ -135,6 +151,13 @@ void RegisterSynth(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--label-jitter-px", args->label_noise_options.jitter_px,
                   "Label noise: boundary jitter (pixels)")
+      ->capture_default_str();
+  cmd->add_flag("--label-bleed", args->label_noise_options.bleed,
+                "Label noise: object pixels within 20 cm of the floor or a "
+                "wall, or dark, take that structure's class and mask; the "
+                "same object parts in most views");
+  cmd->add_option("--label-bleed-share", args->label_noise_options.bleed_share,
+                  "Label noise: expected share of those pixels that bleed")
       ->capture_default_str();
   cmd->add_flag("--overwrite", args->overwrite,
                 "Write into a non-empty output folder");

@@ -18,6 +18,7 @@
 #include "semrec/io/ply_io.h"
 #include "semrec/io/sequence_reader.h"
 #include "semrec/synth/render.h"
+#include "semrec/synth/seed.h"
 
 namespace fs = std::filesystem;
 
@@ -26,13 +27,6 @@ namespace {
 
 // Raw depth units per metre in the written PNGs (0.2 mm steps, up to 13.1 m).
 constexpr double kDepthScale = 5000.0;
-
-uint64_t Mix(uint64_t a, uint64_t b) {
-  uint64_t h = a * 0x9E3779B97F4A7C15ULL + b + 0x632BE59BD9B4E019ULL;
-  h ^= h >> 31;
-  h *= 0xBF58476D1CE4E5B9ULL;
-  return h ^ (h >> 29);
-}
 
 DepthImage16 ToRaw(const DepthImage& depth) {
   DepthImage16 raw(depth.width(), depth.height(), 1);
@@ -80,16 +74,6 @@ uint64_t FileSize(const fs::path& p) {
 
 }  // namespace
 
-void TrajectoryOptions::Check() const {
-  CheckArgument(height_m > 0.2, "synth trajectory: height_m must be > 0.2");
-  CheckArgument(std::isfinite(orbit_deg_per_s),
-                "synth trajectory: orbit_deg_per_s must be finite");
-  CheckArgument(walking_speed_mps > 0.0 && walking_speed_mps < 10.0,
-                "synth trajectory: walking_speed_mps must be in (0, 10)");
-  CheckArgument(jitter_m >= 0.0 && jitter_deg >= 0.0,
-                "synth trajectory: jitter amplitudes must be >= 0");
-}
-
 void SynthOptions::Check() const {
   scene.Check();
   trajectory.Check();
@@ -112,6 +96,9 @@ void SynthOptions::Check() const {
   CheckArgument(trajectory.kind != TrajectoryOptions::Kind::kOrbit ||
                     trajectory.height_m < scene.room_height_m - 0.1,
                 "synth: the camera must be below the ceiling");
+  CheckArgument(trajectory.kind != TrajectoryOptions::Kind::kSparse ||
+                    trajectory.sparse_max_height_m < scene.room_height_m - 0.1,
+                "synth: sparse cameras must stay below the ceiling");
 }
 
 CameraIntrinsics SynthOptions::Intrinsics() const {
@@ -164,78 +151,6 @@ SynthOptions SynthOptions::Preset(const std::string& name) {
   return o;
 }
 
-std::vector<Transform> MakeTrajectory(const Scene& scene,
-                                      const TrajectoryOptions& options,
-                                      int frames, double fps, uint64_t seed) {
-  CheckArgument(fps > 0.0, "synth trajectory: fps must be > 0");
-  options.Check();
-  const Eigen::Vector3d size = scene.room_size;
-  const Eigen::Vector3d center(size.x() / 2, size.y() / 2, 0.0);
-  // Smooth hand-held jitter: a few sinusoids per axis with seeded phases and
-  // frequencies.
-  Rng rng(Mix(seed, 0x7A11));
-  std::array<std::array<double, 4>, 6> waves;
-  for (auto& axis : waves) {
-    axis = {rng.Uniform(0.0, 2 * M_PI), rng.Uniform(0.3, 1.3),
-            rng.Uniform(0.0, 2 * M_PI), 2.3 * rng.Uniform(0.3, 1.3)};
-  }
-  auto wave = [&](int axis, double t) {
-    const auto& p = waves[axis];
-    return 0.7 * std::sin(p[0] + 2 * M_PI * p[1] * t) +
-           0.3 * std::sin(p[2] + 2 * M_PI * p[3] * t);
-  };
-  std::vector<Transform> poses;
-  for (int i = 0; i < frames; ++i) {
-    // Poses depend on time only, so a shorter sequence is a prefix of a longer
-    // one.
-    const double t = i / fps;
-    Transform pose;
-    switch (options.kind) {
-      case TrajectoryOptions::Kind::kOrbit: {
-        const double radius =
-            std::max(0.5, std::min(size.x(), size.y()) / 2 - 0.5);
-        const double angle =
-            -M_PI / 2 + t * options.orbit_deg_per_s * M_PI / 180.0;
-        const Eigen::Vector3d eye =
-            center + Eigen::Vector3d(radius * std::cos(angle),
-                                     radius * std::sin(angle),
-                                     options.height_m);
-        pose = LookAt(eye, center + Eigen::Vector3d(0, 0, 0.4));
-        break;
-      }
-      case TrajectoryOptions::Kind::kWalkthrough: {
-        // Along the long axis and back at walking_speed_mps, panning +-40
-        // degrees every 6 s, looking 35 degrees down.
-        const double length = size.x() - 1.6;
-        const double lap = std::fmod(t * options.walking_speed_mps, 2 * length);
-        const bool forward = lap < length;
-        const double x = forward ? lap : 2 * length - lap;
-        const Eigen::Vector3d eye(0.8 + x, size.y() / 2, options.height_m);
-        const double heading =
-            0.7 * std::sin(2 * M_PI * t / 6.0) + (forward ? 0.0 : M_PI);
-        const Eigen::Vector3d look(std::cos(heading), std::sin(heading), -0.7);
-        pose = LookAt(eye, eye + look);
-        break;
-      }
-      case TrajectoryOptions::Kind::kStatic: {
-        const Eigen::Vector3d eye(size.x() / 2, 0.15, options.height_m);
-        pose = LookAt(eye, Eigen::Vector3d(size.x() / 2, size.y(), 0.8));
-        break;
-      }
-    }
-    const Eigen::Vector3d dp(wave(0, t), wave(1, t), wave(2, t));
-    const double deg = options.jitter_deg * M_PI / 180.0;
-    const Eigen::Matrix3d dR =
-        (Eigen::AngleAxisd(deg * wave(3, t), Eigen::Vector3d::UnitX()) *
-         Eigen::AngleAxisd(deg * wave(4, t), Eigen::Vector3d::UnitY()) *
-         Eigen::AngleAxisd(deg * wave(5, t), Eigen::Vector3d::UnitZ()))
-            .toRotationMatrix();
-    poses.emplace_back(pose.rotation() * dR,
-                       pose.translation() + options.jitter_m * dp);
-  }
-  return poses;
-}
-
 SynthSummary WriteSyntheticSequence(const SynthOptions& options_in,
                                     const fs::path& out_dir,
                                     const ProgressOptions& progress_options) {
@@ -282,8 +197,9 @@ SynthSummary WriteSyntheticSequence(const SynthOptions& options_in,
   tbb::parallel_for(0, options.frames, [&](int i) {
     const double time_s = i / options.fps;
     const RenderedFrame r = Render(scene, time_s, poses[i], k);
-    const DepthImage noisy = ApplyDepthNoise(
-        r.depth, r.cos_incidence, k, options.noise, Mix(options.seed, i + 1));
+    const DepthImage noisy =
+        ApplyDepthNoise(r.depth, r.cos_incidence, k, options.noise,
+                        MixSeed(options.seed, i + 1));
     DepthNoiseOptions clean_options = options.noise;
     clean_options.enabled = false;
     const DepthImage clean =
@@ -309,7 +225,8 @@ SynthSummary WriteSyntheticSequence(const SynthOptions& options_in,
     if (options.write_noisy_labels) {
       const NoisyLabels noisy_labels =
           ApplyLabelNoise(r, scene, poses[i], k, options.label_noise,
-                          Mix(Mix(options.seed, 0x1abe1), i + 1));
+                          MixSeed(MixSeed(options.seed, 0x1abe1), i + 1),
+                          MixSeed(options.seed, 0xb1eed));
       const fs::path noisy = out_dir / "labels_noisy";
       io::WritePng(noisy / "instance" / stem, noisy_labels.instance);
       io::WritePng(noisy / "semantic" / stem, noisy_labels.semantic);
@@ -451,7 +368,15 @@ SynthSummary WriteSyntheticSequence(const SynthOptions& options_in,
       {"fps", options.fps},
       {"room_size_m",
        {scene.room_size.x(), scene.room_size.y(), scene.room_size.z()}},
+      {"views", options.trajectory.kind == TrajectoryOptions::Kind::kSparse
+                    ? "sparse"
+                    : "video"},
       {"noise", options.noise.enabled ? "kinect" : "none"},
+      {"label_noise", options.write_noisy_labels},
+      {"label_bleed_share",
+       options.write_noisy_labels && options.label_noise.bleed
+           ? options.label_noise.bleed_share
+           : 0.0},
       {"noise_strength", options.noise.strength},
       {"max_depth_m", options.noise.max_depth_m},
       {"depth_scale", kDepthScale},

@@ -15,34 +15,9 @@
 #include "semrec/synth/label_noise.h"
 #include "semrec/synth/noise.h"
 #include "semrec/synth/scene.h"
+#include "semrec/synth/trajectory.h"
 
 namespace semrec::synth {
-
-struct TrajectoryOptions {
-  enum class Kind {
-    /// Circles the room centre above the furniture, looking down at it.
-    kOrbit,
-    /// Travels along the room's long axis, panning left and right.
-    kWalkthrough,
-    /// Stands at the front wall looking into the room (people walk through the
-    /// view).
-    kStatic,
-  };
-  Kind kind = Kind::kOrbit;
-  /// Camera height for orbit and walk-through (above the tallest furniture, 1.8
-  /// m).
-  double height_m = 2.1;
-  /// Orbit: angular speed (60 degrees/s = 2 degrees per frame at 30 fps, a
-  /// brisk hand-held pan).
-  double orbit_deg_per_s = 60.0;
-  /// Walk-through: speed along the room.
-  double walking_speed_mps = 0.5;
-  /// Hand-held jitter amplitudes (smooth, seeded).
-  double jitter_m = 0.01;
-  double jitter_deg = 0.5;
-
-  void Check() const;
-};
 
 struct SynthOptions {
   SceneOptions scene;
@@ -78,12 +53,6 @@ struct SynthOptions {
   static SynthOptions Preset(const std::string& name);
   static std::vector<std::string> PresetNames();
 };
-
-/// Camera poses (T_world_camera) for frames at times i / fps. They depend on
-/// time only, so a shorter sequence is a prefix of a longer one.
-std::vector<Transform> MakeTrajectory(const Scene& scene,
-                                      const TrajectoryOptions& options,
-                                      int frames, double fps, uint64_t seed);
 
 struct SynthSummary {
   size_t frames = 0;

@@ -1,6 +1,8 @@
 #include "semrec/synth/label_noise.h"
 
 #include <algorithm>
+#include <array>
+#include <limits>
 #include <map>
 #include <set>
 #include <vector>
@@ -8,6 +10,7 @@
 #include "semrec/core/error.h"
 #include "semrec/core/random.h"
 #include "semrec/core/union_find.h"
+#include "semrec/synth/seed.h"
 
 namespace semrec::synth {
 namespace {
@@ -16,6 +19,75 @@ bool IsObject(uint16_t instance, const Scene& scene) {
   if (instance == 0 || instance >= kPersonInstanceBase) return false;
   const SceneObject* o = scene.FindObject(instance);
   return o != nullptr && !o->structure;
+}
+
+// Share of the views in which a bleeding part bleeds (LabelNoiseOptions).
+constexpr double kBleedViewRate = 0.8;
+
+// Distance from p to room face `face` (Scene::room_faces order).
+double FaceDistance(const Eigen::Vector3d& room, int face,
+                    const Eigen::Vector3d& p) {
+  const int axis = face / 2;
+  return face % 2 == 1 ? room[axis] - p[axis] : p[axis];
+}
+
+double Luma(const ColorImage& color, int u, int v) {
+  return 0.299 * color(u, v, 0) + 0.587 * color(u, v, 1) +
+         0.114 * color(u, v, 2);
+}
+
+// LabelNoiseOptions::bleed. Decisions read the ground truth only, so the order
+// of pixels does not matter; draws are hashes, not the noise stream.
+void ApplyStructureBleed(
+    const RenderedFrame& frame, const Scene& scene,
+    const Transform& T_world_camera, const CameraIntrinsics& k,
+    const LabelNoiseOptions& options,
+    const std::map<std::pair<uint32_t, int>, uint16_t>& mask_id,
+    uint64_t view_seed, uint64_t scene_seed, NoisyLabels* out) {
+  // Floor and walls in view (the ceiling touches nothing) and their masks.
+  std::map<uint16_t, int> face_of;
+  std::array<uint16_t, 6> face_mask{}, face_class{};
+  for (int f = 0; f < 5; ++f) {
+    const uint16_t instance = scene.room_faces[f];
+    const auto it = mask_id.find({instance, 0});
+    if (instance == 0 || it == mask_id.end()) continue;
+    face_of[instance] = f;
+    face_mask[f] = it->second;
+    face_class[f] = scene.FindObject(instance)->class_id;
+  }
+  if (face_of.empty()) return;
+  const double view_rate = std::max(options.bleed_share, kBleedViewRate);
+  // (object, face) -> whether that side of the object bleeds in this view.
+  std::map<std::pair<uint16_t, int>, bool> side_bleeds;
+  for (int v = 0; v < frame.instance.height(); ++v) {
+    for (int u = 0; u < frame.instance.width(); ++u) {
+      const uint16_t instance = frame.instance(u, v);
+      if (!IsObject(instance, scene)) continue;
+      const Eigen::Vector3d p =
+          T_world_camera *
+          k.BackProject(u, v, static_cast<double>(frame.depth(u, v)));
+      int nearest = -1;
+      double nearest_m = std::numeric_limits<double>::infinity();
+      for (const auto& [unused, f] : face_of) {
+        const double d = FaceDistance(scene.room_size, f, p);
+        if (d < nearest_m) nearest = f, nearest_m = d;
+      }
+      if (nearest_m > options.bleed_contact_m &&
+          Luma(frame.color, u, v) >= options.bleed_dark_luma) {
+        continue;
+      }
+      const int face = nearest;
+      const auto [it, added] = side_bleeds.try_emplace({instance, face}, false);
+      if (added) {
+        const uint64_t side = MixSeed(MixSeed(scene_seed, instance), face);
+        it->second = UnitFromHash(side) < options.bleed_share / view_rate &&
+                     UnitFromHash(MixSeed(view_seed, side)) < view_rate;
+      }
+      if (!it->second) continue;
+      out->instance(u, v) = face_mask[face];
+      out->semantic(u, v) = face_class[face];
+    }
+  }
 }
 
 }  // namespace
@@ -29,12 +101,19 @@ void LabelNoiseOptions::Check() const {
   CheckArgument(jitter_px >= 0, "label noise: jitter_px must be >= 0");
   CheckArgument(min_mask_pixels >= 0,
                 "label noise: min_mask_pixels must be >= 0");
+  CheckArgument(bleed_share >= 0.0 && bleed_share <= 1.0,
+                "label noise: the bleed share must be in [0, 1]");
+  CheckArgument(bleed_contact_m >= 0.0,
+                "label noise: bleed_contact_m must be >= 0");
+  CheckArgument(bleed_dark_luma >= 0.0,
+                "label noise: bleed_dark_luma must be >= 0");
 }
 
 NoisyLabels ApplyLabelNoise(const RenderedFrame& frame, const Scene& scene,
                             const Transform& T_world_camera,
                             const CameraIntrinsics& k,
-                            const LabelNoiseOptions& options, uint64_t seed) {
+                            const LabelNoiseOptions& options, uint64_t seed,
+                            uint64_t scene_seed) {
   options.Check();
   const int w = frame.instance.width(), h = frame.instance.height();
   Rng rng(seed);
@@ -193,6 +272,11 @@ NoisyLabels ApplyLabelNoise(const RenderedFrame& frame, const Scene& scene,
         out.semantic(u, v) = mask_class[id];
       }
     }
+  }
+
+  if (options.bleed) {
+    ApplyStructureBleed(frame, scene, T_world_camera, k, options, mask_id,
+                        MixSeed(seed, 0xb1eed), scene_seed, &out);
   }
 
   // Ragged boundaries: a pixel near another mask may take that mask's labels.

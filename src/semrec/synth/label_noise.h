@@ -5,6 +5,8 @@
 // centre), joined with a touching neighbour, given another object class,
 // boundaries are jittered and small masks dropped. Fusion's evidence merging
 // is measured against this (issue 17); so is the paper's rule alone.
+// Optionally object pixels bleed into the structure they touch (a chair's legs
+// painted as floor, a cabinet's side as wall), the same parts in most views.
 #pragma once
 
 #include <cstdint>
@@ -33,8 +35,25 @@ struct LabelNoiseOptions {
   /// Object masks with fewer pixels are dropped (instance 0).
   int min_mask_pixels = 150;
 
-  /// Throws InvalidArgument for probabilities outside [0, 1] or negative
-  /// sizes.
+  /// Structure bleed: object pixels near structure take the class and the
+  /// mask of the floor or wall nearest to them (in 3D, among those in view),
+  /// as a 2D segmenter paints the lower part of a chair as floor or a cabinet
+  /// against a wall as wall. Candidates are object pixels within
+  /// bleed_contact_m of the floor or a wall, or darker than bleed_dark_luma.
+  /// Whether a candidate bleeds is decided per object side (object x the
+  /// floor or wall it bleeds into: all of a chair's legs at once),
+  /// correlated across views: share / 0.8 of the sides (a hash of the scene
+  /// seed and the side) bleed, each in 80 % of the views (a per-view draw);
+  /// shares above 0.8 make every side bleed in that share of the views.
+  bool bleed = false;
+  /// Expected share of the candidate pixels that bleed.
+  double bleed_share = 0.3;
+  double bleed_contact_m = 0.2;
+  /// Rec. 601 luma (0-255) below which an object pixel is a candidate.
+  double bleed_dark_luma = 40.0;
+
+  /// Throws InvalidArgument for probabilities or shares outside [0, 1] or
+  /// negative sizes.
   void Check() const;
 };
 
@@ -45,10 +64,14 @@ struct NoisyLabels {
   LabelMap instance;
 };
 
-/// Noisy labels for one rendered view; deterministic in `seed`.
+/// Noisy labels for one rendered view; deterministic in `seed` (this view's)
+/// and `scene_seed` (the same for every view of a sequence: what holds across
+/// views). The bleed takes no draws from the other steps' stream, so turning it
+/// on changes only the bled pixels (and what jitter and dropping make of them).
 NoisyLabels ApplyLabelNoise(const RenderedFrame& frame, const Scene& scene,
                             const Transform& T_world_camera,
                             const CameraIntrinsics& k,
-                            const LabelNoiseOptions& options, uint64_t seed);
+                            const LabelNoiseOptions& options, uint64_t seed,
+                            uint64_t scene_seed);
 
 }  // namespace semrec::synth

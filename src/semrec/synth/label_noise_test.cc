@@ -31,7 +31,7 @@ View SixObjectsView() {
 }
 
 NoisyLabels Noisy(const View& v, const LabelNoiseOptions& o, uint64_t seed) {
-  return ApplyLabelNoise(v.frame, v.scene, v.T_world_camera, v.k, o, seed);
+  return ApplyLabelNoise(v.frame, v.scene, v.T_world_camera, v.k, o, seed, 7);
 }
 
 LabelNoiseOptions Clean() {
