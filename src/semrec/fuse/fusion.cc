@@ -127,60 +127,16 @@ FrameFusionStats SceneFusion::Integrate(
   stats.frame_index = frame_index;
   stats.frame_segments = input_segments.size();
   stats.scene_segments_before = segments_.size();
-  const bool fast = options_.method == FusionOptions::Method::kFast;
-  const float margin = static_cast<float>(options_.max_corr_dist_m);
 
-  // Frame segments at the stored resolution (what a merge adds) and at the
-  // comparison resolution (from the stored one: a few thousand points instead
-  // of the raw pixels).
-  std::vector<Cloud> frame_store(frame_segments.size());
-  std::vector<Cloud> frame_corr(frame_segments.size());
-  std::vector<Eigen::AlignedBox3f> frame_bounds(frame_segments.size());
-  std::vector<VoxelGrid> frame_grids(fast ? frame_segments.size() : 0);
-  tbb::parallel_for(size_t{0}, frame_segments.size(), [&](size_t f) {
-    frame_store[f] = VoxelDownsample(frame_segments[f].points_world,
-                                     options_.store_voxel_size_m);
-    frame_corr[f] = VoxelDownsample(frame_store[f], options_.corr_voxel_size_m);
-    frame_bounds[f] = BoundsOf(frame_corr[f]);
-    if (fast) {
-      frame_grids[f] = VoxelGrid(frame_corr[f], options_.max_corr_dist_m);
-    }
-  });
-  for (const Cloud& c : frame_corr) stats.frame_points += c.size();
-  for (const SceneSegment& s : segments_) {
-    stats.scene_points += s.corr_points.size();
-  }
-  for (size_t f = 0; f < frame_segments.size(); ++f) {
-    for (const SceneSegment& s : segments_) {
-      const uint64_t pairs =
-          static_cast<uint64_t>(frame_corr[f].size()) * s.corr_points.size();
-      stats.distance_computations_ungated += pairs;
-      if (s.class_id == frame_segments[f].class_id) {
-        stats.distance_computations_gated += pairs;
-      }
-    }
-  }
-
-  // Map-guided segments belong to the object the map says they are (while it
-  // exists; merged: the object it went into).
-  std::vector<std::optional<size_t>> map_object(frame_segments.size());
-  for (size_t f = 0; f < frame_segments.size(); ++f) {
-    if (frame_segments[f].map_object == 0) continue;
-    const uint32_t id = ResolveId(frame_segments[f].map_object);
-    const auto it =
-        std::find_if(segments_.begin(), segments_.end(),
-                     [id](const SceneSegment& s) { return s.id == id; });
-    if (it != segments_.end()) {
-      map_object[f] = static_cast<size_t>(it - segments_.begin());
-    }
-  }
-
+  FrameClouds clouds = PrepareClouds(frame_segments, &stats);
+  const std::vector<std::optional<size_t>> map_object =
+      MapObjectsOf(frame_segments);
   // Evidence: where the frame's object masks fall on the scene's objects.
   double evidence_seconds = 0.0;
   FrameCoverage coverage;
   if (evidence_on()) {
     const auto t0 = std::chrono::steady_clock::now();
-    coverage = Coverage(frame_segments, frame_corr, frame_bounds);
+    coverage = Coverage(frame_segments, clouds.corr, clouds.bounds);
     // The map seeing itself is neither a class vote nor a view.
     for (size_t f = 0; f < frame_segments.size(); ++f) {
       if (!map_object[f]) continue;
@@ -189,198 +145,15 @@ FrameFusionStats SceneFusion::Integrate(
     }
     evidence_seconds += Seconds(t0);
   }
-
-  // Matches of every frame segment against the scene before this frame. The
-  // candidate pairs (same class, or with evidence an object of another class
-  // the segment lies on; for `fast`, bounding boxes within reach) are listed
-  // first and compared in parallel pair by pair: one large segment (floor,
-  // wall) would otherwise keep a core busy alone.
-  const auto compare_start = std::chrono::steady_clock::now();
-  struct Candidate {
-    size_t frame_segment;
-    size_t scene_segment;
-    double alpha;
-    OverlapResult overlap;
-    bool exceeds = false;
-  };
-  std::vector<Candidate> candidates;
-  std::vector<std::vector<size_t>> matches(frame_segments.size());
-  for (size_t f = 0; f < frame_segments.size(); ++f) {
-    if (map_object[f]) {
-      matches[f].push_back(*map_object[f]);
-      continue;
-    }
-    const bool stuff = frame_segments[f].kind == ClassKind::kStuff;
-    for (size_t s = 0; s < segments_.size(); ++s) {
-      const bool same_class =
-          segments_[s].class_id == frame_segments[f].class_id;
-      if (stuff && options_.stuff_per_class) {
-        // Structure joins its class's segment, whatever the overlap.
-        if (same_class) matches[f].push_back(s);
-        continue;
-      }
-      if (options_.label_gating && !same_class) {
-        // Across classes only with evidence, for objects, when most of the
-        // frame segment lies on this object.
-        const double alpha = options_.evidence.cross_class_alpha;
-        if (evidence_on() && !stuff && alpha < 1.0 &&
-            segments_[s].kind != ClassKind::kStuff &&
-            coverage.nearest[f][s] >
-                alpha * static_cast<double>(frame_corr[f].size())) {
-          candidates.push_back({f, s, alpha, {}, false});
-        }
-        continue;
-      }
-      ++stats.compared_pairs;
-      // No pair can be close.
-      if (fast && !BoxesWithin(frame_bounds[f], segments_[s].bounds, margin)) {
-        continue;
-      }
-      candidates.push_back({f, s, options_.alpha, {}, false});
-    }
-  }
-  auto compare = [&](size_t k) {
-    Candidate& c = candidates[k];
-    const SceneSegment& scene = segments_[c.scene_segment];
-    if (fast) {
-      // Stops as soon as the decision is settled (same decision as the full
-      // sigma).
-      const OverlapDecision d = MutualOverlapExceeds(
-          frame_corr[c.frame_segment], frame_grids[c.frame_segment],
-          scene.corr_points, scene.corr_grid, options_.max_corr_dist_m,
-          c.alpha);
-      c.overlap = d.partial;
-      c.exceeds = d.exceeds;
-    } else {
-      c.overlap =
-          MutualOverlapBruteForce(frame_corr[c.frame_segment],
-                                  scene.corr_points, options_.max_corr_dist_m);
-      c.exceeds = c.overlap.sigma > c.alpha;
-    }
-  };
-  if (fast) {
-    tbb::parallel_for(size_t{0}, candidates.size(), compare);
-  } else {
-    for (size_t k = 0; k < candidates.size(); ++k) compare(k);
-  }
-  stats.compare_seconds = Seconds(compare_start);
-  for (const Candidate& c : candidates) {
-    stats.distance_computations_done += c.overlap.distance_computations;
-    SPDLOG_TRACE(
-        "frame {} segment {} (class {}, {} pts) vs scene {} ({} pts): "
-        "|M|{}{} sigma{}{:.3f} -> {}",
-        frame_index, c.frame_segment, frame_segments[c.frame_segment].class_id,
-        frame_corr[c.frame_segment].size(), segments_[c.scene_segment].id,
-        segments_[c.scene_segment].corr_points.size(), fast ? ">=" : "=",
-        c.overlap.mutual_pairs, fast ? ">=" : "=", c.overlap.sigma,
-        c.exceeds ? "merge" : "no");
-    if (!c.exceeds) continue;
-    // In increasing scene order per frame segment (the list's order).
-    matches[c.frame_segment].push_back(c.scene_segment);
-    const SceneSegment& scene = segments_[c.scene_segment];
-    const uint16_t segment_class = frame_segments[c.frame_segment].class_id;
-    if (scene.class_id != segment_class) {
-      ++stats.cross_class_matches;
-      events_.push_back(
-          {FusionEvent::Kind::kCrossClassMatch, frame_index, 0, scene.id,
-           fmt::format("a segment of another class lies on object {} (overlap "
-                       "sigma >= {:.2f} > {})",
-                       scene.id, c.overlap.sigma, c.alpha),
-           segment_class, scene.class_id});
-    }
-  }
-
+  const auto matches = MatchSegments(frame_segments, clouds, map_object,
+                                     coverage, frame_index, &stats);
   if (evidence_on()) {
     const auto t0 = std::chrono::steady_clock::now();
     RecordViewEvidence(frame_segments, coverage, frame_index);
     evidence_seconds += Seconds(t0);
   }
-
-  // Apply: union scene segments linked through a frame segment, attach the
-  // frame segments.
-  UnionFind groups(segments_.size());
-  for (const auto& m : matches) {
-    for (size_t k = 1; k < m.size(); ++k) groups.Unite(m[0], m[k]);
-  }
-  std::map<size_t, std::vector<size_t>>
-      attached;  // group root -> frame segments
-  std::vector<SceneSegment> created;
-  stats.assigned_ids.resize(frame_segments.size());
-  for (size_t f = 0; f < frame_segments.size(); ++f) {
-    if (matches[f].empty()) {
-      SceneSegment s;
-      s.id = next_id_++;
-      stats.assigned_ids[f] = s.id;
-      s.class_id = frame_segments[f].class_id;
-      s.kind = frame_segments[f].kind;
-      s.class_votes[s.class_id] = frame_corr[f].size();
-      s.points = std::move(frame_store[f]);
-      s.first_seen_frame = s.last_seen_frame = frame_index;
-      s.observations = 1;
-      s.frames_seen = {static_cast<uint32_t>(frame_index)};
-      created.push_back(std::move(s));
-    } else {
-      const size_t root = groups.Find(matches[f][0]);
-      attached[root].push_back(f);
-      stats.assigned_ids[f] = segments_[root].id;
-      ++stats.merged_frame_segments;
-    }
-  }
-  std::map<size_t, std::vector<size_t>>
-      members;  // root -> scene segments in the group
-  for (size_t s = 0; s < segments_.size(); ++s) {
-    members[groups.Find(s)].push_back(s);
-  }
-
-  std::vector<SceneSegment> next;
-  std::vector<size_t>
-      changed;  // indices into `next` whose clouds must be rebuilt
-  for (auto& [root, group] : members) {
-    const auto it = attached.find(root);
-    if (it == attached.end()) {  // untouched this frame
-      for (size_t s : group) next.push_back(std::move(segments_[s]));
-      continue;
-    }
-    SceneSegment merged = std::move(segments_[root]);
-    std::map<uint16_t, size_t> class_points;
-    class_points[merged.class_id] += merged.points.size();
-    for (size_t s : group) {
-      if (s == root) continue;
-      SceneSegment& other = segments_[s];
-      class_points[other.class_id] += other.points.size();
-      Absorb(&merged, &other);
-      ++stats.removed_by_merge;
-    }
-    for (size_t f : it->second) {
-      const Cloud& p = frame_store[f];
-      class_points[frame_segments[f].class_id] += p.size();
-      merged.points.insert(merged.points.end(), p.begin(), p.end());
-      ++merged.observations;
-      // The map's own projection is no new sighting (fragments seen once
-      // stay fragments) and no class vote.
-      if (map_object[f]) continue;
-      SortedInsert(&merged.frames_seen, static_cast<uint32_t>(frame_index));
-      // With evidence the coverage counted this segment's vote already.
-      if (!evidence_on()) {
-        merged.class_votes[frame_segments[f].class_id] += frame_corr[f].size();
-      }
-    }
-    // With evidence every class is updated from the votes below.
-    if (!evidence_on() && !options_.label_gating) {
-      size_t best = 0;
-      for (const auto& [cls, count] : class_points) {
-        if (count > best) best = count, merged.class_id = cls;
-      }
-    }
-    merged.last_seen_frame = frame_index;
-    changed.push_back(next.size());
-    next.push_back(std::move(merged));
-  }
-  for (SceneSegment& s : created) {
-    changed.push_back(next.size());
-    next.push_back(std::move(s));
-  }
-  stats.new_segments = created.size();
+  ApplyMatches(frame_segments, matches, map_object, frame_index, &clouds,
+               &stats);
   if (join) {  // report per input segment
     std::vector<uint32_t> ids(input_segments.size());
     for (size_t i = 0; i < ids.size(); ++i) {
@@ -388,12 +161,6 @@ FrameFusionStats SceneFusion::Integrate(
     }
     stats.assigned_ids = std::move(ids);
   }
-  tbb::parallel_for(size_t{0}, changed.size(),
-                    [&](size_t c) { Rebuild(&next[changed[c]]); });
-  std::sort(
-      next.begin(), next.end(),
-      [](const SceneSegment& a, const SceneSegment& b) { return a.id < b.id; });
-  segments_ = std::move(next);
   if (evidence_on()) {
     const auto t0 = std::chrono::steady_clock::now();
     for (SceneSegment& s : segments_) UpdateClass(&s);
@@ -409,6 +176,279 @@ FrameFusionStats SceneFusion::Integrate(
   stats.evidence_seconds = evidence_seconds;
   stats.seconds = Seconds(start);
   return stats;
+}
+
+SceneFusion::FrameClouds SceneFusion::PrepareClouds(
+    const std::vector<FrameSegment>& frame_segments,
+    FrameFusionStats* stats) const {
+  // Frame segments at the stored resolution (what a merge adds) and at the
+  // comparison resolution (from the stored one: a few thousand points instead
+  // of the raw pixels).
+  const bool fast = options_.method == FusionOptions::Method::kFast;
+  const size_t n = frame_segments.size();
+  FrameClouds c;
+  c.store.resize(n);
+  c.corr.resize(n);
+  c.bounds.resize(n);
+  c.grids.resize(fast ? n : 0);
+  tbb::parallel_for(size_t{0}, n, [&](size_t f) {
+    c.store[f] = VoxelDownsample(frame_segments[f].points_world,
+                                 options_.store_voxel_size_m);
+    c.corr[f] = VoxelDownsample(c.store[f], options_.corr_voxel_size_m);
+    c.bounds[f] = BoundsOf(c.corr[f]);
+    if (fast) c.grids[f] = VoxelGrid(c.corr[f], options_.max_corr_dist_m);
+  });
+  for (const Cloud& corr : c.corr) stats->frame_points += corr.size();
+  for (const SceneSegment& s : segments_) {
+    stats->scene_points += s.corr_points.size();
+  }
+  for (size_t f = 0; f < n; ++f) {
+    for (const SceneSegment& s : segments_) {
+      const uint64_t pairs =
+          static_cast<uint64_t>(c.corr[f].size()) * s.corr_points.size();
+      stats->distance_computations_ungated += pairs;
+      if (s.class_id == frame_segments[f].class_id) {
+        stats->distance_computations_gated += pairs;
+      }
+    }
+  }
+  return c;
+}
+
+std::vector<std::optional<size_t>> SceneFusion::MapObjectsOf(
+    const std::vector<FrameSegment>& frame_segments) const {
+  // Map-guided segments belong to the object the map says they are (while it
+  // exists; merged: the object it went into).
+  std::vector<std::optional<size_t>> map_object(frame_segments.size());
+  for (size_t f = 0; f < frame_segments.size(); ++f) {
+    if (frame_segments[f].map_object == 0) continue;
+    const uint32_t id = ResolveId(frame_segments[f].map_object);
+    const auto it =
+        std::find_if(segments_.begin(), segments_.end(),
+                     [id](const SceneSegment& s) { return s.id == id; });
+    if (it != segments_.end()) {
+      map_object[f] = static_cast<size_t>(it - segments_.begin());
+    }
+  }
+  return map_object;
+}
+
+std::vector<SceneFusion::Candidate> SceneFusion::ListCandidates(
+    const std::vector<FrameSegment>& frame_segments, const FrameClouds& clouds,
+    const std::vector<std::optional<size_t>>& map_object,
+    const FrameCoverage& coverage, std::vector<std::vector<size_t>>* matches,
+    FrameFusionStats* stats) const {
+  // Same class, or with evidence an object of another class the segment lies
+  // on; for `fast`, bounding boxes within reach.
+  const bool fast = options_.method == FusionOptions::Method::kFast;
+  const auto margin = static_cast<float>(options_.max_corr_dist_m);
+  std::vector<Candidate> candidates;
+  for (size_t f = 0; f < frame_segments.size(); ++f) {
+    if (map_object[f]) {
+      (*matches)[f].push_back(*map_object[f]);
+      continue;
+    }
+    const bool stuff = frame_segments[f].kind == ClassKind::kStuff;
+    for (size_t s = 0; s < segments_.size(); ++s) {
+      const bool same_class =
+          segments_[s].class_id == frame_segments[f].class_id;
+      if (stuff && options_.stuff_per_class) {
+        // Structure joins its class's segment, whatever the overlap.
+        if (same_class) (*matches)[f].push_back(s);
+        continue;
+      }
+      if (options_.label_gating && !same_class) {
+        // Across classes only with evidence, for objects, when most of the
+        // frame segment lies on this object.
+        const double alpha = options_.evidence.cross_class_alpha;
+        if (evidence_on() && !stuff && alpha < 1.0 &&
+            segments_[s].kind != ClassKind::kStuff &&
+            coverage.nearest[f][s] >
+                alpha * static_cast<double>(clouds.corr[f].size())) {
+          candidates.push_back({f, s, alpha, {}, false});
+        }
+        continue;
+      }
+      ++stats->compared_pairs;
+      // No pair can be close.
+      if (fast &&
+          !BoxesWithin(clouds.bounds[f], segments_[s].bounds, margin)) {
+        continue;
+      }
+      candidates.push_back({f, s, options_.alpha, {}, false});
+    }
+  }
+  return candidates;
+}
+
+std::vector<std::vector<size_t>> SceneFusion::MatchSegments(
+    const std::vector<FrameSegment>& frame_segments, const FrameClouds& clouds,
+    const std::vector<std::optional<size_t>>& map_object,
+    const FrameCoverage& coverage, size_t frame_index,
+    FrameFusionStats* stats) {
+  // Every frame segment against the scene before this frame: the candidate
+  // pairs are compared in parallel pair by pair (one large segment, floor or
+  // wall, would otherwise keep a core busy alone).
+  std::vector<std::vector<size_t>> matches(frame_segments.size());
+  const auto compare_start = std::chrono::steady_clock::now();
+  std::vector<Candidate> candidates = ListCandidates(
+      frame_segments, clouds, map_object, coverage, &matches, stats);
+  const bool fast = options_.method == FusionOptions::Method::kFast;
+  auto compare = [&](size_t k) {
+    Candidate& c = candidates[k];
+    const SceneSegment& scene = segments_[c.scene_segment];
+    if (fast) {
+      // Stops as soon as the decision is settled (same decision as the full
+      // sigma).
+      const OverlapDecision d = MutualOverlapExceeds(
+          clouds.corr[c.frame_segment], clouds.grids[c.frame_segment],
+          scene.corr_points, scene.corr_grid, options_.max_corr_dist_m,
+          c.alpha);
+      c.overlap = d.partial;
+      c.exceeds = d.exceeds;
+    } else {
+      c.overlap = MutualOverlapBruteForce(clouds.corr[c.frame_segment],
+                                          scene.corr_points,
+                                          options_.max_corr_dist_m);
+      c.exceeds = c.overlap.sigma > c.alpha;
+    }
+  };
+  if (fast) {
+    tbb::parallel_for(size_t{0}, candidates.size(), compare);
+  } else {
+    for (size_t k = 0; k < candidates.size(); ++k) compare(k);
+  }
+  stats->compare_seconds = Seconds(compare_start);
+  for (const Candidate& c : candidates) {
+    stats->distance_computations_done += c.overlap.distance_computations;
+    SPDLOG_TRACE(
+        "frame {} segment {} (class {}, {} pts) vs scene {} ({} pts): "
+        "|M|{}{} sigma{}{:.3f} -> {}",
+        frame_index, c.frame_segment, frame_segments[c.frame_segment].class_id,
+        clouds.corr[c.frame_segment].size(), segments_[c.scene_segment].id,
+        segments_[c.scene_segment].corr_points.size(), fast ? ">=" : "=",
+        c.overlap.mutual_pairs, fast ? ">=" : "=", c.overlap.sigma,
+        c.exceeds ? "merge" : "no");
+    if (!c.exceeds) continue;
+    // In increasing scene order per frame segment (the list's order).
+    matches[c.frame_segment].push_back(c.scene_segment);
+    const SceneSegment& scene = segments_[c.scene_segment];
+    const uint16_t segment_class = frame_segments[c.frame_segment].class_id;
+    if (scene.class_id != segment_class) {
+      ++stats->cross_class_matches;
+      events_.push_back(
+          {FusionEvent::Kind::kCrossClassMatch, frame_index, 0, scene.id,
+           fmt::format("a segment of another class lies on object {} (overlap "
+                       "sigma >= {:.2f} > {})",
+                       scene.id, c.overlap.sigma, c.alpha),
+           segment_class, scene.class_id});
+    }
+  }
+  return matches;
+}
+
+void SceneFusion::ApplyMatches(
+    const std::vector<FrameSegment>& frame_segments,
+    const std::vector<std::vector<size_t>>& matches,
+    const std::vector<std::optional<size_t>>& map_object, size_t frame_index,
+    FrameClouds* clouds, FrameFusionStats* stats) {
+  // Scene segments linked through a frame segment become one; the frame
+  // segments attach to it, or become new segments.
+  UnionFind groups(segments_.size());
+  for (const auto& m : matches) {
+    for (size_t k = 1; k < m.size(); ++k) groups.Unite(m[0], m[k]);
+  }
+  std::map<size_t, std::vector<size_t>> attached;  // root -> frame segments
+  std::vector<SceneSegment> created;
+  stats->assigned_ids.resize(frame_segments.size());
+  for (size_t f = 0; f < frame_segments.size(); ++f) {
+    if (matches[f].empty()) {
+      SceneSegment s;
+      s.id = next_id_++;
+      stats->assigned_ids[f] = s.id;
+      s.class_id = frame_segments[f].class_id;
+      s.kind = frame_segments[f].kind;
+      s.class_votes[s.class_id] = clouds->corr[f].size();
+      s.points = std::move(clouds->store[f]);
+      s.first_seen_frame = s.last_seen_frame = frame_index;
+      s.observations = 1;
+      s.frames_seen = {static_cast<uint32_t>(frame_index)};
+      created.push_back(std::move(s));
+    } else {
+      const size_t root = groups.Find(matches[f][0]);
+      attached[root].push_back(f);
+      stats->assigned_ids[f] = segments_[root].id;
+      ++stats->merged_frame_segments;
+    }
+  }
+  std::map<size_t, std::vector<size_t>> members;  // root -> scene segments
+  for (size_t s = 0; s < segments_.size(); ++s) {
+    members[groups.Find(s)].push_back(s);
+  }
+  std::vector<SceneSegment> next;
+  std::vector<size_t> changed;  // indices into `next` to rebuild
+  for (auto& [root, group] : members) {
+    const auto it = attached.find(root);
+    if (it == attached.end()) {  // untouched this frame
+      for (size_t s : group) next.push_back(std::move(segments_[s]));
+      continue;
+    }
+    next.push_back(MergeGroup(root, group, it->second, frame_segments,
+                              map_object, *clouds, frame_index, stats));
+    changed.push_back(next.size() - 1);
+  }
+  for (SceneSegment& s : created) {
+    changed.push_back(next.size());
+    next.push_back(std::move(s));
+  }
+  stats->new_segments = created.size();
+  tbb::parallel_for(size_t{0}, changed.size(),
+                    [&](size_t c) { Rebuild(&next[changed[c]]); });
+  std::sort(
+      next.begin(), next.end(),
+      [](const SceneSegment& a, const SceneSegment& b) { return a.id < b.id; });
+  segments_ = std::move(next);
+}
+
+SceneSegment SceneFusion::MergeGroup(
+    size_t root, const std::vector<size_t>& group,
+    const std::vector<size_t>& attached,
+    const std::vector<FrameSegment>& frame_segments,
+    const std::vector<std::optional<size_t>>& map_object,
+    const FrameClouds& clouds, size_t frame_index, FrameFusionStats* stats) {
+  SceneSegment merged = std::move(segments_[root]);
+  std::map<uint16_t, size_t> class_points;
+  class_points[merged.class_id] += merged.points.size();
+  for (size_t s : group) {
+    if (s == root) continue;
+    SceneSegment& other = segments_[s];
+    class_points[other.class_id] += other.points.size();
+    Absorb(&merged, &other);
+    ++stats->removed_by_merge;
+  }
+  for (size_t f : attached) {
+    const Cloud& p = clouds.store[f];
+    class_points[frame_segments[f].class_id] += p.size();
+    merged.points.insert(merged.points.end(), p.begin(), p.end());
+    ++merged.observations;
+    // The map's own projection is no new sighting (fragments seen once stay
+    // fragments) and no class vote.
+    if (map_object[f]) continue;
+    SortedInsert(&merged.frames_seen, static_cast<uint32_t>(frame_index));
+    // With evidence the coverage counted this segment's vote already.
+    if (!evidence_on()) {
+      merged.class_votes[frame_segments[f].class_id] += clouds.corr[f].size();
+    }
+  }
+  // With evidence every class is updated from the votes.
+  if (!evidence_on() && !options_.label_gating) {
+    size_t best = 0;
+    for (const auto& [cls, count] : class_points) {
+      if (count > best) best = count, merged.class_id = cls;
+    }
+  }
+  merged.last_seen_frame = frame_index;
+  return merged;
 }
 
 uint32_t SceneFusion::ResolveId(uint32_t id) const {

@@ -47,6 +47,7 @@
 
 #include "semrec/fuse/evidence.h"
 #include "semrec/fuse/map_objects.h"
+#include "semrec/fuse/overlap.h"
 #include "semrec/fuse/segments.h"
 #include "semrec/fuse/voxel.h"
 #include "semrec/fuse/voxel_evidence.h"
@@ -239,6 +240,54 @@ class SceneFusion {
     std::vector<std::vector<uint32_t>> on;
     std::vector<std::vector<uint32_t>> nearest;
   };
+  /// A frame's segments at the stored and the comparison resolution.
+  struct FrameClouds {
+    std::vector<Cloud> store;
+    std::vector<Cloud> corr;
+    std::vector<Eigen::AlignedBox3f> bounds;
+    std::vector<VoxelGrid> grids;  // kFast only
+  };
+  /// A (frame segment, scene segment) pair to compare.
+  struct Candidate {
+    size_t frame_segment;
+    size_t scene_segment;
+    double alpha;
+    OverlapResult overlap;
+    bool exceeds = false;
+  };
+  /// Integrate's steps: downsampled clouds (and the comparison counts), the
+  /// map object of each map-guided segment, the pairs to compare, the matches
+  /// (scene segment indices per frame segment), and applying them.
+  FrameClouds PrepareClouds(const std::vector<FrameSegment>& frame_segments,
+                            FrameFusionStats* stats) const;
+  std::vector<std::optional<size_t>> MapObjectsOf(
+      const std::vector<FrameSegment>& frame_segments) const;
+  std::vector<Candidate> ListCandidates(
+      const std::vector<FrameSegment>& frame_segments,
+      const FrameClouds& clouds,
+      const std::vector<std::optional<size_t>>& map_object,
+      const FrameCoverage& coverage,
+      std::vector<std::vector<size_t>>* matches,
+      FrameFusionStats* stats) const;
+  std::vector<std::vector<size_t>> MatchSegments(
+      const std::vector<FrameSegment>& frame_segments,
+      const FrameClouds& clouds,
+      const std::vector<std::optional<size_t>>& map_object,
+      const FrameCoverage& coverage, size_t frame_index,
+      FrameFusionStats* stats);
+  void ApplyMatches(const std::vector<FrameSegment>& frame_segments,
+                    const std::vector<std::vector<size_t>>& matches,
+                    const std::vector<std::optional<size_t>>& map_object,
+                    size_t frame_index, FrameClouds* clouds,
+                    FrameFusionStats* stats);
+  /// One group of scene segments linked this frame, with the frame segments
+  /// attached to it, as one segment (clouds not rebuilt).
+  SceneSegment MergeGroup(size_t root, const std::vector<size_t>& group,
+                          const std::vector<size_t>& attached,
+                          const std::vector<FrameSegment>& frame_segments,
+                          const std::vector<std::optional<size_t>>& map_object,
+                          const FrameClouds& clouds, size_t frame_index,
+                          FrameFusionStats* stats);
   FrameCoverage Coverage(
       const std::vector<FrameSegment>& frame_segments,
       const std::vector<Cloud>& frame_corr,

@@ -8,6 +8,7 @@
 #include <spdlog/spdlog.h>
 
 #include "semrec/core/error.h"
+#include "semrec/core/union_find.h"
 
 namespace semrec::fuse {
 
@@ -15,6 +16,8 @@ void MapObjectOptions::Check() const {
   planes.Check();
   CheckArgument(min_seen_ratio >= 0.0 && min_seen_ratio <= 1.0,
                 "map objects: min_seen_ratio must be in [0, 1]");
+  CheckArgument(touch_voxels >= 1 && touch_voxels <= 3,
+                "map objects: touch_voxels must be 1, 2 or 3");
 }
 
 namespace {
@@ -70,6 +73,7 @@ class Resolver {
     AssignOwners();
     SplitDisconnected();
     AttachOrphans();
+    MergeByMasks();
     JudgeFragments();
     return Build();
   }
@@ -140,8 +144,14 @@ class Resolver {
             OnAnyPlane(c.p, it->second, options_.planes.tolerance_m)) {
           break;
         }
-        c.excluded.push_back(c.class_id);
-        c.class_id = Winner(*c.evidence, c.excluded);
+        // With no other class in view, the structure class stays: nothing
+        // says otherwise (a patch of wall too small to fit a plane to).
+        std::vector<uint16_t> excluded = c.excluded;
+        excluded.push_back(c.class_id);
+        const uint16_t next = Winner(*c.evidence, excluded);
+        if (next == kNoClass) break;
+        c.excluded = std::move(excluded);
+        c.class_id = next;
       }
       if (!c.excluded.empty()) ++result_.gated_voxels;
     }
@@ -191,9 +201,10 @@ class Resolver {
   template <typename Visit>
   void ForNeighbours(size_t i, const Visit& visit) const {
     const Eigen::Vector3i v = UnpackVoxel(cells_[i].key);
-    for (int dx = -1; dx <= 1; ++dx) {
-      for (int dy = -1; dy <= 1; ++dy) {
-        for (int dz = -1; dz <= 1; ++dz) {
+    const int r = options_.touch_voxels;
+    for (int dx = -r; dx <= r; ++dx) {
+      for (int dy = -r; dy <= r; ++dy) {
+        for (int dz = -r; dz <= r; ++dz) {
           if (dx == 0 && dy == 0 && dz == 0) continue;
           const auto it =
               index_.find(PackVoxel(v.x() + dx, v.y() + dy, v.z() + dz));
@@ -238,8 +249,52 @@ class Resolver {
     return MostVoted(contacts, [](uint32_t) { return true; });
   }
 
-  // Pieces of an object that do not touch: the largest keeps the id, large
-  // others become objects, small ones become orphans (joined below).
+  // Views that saw two groups of cells: holding both in one mask, or in
+  // different masks.
+  struct PairViews {
+    size_t one = 0, two = 0;
+  };
+  // Per frame, the masks holding `cells` (covering enough of them).
+  std::map<size_t, std::set<uint64_t>> Holders(
+      const std::vector<size_t>& cells) const {
+    std::map<uint64_t, size_t> count;
+    for (size_t i : cells) {
+      for (uint64_t m : cells_[i].evidence->masks) ++count[m];
+    }
+    // A share of the part, not a few voxels at the contact where the depth
+    // of two touching objects mixes.
+    const auto need = std::max(
+        std::min<size_t>(cells.size(), 5),
+        static_cast<size_t>(std::ceil(options_.min_hold_share *
+                                      static_cast<double>(cells.size()))));
+    std::map<size_t, std::set<uint64_t>> holders;
+    for (const auto& [m, n] : count) {
+      if (n >= need) holders[MaskFrame(m)].insert(m);
+    }
+    return holders;
+  }
+  static PairViews CoViews(const std::map<size_t, std::set<uint64_t>>& a,
+                           const std::map<size_t, std::set<uint64_t>>& b) {
+    PairViews v;
+    for (const auto& [frame, masks] : a) {
+      const auto it = b.find(frame);
+      if (it == b.end()) continue;
+      const bool shared = std::any_of(masks.begin(), masks.end(), [&](auto m) {
+        return it->second.count(m) != 0;
+      });
+      ++(shared ? v.one : v.two);
+    }
+    return v;
+  }
+  bool SaysOne(const PairViews& v, size_t min_one) const {
+    return v.one >= min_one &&
+           static_cast<double>(v.one) >
+               options_.two_weight * static_cast<double>(v.two);
+  }
+
+  // Pieces of an object that do not touch: those the views held in one mask
+  // stay with the largest; other large groups become objects, small ones
+  // orphans (joined below).
   void SplitDisconnected() {
     std::vector<bool> done(cells_.size(), false);
     std::map<uint32_t, std::vector<std::vector<size_t>>> pieces;
@@ -250,18 +305,79 @@ class Resolver {
           i, &done, [&](size_t n) { return cells_[n].owner == owner; }));
     }
     for (auto& [owner, list] : pieces) {
+      if (list.size() < 2) continue;
       std::stable_sort(list.begin(), list.end(), [](const auto& a, const auto& b) {
         return a.size() > b.size();
       });
-      for (size_t k = 1; k < list.size(); ++k) {
-        uint32_t id = 0;
-        if (list[k].size() >= options_.min_piece_voxels) {
-          id = (*next_id_)++;
-          owner_class_[id] = owner_class_[owner];
-          ++result_.split_objects;
+      std::vector<std::map<size_t, std::set<uint64_t>>> holders;
+      for (const auto& piece : list) holders.push_back(Holders(piece));
+      UnionFind groups(list.size());
+      for (size_t a = 0; a < list.size(); ++a) {
+        for (size_t b = a + 1; b < list.size(); ++b) {
+          if (SaysOne(CoViews(holders[a], holders[b]), 1)) groups.Unite(a, b);
         }
-        for (size_t i : list[k]) cells_[i].owner = id;
       }
+      std::map<size_t, uint32_t> group_id{{groups.Find(0), owner}};
+      for (size_t k = 1; k < list.size(); ++k) {
+        const size_t g = groups.Find(k);
+        if (!group_id.count(g)) {
+          group_id[g] = 0;
+          if (list[k].size() >= options_.min_piece_voxels) {
+            group_id[g] = (*next_id_)++;
+            owner_class_[group_id[g]] = owner_class_[owner];
+            ++result_.split_objects;
+          }
+        }
+        for (size_t i : list[k]) cells_[i].owner = group_id[g];
+      }
+    }
+  }
+
+  // Touching objects of one class that the views mostly held in one mask are
+  // one object (the larger keeps its id); so are touching parts no view held
+  // in two masks (sparse views of one table from opposite sides: adjacency is
+  // all there is, and no view says two).
+  void MergeByMasks() {
+    std::map<uint32_t, std::vector<size_t>> members;
+    for (size_t i = 0; i < cells_.size(); ++i) {
+      if (cells_[i].owner != 0 && IsThingCell(cells_[i])) {
+        members[cells_[i].owner].push_back(i);
+      }
+    }
+    std::map<uint32_t, std::map<size_t, std::set<uint64_t>>> holders;
+    for (const auto& [id, cells] : members) holders[id] = Holders(cells);
+    std::set<std::pair<uint32_t, uint32_t>> pairs;
+    for (const auto& [id, cells] : members) {
+      for (size_t i : cells) {
+        ForNeighbours(i, [&](size_t n) {
+          const uint32_t other = cells_[n].owner;
+          if (other > id && IsThingCell(cells_[n]) &&
+              owner_class_[other] == owner_class_[id]) {
+            pairs.emplace(id, other);
+          }
+        });
+      }
+    }
+    std::map<uint32_t, uint32_t> into;
+    auto find = [&](uint32_t id) {
+      while (into.count(id)) id = into[id];
+      return id;
+    };
+    for (const auto& [a, b] : pairs) {
+      const uint32_t x = find(a), y = find(b);
+      const PairViews views = CoViews(holders[a], holders[b]);
+      const bool one = views.two == 0 ? true  // no view says two
+                                      : SaysOne(views, options_.min_one_views);
+      if (x == y || !one) continue;
+      const bool x_keeps = members[x].size() >= members[y].size();
+      const uint32_t keep = x_keeps ? x : y, gone = x_keeps ? y : x;
+      into[gone] = keep;
+      members[keep].insert(members[keep].end(), members[gone].begin(),
+                           members[gone].end());
+      ++result_.merged_objects;
+    }
+    for (Cell& c : cells_) {
+      if (c.owner != 0 && IsThingCell(c)) c.owner = find(c.owner);
     }
   }
 
@@ -277,6 +393,8 @@ class Resolver {
         return cells_[n].owner == 0 && cells_[n].class_id == cls;
       });
       uint32_t id = MostTouching(group, cls, 0);
+      spdlog::debug("orphan voxels: {} of class {} -> object {}", group.size(),
+                    cls, id);
       if (id == 0) {
         id = (*next_id_)++;
         owner_class_[id] = cls;

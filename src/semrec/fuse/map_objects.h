@@ -8,14 +8,18 @@
 //     plane, a ceiling vote only on the highest (planes fitted to the voxels
 //     that vote for the class; gravity known). Elsewhere that class's
 //     evidence is set aside and the next class wins: a chair against a wall
-//     that some views call wall stays a chair. A class with no plane large
+//     that some views call wall stays a chair (with no other class seen
+//     there, the structure class stays). A class with no plane large
 //     enough is not gated (too little seen to tell).
 //  3. Each thing voxel belongs to the fusion object of its class that most
 //     views put it in; structure voxels to their class's structure object.
 //     Thing voxels no object of their class claimed (they were fused into the
 //     wall) join the touching object of their class, or form a new one.
-//  4. An object's voxels that are not connected (26-neighbourhood) are split
-//     into objects; a small piece joins the object of its class it touches.
+//  4. An object's pieces that do not touch (within touch_voxels) are split
+//     into objects unless the views that saw both mostly put them in one mask
+//     (MaskClustering-style consensus); touching objects of one class that
+//     views mostly saw in one mask are merged. A small piece joins the object
+//     of its class it touches.
 //  5. Fragments are judged by visibility: an object is a fragment when the
 //     views that labelled its voxels as its class are few compared with the
 //     views that observed those voxels at all (a part seen once where five
@@ -52,6 +56,18 @@ struct MapObjectOptions {
   /// A split-off piece with fewer voxels than this joins a touching object of
   /// its class instead of standing alone.
   size_t min_piece_voxels = 20;
+  /// Voxels this many voxels apart (Chebyshev) or closer touch: parts of one
+  /// object with a gap of one voxel (an occluded strip, a thin leg missed by
+  /// the depth camera) stay one object.
+  int touch_voxels = 2;
+  /// Mask consensus: two parts are one when at least min_one_views views
+  /// (for a split: one) held both in one mask and one > two_weight x (views
+  /// that held them in different masks). A mask holds a part when it covers
+  /// at least min_hold_share of the part's voxels (and 5, or all of a
+  /// smaller part).
+  size_t min_one_views = 2;
+  double two_weight = 0.5;
+  double min_hold_share = 0.2;
 
   void Check() const;
 };
@@ -104,9 +120,11 @@ struct MapResolution {
   std::unordered_map<uint64_t, VoxelOwner> owners;
   std::vector<StructurePlane> planes;
   /// Voxels whose class changed by the structure gate; objects split off,
-  /// made from unclaimed voxels, and dropped or folded as fragments.
+  /// merged by mask consensus, made from unclaimed voxels, and dropped or
+  /// folded as fragments.
   size_t gated_voxels = 0;
   size_t split_objects = 0;
+  size_t merged_objects = 0;
   size_t new_objects = 0;
   size_t fragments_folded = 0;
   size_t fragments_dropped = 0;

@@ -208,7 +208,7 @@ TEST(MapObjects, PartSeenOnceWhereFiveViewsLookedIsAFragment) {
 
 TEST(MapObjects, TwoChairsJoinedInOneViewAndApartInThreeEndAsTwo) {
   const Cloud a = Box({1.0f, 1.0f, 0.1f}, {1.45f, 1.45f, 0.9f});
-  const Cloud b = Box({1.6f, 1.0f, 0.1f}, {2.05f, 1.45f, 0.9f});
+  const Cloud b = Box({1.7f, 1.0f, 0.1f}, {2.15f, 1.45f, 0.9f});
   Cloud both = a;
   both.insert(both.end(), b.begin(), b.end());
   std::vector<View> views;

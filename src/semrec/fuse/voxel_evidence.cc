@@ -50,6 +50,8 @@ struct Vote {
   uint64_t key;
   uint32_t object;
   uint16_t class_id;
+  /// The mask's label in the frame; 0 for structure (not kept).
+  uint16_t label;
   Eigen::Vector3f p;
 };
 
@@ -79,7 +81,9 @@ void VoxelEvidenceMap::AddFrame(const std::vector<FrameSegment>& segments,
     const FrameSegment& s = segments[f];
     if (s.map_object != 0) continue;
     for (const Eigen::Vector3f& p : s.points_world) {
-      votes.push_back({VoxelKey(p, inv_voxel_), object_ids[f], s.class_id, p});
+      votes.push_back({VoxelKey(p, inv_voxel_), object_ids[f], s.class_id,
+                       s.kind == ClassKind::kStuff ? uint16_t{0} : s.source_label,
+                       p});
     }
   }
   // Grouped by voxel, then class and object: one pass casts each voxel's vote.
@@ -126,6 +130,17 @@ void VoxelEvidenceMap::AddFrame(const std::vector<FrameSegment>& segments,
         if (votes[o].object != 0) {
           FindOrAdd(&v.objects, &ObjectVote::id, votes[o].object)->views +=
               static_cast<float>(object_end - o) / n;
+        }
+        for (size_t m = o; m < object_end; ++m) {
+          if (votes[m].label == 0) continue;
+          // This frame's masks are the last entries: a short scan.
+          const uint64_t id = MaskId(frame_index, votes[m].label);
+          bool known = false;
+          for (auto it = v.masks.rbegin();
+               it != v.masks.rend() && MaskFrame(*it) == frame_index; ++it) {
+            known = known || *it == id;
+          }
+          if (!known) v.masks.push_back(id);
         }
         o = object_end;
       }

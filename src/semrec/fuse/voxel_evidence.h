@@ -64,6 +64,9 @@ struct VoxelEvidence {
   uint32_t views = 0;
   std::vector<ClassEvidence> classes;
   std::vector<ObjectVote> objects;
+  /// The object masks (MaskId) that covered it, one per view and mask: which
+  /// parts views saw inside one mask (structure masks are not kept).
+  std::vector<uint64_t> masks;
 
   Eigen::Vector3f Centroid() const {
     if (points == 0) return Eigen::Vector3f::Zero();
@@ -106,6 +109,12 @@ class VoxelEvidenceMap {
   VoxelEvidenceOptions options_;
   std::unordered_map<uint64_t, VoxelEvidence> voxels_;
 };
+
+/// A view's mask: frame index and the mask's label in that frame.
+inline uint64_t MaskId(size_t frame, uint16_t label) {
+  return (static_cast<uint64_t>(frame) << 16) | label;
+}
+inline size_t MaskFrame(uint64_t mask) { return mask >> 16; }
 
 /// Integer voxel coordinates of a key (inverse of PackVoxel).
 Eigen::Vector3i UnpackVoxel(uint64_t key);

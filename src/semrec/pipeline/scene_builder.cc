@@ -199,10 +199,11 @@ void SceneBuilder::Finish() {
         fusion_.ResolveMap(fuse::MakeMapContext(classes_, gravity.up_world));
     spdlog::info(
         "objects decided per map voxel: {} objects, {} structure planes, {} "
-        "voxels moved off structure, {} split, {} new, fragments {} folded / "
-        "{} dropped",
+        "voxels moved off structure, {} split, {} merged by masks, {} new, "
+        "fragments {} folded / {} dropped",
         r.objects.size(), r.planes.size(), r.gated_voxels, r.split_objects,
-        r.new_objects, r.fragments_folded, r.fragments_dropped);
+        r.merged_objects, r.new_objects, r.fragments_folded,
+        r.fragments_dropped);
   }
 }
 
