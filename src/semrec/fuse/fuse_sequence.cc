@@ -112,8 +112,8 @@ FuseSequenceResult FuseSequence(const io::SequenceReader& reader,
       observation->observed_world =
           ObservedPoints(frame, labels, nullptr, extraction.pixel_stride);
     }
-    result.frames.push_back(fusion->Integrate(
-        segments, i, observation ? &*observation : nullptr));
+    result.frames.push_back(
+        fusion->Integrate(segments, i, observation ? &*observation : nullptr));
     progress.Tick();
   }
   progress.Finish();

@@ -271,8 +271,7 @@ std::vector<SceneFusion::Candidate> SceneFusion::ListCandidates(
       }
       ++stats->compared_pairs;
       // No pair can be close.
-      if (fast &&
-          !BoxesWithin(clouds.bounds[f], segments_[s].bounds, margin)) {
+      if (fast && !BoxesWithin(clouds.bounds[f], segments_[s].bounds, margin)) {
         continue;
       }
       candidates.push_back({f, s, options_.alpha, {}, false});
@@ -307,9 +306,9 @@ std::vector<std::vector<size_t>> SceneFusion::MatchSegments(
       c.overlap = d.partial;
       c.exceeds = d.exceeds;
     } else {
-      c.overlap = MutualOverlapBruteForce(clouds.corr[c.frame_segment],
-                                          scene.corr_points,
-                                          options_.max_corr_dist_m);
+      c.overlap =
+          MutualOverlapBruteForce(clouds.corr[c.frame_segment],
+                                  scene.corr_points, options_.max_corr_dist_m);
       c.exceeds = c.overlap.sigma > c.alpha;
     }
   };

@@ -97,7 +97,8 @@ struct FusionOptions {
   void Check() const;
 };
 
-/// "paper", "evidence" or "voxel"; ParseMerge throws InvalidArgument for anything else.
+/// "paper", "evidence" or "voxel"; ParseMerge throws InvalidArgument for
+/// anything else.
 const char* MergeName(FusionOptions::Merge merge);
 FusionOptions::Merge ParseMerge(const std::string& name);
 
@@ -266,8 +267,7 @@ class SceneFusion {
       const std::vector<FrameSegment>& frame_segments,
       const FrameClouds& clouds,
       const std::vector<std::optional<size_t>>& map_object,
-      const FrameCoverage& coverage,
-      std::vector<std::vector<size_t>>* matches,
+      const FrameCoverage& coverage, std::vector<std::vector<size_t>>* matches,
       FrameFusionStats* stats) const;
   std::vector<std::vector<size_t>> MatchSegments(
       const std::vector<FrameSegment>& frame_segments,

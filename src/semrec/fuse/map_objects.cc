@@ -30,9 +30,8 @@ uint16_t Winner(const VoxelEvidence& v, const std::vector<uint16_t>& excluded) {
   uint16_t best = kNoClass;
   float best_weight = 0.0f;
   for (const ClassEvidence& c : v.classes) {
-    if (c.weight <= 0.0f ||
-        std::find(excluded.begin(), excluded.end(), c.class_id) !=
-            excluded.end()) {
+    if (c.weight <= 0.0f || std::find(excluded.begin(), excluded.end(),
+                                      c.class_id) != excluded.end()) {
       continue;
     }
     if (c.weight > best_weight ||
@@ -121,7 +120,8 @@ class Resolver {
     const double area = map_.voxel_size_m() * map_.voxel_size_m();
     for (uint16_t cls : stuff_classes) {
       const auto g = context_.geometry.find(cls);
-      if (g == context_.geometry.end() || g->second == StructureGeometry::kNone) {
+      if (g == context_.geometry.end() ||
+          g->second == StructureGeometry::kNone) {
         continue;
       }
       Cloud points;
@@ -306,9 +306,9 @@ class Resolver {
     }
     for (auto& [owner, list] : pieces) {
       if (list.size() < 2) continue;
-      std::stable_sort(list.begin(), list.end(), [](const auto& a, const auto& b) {
-        return a.size() > b.size();
-      });
+      std::stable_sort(
+          list.begin(), list.end(),
+          [](const auto& a, const auto& b) { return a.size() > b.size(); });
       std::vector<std::map<size_t, std::set<uint64_t>>> holders;
       for (const auto& piece : list) holders.push_back(Holders(piece));
       UnionFind groups(list.size());
@@ -333,10 +333,37 @@ class Resolver {
     }
   }
 
-  // Touching objects of one class that the views mostly held in one mask are
-  // one object (the larger keeps its id); so are touching parts no view held
-  // in two masks (sparse views of one table from opposite sides: adjacency is
-  // all there is, and no view says two).
+  // Share of `cells`' class evidence that goes to `class_id`.
+  double VoteShare(const std::vector<size_t>& cells, uint16_t class_id) const {
+    double total = 0.0, of_class = 0.0;
+    for (size_t i : cells) {
+      for (const ClassEvidence& e : cells_[i].evidence->classes) {
+        total += e.weight;
+        if (e.class_id == class_id) of_class += e.weight;
+      }
+    }
+    return total > 0.0 ? of_class / total : 0.0;
+  }
+
+  // Whether touching objects a and b are one. One class: unless two views or
+  // more held them in different masks and the views holding both in one mask
+  // are too few (masks cut one object apart far more often than they join
+  // two; sparse views see an object once or twice). Two classes: when views
+  // held both in one mask, none said two more often, and one's votes give the
+  // other's class at least confusion_share (one object, its class confused).
+  bool OneObject(const std::vector<size_t>& a, const std::vector<size_t>& b,
+                 uint32_t id_a, uint32_t id_b, const PairViews& views) const {
+    const uint16_t ca = owner_class_.at(id_a), cb = owner_class_.at(id_b);
+    if (ca == cb) {
+      return views.two <= 1 || SaysOne(views, options_.min_one_views);
+    }
+    return SaysOne(views, 1) &&
+           std::max(VoteShare(a, cb), VoteShare(b, ca)) >=
+               options_.confusion_share;
+  }
+
+  // Touching objects that are one (OneObject) become one; the larger keeps
+  // its id and class.
   void MergeByMasks() {
     std::map<uint32_t, std::vector<size_t>> members;
     for (size_t i = 0; i < cells_.size(); ++i) {
@@ -351,11 +378,17 @@ class Resolver {
       for (size_t i : cells) {
         ForNeighbours(i, [&](size_t n) {
           const uint32_t other = cells_[n].owner;
-          if (other > id && IsThingCell(cells_[n]) &&
-              owner_class_[other] == owner_class_[id]) {
-            pairs.emplace(id, other);
-          }
+          if (other > id && IsThingCell(cells_[n])) pairs.emplace(id, other);
         });
+      }
+    }
+    // Judged on the objects as they were: a chain of merges does not change
+    // the evidence of a pair.
+    std::vector<std::pair<uint32_t, uint32_t>> one;
+    for (const auto& [a, b] : pairs) {
+      if (OneObject(members[a], members[b], a, b,
+                    CoViews(holders[a], holders[b]))) {
+        one.emplace_back(a, b);
       }
     }
     std::map<uint32_t, uint32_t> into;
@@ -363,12 +396,9 @@ class Resolver {
       while (into.count(id)) id = into[id];
       return id;
     };
-    for (const auto& [a, b] : pairs) {
+    for (const auto& [a, b] : one) {
       const uint32_t x = find(a), y = find(b);
-      const PairViews views = CoViews(holders[a], holders[b]);
-      const bool one = views.two == 0 ? true  // no view says two
-                                      : SaysOne(views, options_.min_one_views);
-      if (x == y || !one) continue;
+      if (x == y) continue;
       const bool x_keeps = members[x].size() >= members[y].size();
       const uint32_t keep = x_keeps ? x : y, gone = x_keeps ? y : x;
       into[gone] = keep;
@@ -377,7 +407,9 @@ class Resolver {
       ++result_.merged_objects;
     }
     for (Cell& c : cells_) {
-      if (c.owner != 0 && IsThingCell(c)) c.owner = find(c.owner);
+      if (c.owner == 0 || !IsThingCell(c)) continue;
+      c.owner = find(c.owner);
+      c.class_id = owner_class_[c.owner];
     }
   }
 
@@ -429,8 +461,7 @@ class Resolver {
     for (const auto& [size, id] : fragments) refused.insert(id);
     for (const auto& [size, id] : fragments) {
       const std::vector<size_t>& cells = members[id];
-      const uint32_t into =
-          MostTouching(cells, owner_class_[id], id, refused);
+      const uint32_t into = MostTouching(cells, owner_class_[id], id, refused);
       for (size_t i : cells) {
         cells_[i].owner = into;
         if (into == 0) cells_[i].class_id = kNoClass;
@@ -439,7 +470,8 @@ class Resolver {
     }
   }
 
-  std::pair<double, uint32_t> Visibility(const std::vector<size_t>& cells) const {
+  std::pair<double, uint32_t> Visibility(
+      const std::vector<size_t>& cells) const {
     double labelled = 0.0, observed = 0.0;
     uint32_t max_views = 0;
     for (size_t i : cells) {

@@ -17,9 +17,10 @@
 //     wall) join the touching object of their class, or form a new one.
 //  4. An object's pieces that do not touch (within touch_voxels) are split
 //     into objects unless the views that saw both mostly put them in one mask
-//     (MaskClustering-style consensus); touching objects of one class that
-//     views mostly saw in one mask are merged. A small piece joins the object
-//     of its class it touches.
+//     (MaskClustering-style consensus); touching objects of one class are
+//     merged unless several views held them in different masks and few in
+//     one; touching objects of confused classes that views held in one mask
+//     are merged too. A small piece joins the object of its class it touches.
 //  5. Fragments are judged by visibility: an object is a fragment when the
 //     views that labelled its voxels as its class are few compared with the
 //     views that observed those voxels at all (a part seen once where five
@@ -68,6 +69,9 @@ struct MapObjectOptions {
   size_t min_one_views = 2;
   double two_weight = 0.5;
   double min_hold_share = 0.2;
+  /// Touching objects of different classes merge when views held both in
+  /// one mask and one's votes give the other's class at least this share.
+  double confusion_share = 0.25;
 
   void Check() const;
 };
@@ -130,12 +134,11 @@ struct MapResolution {
   size_t fragments_dropped = 0;
 };
 
-/// Decides the objects. `resolve`: a fusion id's current id (0: dropped). `next_id`: the first id free for new
-/// objects (advanced).
-MapResolution ResolveMapObjects(const VoxelEvidenceMap& map,
-                                const MapContext& context,
-                                const MapObjectOptions& options,
-                                const std::function<uint32_t(uint32_t)>& resolve,
-                                uint32_t* next_id);
+/// Decides the objects. `resolve`: a fusion id's current id (0: dropped).
+/// `next_id`: the first id free for new objects (advanced).
+MapResolution ResolveMapObjects(
+    const VoxelEvidenceMap& map, const MapContext& context,
+    const MapObjectOptions& options,
+    const std::function<uint32_t(uint32_t)>& resolve, uint32_t* next_id);
 
 }  // namespace semrec::fuse

@@ -44,7 +44,8 @@ FrameSegment Segment(uint16_t cls, uint16_t label, Cloud points) {
   s.class_id = cls;
   s.source_label = label;
   s.points_world = std::move(points);
-  s.kind = cls == kWall || cls == kFloor ? ClassKind::kStuff : ClassKind::kThing;
+  s.kind =
+      cls == kWall || cls == kFloor ? ClassKind::kStuff : ClassKind::kThing;
   return s;
 }
 
@@ -227,9 +228,8 @@ TEST(MapObjects, TwoChairsJoinedInOneViewAndApartInThreeEndAsTwo) {
   ASSERT_EQ(Count(fusion, kChair), 2u);
   const auto in_a = WhereItWent(fusion, a), in_b = WhereItWent(fusion, b);
   const auto top = [](const std::map<uint32_t, double>& m) {
-    return std::max_element(m.begin(), m.end(), [](auto x, auto y) {
-      return x.second < y.second;
-    });
+    return std::max_element(m.begin(), m.end(),
+                            [](auto x, auto y) { return x.second < y.second; });
   };
   EXPECT_GT(top(in_a)->second, 0.9);
   EXPECT_GT(top(in_b)->second, 0.9);
@@ -242,8 +242,9 @@ TEST(VoxelEvidence, OneVotePerViewSplitOverClassesAndWeightedByDistance) {
   // 10 wall pixels in a view 4 m away.
   const Eigen::Vector3f p(0.01f, 0.01f, 0.01f);
   FrameObservation near{{1.0f, 0.0f, 0.0f}, {}};
-  map.AddFrame({Segment(kChair, 1, Cloud(3, p)), Segment(kWall, 2, Cloud(1, p))},
-               {7, 8}, &near, 0);
+  map.AddFrame(
+      {Segment(kChair, 1, Cloud(3, p)), Segment(kWall, 2, Cloud(1, p))}, {7, 8},
+      &near, 0);
   FrameObservation far{{4.0f, 0.0f, 0.0f}, {p, {0.5f, 0.5f, 0.5f}}};
   map.AddFrame({Segment(kWall, 1, Cloud(10, p))}, {8}, &far, 1);
   const VoxelEvidence& v = map.voxels().at(VoxelKey(p, 20.0f));
@@ -265,9 +266,8 @@ TEST(StructurePlanes, WallsAreLargeVerticalPlanesAndTheFloorTheLowest) {
   walls.insert(walls.end(), other.begin(), other.end());
   const Cloud small = Box({2, 1, 0}, {2, 1.5f, 0.5f}, 0.05f);  // 0.25 m2
   walls.insert(walls.end(), small.begin(), small.end());
-  const auto planes =
-      FindStructurePlanes(walls, StructureGeometry::kVertical,
-                          Eigen::Vector3d::UnitZ(), 0.0025, {});
+  const auto planes = FindStructurePlanes(walls, StructureGeometry::kVertical,
+                                          Eigen::Vector3d::UnitZ(), 0.0025, {});
   ASSERT_EQ(planes.size(), 2u);
   EXPECT_TRUE(OnAnyPlane({0.01f, 2, 1}, planes, 0.06));
   EXPECT_TRUE(OnAnyPlane({1.5f, 3.98f, 1}, planes, 0.06));

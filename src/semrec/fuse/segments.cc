@@ -184,8 +184,8 @@ Cloud ObservedPoints(const Frame& frame, const FrameLabels& labels,
                      const LabelMap* person_ids, int pixel_stride) {
   CheckArgument(pixel_stride >= 1, "ObservedPoints: pixel_stride must be >= 1");
   const int w = frame.depth.width(), h = frame.depth.height();
-  const bool check_map = !labels.map_objects.empty() &&
-                         labels.instance.SameSize(w, h);
+  const bool check_map =
+      !labels.map_objects.empty() && labels.instance.SameSize(w, h);
   const bool check_people = person_ids != nullptr && person_ids->SameSize(w, h);
   Cloud out;
   out.reserve(static_cast<size_t>(w / pixel_stride + 1) *
@@ -198,9 +198,9 @@ Cloud ObservedPoints(const Frame& frame, const FrameLabels& labels,
       if (check_map && labels.map_objects.count(labels.instance(u, v)) != 0) {
         continue;
       }
-      out.push_back((frame.T_world_camera *
-                     frame.intrinsics.BackProject(u, v, z))
-                        .cast<float>());
+      out.push_back(
+          (frame.T_world_camera * frame.intrinsics.BackProject(u, v, z))
+              .cast<float>());
     }
   }
   return out;

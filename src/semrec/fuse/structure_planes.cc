@@ -142,8 +142,8 @@ std::vector<StructurePlane> VerticalPlanes(Cloud points,
         best.normal = n, best.offset = offset, best.support = support;
       }
     }
-    best.support = static_cast<size_t>(
-        std::count_if(points.begin(), points.end(), [&](const Eigen::Vector3f& p) {
+    best.support = static_cast<size_t>(std::count_if(
+        points.begin(), points.end(), [&](const Eigen::Vector3f& p) {
           return std::abs(best.normal.dot(p.cast<double>()) - best.offset) <=
                  o.tolerance_m;
         }));
@@ -162,8 +162,8 @@ std::vector<StructurePlane> VerticalPlanes(Cloud points,
       }
     }
     std::sort(heights.begin(), heights.end());
-    const double height = heights[heights.size() * 95 / 100] -
-                          heights[heights.size() * 5 / 100];
+    const double height =
+        heights[heights.size() * 95 / 100] - heights[heights.size() * 5 / 100];
     mean /= static_cast<double>(inliers.size());
     Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
     for (const auto& q : inliers) cov += (q - mean) * (q - mean).transpose();
@@ -190,10 +190,11 @@ std::vector<StructurePlane> FindStructurePlanes(
     const Eigen::Vector3d& up_world, double voxel_area_m2,
     const StructurePlaneOptions& options) {
   options.Check();
-  CheckArgument(voxel_area_m2 > 0.0, "structure planes: voxel area must be > 0");
+  CheckArgument(voxel_area_m2 > 0.0,
+                "structure planes: voxel area must be > 0");
   const Eigen::Vector3d up = up_world.normalized();
-  const auto min_support = static_cast<size_t>(
-      std::ceil(options.min_area_m2 / voxel_area_m2));
+  const auto min_support =
+      static_cast<size_t>(std::ceil(options.min_area_m2 / voxel_area_m2));
   switch (geometry) {
     case StructureGeometry::kVertical:
       return VerticalPlanes(points, up, min_support, options);

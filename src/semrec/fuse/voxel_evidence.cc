@@ -81,14 +81,14 @@ void VoxelEvidenceMap::AddFrame(const std::vector<FrameSegment>& segments,
     const FrameSegment& s = segments[f];
     if (s.map_object != 0) continue;
     for (const Eigen::Vector3f& p : s.points_world) {
-      votes.push_back({VoxelKey(p, inv_voxel_), object_ids[f], s.class_id,
-                       s.kind == ClassKind::kStuff ? uint16_t{0} : s.source_label,
-                       p});
+      votes.push_back(
+          {VoxelKey(p, inv_voxel_), object_ids[f], s.class_id,
+           s.kind == ClassKind::kStuff ? uint16_t{0} : s.source_label, p});
     }
   }
   // Grouped by voxel, then class and object: one pass casts each voxel's vote.
   std::sort(votes.begin(), votes.end(), [](const Vote& a, const Vote& b) {
-    return a.key != b.key ? a.key < b.key
+    return a.key != b.key             ? a.key < b.key
            : a.class_id != b.class_id ? a.class_id < b.class_id
                                       : a.object < b.object;
   });
@@ -113,7 +113,8 @@ void VoxelEvidenceMap::AddFrame(const std::vector<FrameSegment>& segments,
     }
     for (size_t k = i; k < end;) {  // per class
       size_t class_end = k;
-      while (class_end < end && votes[class_end].class_id == votes[k].class_id) {
+      while (class_end < end &&
+             votes[class_end].class_id == votes[k].class_id) {
         ++class_end;
       }
       const float share = static_cast<float>(class_end - k) / n;

@@ -51,9 +51,9 @@ TEST(ObjectSurfaces, EachVoxelsSurfaceGoesToItsOwnerOnce) {
   auto y_range = [](const open3d::geometry::TriangleMesh& m, bool inside) {
     size_t n = 0;
     for (const auto& t : m.triangles_) {
-      const double y =
-          (m.vertices_[t.x()].y() + m.vertices_[t.y()].y() +
-           m.vertices_[t.z()].y()) / 3.0;
+      const double y = (m.vertices_[t.x()].y() + m.vertices_[t.y()].y() +
+                        m.vertices_[t.z()].y()) /
+                       3.0;
       if ((y >= 1.0 && y < 1.5) == inside) ++n;
     }
     return n;
@@ -71,7 +71,8 @@ TEST(ObjectSurfaces, EachVoxelsSurfaceGoesToItsOwnerOnce) {
 
 TEST(ObjectSurfaces, VolumeWithoutMeshDoesNotLeaveAHole) {
   fuse::MapResolution r;
-  for (int iy = 0; iy < 10; ++iy) r.owners[fuse::PackVoxel(0, iy, 0)] = {3u, 9u};
+  for (int iy = 0; iy < 10; ++iy)
+    r.owners[fuse::PackVoxel(0, iy, 0)] = {3u, 9u};
   MeshMap volumes;
   volumes[4] = Sheet(0.01, 0.0, 0.5);
   const MeshMap cut = CutMeshesByOwner(volumes, r, 0.05);
