@@ -149,12 +149,24 @@ class Resolver {
         std::vector<uint16_t> excluded = c.excluded;
         excluded.push_back(c.class_id);
         const uint16_t next = Winner(*c.evidence, excluded);
-        if (next == kNoClass) break;
+        if (!CanTakeOver(*c.evidence, next)) break;
         c.excluded = std::move(excluded);
         c.class_id = next;
       }
       if (!c.excluded.empty()) ++result_.gated_voxels;
     }
+  }
+
+  // The next class takes a voxel off structure only on real evidence: a view
+  // where it held most of the voxel's pixels and a share of its votes (not
+  // the stray vote of a mask's fringe).
+  bool CanTakeOver(const VoxelEvidence& v, uint16_t class_id) const {
+    if (class_id == kNoClass) return false;
+    const ClassEvidence* e = v.Find(class_id);
+    float total = 0.0f;
+    for (const ClassEvidence& c : v.classes) total += c.weight;
+    return e != nullptr && e->views >= 1 &&
+           e->weight >= options_.min_takeover_share * total;
   }
 
   uint32_t StructureId(uint16_t class_id) {
@@ -355,7 +367,7 @@ class Resolver {
                  uint32_t id_a, uint32_t id_b, const PairViews& views) const {
     const uint16_t ca = owner_class_.at(id_a), cb = owner_class_.at(id_b);
     if (ca == cb) {
-      return views.two <= 1 || SaysOne(views, options_.min_one_views);
+      return views.two == 0 || SaysOne(views, options_.min_one_views);
     }
     return SaysOne(views, 1) &&
            std::max(VoteShare(a, cb), VoteShare(b, ca)) >=

@@ -8,8 +8,8 @@
 //     plane, a ceiling vote only on the highest (planes fitted to the voxels
 //     that vote for the class; gravity known). Elsewhere that class's
 //     evidence is set aside and the next class wins: a chair against a wall
-//     that some views call wall stays a chair (with no other class seen
-//     there, the structure class stays). A class with no plane large
+//     that some views call wall stays a chair (where no other class has real
+//     evidence, the structure class stays). A class with no plane large
 //     enough is not gated (too little seen to tell).
 //  3. Each thing voxel belongs to the fusion object of its class that most
 //     views put it in; structure voxels to their class's structure object.
@@ -52,8 +52,13 @@ struct MapObjectOptions {
   /// Fragments: labelled views / observing views, summed over the object's
   /// voxels, below this.
   double min_seen_ratio = 0.3;
-  /// Objects with fewer voxels are fragments whatever their visibility.
-  size_t min_voxels = 8;
+  /// Objects with fewer voxels are fragments whatever their visibility (20
+  /// voxels: about 20 x 20 cm of surface).
+  size_t min_voxels = 20;
+  /// Off its planes, a structure class gives way to the next class only when
+  /// that class held the voxel in at least one view and has at least this
+  /// share of its votes.
+  double min_takeover_share = 0.1;
   /// A split-off piece with fewer voxels than this joins a touching object of
   /// its class instead of standing alone.
   size_t min_piece_voxels = 20;

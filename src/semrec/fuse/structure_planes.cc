@@ -8,6 +8,8 @@
 
 #include <Eigen/Eigenvalues>
 
+#include <spdlog/spdlog.h>
+
 #include "semrec/core/error.h"
 
 namespace semrec::fuse {
@@ -178,6 +180,11 @@ std::vector<StructurePlane> VerticalPlanes(Cloud points,
       return std::abs(best.normal.dot(p.cast<double>()) - best.offset) <=
              o.tolerance_m;
     });
+    spdlog::debug("vertical plane candidate: {} points, {:.2f} m tall ({:.2f} "
+                  "to {:.2f} along up){}",
+                  best.support, height, heights[heights.size() * 5 / 100],
+                  heights[heights.size() * 95 / 100],
+                  height >= o.min_wall_height_m ? "" : " (too low for a wall)");
     if (height >= o.min_wall_height_m) planes.push_back(best);
   }
   return planes;

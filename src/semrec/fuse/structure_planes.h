@@ -32,9 +32,10 @@ struct StructurePlaneOptions {
   /// voxel area).
   double min_area_m2 = 1.0;
   /// A wall's points span at least this height (5th to 95th percentile along
-  /// up): the side of a table or a cabinet's front is vertical and can be
-  /// large, but a wall reaches well above the furniture.
-  double min_wall_height_m = 1.0;
+  /// up): the side of a table is vertical and can be large, but low. Walls
+  /// are often seen only below the furniture's top or as low partitions
+  /// (7-Scenes chess: the walls the model names span 0.82 and 0.88 m).
+  double min_wall_height_m = 0.7;
   /// Vertical planes: normals within this angle of horizontal.
   double max_wall_tilt_deg = 10.0;
   /// At most this many vertical planes per class.
