@@ -369,9 +369,8 @@ class Resolver {
     if (ca == cb) {
       return views.two == 0 || SaysOne(views, options_.min_one_views);
     }
-    return SaysOne(views, 1) &&
-           std::max(VoteShare(a, cb), VoteShare(b, ca)) >=
-               options_.confusion_share;
+    return SaysOne(views, 1) && std::max(VoteShare(a, cb), VoteShare(b, ca)) >=
+                                    options_.confusion_share;
   }
 
   // Touching objects that are one (OneObject) become one; the larger keeps
@@ -386,8 +385,9 @@ class Resolver {
     std::map<uint32_t, std::map<size_t, std::set<uint64_t>>> holders;
     for (const auto& [id, cells] : members) holders[id] = Holders(cells);
     std::set<std::pair<uint32_t, uint32_t>> pairs;
-    for (const auto& [id, cells] : members) {
-      for (size_t i : cells) {
+    for (const auto& entry : members) {
+      const uint32_t id = entry.first;
+      for (size_t i : entry.second) {
         ForNeighbours(i, [&](size_t n) {
           const uint32_t other = cells_[n].owner;
           if (other > id && IsThingCell(cells_[n])) pairs.emplace(id, other);

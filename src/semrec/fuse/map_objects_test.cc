@@ -21,14 +21,15 @@ constexpr uint16_t kWall = 1, kFloor = 2, kChair = 3, kTable = 4, kSofa = 5,
 // zero), on a grid of `step_m`.
 Cloud Box(const Eigen::Vector3f& lo, const Eigen::Vector3f& hi,
           float step_m = 0.02f) {
+  // Integer steps (a float loop counter drifts).
+  const Eigen::Vector3i n = ((hi - lo) / step_m).array().round().cast<int>();
   Cloud c;
-  for (float x = lo.x(); x <= hi.x() + 1e-4f; x += step_m) {
-    for (float y = lo.y(); y <= hi.y() + 1e-4f; y += step_m) {
-      for (float z = lo.z(); z <= hi.z() + 1e-4f; z += step_m) {
-        const bool surface = x - lo.x() < step_m || hi.x() - x < step_m ||
-                             y - lo.y() < step_m || hi.y() - y < step_m ||
-                             z - lo.z() < step_m || hi.z() - z < step_m;
-        if (surface) c.emplace_back(x, y, z);
+  for (int i = 0; i <= n.x(); ++i) {
+    for (int j = 0; j <= n.y(); ++j) {
+      for (int k = 0; k <= n.z(); ++k) {
+        const bool surface = i == 0 || i == n.x() || j == 0 || j == n.y() ||
+                             k == 0 || k == n.z();
+        if (surface) c.push_back(lo + step_m * Eigen::Vector3f(i, j, k));
       }
     }
   }

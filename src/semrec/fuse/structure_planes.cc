@@ -80,6 +80,7 @@ std::vector<StructurePlane> HorizontalPlane(const Cloud& points, bool lowest,
     return sum;
   };
   std::vector<int64_t> order;
+  order.reserve(bins.size());
   for (const auto& [b, unused] : bins) order.push_back(b);
   if (!lowest) std::reverse(order.begin(), order.end());
   for (int64_t b : order) {
@@ -180,11 +181,12 @@ std::vector<StructurePlane> VerticalPlanes(Cloud points,
       return std::abs(best.normal.dot(p.cast<double>()) - best.offset) <=
              o.tolerance_m;
     });
-    spdlog::debug("vertical plane candidate: {} points, {:.2f} m tall ({:.2f} "
-                  "to {:.2f} along up){}",
-                  best.support, height, heights[heights.size() * 5 / 100],
-                  heights[heights.size() * 95 / 100],
-                  height >= o.min_wall_height_m ? "" : " (too low for a wall)");
+    spdlog::debug(
+        "vertical plane candidate: {} points, {:.2f} m tall ({:.2f} "
+        "to {:.2f} along up){}",
+        best.support, height, heights[heights.size() * 5 / 100],
+        heights[heights.size() * 95 / 100],
+        height >= o.min_wall_height_m ? "" : " (too low for a wall)");
     if (height >= o.min_wall_height_m) planes.push_back(best);
   }
   return planes;

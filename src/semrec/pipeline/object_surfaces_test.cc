@@ -71,8 +71,9 @@ TEST(ObjectSurfaces, EachVoxelsSurfaceGoesToItsOwnerOnce) {
 
 TEST(ObjectSurfaces, VolumeWithoutMeshDoesNotLeaveAHole) {
   fuse::MapResolution r;
-  for (int iy = 0; iy < 10; ++iy)
+  for (int iy = 0; iy < 10; ++iy) {
     r.owners[fuse::PackVoxel(0, iy, 0)] = {3u, 9u};
+  }
   MeshMap volumes;
   volumes[4] = Sheet(0.01, 0.0, 0.5);
   const MeshMap cut = CutMeshesByOwner(volumes, r, 0.05);

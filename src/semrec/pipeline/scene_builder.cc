@@ -362,8 +362,9 @@ SceneWriteResult SceneBuilder::Write(const fs::path& out_dir,
   if (write_options.usdz) {
     usd::WriteSceneUsdz(out_dir / "scene.usdz", prims, stage, tracks);
   }
-  if (write_options.glb)
+  if (write_options.glb) {
     usd::WriteSceneGlb(out_dir / "scene.glb", prims, stage, tracks);
+  }
   return result;
 }
 
