@@ -38,4 +38,13 @@ PY
 grep -q "objects decided per map voxel" "$tmp/gt_voxel.log" || fail "no per-voxel decision logged"
 grep -q '"merge": "voxel"\|merge voxel' "$tmp/gt_voxel/summary.json" "$tmp/gt_voxel/static.usda" ||
   fail "the result does not name the voxel rule"
+python3 - "$tmp/gt_voxel/summary.json" "$tmp/gt_paper/summary.json" <<'PY' ||
+import json, sys
+v, p = (json.load(open(f)) for f in sys.argv[1:])
+m = v["map_objects"]
+ok = m["objects"] >= 1 and any(x["class"] == "floor" and x["geometry"] == "floor" for x in m["planes"])
+ok &= p["map_objects"] is None  # only the voxel rule decides per voxel
+sys.exit(0 if ok else 1)
+PY
+  fail "summary.json does not report the per-voxel decision (map_objects)"
 echo "ok"

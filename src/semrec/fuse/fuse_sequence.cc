@@ -83,6 +83,29 @@ nlohmann::json FusionEventsJson(const SceneFusion& fusion,
   return events;
 }
 
+nlohmann::json MapResolutionJson(const SceneFusion& fusion,
+                                 const LabelSet& classes) {
+  const MapResolution* r = fusion.map_resolution();
+  if (r == nullptr) return nullptr;
+  static const char* kGeometry[] = {"none", "vertical", "floor", "ceiling"};
+  nlohmann::json planes = nlohmann::json::array();
+  for (const StructurePlane& p : r->planes) {
+    planes.push_back({{"class", ClassName(classes, p.class_id)},
+                      {"geometry", kGeometry[static_cast<int>(p.geometry)]},
+                      {"normal", {p.normal.x(), p.normal.y(), p.normal.z()}},
+                      {"offset_m", p.offset},
+                      {"voxels", p.support}});
+  }
+  return {{"objects", r->objects.size()},
+          {"planes", planes},
+          {"voxels_moved_off_structure", r->gated_voxels},
+          {"split", r->split_objects},
+          {"merged_by_masks", r->merged_objects},
+          {"new_from_unclaimed_voxels", r->new_objects},
+          {"fragments_folded", r->fragments_folded},
+          {"fragments_dropped", r->fragments_dropped}};
+}
+
 FuseSequenceResult FuseSequence(const io::SequenceReader& reader,
                                 const SegmentationSource& source,
                                 const SegmentExtractionOptions& extraction,
@@ -213,6 +236,7 @@ void WriteFusionResult(const fs::path& out_dir, const SceneFusion& fusion,
       {"segments", segments},
       {"frames", frames},
       {"events", FusionEventsJson(fusion, classes)},
+      {"map_objects", MapResolutionJson(fusion, classes)},
       {"empty_frames", result.empty_frames},
       {"seconds", result.seconds}};
   WriteTextFileAtomic(out_dir / "summary.json", summary.dump(2) + "\n");

@@ -34,6 +34,13 @@ double ClassConfidence(const SceneSegment& segment);
 nlohmann::json FusionEventsJson(const SceneFusion& fusion,
                                 const LabelSet& classes);
 
+/// What ResolveMap decided (merge "voxel"): the structure planes (class,
+/// geometry, normal, offset, voxels on it) and the counts of voxels moved off
+/// structure, objects split, merged, made and fragments folded or dropped;
+/// null before ResolveMap or with another merge rule.
+nlohmann::json MapResolutionJson(const SceneFusion& fusion,
+                                 const LabelSet& classes);
+
 /// Reads every frame of `reader`, extracts its segments with `source`, fuses
 /// them, then calls fusion->Finish().
 FuseSequenceResult FuseSequence(const io::SequenceReader& reader,

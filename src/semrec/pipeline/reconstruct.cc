@@ -96,6 +96,8 @@ ReconstructResult Reconstruct(const io::SequenceReader& reader,
            {"people", written.people},
            {"fusion_events",
             fuse::FusionEventsJson(builder.fusion(), source.classes())},
+           {"map_objects",
+            fuse::MapResolutionJson(builder.fusion(), source.classes())},
            {"skipped_empty_objects", written.skipped_empty_objects},
            {"seconds", result.seconds}})
               .dump(2) +

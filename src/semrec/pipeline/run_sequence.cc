@@ -348,7 +348,9 @@ RunResult RunSequence(const io::SequenceReader& reader,
       {"models", ModelsJson(registry, options.pipeline)},
       {"scene", result.scene.objects_json},
       {"fusion_events",
-       fuse::FusionEventsJson(pipeline.scene().fusion(), pipeline.classes())}};
+       fuse::FusionEventsJson(pipeline.scene().fusion(), pipeline.classes())},
+      {"map_objects",
+       fuse::MapResolutionJson(pipeline.scene().fusion(), pipeline.classes())}};
   if (models) {
     // Without guidance every segmented frame is full; the counts of encoder
     // calls and prompts compare the two.
