@@ -12,7 +12,6 @@
 
 #include "semrec/core/error.h"
 #include "semrec/core/file_util.h"
-#include "semrec/fuse/gravity.h"
 #include "semrec/io/ply_io.h"
 
 namespace fs = std::filesystem;
@@ -83,6 +82,19 @@ nlohmann::json FusionEventsJson(const SceneFusion& fusion,
   return events;
 }
 
+GravityEstimate EstimateSceneGravity(const SceneFusion& fusion,
+                                     const LabelSet& classes,
+                                     const std::vector<Transform>& cameras,
+                                     const GravityOptions& options) {
+  std::vector<const Cloud*> clouds;
+  std::vector<bool> is_floor;
+  for (const SceneSegment& s : fusion.segments()) {
+    clouds.push_back(&s.points);
+    is_floor.push_back(classes.Get(s.class_id).name == "floor");
+  }
+  return EstimateGravity(clouds, is_floor, cameras, options);
+}
+
 nlohmann::json MapResolutionJson(const SceneFusion& fusion,
                                  const LabelSet& classes) {
   const MapResolution* r = fusion.map_resolution();
@@ -129,11 +141,8 @@ FuseSequenceResult FuseSequence(const io::SequenceReader& reader,
     }
     std::optional<FrameObservation> observation;
     if (fusion->voxel_evidence() != nullptr) {
-      observation.emplace();
-      observation->camera_position_world =
-          frame.T_world_camera.translation().cast<float>();
-      observation->observed_world =
-          ObservedPoints(frame, labels, nullptr, extraction.pixel_stride);
+      observation =
+          ObserveFrame(frame, labels, nullptr, extraction.pixel_stride);
     }
     result.frames.push_back(
         fusion->Integrate(segments, i, observation ? &*observation : nullptr));
@@ -149,14 +158,8 @@ FuseSequenceResult FuseSequence(const io::SequenceReader& reader,
   }
   if (fusion->voxel_evidence() != nullptr) {
     // Up decides which planes are walls and floors.
-    std::vector<const Cloud*> clouds;
-    std::vector<bool> is_floor;
-    for (const SceneSegment& s : fusion->segments()) {
-      clouds.push_back(&s.points);
-      is_floor.push_back(source.classes().Get(s.class_id).name == "floor");
-    }
-    const GravityEstimate gravity =
-        EstimateGravity(clouds, is_floor, cameras, GravityOptions{});
+    const GravityEstimate gravity = EstimateSceneGravity(
+        *fusion, source.classes(), cameras, GravityOptions{});
     fusion->ResolveMap(MakeMapContext(source.classes(), gravity.up_world));
   }
   if (result.empty_frames > 0) {

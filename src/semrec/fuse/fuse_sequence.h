@@ -10,6 +10,7 @@
 
 #include "semrec/core/progress.h"
 #include "semrec/fuse/fusion.h"
+#include "semrec/fuse/gravity.h"
 #include "semrec/fuse/segments.h"
 #include "semrec/io/sequence_reader.h"
 
@@ -31,6 +32,13 @@ std::string ClassVotesText(const SceneSegment& segment,
 /// The share of the winning class (1 without votes).
 double ClassConfidence(const SceneSegment& segment);
 /// fusion.events() for summary.json.
+/// Up and the floor from the scene's objects (those of a class named
+/// "floor" marked as floor) and the cameras (fuse/gravity.h).
+GravityEstimate EstimateSceneGravity(const SceneFusion& fusion,
+                                     const LabelSet& classes,
+                                     const std::vector<Transform>& cameras,
+                                     const GravityOptions& options);
+
 nlohmann::json FusionEventsJson(const SceneFusion& fusion,
                                 const LabelSet& classes);
 

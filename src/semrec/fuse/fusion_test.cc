@@ -9,6 +9,7 @@
 #include "semrec/core/error.h"
 #include "semrec/io/sequence_reader.h"
 #include "semrec/synth/generator.h"
+#include "semrec/testing/small_scene.h"
 #include "semrec/testing/test_util.h"
 
 namespace fs = std::filesystem;
@@ -206,16 +207,8 @@ TEST(Fusion, OptionsAreChecked) {
 // mixes objects, and fast and brute force agree on rendered data too.
 TEST(Fusion, SyntheticSixObjectsEndAsOneSegmentEach) {
   testing::TempDir dir;
-  synth::SynthOptions o = synth::SynthOptions::Preset("six-objects");
-  o.frames = 12;
-  o.width = 320;
-  o.height = 240;
-  o.fx = o.fy = 262.5;
-  o.gt_object_spacing_m = 0.05;
-  o.gt_structure_spacing_m = 0.2;
-  ProgressOptions quiet;
-  quiet.mode = ProgressOptions::Mode::kOff;
-  synth::WriteSyntheticSequence(o, dir.path(), quiet);
+  const synth::SynthOptions o = testing::SmallScene("six-objects", 12);
+  synth::WriteSyntheticSequence(o, dir.path(), testing::QuietProgress());
   const io::SequenceReader reader = io::SequenceReader::Open(dir.path());
   const auto source = SegmentationSource::Create("gt", reader);
   FusionOptions brute_options;

@@ -180,14 +180,17 @@ std::vector<FrameSegment> ExtractFrameSegments(
   return out;
 }
 
-Cloud ObservedPoints(const Frame& frame, const FrameLabels& labels,
-                     const LabelMap* person_ids, int pixel_stride) {
-  CheckArgument(pixel_stride >= 1, "ObservedPoints: pixel_stride must be >= 1");
+FrameObservation ObserveFrame(const Frame& frame, const FrameLabels& labels,
+                              const LabelMap* person_ids, int pixel_stride) {
+  CheckArgument(pixel_stride >= 1, "ObserveFrame: pixel_stride must be >= 1");
   const int w = frame.depth.width(), h = frame.depth.height();
   const bool check_map =
       !labels.map_objects.empty() && labels.instance.SameSize(w, h);
   const bool check_people = person_ids != nullptr && person_ids->SameSize(w, h);
-  Cloud out;
+  FrameObservation observation;
+  observation.camera_position_world =
+      frame.T_world_camera.translation().cast<float>();
+  Cloud& out = observation.observed_world;
   out.reserve(static_cast<size_t>(w / pixel_stride + 1) *
               static_cast<size_t>(h / pixel_stride + 1));
   for (int v = 0; v < h; v += pixel_stride) {
@@ -203,7 +206,7 @@ Cloud ObservedPoints(const Frame& frame, const FrameLabels& labels,
               .cast<float>());
     }
   }
-  return out;
+  return observation;
 }
 
 }  // namespace semrec::fuse

@@ -99,11 +99,20 @@ std::vector<FrameSegment> ExtractFrameSegments(
     const Frame& frame, const FrameLabels& labels, const LabelSet& classes,
     const SegmentExtractionOptions& options);
 
-/// Every `pixel_stride`-th pixel with depth, back-projected into the world
-/// frame: what the frame observed, labelled or not (fusion's visibility).
-/// Left out: pixels of tracked people (`person_ids` != 0, may be null) and
-/// pixels the map's projection labelled (labels.map_objects).
-Cloud ObservedPoints(const Frame& frame, const FrameLabels& labels,
-                     const LabelMap* person_ids, int pixel_stride);
+/// What one frame shows: where the camera was and every surface point it
+/// measured (world frame), labelled or not. Pixels the map's projection
+/// labelled are left out: the map seeing itself is no view.
+struct FrameObservation {
+  Eigen::Vector3f camera_position_world = Eigen::Vector3f::Zero();
+  Cloud observed_world;
+};
+
+/// What the frame observed, labelled or not (fusion's visibility): the
+/// camera's position and every `pixel_stride`-th pixel with depth,
+/// back-projected into the world frame. Left out: pixels of tracked people
+/// (`person_ids` != 0, may be null) and pixels the map's projection labelled
+/// (labels.map_objects).
+FrameObservation ObserveFrame(const Frame& frame, const FrameLabels& labels,
+                              const LabelMap* person_ids, int pixel_stride);
 
 }  // namespace semrec::fuse

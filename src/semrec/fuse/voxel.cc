@@ -17,12 +17,24 @@ Eigen::AlignedBox3f BoundsOf(const Cloud& cloud) {
   return box;
 }
 
+namespace {
+// 21 bits per axis, offset so that negative coordinates pack.
+constexpr int64_t kOffset = 1 << 20;
+constexpr uint64_t kMask = (1u << 21) - 1;
+}  // namespace
+
 uint64_t PackVoxel(int64_t x, int64_t y, int64_t z) {
-  constexpr int64_t kOffset = 1 << 20;
-  constexpr uint64_t kMask = (1u << 21) - 1;
   return ((static_cast<uint64_t>(x + kOffset) & kMask) << 42) |
          ((static_cast<uint64_t>(y + kOffset) & kMask) << 21) |
          (static_cast<uint64_t>(z + kOffset) & kMask);
+}
+
+Eigen::Vector3i UnpackVoxel(uint64_t key) {
+  auto axis = [key](int shift) {
+    return static_cast<int>(static_cast<int64_t>((key >> shift) & kMask) -
+                            kOffset);
+  };
+  return {axis(42), axis(21), axis(0)};
 }
 
 uint64_t VoxelKey(const Eigen::Vector3f& p, float inv_voxel_size) {

@@ -31,6 +31,8 @@ inline bool BoxesWithin(const Eigen::AlignedBox3f& a,
 /// voxels).
 uint64_t VoxelKey(const Eigen::Vector3f& p, float inv_voxel_size);
 uint64_t PackVoxel(int64_t x, int64_t y, int64_t z);
+/// Integer voxel coordinates of a key (inverse of PackVoxel).
+Eigen::Vector3i UnpackVoxel(uint64_t key);
 
 /// One point per occupied voxel: the centroid of the points inside it
 /// (accumulated in double), ordered by voxel key, so the result does not depend

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <unordered_set>
 
 #include "semrec/core/error.h"
 
@@ -19,14 +20,6 @@ const ClassEvidence* VoxelEvidence::Find(uint16_t class_id) const {
     if (c.class_id == class_id) return &c;
   }
   return nullptr;
-}
-
-Eigen::Vector3i UnpackVoxel(uint64_t key) {
-  constexpr int64_t kOffset = 1 << 20;
-  constexpr uint64_t kMask = (1u << 21) - 1;
-  return {static_cast<int>(static_cast<int64_t>((key >> 42) & kMask) - kOffset),
-          static_cast<int>(static_cast<int64_t>((key >> 21) & kMask) - kOffset),
-          static_cast<int>(static_cast<int64_t>(key & kMask) - kOffset)};
 }
 
 VoxelEvidenceMap::VoxelEvidenceMap(double voxel_size_m,
@@ -94,8 +87,7 @@ void VoxelEvidenceMap::AddFrame(const std::vector<FrameSegment>& segments,
   });
   const Eigen::Vector3f eye = observation ? observation->camera_position_world
                                           : Eigen::Vector3f::Zero();
-  const auto frame = static_cast<uint32_t>(frame_index);
-  std::unordered_map<uint64_t, uint32_t> seen_this_frame;
+  std::unordered_set<uint64_t> seen_this_frame;
   for (size_t i = 0; i < votes.size();) {
     size_t end = i;
     while (end < votes.size() && votes[end].key == votes[i].key) ++end;
@@ -148,13 +140,13 @@ void VoxelEvidenceMap::AddFrame(const std::vector<FrameSegment>& segments,
       k = class_end;
     }
     ++v.views;
-    seen_this_frame.emplace(votes[i].key, frame);
+    seen_this_frame.insert(votes[i].key);
     i = end;
   }
   if (observation == nullptr) return;
   for (const Eigen::Vector3f& p : observation->observed_world) {
     const uint64_t key = VoxelKey(p, inv_voxel_);
-    if (!seen_this_frame.emplace(key, frame).second) continue;
+    if (!seen_this_frame.insert(key).second) continue;
     ++voxels_[key].views;
   }
 }

@@ -75,14 +75,6 @@ struct VoxelEvidence {
   const ClassEvidence* Find(uint16_t class_id) const;
 };
 
-/// What one frame shows: where the camera was and every surface point it
-/// measured (world frame), labelled or not. Pixels the map's projection
-/// labelled are left out: the map seeing itself is no view.
-struct FrameObservation {
-  Eigen::Vector3f camera_position_world = Eigen::Vector3f::Zero();
-  Cloud observed_world;
-};
-
 class VoxelEvidenceMap {
  public:
   VoxelEvidenceMap(double voxel_size_m, const VoxelEvidenceOptions& options);
@@ -115,8 +107,5 @@ inline uint64_t MaskId(size_t frame, uint16_t label) {
   return (static_cast<uint64_t>(frame) << 16) | label;
 }
 inline size_t MaskFrame(uint64_t mask) { return mask >> 16; }
-
-/// Integer voxel coordinates of a key (inverse of PackVoxel).
-Eigen::Vector3i UnpackVoxel(uint64_t key);
 
 }  // namespace semrec::fuse

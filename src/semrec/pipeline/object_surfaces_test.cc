@@ -10,7 +10,7 @@
 #include "semrec/fuse/voxel.h"
 #include "semrec/io/ply_io.h"
 #include "semrec/pipeline/reconstruct.h"
-#include "semrec/synth/generator.h"
+#include "semrec/testing/small_scene.h"
 #include "semrec/testing/test_util.h"
 
 namespace semrec::pipeline {
@@ -163,16 +163,9 @@ size_t WallVerticesInside(const std::filesystem::path& out,
 // paper's rule the wall's volume keeps that view's cabinet surface.
 TEST(ObjectSurfaces, FurnitureCalledWallInOneViewLeavesTheWallsMesh) {
   testing::TempDir dir;
-  synth::SynthOptions o = synth::SynthOptions::Preset("six-objects");
-  o.frames = 12;
-  o.width = 320;
-  o.height = 240;
-  o.fx = o.fy = 262.5;
-  o.gt_object_spacing_m = 0.05;
-  o.gt_structure_spacing_m = 0.2;
-  ProgressOptions quiet;
-  quiet.mode = ProgressOptions::Mode::kOff;
-  synth::WriteSyntheticSequence(o, dir / "seq", quiet);
+  const ProgressOptions quiet = testing::QuietProgress();
+  synth::WriteSyntheticSequence(testing::SmallScene("six-objects", 12),
+                                dir / "seq", quiet);
   const io::SequenceReader reader = io::SequenceReader::Open(dir / "seq");
   const PaintedAsWall source(fuse::SegmentationSource::Create("gt", reader),
                              "cabinet", 4);

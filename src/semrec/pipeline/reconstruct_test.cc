@@ -10,6 +10,7 @@
 #include "semrec/core/file_util.h"
 #include "semrec/synth/generator.h"
 #include "semrec/synth/scene.h"
+#include "semrec/testing/small_scene.h"
 #include "semrec/testing/test_util.h"
 #include "semrec/usd/usda_reader.h"
 
@@ -18,23 +19,12 @@ namespace fs = std::filesystem;
 namespace semrec::pipeline {
 namespace {
 
-ProgressOptions Quiet() {
-  ProgressOptions p;
-  p.mode = ProgressOptions::Mode::kOff;
-  return p;
-}
+ProgressOptions Quiet() { return testing::QuietProgress(); }
 
-// A quarter-size (320x240) noiseless synthetic sequence with sparse ground
-// truth: fast enough for unit tests.
+// SmallScene without sensor noise.
 synth::SynthOptions SmallNoiselessScene(const std::string& preset, int frames) {
-  synth::SynthOptions o = synth::SynthOptions::Preset(preset);
-  o.frames = frames;
-  o.width = 320;
-  o.height = 240;
-  o.fx = o.fy = 262.5;
+  synth::SynthOptions o = testing::SmallScene(preset, frames);
   o.noise.enabled = false;
-  o.gt_object_spacing_m = 0.05;
-  o.gt_structure_spacing_m = 0.2;
   return o;
 }
 

@@ -158,12 +158,9 @@ SceneFrameStats SceneBuilder::Add(const Frame& frame,
       frame, static_labels, classes_, options_.extraction);
   // Voxel evidence: what the frame saw, labelled or not (visibility).
   std::optional<fuse::FrameObservation> observation;
-  if (options_.fusion.merge == fuse::FusionOptions::Merge::kVoxel) {
-    observation.emplace();
-    observation->camera_position_world =
-        frame.T_world_camera.translation().cast<float>();
-    observation->observed_world = fuse::ObservedPoints(
-        frame, static_labels, person_ids, options_.extraction.pixel_stride);
+  if (fusion_.voxel_evidence() != nullptr) {
+    observation = fuse::ObserveFrame(frame, static_labels, person_ids,
+                                     options_.extraction.pixel_stride);
   }
   const fuse::FrameFusionStats fused = fusion_.Integrate(
       segments, frame.index, observation ? &*observation : nullptr);
@@ -193,8 +190,9 @@ void SceneBuilder::Finish() {
         cleaned);
   }
   mesher_.Reconcile([&](uint32_t id) { return fusion_.ResolveId(id); });
-  if (options_.fusion.merge == fuse::FusionOptions::Merge::kVoxel) {
-    const fuse::GravityEstimate gravity = EstimateGravityNow();
+  if (fusion_.voxel_evidence() != nullptr) {
+    const fuse::GravityEstimate gravity = fuse::EstimateSceneGravity(
+        fusion_, classes_, cameras_, options_.gravity);
     const fuse::MapResolution& r =
         fusion_.ResolveMap(fuse::MakeMapContext(classes_, gravity.up_world));
     spdlog::info(
@@ -205,16 +203,6 @@ void SceneBuilder::Finish() {
         r.merged_objects, r.new_objects, r.fragments_folded,
         r.fragments_dropped);
   }
-}
-
-fuse::GravityEstimate SceneBuilder::EstimateGravityNow() const {
-  std::vector<const fuse::Cloud*> clouds;
-  std::vector<bool> is_floor;
-  for (const fuse::SceneSegment& s : fusion_.segments()) {
-    clouds.push_back(&s.points);
-    is_floor.push_back(classes_.Get(s.class_id).name == "floor");
-  }
-  return fuse::EstimateGravity(clouds, is_floor, cameras_, options_.gravity);
 }
 
 void SceneBuilder::RebuildVolumes(
@@ -244,7 +232,8 @@ SceneWriteResult SceneBuilder::Write(const fs::path& out_dir,
   }
 
   // Upright: the scene's points and the cameras decide which way is up.
-  result.gravity = EstimateGravityNow();
+  result.gravity =
+      fuse::EstimateSceneGravity(fusion_, classes_, cameras_, options_.gravity);
   // An upright scene declared Y-up gets its axes turned: (x, y, z) -> (x, z,
   // -y). With gravity "none" the stage only declares the user's own axis.
   if (options_.stage.up_axis == "Y" &&

@@ -149,9 +149,6 @@ class SceneBuilder {
   size_t volumes() const { return mesher_.num_objects(); }
 
  private:
-  /// Up from the scene's points and the cameras (fuse/gravity.h).
-  fuse::GravityEstimate EstimateGravityNow() const;
-
   LabelSet classes_;
   SceneBuilderOptions options_;
   fuse::SceneFusion fusion_;

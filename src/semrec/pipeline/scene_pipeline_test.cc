@@ -19,6 +19,7 @@
 #include "semrec/pipeline/run_sequence.h"
 #include "semrec/pipeline/track_images.h"
 #include "semrec/synth/generator.h"
+#include "semrec/testing/small_scene.h"
 #include "semrec/testing/test_util.h"
 
 namespace fs = std::filesystem;
@@ -26,22 +27,8 @@ namespace fs = std::filesystem;
 namespace semrec::pipeline {
 namespace {
 
-ProgressOptions Quiet() {
-  ProgressOptions p;
-  p.mode = ProgressOptions::Mode::kOff;
-  return p;
-}
-
-synth::SynthOptions SmallScene(const std::string& preset, int frames) {
-  synth::SynthOptions o = synth::SynthOptions::Preset(preset);
-  o.frames = frames;
-  o.width = 320;
-  o.height = 240;
-  o.fx = o.fy = 262.5;
-  o.gt_object_spacing_m = 0.05;
-  o.gt_structure_spacing_m = 0.2;
-  return o;
-}
+using testing::SmallScene;
+ProgressOptions Quiet() { return testing::QuietProgress(); }
 
 // Largest distance from a sample of `a`'s points (about 400) to the nearest
 // point of `b`, by brute force.
