@@ -43,6 +43,8 @@ import json, sys
 v, p = (json.load(open(f)) for f in sys.argv[1:])
 m = v["map_objects"]
 ok = m["objects"] >= 1 and any(x["class"] == "floor" and x["geometry"] == "floor" for x in m["planes"])
+ok &= len(m["visibility"]) >= 1 and all(0.3 <= o["seen_ratio"] <= 1 and o["max_views"] >= 1
+                                        for o in m["visibility"])  # kept objects pass the rule
 ok &= p["map_objects"] is None  # only the voxel rule decides per voxel
 sys.exit(0 if ok else 1)
 PY

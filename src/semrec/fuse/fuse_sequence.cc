@@ -108,7 +108,18 @@ nlohmann::json MapResolutionJson(const SceneFusion& fusion,
                       {"offset_m", p.offset},
                       {"voxels", p.support}});
   }
+  // Why each object was kept: how it was seen (things only).
+  nlohmann::json objects = nlohmann::json::array();
+  for (const MapObject& o : r->objects) {
+    if (o.kind == ClassKind::kStuff) continue;
+    objects.push_back({{"id", o.id},
+                       {"class", ClassName(classes, o.class_id)},
+                       {"voxels", o.voxels.size()},
+                       {"seen_ratio", std::round(o.seen_ratio * 1000) / 1000},
+                       {"max_views", o.max_views}});
+  }
   return {{"objects", r->objects.size()},
+          {"visibility", objects},
           {"planes", planes},
           {"voxels_moved_off_structure", r->gated_voxels},
           {"split", r->split_objects},

@@ -42,9 +42,11 @@ GravityEstimate EstimateSceneGravity(const SceneFusion& fusion,
 nlohmann::json FusionEventsJson(const SceneFusion& fusion,
                                 const LabelSet& classes);
 
-/// What ResolveMap decided (merge "voxel"): the structure planes (class,
-/// geometry, normal, offset, voxels on it) and the counts of voxels moved off
-/// structure, objects split, merged, made and fragments folded or dropped;
+/// What ResolveMap decided (merge "voxel"): each object's visibility (id,
+/// class, voxels, seen ratio, most views labelling one voxel), the structure
+/// planes (class, geometry, normal, offset, voxels on it) and the counts of
+/// voxels moved off structure, objects split, merged, made and fragments
+/// folded or dropped;
 /// null before ResolveMap or with another merge rule.
 nlohmann::json MapResolutionJson(const SceneFusion& fusion,
                                  const LabelSet& classes);
