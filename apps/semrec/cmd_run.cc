@@ -128,6 +128,7 @@ void RunRun(RunArgs& args, CLI::App* cmd) {
       p.segmenter.masks.model = segment::PromptableOptions::FromRegistry(
           registry, args.masks, p.segmenter.semantic.runtime);
     }
+    p.segmenter.objects.runtime = p.segmenter.semantic.runtime;
     p.people.detector.model = args.detector;
     p.people.detector.score_threshold = args.detector_score;
     p.people.detector.runtime = args.model.Runtime();
@@ -222,6 +223,7 @@ void RegisterRun(CLI::App& app) {
                   "Mask generation: point-prompt grid size")
       ->capture_default_str();
   pipeline::ScenePipelineOptions& pipe = args->run.pipeline;
+  AddObjectDetectorArgs(cmd, &pipe.segmenter.objects);
   cmd->add_flag("--map-guidance", pipe.map_guidance,
                 "Segment only what the map cannot explain: the fused map is "
                 "projected into each frame; masks are prompted only in the "

@@ -26,6 +26,7 @@ struct SegmentArgs {
   bool no_skip_covered = false;
   bool overwrite = false;
   segment::MaskGeneratorOptions amg;
+  segment::ObjectDetectorOptions objects;
 };
 
 void RunSegment(SegmentArgs args) {
@@ -40,6 +41,8 @@ void RunSegment(SegmentArgs args) {
     options.masks.model = segment::PromptableOptions::FromRegistry(
         registry, args.masks, options.semantic.runtime);
   }
+  options.objects = args.objects;
+  options.objects.runtime = options.semantic.runtime;
   CheckUsage(options);
 
   const auto inputs =
@@ -104,6 +107,7 @@ void RegisterSegment(CLI::App& app) {
                   "(faster, loses nested masks)")
       ->check(CLI::Range(0.0, 1.0))
       ->capture_default_str();
+  AddObjectDetectorArgs(cmd, &args->objects);
   cmd->add_option("--stride", args->stride, "Use every n-th image/frame")
       ->capture_default_str();
   cmd->add_option("--max-frames", args->max_frames,

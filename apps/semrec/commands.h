@@ -12,6 +12,7 @@
 #include "semrec/infer/model_registry.h"
 #include "semrec/infer/onnx_model.h"
 #include "semrec/io/sequence_reader.h"
+#include "semrec/segment/object_evidence.h"
 
 namespace semrec::cli {
 
@@ -63,6 +64,10 @@ struct ModelArgs {
   infer::OnnxModelOptions Runtime() const;
 };
 void AddModelArgs(CLI::App* cmd, ModelArgs* args);
+
+/// --object-detector and its tuning options (segment, run).
+void AddObjectDetectorArgs(CLI::App* cmd,
+                           segment::ObjectDetectorOptions* options);
 
 void RegisterInfo(CLI::App& app);
 void RegisterTsdf(CLI::App& app);

@@ -51,4 +51,42 @@ void AddModelArgs(CLI::App* cmd, ModelArgs* args) {
       ->capture_default_str();
 }
 
+void AddObjectDetectorArgs(CLI::App* cmd,
+                           segment::ObjectDetectorOptions* options) {
+  cmd->add_option("--object-detector", options->model,
+                  "Object detector (registry name, e.g. yolox_nano) as a "
+                  "second source of class evidence: its detections of "
+                  "classes the label set has (data/class_maps/) become box "
+                  "prompts, and a mask that matches one adds the detected "
+                  "class, weighted by its score, to its vote; empty = off")
+      ->capture_default_str();
+  cmd->add_option("--object-score", options->score_threshold,
+                  "Ignore object detections below this score")
+      ->check(CLI::Range(0.0, 1.0))
+      ->capture_default_str();
+  cmd->add_option("--object-weight", options->weight,
+                  "A matched detection adds weight x score to its class's "
+                  "share of the mask's semantic pixels")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+  cmd->add_option("--object-part-share", options->part_containment,
+                  "A smaller mask with this share of its pixels inside a "
+                  "detection's mask takes its evidence as a part (0 = off)")
+      ->check(CLI::Range(0.0, 1.0))
+      ->capture_default_str();
+  cmd->add_option("--object-mask-iou", options->min_predicted_iou,
+                  "A detection no mask matches adds its own mask when the "
+                  "decoder's predicted IoU is >= this (above 1 = never)")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+  cmd->add_flag("--object-keep-stuff{false}", options->stuff_yields,
+                "Do not scale down stuff classes (wall, floor...) in masks "
+                "matching a detection (by default their pixel share is "
+                "multiplied by 1 - score)");
+  cmd->add_option("--object-class-map", options->class_map,
+                  "JSON map from detector class names to label-set class "
+                  "names (default: data/class_maps/<detector "
+                  "set>_to_<label set>.json)");
+}
+
 }  // namespace semrec::cli

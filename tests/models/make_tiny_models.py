@@ -31,6 +31,12 @@ exact expected answer:
   best is the second, which equals the SAM decoder's mask; `obj_ptr` [1,256]
   is the mean colour / 255 under that mask in entries 0..2, zeros after.
 
+- tiny_yolox.onnx: the YOLOX signature at a 64x64 input (`images` -> `output`
+  [1,84,85], strides 8/16/32) reporting one fixed detection whatever the
+  image: COCO class 57 (chair) with objectness 0.9 and class score 1.0, box
+  centre (16, 20), size 16x24 in the input frame (anchor 0 of stride 8:
+  p = (cx/8 - 0, cy/8 - 0, log(w/8), log(h/8)) at grid cell (0, 0)).
+
 The palette (150 colours of a 6x6x6 grid, min distance 51) is written to
 tiny_palette150.json (list of [r, g, b] by class index), the registry entries
 of all models to registry.yaml.
@@ -355,6 +361,21 @@ def sam_attention(path, rewritten_path):
     onnx.save(model, rewritten_path)
 
 
+def tiny_yolox(path):
+    g = Graph()
+    anchors = 8 * 8 + 4 * 4 + 2 * 2
+    out = np.zeros((1, anchors, 85), np.float32)
+    # Anchor 0 is stride 8's cell (0, 0): cx = p0 * 8, w = exp(p2) * 8.
+    out[0, 0, :4] = [16 / 8, 20 / 8, np.log(16 / 8), np.log(24 / 8)]
+    out[0, 0, 4] = 0.9
+    out[0, 0, 5 + 56] = 1.0  # COCO id 57 (label_offset 1): chair
+    # + 0 x mean(image), so that the output depends on the input.
+    zero = g.op("Mul", [g.op("ReduceMean", ["images"], keepdims=0), g.const(0.0)])
+    g.out("Add", [g.const(out), zero], "output")
+    g.save(path, [helper.make_tensor_value_info("images", F, [1, 3, 64, 64])],
+           [helper.make_tensor_value_info("output", F, [1, anchors, 85])])
+
+
 REGISTRY = """models:
   tiny_segformer:
     file: tiny_segformer.onnx
@@ -395,6 +416,15 @@ REGISTRY = """models:
     file: tiny_sam2_decoder.onnx
     role: mask_decoder
     backend: sam2
+  tiny_yolox:
+    file: tiny_yolox.onnx
+    role: detector
+    label_set: coco80
+    label_offset: 1
+    input: {name: images, layout: NCHW, width: 64, height: 64, color: BGR,
+            resize: letterbox, pad_value: 114, pad_space: raw,
+            mean: [0, 0, 0], std: [1, 1, 1]}
+    output: {name: output, layout: NCHW}
 """
 
 
@@ -418,6 +448,7 @@ def main():
                   os.path.join(out, "tiny_sam_attention_rewritten.onnx"))
     sam_encoder(os.path.join(out, "tiny_sam2_encoder.onnx"), sam2=True)
     sam2_decoder(os.path.join(out, "tiny_sam2_decoder.onnx"))
+    tiny_yolox(os.path.join(out, "tiny_yolox.onnx"))
     with open(os.path.join(out, "tiny_palette150.json"), "w") as f:
         json.dump(palette(), f)
     # The registry entries the C++ tests load (file names relative to OUT_DIR).

@@ -329,6 +329,55 @@ TEST(MapGuidedReplay, ReplayedFramesRestoreTheGuidance) {
   EXPECT_EQ(counts2.projection, counts.projection);
 }
 
+// Object evidence and people tracking with the same detector run it once per
+// frame, and the people come out exactly as with the tracker's own pass (the
+// tiny detector always reports one chair; the "people" tracker here tracks
+// chairs so that it has something to track).
+TEST(ObjectDetectorPipeline, OneDetectorPassServesPeopleAndObjects) {
+  ASSERT_FALSE(semrec::testing::TinyModelDir().empty());
+  const auto palette = TinyPalette();
+  const infer::ModelRegistry registry = TinyRegistry();
+  const auto run = [&](bool objects) {
+    ScenePipelineOptions options = GuidedOptions();
+    options.map_guidance = false;
+    options.segment_every = 2;
+    options.track_people = true;
+    options.people.detector.model = "tiny_yolox";
+    options.people.detector.classes = {57};  // COCO chair
+    options.people.detector.runtime = options.segmenter.semantic.runtime;
+    options.people.mask_model = options.segmenter.masks.model;
+    options.people.tracker = track::TrackerOptions::Paper();
+    if (objects) {
+      options.segmenter.objects.model = "tiny_yolox";
+      options.segmenter.objects.runtime = options.segmenter.semantic.runtime;
+    }
+    ScenePipeline pipeline(&registry, nullptr, options);
+    for (size_t i = 0; i < 4; ++i) {
+      PipelineInput input;
+      input.frame = Render(i, palette).frame;
+      input.name = "frame.png";
+      pipeline.Process(input);
+    }
+    pipeline.Finish();
+    return std::make_pair(pipeline.Tracks(), pipeline.object_counts());
+  };
+  const auto [tracks, counts] = run(false);
+  const auto [shared_tracks, shared_counts] = run(true);
+  ASSERT_EQ(tracks.size(), 4u);  // one box per frame
+  ASSERT_EQ(shared_tracks.size(), tracks.size());
+  for (size_t i = 0; i < tracks.size(); ++i) {
+    EXPECT_EQ(shared_tracks[i].frame, tracks[i].frame);
+    EXPECT_EQ(shared_tracks[i].id, tracks[i].id);
+    EXPECT_DOUBLE_EQ(shared_tracks[i].left, tracks[i].left);
+    EXPECT_DOUBLE_EQ(shared_tracks[i].width, tracks[i].width);
+  }
+  EXPECT_EQ(counts.detections, 0u);
+  // Frames 0 and 2 segmented, each with the one (chair) detection.
+  EXPECT_EQ(shared_counts.shared_passes, 2u);
+  EXPECT_EQ(shared_counts.detections, 2u);
+  EXPECT_EQ(shared_counts.matched + shared_counts.added, 2u);
+}
+
 TEST(MapGuidedLabels, ComposedLabelsTakeTheMapWhereItExplains) {
   fuse::ProjectedMap projected;
   projected.state = Image<uint8_t>(4, 1, 1, fuse::ProjectedMap::kExplained);

@@ -69,6 +69,9 @@ nlohmann::json ModelsJson(const infer::ModelRegistry* registry,
     names.push_back(options.segmenter.masks.model.encoder);
     names.push_back(options.segmenter.masks.model.decoder);
   }
+  if (options.segmenter.objects.enabled()) {
+    names.push_back(options.segmenter.objects.model);
+  }
   if (options.track_people) {
     names.push_back(options.people.detector.model);
     if (options.people.masks) {
@@ -368,6 +371,18 @@ RunResult RunSequence(const io::SequenceReader& reader,
         {"mean_unexplained_share",
          guided > 0 ? g.unexplained_share_sum / static_cast<double>(guided)
                     : 0.0}};
+    const segment::ObjectDetectorOptions& o = options.pipeline.segmenter.objects;
+    const ObjectDetectionCounts& c = pipeline.object_counts();
+    result.report["object_detector"] = {
+        {"model", o.enabled() ? nlohmann::json(o.model) : nlohmann::json()},
+        {"score_threshold", o.score_threshold},
+        {"weight", o.weight},
+        {"stuff_yields", o.stuff_yields},
+        {"detections", c.detections},
+        {"matched_masks", c.matched},
+        {"added_masks", c.added},
+        {"parts", c.parts},
+        {"frames_sharing_the_people_pass", c.shared_passes}};
   }
   WriteTextFileAtomic(out_dir / "report.json", result.report.dump(2) + "\n");
   return result;

@@ -1,5 +1,6 @@
 #include "semrec/pipeline/scene_pipeline.h"
 
+#include <algorithm>
 #include <map>
 #include <set>
 
@@ -22,6 +23,27 @@ void ScenePipelineOptions::Check() const {
   offline.Check();
   scene.Check();
 }
+
+namespace {
+
+// The people tracker's share of a detector pass over every class.
+std::vector<track::Detection> PersonDetections(
+    const std::vector<track::LabeledDetection>& all,
+    const track::YoloxOptions& people) {
+  std::vector<track::Detection> out;
+  for (const track::LabeledDetection& d : all) {
+    const bool wanted =
+        people.classes.empty() ||
+        std::find(people.classes.begin(), people.classes.end(), d.class_id) !=
+            people.classes.end();
+    if (wanted && d.detection.score >= people.score_threshold) {
+      out.push_back(d.detection);
+    }
+  }
+  return out;
+}
+
+}  // namespace
 
 std::vector<PersonObservation> PeopleFromIdMap(const LabelMap& person_ids) {
   std::set<uint16_t> ids(person_ids.values().begin(),
@@ -57,6 +79,19 @@ ScenePipeline::ScenePipeline(const infer::ModelRegistry* registry,
                                                             options_.segmenter);
     if (options_.track_people) {
       tracker_ = std::make_unique<PeopleTracker>(*registry, options_.people);
+      const track::YoloxOptions& people = options_.people.detector;
+      const segment::ObjectDetectorOptions& objects =
+          options_.segmenter.objects;
+      if (objects.enabled() && objects.model == people.model) {
+        // Per-class NMS and a class filter after it: the people's boxes are
+        // exactly those of a people-only pass.
+        track::YoloxOptions shared = people;
+        shared.classes.clear();
+        shared.score_threshold =
+            std::min(people.score_threshold, objects.score_threshold);
+        shared_detector_ =
+            std::make_unique<track::YoloxDetector>(*registry, shared);
+      }
     }
     builder_ =
         std::make_unique<SceneBuilder>(segmenter_->label_set(), options_.scene);
@@ -83,6 +118,16 @@ PreparedFrame ScenePipeline::Prepare(PipelineInput input) {
   const Frame& frame = prepared.frame;
   Stopwatch watch;
 
+  // One detector pass for people and objects (when they share a detector).
+  std::optional<std::vector<track::LabeledDetection>> detections;
+  if (shared_detector_ && !input.replay) {
+    try {
+      detections = shared_detector_->Detect(frame.color);
+    } catch (const InvalidArgument& e) {
+      throw FormatError(frame.color_path, e.what());
+    }
+  }
+
   // People first (every frame): map guidance leaves their pixels to them.
   std::vector<PersonObservation>& people = prepared.people;
   std::optional<LabelMap>& person_ids = prepared.person_ids;
@@ -100,7 +145,11 @@ PreparedFrame ScenePipeline::Prepare(PipelineInput input) {
     } else if (models) {
       PeopleFrame tracked;
       try {
-        tracked = tracker_->Process(frame.color);
+        tracked = tracker_->Process(
+            frame.color,
+            detections ? std::make_optional(PersonDetections(
+                             *detections, options_.people.detector))
+                       : std::nullopt);
       } catch (const InvalidArgument& e) {
         throw FormatError(frame.color_path, e.what());
       }
@@ -129,7 +178,9 @@ PreparedFrame ScenePipeline::Prepare(PipelineInput input) {
     if (models) {
       labels =
           SegmentFrame(frame, prepared.position, person_ids, &prepared.guidance,
-                       options_.overlays ? &prepared.decision : nullptr);
+                       options_.overlays ? &prepared.decision : nullptr,
+                       detections ? &*detections : nullptr);
+      if (detections) ++object_counts_.shared_passes;
     } else {
       CheckArgument(input.labels.has_value(),
                     "pipeline: frame " + input.name + " came without labels");
@@ -144,7 +195,8 @@ PreparedFrame ScenePipeline::Prepare(PipelineInput input) {
 fuse::FrameLabels ScenePipeline::SegmentFrame(
     const Frame& frame, size_t position,
     const std::optional<LabelMap>& person_ids, std::string* mode,
-    std::optional<GuidanceDecision>* decision_out) {
+    std::optional<GuidanceDecision>* decision_out,
+    const std::vector<track::LabeledDetection>* detections) {
   const std::string source = frame.color_path.string();
   // Without guidance, or before there is a map: a full frame.
   GuidanceDecision decision;
@@ -194,9 +246,9 @@ fuse::FrameLabels ScenePipeline::SegmentFrame(
   segment::HybridResult hybrid;
   try {
     hybrid = decision.mode == FrameMode::kFull
-                 ? segmenter_->Segment(frame.color)
+                 ? segmenter_->Segment(frame.color, detections)
                  : segmenter_->SegmentWhere(frame.color, decision.prompt_region,
-                                            std::move(semantic));
+                                            std::move(semantic), detections);
   } catch (const InvalidArgument& e) {
     throw FormatError(frame.color_path, e.what());
   }
@@ -204,6 +256,10 @@ fuse::FrameLabels ScenePipeline::SegmentFrame(
       static_cast<size_t>(hybrid.mask_stats.encoder_calls);
   guidance_counts_.prompts_decoded +=
       static_cast<size_t>(hybrid.mask_stats.prompts_decoded);
+  object_counts_.detections += hybrid.detections.size();
+  object_counts_.matched += static_cast<size_t>(hybrid.detections_matched);
+  object_counts_.added += static_cast<size_t>(hybrid.detections_added);
+  object_counts_.parts += static_cast<size_t>(hybrid.detection_parts);
   if (decision.mode == FrameMode::kFull) {
     return {std::move(hybrid.vote.instance), std::move(hybrid.vote.semantic),
             source};

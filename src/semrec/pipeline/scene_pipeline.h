@@ -123,6 +123,18 @@ struct GuidanceCounts {
   double unexplained_share_sum = 0.0;
 };
 
+/// The object detector's evidence over the frames this process segmented.
+struct ObjectDetectionCounts {
+  /// Detections of mapped classes used, and what they did (HybridResult).
+  size_t detections = 0;
+  size_t matched = 0;
+  size_t added = 0;
+  size_t parts = 0;
+  /// Frames whose one detector pass served both people tracking and the
+  /// object evidence.
+  size_t shared_passes = 0;
+};
+
 /// What one frame gave.
 struct PipelineFrameResult {
   bool segmented = false;
@@ -190,6 +202,7 @@ class ScenePipeline {
   size_t frames() const { return frames_; }
   size_t segmented_frames() const { return segmented_frames_; }
   const GuidanceCounts& guidance_counts() const { return guidance_counts_; }
+  const ObjectDetectionCounts& object_counts() const { return object_counts_; }
   const ScenePipelineOptions& options() const { return options_; }
 
  private:
@@ -197,7 +210,9 @@ class ScenePipeline {
   fuse::FrameLabels SegmentFrame(const Frame& frame, size_t position,
                                  const std::optional<LabelMap>& person_ids,
                                  std::string* mode,
-                                 std::optional<GuidanceDecision>* decision);
+                                 std::optional<GuidanceDecision>* decision,
+                                 const std::vector<track::LabeledDetection>*
+                                     detections);
   /// Map guidance bookkeeping for a segmented frame's mode.
   void CountGuidance(const std::string& mode, const Transform& T_world_camera);
   /// The map frame `position` is guided by (after frame position - 2).
@@ -208,6 +223,9 @@ class ScenePipeline {
   ScenePipelineOptions options_;
   std::unique_ptr<segment::HybridSegmenter> segmenter_;
   std::unique_ptr<PeopleTracker> tracker_;
+  // One detector pass per frame for people and object evidence, when both
+  // use the same detector (null otherwise: each runs its own).
+  std::unique_ptr<track::YoloxDetector> shared_detector_;
   std::unique_ptr<SceneBuilder> builder_;
   std::vector<track::TrackPoint> track_points_;
   std::vector<track::TrackPoint> finished_tracks_;
@@ -217,6 +235,7 @@ class ScenePipeline {
   size_t segmented_frames_ = 0;
   // Map guidance: Prepare() side.
   GuidanceCounts guidance_counts_;
+  ObjectDetectionCounts object_counts_;
   std::optional<Transform> T_world_last_full_;
   size_t frames_since_full_ = 0;
   // Maps published by Integrate() (tagged with the frame's position) for

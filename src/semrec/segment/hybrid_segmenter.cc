@@ -4,12 +4,17 @@
 #include <string>
 
 #include "semrec/core/error.h"
+#include "semrec/io/label_set_io.h"
 
 namespace semrec::segment {
 
 void HybridSegmenterOptions::Check() const {
   semantic.Check();
   if (use_masks) masks.Check();
+  objects.Check();
+  CheckArgument(!objects.enabled() || use_masks,
+                "hybrid segmenter: the object detector needs the mask model "
+                "(its boxes are prompts)");
 }
 
 HybridSegmenter::HybridSegmenter(const infer::ModelRegistry& registry,
@@ -20,10 +25,41 @@ HybridSegmenter::HybridSegmenter(const infer::ModelRegistry& registry,
   if (options_.use_masks) {
     masks_ = MaskGenerator::Create(registry, options_.masks);
   }
+  if (options_.objects.enabled()) {
+    track::YoloxOptions detector;
+    detector.model = options_.objects.model;
+    detector.runtime = options_.objects.runtime;
+    detector.score_threshold = options_.objects.score_threshold;
+    detector.classes.clear();
+    detector_ = std::make_unique<track::YoloxDetector>(registry, detector);
+    const std::string& detector_set = registry.Get(detector.model).label_set;
+    const std::filesystem::path map_file =
+        options_.objects.class_map.empty()
+            ? DetectorClassMap::DefaultPath(detector_set,
+                                            semantic_->entry().label_set)
+            : std::filesystem::path(options_.objects.class_map);
+    CheckArgument(std::filesystem::exists(map_file),
+                  "object detector: no class map " + map_file.string() +
+                      " from " + detector_set + " to " +
+                      semantic_->entry().label_set +
+                      " (write one: JSON {\"detector class\": \"label "
+                      "class\"}, see data/class_maps/)");
+    class_map_ = DetectorClassMap::Load(
+        map_file, io::LoadLabelSet(detector_set), semantic_->label_set());
+  }
 }
 
-HybridResult HybridSegmenter::Segment(const ColorImage& rgb) {
-  return Run(rgb, nullptr, std::nullopt);
+HybridResult HybridSegmenter::Segment(
+    const ColorImage& rgb,
+    const std::vector<track::LabeledDetection>* detections) {
+  return Run(rgb, nullptr, std::nullopt, detections);
+}
+
+std::vector<track::LabeledDetection> HybridSegmenter::DetectObjects(
+    const ColorImage& rgb) const {
+  CheckArgument(detector_ != nullptr,
+                "hybrid segmenter: the object detector is off");
+  return detector_->Detect(rgb);
 }
 
 SemanticResult HybridSegmenter::SegmentSemantic(const ColorImage& rgb) {
@@ -32,7 +68,8 @@ SemanticResult HybridSegmenter::SegmentSemantic(const ColorImage& rgb) {
 
 HybridResult HybridSegmenter::SegmentWhere(
     const ColorImage& rgb, const Image<uint8_t>& prompt_region,
-    std::optional<SemanticResult> semantic) {
+    std::optional<SemanticResult> semantic,
+    const std::vector<track::LabeledDetection>* detections) {
   CheckArgument(prompt_region.SameSize(rgb.width(), rgb.height()),
                 "hybrid segmenter: the prompt region is " +
                     std::to_string(prompt_region.width()) + "x" +
@@ -42,12 +79,52 @@ HybridResult HybridSegmenter::SegmentWhere(
   CheckArgument(
       !semantic || semantic->labels.SameSize(rgb.width(), rgb.height()),
       "hybrid segmenter: the semantic labels' size differs from the image's");
-  return Run(rgb, &prompt_region, std::move(semantic));
+  return Run(rgb, &prompt_region, std::move(semantic), detections);
 }
 
-HybridResult HybridSegmenter::Run(const ColorImage& rgb,
-                                  const Image<uint8_t>* prompt_region,
-                                  std::optional<SemanticResult> semantic) {
+void HybridSegmenter::AddObjectEvidence(
+    const ColorImage& rgb, const Image<uint8_t>* prompt_region,
+    const std::vector<track::LabeledDetection>* detections,
+    HybridResult* result) {
+  using Clock = std::chrono::steady_clock;
+  const auto t0 = Clock::now();
+  const std::vector<track::LabeledDetection> raw =
+      detections ? std::vector<track::LabeledDetection>{}
+                 : detector_->Detect(rgb);
+  const auto t1 = Clock::now();
+  result->detect_seconds = std::chrono::duration<double>(t1 - t0).count();
+  std::vector<ObjectDetection> mapped =
+      MapDetections(detections ? *detections : raw, class_map_,
+                    options_.objects.score_threshold, rgb.width(),
+                    rgb.height());
+  if (prompt_region != nullptr) {
+    std::erase_if(mapped, [&](const ObjectDetection& d) {
+      return (*prompt_region)((d.box.x0 + d.box.x1) / 2,
+                              (d.box.y0 + d.box.y1) / 2) == 0;
+    });
+  }
+  if (mapped.empty()) return;
+  masks_->EncodeUnlessCurrent(rgb);
+  std::vector<Mask> detection_masks = DecodeDetectionMasks(
+      masks_->model(), mapped, options_.masks.min_region_area_px);
+  ObjectEvidence evidence =
+      AttachDetections(std::move(result->masks), mapped,
+                       std::move(detection_masks), options_.objects);
+  result->masks = std::move(evidence.masks);
+  result->mask_evidence = std::move(evidence.evidence);
+  result->mask_detection = std::move(evidence.detection);
+  result->detections_matched = evidence.matched;
+  result->detections_added = evidence.added;
+  result->detection_parts = evidence.parts;
+  result->detections = std::move(mapped);
+  result->object_mask_seconds =
+      std::chrono::duration<double>(Clock::now() - t1).count();
+}
+
+HybridResult HybridSegmenter::Run(
+    const ColorImage& rgb, const Image<uint8_t>* prompt_region,
+    std::optional<SemanticResult> semantic,
+    const std::vector<track::LabeledDetection>* detections) {
   using Clock = std::chrono::steady_clock;
   // Below this the models see a few pixels blown up to their input size and
   // return noise; say so instead.
@@ -65,10 +142,14 @@ HybridResult HybridSegmenter::Run(const ColorImage& rgb,
   if (masks_) {
     result.masks = prompt_region ? masks_->GenerateWhere(rgb, *prompt_region)
                                  : masks_->Generate(rgb);
+    if (detector_) AddObjectEvidence(rgb, prompt_region, detections, &result);
     result.mask_stats = masks_->stats();
   }
   const auto t2 = Clock::now();
-  result.vote = Vote(result.semantic_branch.labels, result.masks);
+  result.vote = Vote(result.semantic_branch.labels, result.masks,
+                     result.mask_evidence.empty() ? nullptr
+                                                  : &result.mask_evidence,
+                     &semantic_->label_set());
   result.vote_seconds =
       std::chrono::duration<double>(Clock::now() - t2).count();
   return result;

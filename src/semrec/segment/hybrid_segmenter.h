@@ -6,8 +6,10 @@
 #include <vector>
 
 #include "semrec/segment/mask_generator.h"
+#include "semrec/segment/object_evidence.h"
 #include "semrec/segment/semantic_segmenter.h"
 #include "semrec/segment/vote.h"
+#include "semrec/track/yolox_detector.h"
 
 namespace semrec::segment {
 
@@ -17,6 +19,9 @@ struct HybridSegmenterOptions {
   /// 0).
   bool use_masks = true;
   MaskGeneratorOptions masks;
+  /// Object detections as a second source of class evidence (off unless
+  /// objects.model is set; needs masks).
+  ObjectDetectorOptions objects;
   void Check() const;
 };
 
@@ -28,7 +33,18 @@ struct HybridResult {
   /// Final semantic and instance maps.
   VoteResult vote;
   MaskGeneratorStats mask_stats;
+  /// Object detections used (label-set classes); per mask the detection it
+  /// matched or came from (-1: none) and the class weights it added.
+  std::vector<ObjectDetection> detections;
+  std::vector<int> mask_detection;
+  std::vector<MaskEvidence> mask_evidence;
+  int detections_matched = 0;
+  int detections_added = 0;
+  int detection_parts = 0;
   double semantic_seconds = 0;
+  /// Detector (0 when detections were given) and the box prompts' masks.
+  double detect_seconds = 0;
+  double object_mask_seconds = 0;
   double vote_seconds = 0;
 };
 
@@ -36,7 +52,12 @@ class HybridSegmenter {
  public:
   HybridSegmenter(const infer::ModelRegistry& registry,
                   const HybridSegmenterOptions& options);
-  HybridResult Segment(const ColorImage& rgb);
+  /// `detections` (the detector's raw output on this image, e.g. shared with
+  /// people tracking) replace running the object detector; ignored when it
+  /// is off.
+  HybridResult Segment(
+      const ColorImage& rgb,
+      const std::vector<track::LabeledDetection>* detections = nullptr);
   /// The semantic branch alone (map guidance looks at its labels before it
   /// chooses where to prompt).
   SemanticResult SegmentSemantic(const ColorImage& rgb);
@@ -45,18 +66,37 @@ class HybridSegmenter {
   /// still sees the whole image (or its given result, from SegmentSemantic),
   /// so pixels outside every mask keep its label. Throws InvalidArgument when
   /// the region's or the given labels' size differs from the image's.
+  /// Detections are used only where their box's centre lies in the region.
   HybridResult SegmentWhere(
       const ColorImage& rgb, const Image<uint8_t>& prompt_region,
-      std::optional<SemanticResult> semantic = std::nullopt);
+      std::optional<SemanticResult> semantic = std::nullopt,
+      const std::vector<track::LabeledDetection>* detections = nullptr);
   const LabelSet& label_set() const { return semantic_->label_set(); }
+
+  /// Whether the object detector is on, its registry name and options.
+  bool detects_objects() const { return detector_ != nullptr; }
+  const ObjectDetectorOptions& object_options() const {
+    return options_.objects;
+  }
+  /// The object detector's raw output (every class, at its score
+  /// threshold). Throws InvalidArgument when it is off.
+  std::vector<track::LabeledDetection> DetectObjects(
+      const ColorImage& rgb) const;
 
  private:
   HybridResult Run(const ColorImage& rgb, const Image<uint8_t>* prompt_region,
-                   std::optional<SemanticResult> semantic);
+                   std::optional<SemanticResult> semantic,
+                   const std::vector<track::LabeledDetection>* detections);
+  void AddObjectEvidence(
+      const ColorImage& rgb, const Image<uint8_t>* prompt_region,
+      const std::vector<track::LabeledDetection>* detections,
+      HybridResult* result);
 
   HybridSegmenterOptions options_;
   std::unique_ptr<SemanticSegmenter> semantic_;
   std::unique_ptr<MaskGenerator> masks_;
+  std::unique_ptr<track::YoloxDetector> detector_;
+  DetectorClassMap class_map_;
 };
 
 }  // namespace semrec::segment

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <numeric>
+#include <string_view>
 
 #include <tbb/parallel_for.h>
 #include <opencv2/imgproc.hpp>
@@ -243,6 +244,15 @@ double Cosine(const std::vector<float>& a, const std::vector<float>& b) {
   return aa > 0 && bb > 0 ? dot / std::sqrt(aa * bb) : 1.0;
 }
 
+// Content hash of an image (size and bytes): which image the model holds.
+size_t ImageHash(const ColorImage& rgb) {
+  const std::string_view bytes(reinterpret_cast<const char*>(rgb.data()),
+                               rgb.NumPixels() * static_cast<size_t>(rgb.channels()));
+  return std::hash<std::string_view>{}(bytes) ^
+         (static_cast<size_t>(rgb.width()) << 32 ^
+          static_cast<size_t>(rgb.height()));
+}
+
 class AutomaticMaskGenerator : public MaskGenerator {
  public:
   AutomaticMaskGenerator(const infer::ModelRegistry& registry,
@@ -325,6 +335,17 @@ class AutomaticMaskGenerator : public MaskGenerator {
   const MaskGeneratorStats& stats() const override { return stats_; }
   PromptableSegmenter& model() override { return *model_; }
 
+  void EncodeUnlessCurrent(const ColorImage& rgb) override {
+    const size_t hash = ImageHash(rgb);
+    if (encoded_whole_ && encoded_hash_ == hash) return;
+    const auto t0 = Clock::now();
+    model_->SetImage(rgb);
+    ++stats_.encoder_calls;
+    stats_.encode_seconds += Seconds(t0, Clock::now());
+    encoded_whole_ = true;
+    encoded_hash_ = hash;
+  }
+
  private:
   // Encode, decode the grid, filter and NMS within one image (or crop).
   std::vector<Mask> GenerateInCrop(const ColorImage& rgb, int points_per_side,
@@ -357,6 +378,9 @@ class AutomaticMaskGenerator : public MaskGenerator {
     model_->SetImage(rgb);
     ++stats_.encoder_calls;
     const auto t1 = Clock::now();
+    // `rgb` is a crop's copy when crops are on: only a whole image counts.
+    encoded_whole_ = crop.x0 == 0 && crop.y0 == 0 && options_.crop_layers == 0;
+    encoded_hash_ = ImageHash(rgb);
     grid_side_ = points_per_side;
     stats_.prompts_total += static_cast<int>(points.size());
     std::vector<Mask> candidates =
@@ -555,6 +579,9 @@ class AutomaticMaskGenerator : public MaskGenerator {
   std::vector<int> levels_;  // grid level per point (see GridPoints)
   int grid_side_ = 0;        // points per side of the current grid
   std::vector<std::array<int, 2>> cells_;  // grid column and row per point
+  // What model_ holds: a whole image (not a crop) with this content hash.
+  bool encoded_whole_ = false;
+  size_t encoded_hash_ = 0;
 };
 
 }  // namespace

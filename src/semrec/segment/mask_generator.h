@@ -106,6 +106,11 @@ class MaskGenerator {
   virtual std::vector<Mask> GenerateWhere(
       const ColorImage& rgb, const Image<uint8_t>& prompt_region) = 0;
   virtual const MaskGeneratorStats& stats() const = 0;
+  /// Makes model() hold `rgb`'s encoding for further prompts (object
+  /// detections' boxes): free when the last Generate() / GenerateWhere()
+  /// encoded this same image whole (no crops; compared by content), else one
+  /// encoder run, counted in stats().encoder_calls / encode_seconds.
+  virtual void EncodeUnlessCurrent(const ColorImage& rgb) = 0;
   /// The underlying promptable model (for box prompts, embeddings).
   virtual PromptableSegmenter& model() = 0;
 };

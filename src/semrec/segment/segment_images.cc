@@ -70,6 +70,9 @@ SegmentImagesResult SegmentImages(const infer::ModelRegistry& registry,
       {"crop_layers", m.crop_layers},
       {"skip_covered_points", m.skip_covered_points},
       {"covered_similarity", m.covered_similarity},
+      {"object_detector", options.objects.model},
+      {"object_score", options.objects.score_threshold},
+      {"object_weight", options.objects.weight},
       {"seconds_per_image", result.seconds_per_image}};
   WriteTextFileAtomic(out_dir / "summary.json", summary.dump(2) + "\n");
   return result;

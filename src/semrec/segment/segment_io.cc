@@ -159,10 +159,25 @@ void WriteSegmentation(const fs::path& out_dir, const SegmentInput& input,
   io::WritePng(out_dir / "instance" / input.name, result.vote.instance);
   io::WritePng(out_dir / "overlay" / input.name,
                RenderOverlay(rgb, result, labels));
+  const auto class_name = [&](uint16_t id) {
+    return labels.Contains(id) ? labels.Get(id).name : std::string();
+  };
   nlohmann::json masks = nlohmann::json::array();
   for (size_t m = 0; m < result.masks.size(); ++m) {
     const Mask& mask = result.masks[m];
     const uint16_t id = result.vote.mask_labels[m];
+    nlohmann::json evidence = nlohmann::json::array();
+    float stuff_scale = 1.0f;
+    if (m < result.mask_evidence.size()) {
+      for (const ClassWeight& e : result.mask_evidence[m].weights) {
+        evidence.push_back({{"class", class_name(e.class_id)},
+                            {"label", e.class_id},
+                            {"weight", e.weight}});
+      }
+      stuff_scale = result.mask_evidence[m].stuff_scale;
+    }
+    const int detection =
+        m < result.mask_detection.size() ? result.mask_detection[m] : -1;
     masks.push_back(
         {{"instance", m + 1},
          {"label", id},
@@ -173,7 +188,19 @@ void WriteSegmentation(const fs::path& out_dir, const SegmentInput& input,
          {"predicted_iou", mask.predicted_iou},
          {"stability", mask.stability},
          {"vote_agreement", result.vote.mask_agreement[m]},
-         {"point", {mask.point_x, mask.point_y}}});
+         {"point", {mask.point_x, mask.point_y}},
+         {"detection", detection},
+         {"detector_evidence", evidence},
+         {"stuff_scale", stuff_scale}});
+  }
+  nlohmann::json detections = nlohmann::json::array();
+  for (const ObjectDetection& d : result.detections) {
+    detections.push_back(
+        {{"class", class_name(d.class_id)},
+         {"label", d.class_id},
+         {"detector_class", d.detector_class},
+         {"score", d.score},
+         {"bbox", {d.box.x0, d.box.y0, d.box.width(), d.box.height()}}});
   }
   const nlohmann::json j = {
       {"image", input.image.string()},
@@ -181,8 +208,14 @@ void WriteSegmentation(const fs::path& out_dir, const SegmentInput& input,
       {"height", rgb.height()},
       {"label_set", labels.name()},
       {"masks", masks},
+      {"detections", detections},
+      {"detections_matched", result.detections_matched},
+      {"detections_added", result.detections_added},
+      {"detection_parts", result.detection_parts},
       {"seconds",
        {{"semantic", result.semantic_seconds},
+        {"detect", result.detect_seconds},
+        {"object_masks", result.object_mask_seconds},
         {"mask_encode", result.mask_stats.encode_seconds},
         {"mask_decode", result.mask_stats.decode_seconds},
         {"mask_postprocess", result.mask_stats.postprocess_seconds},

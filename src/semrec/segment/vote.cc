@@ -7,9 +7,13 @@
 
 namespace semrec::segment {
 
-VoteResult Vote(const LabelMap& semantic, const std::vector<Mask>& masks) {
+VoteResult Vote(const LabelMap& semantic, const std::vector<Mask>& masks,
+                const std::vector<MaskEvidence>* evidence,
+                const LabelSet* classes) {
   const int w = semantic.width(), h = semantic.height();
   CheckArgument(masks.size() <= 65535, "vote: more than 65535 masks");
+  CheckArgument(!evidence || evidence->size() == masks.size(),
+                "vote: one evidence list per mask expected");
   VoteResult result;
   result.semantic = semantic;
   result.instance = LabelMap(w, h);
@@ -31,15 +35,33 @@ VoteResult Vote(const LabelMap& semantic, const std::vector<Mask>& masks) {
         if (bits[x - b.x0]) ++counts[labels[x]];
       }
     }
-    uint16_t best = 0;
-    int64_t best_count = -1, total = 0;
+    int64_t total = 0;
+    for (const auto& [label, count] : counts) total += count;
+    // Score = share of the mask's pixels (+ extra evidence); ties: the
+    // smaller class id.
+    const MaskEvidence* extra = evidence ? &(*evidence)[m] : nullptr;
+    std::unordered_map<uint16_t, double> score;
     for (const auto& [label, count] : counts) {
-      total += count;
-      if (count > best_count || (count == best_count && label < best)) {
+      double share = total > 0 ? static_cast<double>(count) / total : 0.0;
+      if (extra && classes && classes->Contains(label) &&
+          classes->Get(label).kind == ClassKind::kStuff) {
+        share *= extra->stuff_scale;
+      }
+      score[label] = share;
+    }
+    if (extra) {
+      for (const ClassWeight& e : extra->weights) score[e.class_id] += e.weight;
+    }
+    uint16_t best = 0;
+    double best_score = -1;
+    for (const auto& [label, value] : score) {
+      if (value > best_score || (value == best_score && label < best)) {
         best = label;
-        best_count = count;
+        best_score = value;
       }
     }
+    const auto it = counts.find(best);
+    const int64_t best_count = it == counts.end() ? 0 : it->second;
     result.mask_labels[m] = best;
     result.mask_agreement[m] =
         total > 0 ? static_cast<float>(best_count) / static_cast<float>(total)

@@ -8,6 +8,7 @@
 
 #include "semrec/core/label_map.h"
 #include "semrec/segment/mask.h"
+#include "semrec/segment/object_evidence.h"
 
 namespace semrec::segment {
 
@@ -36,6 +37,14 @@ struct VoteResult {
 /// pass over the image; no per-mask full-image scans. Throws InvalidArgument
 /// when a mask belongs to an image of another size or there are more than
 /// 65535 masks.
-VoteResult Vote(const LabelMap& semantic, const std::vector<Mask>& masks);
+///
+/// With `evidence` (one per mask, e.g. from object detections), a mask's
+/// class is the argmax of its classes' pixel shares (those of stuff classes
+/// in `classes` scaled by stuff_scale) plus their extra weights;
+/// `mask_agreement` stays the semantic share of the winner. Throws
+/// InvalidArgument when its size differs from the masks'.
+VoteResult Vote(const LabelMap& semantic, const std::vector<Mask>& masks,
+                const std::vector<MaskEvidence>* evidence = nullptr,
+                const LabelSet* classes = nullptr);
 
 }  // namespace semrec::segment
