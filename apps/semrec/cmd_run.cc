@@ -128,7 +128,8 @@ void RunRun(RunArgs& args, CLI::App* cmd) {
       p.segmenter.masks.model = segment::PromptableOptions::FromRegistry(
           registry, args.masks, p.segmenter.semantic.runtime);
     }
-    p.segmenter.objects.runtime = p.segmenter.semantic.runtime;
+    FinishObjectDetectorArgs(*cmd, p.segmenter.use_masks,
+                             p.segmenter.semantic.runtime, &p.segmenter.objects);
     p.people.detector.model = args.detector;
     p.people.detector.score_threshold = args.detector_score;
     p.people.detector.runtime = args.model.Runtime();

@@ -27,6 +27,7 @@ struct SegmentArgs {
   bool overwrite = false;
   segment::MaskGeneratorOptions amg;
   segment::ObjectDetectorOptions objects;
+  const CLI::App* cmd = nullptr;
 };
 
 void RunSegment(SegmentArgs args) {
@@ -42,7 +43,8 @@ void RunSegment(SegmentArgs args) {
         registry, args.masks, options.semantic.runtime);
   }
   options.objects = args.objects;
-  options.objects.runtime = options.semantic.runtime;
+  FinishObjectDetectorArgs(*args.cmd, options.use_masks,
+                           options.semantic.runtime, &options.objects);
   CheckUsage(options);
 
   const auto inputs =
@@ -108,6 +110,7 @@ void RegisterSegment(CLI::App& app) {
       ->check(CLI::Range(0.0, 1.0))
       ->capture_default_str();
   AddObjectDetectorArgs(cmd, &args->objects);
+  args->cmd = cmd;
   cmd->add_option("--stride", args->stride, "Use every n-th image/frame")
       ->capture_default_str();
   cmd->add_option("--max-frames", args->max_frames,

@@ -65,9 +65,16 @@ struct ModelArgs {
 };
 void AddModelArgs(CLI::App* cmd, ModelArgs* args);
 
-/// --object-detector and its tuning options (segment, run).
+/// --object-detector (default yolox_nano) and its tuning options (segment,
+/// run).
 void AddObjectDetectorArgs(CLI::App* cmd,
                            segment::ObjectDetectorOptions* options);
+/// After parsing: "none" turns the detector off; so does `--masks none`
+/// (its boxes are mask prompts) unless --object-detector was given, which is
+/// then a usage error. Sets the detector's runtime.
+void FinishObjectDetectorArgs(const CLI::App& cmd, bool masks,
+                              const infer::OnnxModelOptions& runtime,
+                              segment::ObjectDetectorOptions* options);
 
 void RegisterInfo(CLI::App& app);
 void RegisterTsdf(CLI::App& app);

@@ -53,12 +53,15 @@ void AddModelArgs(CLI::App* cmd, ModelArgs* args) {
 
 void AddObjectDetectorArgs(CLI::App* cmd,
                            segment::ObjectDetectorOptions* options) {
+  options->model = "yolox_nano";
   cmd->add_option("--object-detector", options->model,
                   "Object detector (registry name, e.g. yolox_nano) as a "
                   "second source of class evidence: its detections of "
                   "classes the label set has (data/class_maps/) become box "
                   "prompts, and a mask that matches one adds the detected "
-                  "class, weighted by its score, to its vote; empty = off")
+                  "class, weighted by its score, to its vote (and stuff such "
+                  "as wall gives way by 1 - score); none = off (also with "
+                  "--masks none)")
       ->capture_default_str();
   cmd->add_option("--object-score", options->score_threshold,
                   "Ignore object detections below this score")
@@ -87,6 +90,19 @@ void AddObjectDetectorArgs(CLI::App* cmd,
                   "JSON map from detector class names to label-set class "
                   "names (default: data/class_maps/<detector "
                   "set>_to_<label set>.json)");
+}
+
+void FinishObjectDetectorArgs(const CLI::App& cmd, bool masks,
+                              const infer::OnnxModelOptions& runtime,
+                              segment::ObjectDetectorOptions* options) {
+  if (options->model == "none") options->model.clear();
+  if (!masks && options->enabled()) {
+    CheckUsage(cmd.count("--object-detector") == 0,
+               "--object-detector needs the mask model (its boxes are mask "
+               "prompts): drop --masks none or give --object-detector none");
+    options->model.clear();
+  }
+  options->runtime = runtime;
 }
 
 }  // namespace semrec::cli

@@ -261,6 +261,26 @@ TEST(VoxelEvidence, OneVotePerViewSplitOverClassesAndWeightedByDistance) {
   EXPECT_EQ(map.labelled_voxels(), 1u);
 }
 
+TEST(VoxelEvidence, UnsureMasksCastLessThanAVote) {
+  VoxelEvidenceMap map(0.05, {});
+  const Eigen::Vector3f p(0.01f, 0.01f, 0.01f);
+  FrameObservation near{{1.0f, 0.0f, 0.0f}, {}};
+  // View 0: the chair mask at confidence 0.55 (3 pixels), a wall pixel at 1.
+  FrameSegment chair = Segment(kChair, 1, Cloud(3, p));
+  chair.confidence = 0.55f;
+  map.AddFrame({chair, Segment(kWall, 2, Cloud(1, p))}, {7, 8}, &near, 0);
+  // View 1: all wall, unsure (0.4).
+  FrameSegment wall = Segment(kWall, 1, Cloud(4, p));
+  wall.confidence = 0.4f;
+  map.AddFrame({wall}, {8}, &near, 1);
+  const VoxelEvidence& v = map.voxels().at(VoxelKey(p, 20.0f));
+  EXPECT_NEAR(v.Find(kChair)->weight, 0.75f * 0.55f, 1e-5);
+  EXPECT_NEAR(v.Find(kWall)->weight, 0.25f + 0.4f, 1e-5);
+  // Views count by pixel majority, whatever the confidence.
+  EXPECT_EQ(v.Find(kChair)->views, 1u);
+  EXPECT_EQ(v.Find(kWall)->views, 1u);
+}
+
 TEST(StructurePlanes, WallsAreLargeVerticalPlanesAndTheFloorTheLowest) {
   Cloud walls = Box({0, 0, 0}, {0, 4, 2.5f}, 0.05f);
   const Cloud other = Box({0, 4, 0}, {3, 4, 2.5f}, 0.05f);

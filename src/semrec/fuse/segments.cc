@@ -173,9 +173,11 @@ std::vector<FrameSegment> ExtractFrameSegments(
     if (options.excluded_classes.count(classes.Get(cls).name) != 0) continue;
     if (acc.points.size() < options.min_points) continue;
     const auto map_object = labels.map_objects.find(instance);
+    const auto confidence = labels.confidence.find(instance);
     out.push_back(
         {cls, instance, std::move(acc.points), classes.Get(cls).kind,
-         map_object == labels.map_objects.end() ? 0u : map_object->second});
+         map_object == labels.map_objects.end() ? 0u : map_object->second,
+         confidence == labels.confidence.end() ? 1.0f : confidence->second});
   }
   return out;
 }

@@ -38,6 +38,11 @@ struct FrameLabels {
   /// map object each one is (fusion attaches them to it without counting
   /// them as a new view: the map seeing itself is no evidence).
   std::map<uint16_t, uint32_t> map_objects;
+  /// Per instance: how sure the segmenter was of its class, in [0, 1] (the
+  /// vote's mass on the winning class, detector evidence included; the
+  /// semantic model's mean probability for pixels in no mask). Missing = 1
+  /// (given labels). Scales the instance's votes in the voxel evidence.
+  std::map<uint16_t, float> confidence;
 };
 
 class SegmentationSource {
@@ -77,6 +82,8 @@ struct FrameSegment {
   /// The map object these pixels were labelled as by projection
   /// (FrameLabels::map_objects; 0: found in the frame itself).
   uint32_t map_object = 0;
+  /// FrameLabels::confidence of the instance (1 when not given).
+  float confidence = 1.0f;
 };
 
 struct SegmentExtractionOptions {

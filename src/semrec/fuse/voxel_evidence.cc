@@ -46,6 +46,7 @@ struct Vote {
   /// The mask's label in the frame; 0 for structure (not kept).
   uint16_t label;
   Eigen::Vector3f p;
+  float confidence;
 };
 
 template <typename T, typename Key>
@@ -76,7 +77,8 @@ void VoxelEvidenceMap::AddFrame(const std::vector<FrameSegment>& segments,
     for (const Eigen::Vector3f& p : s.points_world) {
       votes.push_back(
           {VoxelKey(p, inv_voxel_), object_ids[f], s.class_id,
-           s.kind == ClassKind::kStuff ? uint16_t{0} : s.source_label, p});
+           s.kind == ClassKind::kStuff ? uint16_t{0} : s.source_label, p,
+           s.confidence});
     }
   }
   // Grouped by voxel, then class and object: one pass casts each voxel's vote.
@@ -110,9 +112,13 @@ void VoxelEvidenceMap::AddFrame(const std::vector<FrameSegment>& segments,
         ++class_end;
       }
       const float share = static_cast<float>(class_end - k) / n;
+      // The class's share of the view's vote, each pixel counted by how sure
+      // the segmenter was of it: an unsure view casts less than one vote.
+      float sure = 0.0f;
+      for (size_t q = k; q < class_end; ++q) sure += votes[q].confidence;
       ClassEvidence* c =
           FindOrAdd(&v.classes, &ClassEvidence::class_id, votes[k].class_id);
-      c->weight += weight * share;
+      c->weight += weight * sure / n;
       if (share >= options_.view_class_share) ++c->views;
       for (size_t o = k; o < class_end;) {  // per object within the class
         size_t object_end = o;

@@ -14,7 +14,13 @@
 // view), weighted by distance: beyond `full_weight_distance_m` a pixel covers
 // more of the surface and a 2D model's boundaries blur (it sees the frame at
 // ~512 px), so far views count less. Counting views rather than pixels keeps a
-// single close-up view from outvoting every other view of the place.
+// single close-up view from outvoting every other view of the place. Each
+// pixel's part of the vote is scaled by its instance's confidence
+// (FrameLabels::confidence: the vote's mass on the mask's winning class, with
+// the object detector's evidence): a mask the segmenter was unsure of (a
+// chair 55% wall) casts less than one that all pixels and the detector agree
+// on (SemanticFusion and Kimera-Semantics weigh by the model's probability
+// per pixel; the vote's per-mask probability is what semrec's labels carry).
 #pragma once
 
 #include <cstddef>
@@ -44,7 +50,7 @@ struct ClassEvidence {
   uint16_t class_id = 0;
   /// Views in which the class held view_class_share of the voxel's pixels.
   uint16_t views = 0;
-  /// Summed distance-weighted view shares.
+  /// Summed distance- and confidence-weighted view shares.
   float weight = 0.0f;
 };
 

@@ -120,6 +120,13 @@ void CheckpointStore::Record(size_t position,
         }
         j["map_objects"] = std::move(objects);
       }
+      if (!o.labels->confidence.empty()) {
+        nlohmann::json confidence = nlohmann::json::array();
+        for (const auto& [instance, c] : o.labels->confidence) {
+          confidence.push_back({instance, c});
+        }
+        j["confidence"] = std::move(confidence);
+      }
       io::WritePng(FramePath(position, "_semantic.png"), o.labels->semantic);
       io::WritePng(FramePath(position, "_instance.png"), o.labels->instance);
     }
@@ -155,6 +162,12 @@ CheckpointFrame CheckpointStore::Load(size_t position) const {
           for (const auto& pair : j["map_objects"]) {
             o.labels->map_objects[pair.at(0).get<uint16_t>()] =
                 pair.at(1).get<uint32_t>();
+          }
+        }
+        if (j.contains("confidence")) {
+          for (const auto& pair : j["confidence"]) {
+            o.labels->confidence[pair.at(0).get<uint16_t>()] =
+                pair.at(1).get<float>();
           }
         }
       }

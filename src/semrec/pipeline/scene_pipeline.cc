@@ -260,12 +260,23 @@ fuse::FrameLabels ScenePipeline::SegmentFrame(
   object_counts_.matched += static_cast<size_t>(hybrid.detections_matched);
   object_counts_.added += static_cast<size_t>(hybrid.detections_added);
   object_counts_.parts += static_cast<size_t>(hybrid.detection_parts);
+  std::map<uint16_t, float> confidence = segment::InstanceConfidence(
+      hybrid.vote, hybrid.semantic_branch.confidence);
   if (decision.mode == FrameMode::kFull) {
-    return {std::move(hybrid.vote.instance), std::move(hybrid.vote.semantic),
-            source};
+    fuse::FrameLabels labels{std::move(hybrid.vote.instance),
+                             std::move(hybrid.vote.semantic), source};
+    labels.confidence = std::move(confidence);
+    return labels;
   }
-  return ComposeFrameLabels(projected, decision, &hybrid.vote,
-                            source + " (map-guided)");
+  fuse::FrameLabels labels = ComposeFrameLabels(
+      projected, decision, &hybrid.vote, source + " (map-guided)");
+  // Fresh instances keep their ids; the map's own cast no vote.
+  for (const auto& [instance, c] : confidence) {
+    if (labels.map_objects.count(instance) == 0) {
+      labels.confidence[instance] = c;
+    }
+  }
+  return labels;
 }
 
 void ScenePipeline::CountGuidance(const std::string& mode,

@@ -351,6 +351,26 @@ namespace {
 
 // With a stride, given boxes are looked up by the recording's frame numbers
 // and the result keeps them: image k of every 2nd frame is frame 1 + 2k.
+TEST(Checkpoint, RecordsTheLabelsWithTheirConfidence) {
+  const semrec::testing::TempDir dir;
+  const CheckpointStore store(dir.path() / "checkpoint");
+  fs::create_directories(store.dir());
+  ModelOutputs o;
+  o.labels = fuse::FrameLabels{LabelMap(4, 2, 1, 2), LabelMap(4, 2, 1, 20),
+                               "frame.png (map-guided)"};
+  o.labels->map_objects = {{3, 17}};
+  o.labels->confidence = {{1, 0.55f}, {2, 1.0f / 3.0f}};
+  o.guidance = "partial";
+  store.Record(0, {std::nullopt, o});
+  const CheckpointFrame back = store.Load(0);
+  ASSERT_TRUE(back.outputs && back.outputs->labels);
+  const fuse::FrameLabels& l = *back.outputs->labels;
+  EXPECT_EQ(l.confidence, o.labels->confidence);  // exact, floats included
+  EXPECT_EQ(l.map_objects, o.labels->map_objects);
+  EXPECT_EQ(l.instance.values(), o.labels->instance.values());
+  EXPECT_EQ(back.outputs->guidance, "partial");
+}
+
 TEST(TrackImages, StrideKeepsTheRecordingsFrameNumbers) {
   testing::TempDir dir;
   std::vector<segment::SegmentInput> inputs;

@@ -182,6 +182,9 @@ TEST(ObjectEvidence, VoteCombinesPixelSharesWithDetections) {
   const VoteResult chair = Vote(semantic, masks, &evidence, &top31);
   EXPECT_EQ(chair.mask_labels[0], 20);
   EXPECT_FLOAT_EQ(chair.mask_agreement[0], 0.2f);
+  // Confidence: the winner's part of all scores, 0.65 / (0.385 + 0.65 + 0.1).
+  EXPECT_NEAR(chair.mask_confidence[0], 0.65 / 1.135, 1e-6);
+  EXPECT_FLOAT_EQ(Vote(semantic, masks).mask_confidence[0], 0.7f);
   EXPECT_EQ(chair.semantic(5, 1), 20);
   // Stuff scaling needs the class table; a thing class never yields.
   EXPECT_EQ(Vote(semantic, masks, &evidence).mask_labels[0], 1);
@@ -197,6 +200,28 @@ TEST(ObjectEvidence, VoteCombinesPixelSharesWithDetections) {
   EXPECT_EQ(Vote(semantic, masks, &evidence, &top31).mask_labels[0], 16);
   std::vector<MaskEvidence> wrong(2);
   EXPECT_THROW(Vote(semantic, masks, &wrong), InvalidArgument);
+}
+
+TEST(ObjectEvidence, InstanceConfidenceOfMasksAndUnmaskedPixels) {
+  // 10 x 2: a mask over columns 0..3 (class 3 and 5: 6 / 8 pixels class 3),
+  // unmasked class 3 at columns 4..6 and class 5 at 7..9.
+  LabelMap semantic(10, 2);
+  Image<float> probability(10, 2);
+  for (int y = 0; y < 2; ++y) {
+    for (int x = 0; x < 10; ++x) {
+      semantic(x, y) = (x < 3 || (x >= 4 && x < 7)) ? 3 : 5;
+      probability(x, y) = x < 7 ? 0.5f : 0.9f;
+    }
+  }
+  probability(4, 0) = 0.8f;
+  const VoteResult vote = Vote(semantic, {RectMask(10, 2, {0, 0, 4, 2})});
+  const std::map<uint16_t, float> c = InstanceConfidence(vote, probability);
+  ASSERT_EQ(c.size(), 3u);
+  EXPECT_FLOAT_EQ(c.at(1), 0.75f);                      // the mask's share
+  EXPECT_NEAR(c.at(2), (0.8 + 5 * 0.5) / 6, 1e-6);      // unmasked class 3
+  EXPECT_NEAR(c.at(3), 0.9, 1e-6);                      // unmasked class 5
+  EXPECT_FLOAT_EQ(InstanceConfidence(vote, Image<float>()).at(2), 1.0f);
+  EXPECT_THROW(InstanceConfidence(vote, Image<float>(3, 3)), InvalidArgument);
 }
 
 // End to end on tiny models: a rectangle the pixel classifier calls wall

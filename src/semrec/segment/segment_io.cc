@@ -188,6 +188,9 @@ void WriteSegmentation(const fs::path& out_dir, const SegmentInput& input,
          {"predicted_iou", mask.predicted_iou},
          {"stability", mask.stability},
          {"vote_agreement", result.vote.mask_agreement[m]},
+         {"confidence", m < result.vote.mask_confidence.size()
+                            ? result.vote.mask_confidence[m]
+                            : result.vote.mask_agreement[m]},
          {"point", {mask.point_x, mask.point_y}},
          {"detection", detection},
          {"detector_evidence", evidence},

@@ -19,6 +19,7 @@ VoteResult Vote(const LabelMap& semantic, const std::vector<Mask>& masks,
   result.instance = LabelMap(w, h);
   result.mask_labels.resize(masks.size());
   result.mask_agreement.resize(masks.size());
+  result.mask_confidence.resize(masks.size());
   std::unordered_map<uint16_t, int64_t> counts;
   for (size_t m = 0; m < masks.size(); ++m) {
     const Mask& mask = masks[m];
@@ -53,8 +54,9 @@ VoteResult Vote(const LabelMap& semantic, const std::vector<Mask>& masks,
       for (const ClassWeight& e : extra->weights) score[e.class_id] += e.weight;
     }
     uint16_t best = 0;
-    double best_score = -1;
+    double best_score = -1, score_sum = 0;
     for (const auto& [label, value] : score) {
+      score_sum += value;
       if (value > best_score || (value == best_score && label < best)) {
         best = label;
         best_score = value;
@@ -63,6 +65,8 @@ VoteResult Vote(const LabelMap& semantic, const std::vector<Mask>& masks,
     const auto it = counts.find(best);
     const int64_t best_count = it == counts.end() ? 0 : it->second;
     result.mask_labels[m] = best;
+    result.mask_confidence[m] =
+        score_sum > 0 ? static_cast<float>(best_score / score_sum) : 0.0f;
     result.mask_agreement[m] =
         total > 0 ? static_cast<float>(best_count) / static_cast<float>(total)
                   : 0;
@@ -104,6 +108,39 @@ VoteResult Vote(const LabelMap& semantic, const std::vector<Mask>& masks,
     if (!inst[i]) inst[i] = extra_id[out[i]];
   }
   return result;
+}
+
+std::map<uint16_t, float> InstanceConfidence(
+    const VoteResult& vote, const Image<float>& semantic_confidence) {
+  std::map<uint16_t, float> out;
+  for (size_t m = 0; m < vote.mask_confidence.size(); ++m) {
+    out[static_cast<uint16_t>(m + 1)] = vote.mask_confidence[m];
+  }
+  const size_t masks = vote.mask_confidence.size();
+  const size_t extra = vote.unmasked_classes.size();
+  if (extra == 0) return out;
+  std::vector<double> sum(extra, 0.0);
+  std::vector<size_t> count(extra, 0);
+  const bool have = semantic_confidence.NumPixels() > 0;
+  CheckArgument(!have || semantic_confidence.SameSize(vote.instance.width(),
+                                                      vote.instance.height()),
+                "vote: the confidence image's size differs from the labels'");
+  if (have) {
+    const uint16_t* inst = vote.instance.data();
+    const float* conf = semantic_confidence.data();
+    for (size_t i = 0; i < vote.instance.NumPixels(); ++i) {
+      if (inst[i] > masks) {
+        const size_t k = inst[i] - masks - 1;
+        sum[k] += conf[i];
+        ++count[k];
+      }
+    }
+  }
+  for (size_t k = 0; k < extra; ++k) {
+    out[static_cast<uint16_t>(masks + k + 1)] =
+        count[k] > 0 ? static_cast<float>(sum[k] / count[k]) : 1.0f;
+  }
+  return out;
 }
 
 }  // namespace semrec::segment

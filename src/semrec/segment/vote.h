@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cstdint>
+#include <map>
 #include <vector>
 
 #include "semrec/core/label_map.h"
@@ -25,6 +26,10 @@ struct VoteResult {
   /// it (in [0, 1]).
   std::vector<uint16_t> mask_labels;
   std::vector<float> mask_agreement;
+  /// The winner's part of all the mask's class scores (pixel shares after
+  /// stuff scaling + evidence weights), in [0, 1]: the vote's probability
+  /// for the class it chose (= mask_agreement without evidence).
+  std::vector<float> mask_confidence;
   /// Classes of the pixels in no mask, ascending.
   std::vector<uint16_t> unmasked_classes;
 };
@@ -46,5 +51,13 @@ struct VoteResult {
 VoteResult Vote(const LabelMap& semantic, const std::vector<Mask>& masks,
                 const std::vector<MaskEvidence>* evidence = nullptr,
                 const LabelSet* classes = nullptr);
+
+/// Confidence per instance id of `vote` (fuse::FrameLabels::confidence):
+/// masks their mask_confidence; the pixels in no mask (one instance per
+/// class) the mean of `semantic_confidence` (the semantic branch's
+/// probability of its class) over them, 1 where that image is empty. Throws
+/// InvalidArgument when a non-empty image's size differs from the vote's.
+std::map<uint16_t, float> InstanceConfidence(
+    const VoteResult& vote, const Image<float>& semantic_confidence);
 
 }  // namespace semrec::segment
