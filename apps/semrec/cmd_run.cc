@@ -129,7 +129,8 @@ void RunRun(RunArgs& args, CLI::App* cmd) {
           registry, args.masks, p.segmenter.semantic.runtime);
     }
     FinishObjectDetectorArgs(*cmd, p.segmenter.use_masks,
-                             p.segmenter.semantic.runtime, &p.segmenter.objects);
+                             p.segmenter.semantic.runtime,
+                             &p.segmenter.objects);
     p.people.detector.model = args.detector;
     p.people.detector.score_threshold = args.detector_score;
     p.people.detector.runtime = args.model.Runtime();

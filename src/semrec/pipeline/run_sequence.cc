@@ -371,7 +371,8 @@ RunResult RunSequence(const io::SequenceReader& reader,
         {"mean_unexplained_share",
          guided > 0 ? g.unexplained_share_sum / static_cast<double>(guided)
                     : 0.0}};
-    const segment::ObjectDetectorOptions& o = options.pipeline.segmenter.objects;
+    const segment::ObjectDetectorOptions& o =
+        options.pipeline.segmenter.objects;
     const ObjectDetectionCounts& c = pipeline.object_counts();
     result.report["object_detector"] = {
         {"model", o.enabled() ? nlohmann::json(o.model) : nlohmann::json()},

@@ -32,10 +32,9 @@ std::vector<track::Detection> PersonDetections(
     const track::YoloxOptions& people) {
   std::vector<track::Detection> out;
   for (const track::LabeledDetection& d : all) {
-    const bool wanted =
-        people.classes.empty() ||
-        std::find(people.classes.begin(), people.classes.end(), d.class_id) !=
-            people.classes.end();
+    const bool wanted = people.classes.empty() ||
+                        std::find(people.classes.begin(), people.classes.end(),
+                                  d.class_id) != people.classes.end();
     if (wanted && d.detection.score >= people.score_threshold) {
       out.push_back(d.detection);
     }
@@ -146,10 +145,10 @@ PreparedFrame ScenePipeline::Prepare(PipelineInput input) {
       PeopleFrame tracked;
       try {
         tracked = tracker_->Process(
-            frame.color,
-            detections ? std::make_optional(PersonDetections(
-                             *detections, options_.people.detector))
-                       : std::nullopt);
+            frame.color, detections
+                             ? std::make_optional(PersonDetections(
+                                   *detections, options_.people.detector))
+                             : std::nullopt);
       } catch (const InvalidArgument& e) {
         throw FormatError(frame.color_path, e.what());
       }

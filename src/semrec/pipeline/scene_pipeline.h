@@ -207,12 +207,11 @@ class ScenePipeline {
 
  private:
   /// The models' labels for a frame (with map guidance when on); sets `mode`.
-  fuse::FrameLabels SegmentFrame(const Frame& frame, size_t position,
-                                 const std::optional<LabelMap>& person_ids,
-                                 std::string* mode,
-                                 std::optional<GuidanceDecision>* decision,
-                                 const std::vector<track::LabeledDetection>*
-                                     detections);
+  fuse::FrameLabels SegmentFrame(
+      const Frame& frame, size_t position,
+      const std::optional<LabelMap>& person_ids, std::string* mode,
+      std::optional<GuidanceDecision>* decision,
+      const std::vector<track::LabeledDetection>* detections);
   /// Map guidance bookkeeping for a segmented frame's mode.
   void CountGuidance(const std::string& mode, const Transform& T_world_camera);
   /// The map frame `position` is guided by (after frame position - 2).

@@ -93,10 +93,9 @@ void HybridSegmenter::AddObjectEvidence(
                  : detector_->Detect(rgb);
   const auto t1 = Clock::now();
   result->detect_seconds = std::chrono::duration<double>(t1 - t0).count();
-  std::vector<ObjectDetection> mapped =
-      MapDetections(detections ? *detections : raw, class_map_,
-                    options_.objects.score_threshold, rgb.width(),
-                    rgb.height());
+  std::vector<ObjectDetection> mapped = MapDetections(
+      detections ? *detections : raw, class_map_,
+      options_.objects.score_threshold, rgb.width(), rgb.height());
   if (prompt_region != nullptr) {
     std::erase_if(mapped, [&](const ObjectDetection& d) {
       return (*prompt_region)((d.box.x0 + d.box.x1) / 2,
@@ -146,10 +145,10 @@ HybridResult HybridSegmenter::Run(
     result.mask_stats = masks_->stats();
   }
   const auto t2 = Clock::now();
-  result.vote = Vote(result.semantic_branch.labels, result.masks,
-                     result.mask_evidence.empty() ? nullptr
-                                                  : &result.mask_evidence,
-                     &semantic_->label_set());
+  result.vote =
+      Vote(result.semantic_branch.labels, result.masks,
+           result.mask_evidence.empty() ? nullptr : &result.mask_evidence,
+           &semantic_->label_set());
   result.vote_seconds =
       std::chrono::duration<double>(Clock::now() - t2).count();
   return result;

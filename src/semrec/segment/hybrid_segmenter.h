@@ -87,10 +87,10 @@ class HybridSegmenter {
   HybridResult Run(const ColorImage& rgb, const Image<uint8_t>* prompt_region,
                    std::optional<SemanticResult> semantic,
                    const std::vector<track::LabeledDetection>* detections);
-  void AddObjectEvidence(
-      const ColorImage& rgb, const Image<uint8_t>* prompt_region,
-      const std::vector<track::LabeledDetection>* detections,
-      HybridResult* result);
+  void AddObjectEvidence(const ColorImage& rgb,
+                         const Image<uint8_t>* prompt_region,
+                         const std::vector<track::LabeledDetection>* detections,
+                         HybridResult* result);
 
   HybridSegmenterOptions options_;
   std::unique_ptr<SemanticSegmenter> semantic_;

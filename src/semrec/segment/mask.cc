@@ -89,7 +89,7 @@ Mask MaskFromImage(const Image<uint8_t>& image) {
   return m;
 }
 
-double MaskIoU(const Mask& a, const Mask& b) {
+int64_t MaskIntersection(const Mask& a, const Mask& b) {
   const Box inter{std::max(a.box.x0, b.box.x0), std::max(a.box.y0, b.box.y0),
                   std::min(a.box.x1, b.box.x1), std::min(a.box.y1, b.box.y1)};
   int64_t i = 0;
@@ -98,6 +98,11 @@ double MaskIoU(const Mask& a, const Mask& b) {
       i += a.Contains(x, y) && b.Contains(x, y);
     }
   }
+  return i;
+}
+
+double MaskIoU(const Mask& a, const Mask& b) {
+  const int64_t i = MaskIntersection(a, b);
   const int64_t u = a.area + b.area - i;
   return u > 0 ? static_cast<double>(i) / static_cast<double>(u) : 0.0;
 }

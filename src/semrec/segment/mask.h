@@ -57,6 +57,9 @@ Mask MaskFromImage(const Image<uint8_t>& image);
 /// (after editing bits). An empty mask gets an empty box.
 void Tighten(Mask* mask);
 
+/// |a ∩ b| (pixels; one pass over the boxes' overlap).
+int64_t MaskIntersection(const Mask& a, const Mask& b);
+
 /// |a ∩ b| / |a ∪ b| (0 when both are empty).
 double MaskIoU(const Mask& a, const Mask& b);
 

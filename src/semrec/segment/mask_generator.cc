@@ -246,8 +246,9 @@ double Cosine(const std::vector<float>& a, const std::vector<float>& b) {
 
 // Content hash of an image (size and bytes): which image the model holds.
 size_t ImageHash(const ColorImage& rgb) {
-  const std::string_view bytes(reinterpret_cast<const char*>(rgb.data()),
-                               rgb.NumPixels() * static_cast<size_t>(rgb.channels()));
+  const std::string_view bytes(
+      reinterpret_cast<const char*>(rgb.data()),
+      rgb.NumPixels() * static_cast<size_t>(rgb.channels()));
   return std::hash<std::string_view>{}(bytes) ^
          (static_cast<size_t>(rgb.width()) << 32 ^
           static_cast<size_t>(rgb.height()));

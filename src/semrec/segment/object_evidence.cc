@@ -45,8 +45,8 @@ DetectorClassMap DetectorClassMap::Load(const std::filesystem::path& path,
     }
     const auto source = detector_classes.FindByName(from);
     if (!source) {
-      throw FormatError(path, "'" + from + "' is not a class of " +
-                                  detector_classes.name());
+      throw FormatError(
+          path, "'" + from + "' is not a class of " + detector_classes.name());
     }
     const auto target = label_set.FindByName(to.get<std::string>());
     if (!target) {
@@ -62,8 +62,10 @@ std::filesystem::path DetectorClassMap::DefaultPath(
     const std::string& detector_set, const std::string& label_set) {
   // One file per pair whatever alias a registry entry uses.
   static const std::map<std::string, std::string> kCanonical = {
-      {"voc", "voc21"},          {"ade20k", "ade20k150"},
-      {"coco", "coco80"},        {"ade20k_top31", "ade20k-top31"},
+      {"voc", "voc21"},
+      {"ade20k", "ade20k150"},
+      {"coco", "coco80"},
+      {"ade20k_top31", "ade20k-top31"},
       {"cityscapes", "cityscapes19"}};
   const auto canonical = [](const std::string& name) {
     const auto it = kCanonical.find(name);
@@ -81,8 +83,7 @@ std::optional<uint16_t> DetectorClassMap::Map(int detector_class) const {
 
 std::vector<ObjectDetection> MapDetections(
     const std::vector<track::LabeledDetection>& detections,
-    const DetectorClassMap& class_map, float min_score, int width,
-    int height) {
+    const DetectorClassMap& class_map, float min_score, int width, int height) {
   const auto clip = [](double v, int hi) {
     return std::clamp(static_cast<int>(std::lround(v)), 0, hi);
   };
@@ -123,22 +124,6 @@ std::vector<Mask> DecodeDetectionMasks(
   return masks;
 }
 
-namespace {
-
-int64_t Intersection(const Mask& a, const Mask& b) {
-  const Box inter{std::max(a.box.x0, b.box.x0), std::max(a.box.y0, b.box.y0),
-                  std::min(a.box.x1, b.box.x1), std::min(a.box.y1, b.box.y1)};
-  int64_t n = 0;
-  for (int y = inter.y0; y < inter.y1; ++y) {
-    for (int x = inter.x0; x < inter.x1; ++x) {
-      n += a.Contains(x, y) && b.Contains(x, y);
-    }
-  }
-  return n;
-}
-
-}  // namespace
-
 ObjectEvidence AttachDetections(std::vector<Mask> masks,
                                 const std::vector<ObjectDetection>& detections,
                                 std::vector<Mask> detection_masks,
@@ -168,7 +153,7 @@ ObjectEvidence AttachDetections(std::vector<Mask> masks,
     std::vector<std::pair<size_t, double>> parts;
     for (size_t m = 0; m < generated; ++m) {
       if (BoxIoU(masks[m].box, dm.box) == 0) continue;
-      const int64_t inter = Intersection(masks[m], dm);
+      const int64_t inter = MaskIntersection(masks[m], dm);
       if (inter == 0) continue;
       const double iou = static_cast<double>(inter) /
                          static_cast<double>(masks[m].area + dm.area - inter);

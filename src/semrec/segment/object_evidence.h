@@ -61,8 +61,8 @@ struct ObjectDetectorOptions {
 /// A detection in the label set's classes.
 struct ObjectDetection {
   Box box;
-  uint16_t class_id = 0;     // label-set id
-  int detector_class = 0;    // the detector's own class id
+  uint16_t class_id = 0;   // label-set id
+  int detector_class = 0;  // the detector's own class id
   float score = 0.0f;
 };
 

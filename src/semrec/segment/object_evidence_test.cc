@@ -95,8 +95,9 @@ TEST(ObjectEvidence, MapDetectionsKeepsMappedClassesAboveTheScoreClipped) {
     return d;
   };
   const auto mapped = MapDetections(
-      {det("chair", 0.8, {-10, 5, 50, 40}), det("toothbrush", 0.9, {0, 0, 5, 5}),
-       det("couch", 0.2, {0, 0, 20, 20}), det("dining table", 0.5, {90, 90, 30, 30}),
+      {det("chair", 0.8, {-10, 5, 50, 40}),
+       det("toothbrush", 0.9, {0, 0, 5, 5}), det("couch", 0.2, {0, 0, 20, 20}),
+       det("dining table", 0.5, {90, 90, 30, 30}),
        det("bed", 0.6, {120, 0, 10, 10})},
       map, 0.3f, 100, 100);
   ASSERT_EQ(mapped.size(), 2u);  // toothbrush unmapped, couch too weak, bed
@@ -122,11 +123,11 @@ TEST(ObjectEvidence, MatchesPartsAndAddsUnmatchedGoodMasks) {
       Detected({20, 40, 50, 80}, 20, 0.8f),  // matches mask 1 (IoU 0.75)
       Detected({60, 40, 90, 90}, 16, 0.6f),  // no mask: adds its own
       Detected({60, 0, 70, 10}, 16, 0.9f)};  // no mask, poor one: dropped
-  std::vector<Mask> detection_masks = {
-      RectMask(w, h, {20, 40, 50, 80}), RectMask(w, h, {60, 40, 90, 90}, 0.95f),
-      RectMask(w, h, {60, 0, 70, 10}, 0.5f)};
-  const ObjectEvidence e = AttachDetections(masks, detections,
-                                            detection_masks, options);
+  std::vector<Mask> detection_masks = {RectMask(w, h, {20, 40, 50, 80}),
+                                       RectMask(w, h, {60, 40, 90, 90}, 0.95f),
+                                       RectMask(w, h, {60, 0, 70, 10}, 0.5f)};
+  const ObjectEvidence e =
+      AttachDetections(masks, detections, detection_masks, options);
   EXPECT_EQ(e.matched, 1);
   EXPECT_EQ(e.added, 1);
   EXPECT_EQ(e.parts, 1);  // the seat, inside the chair's mask
@@ -154,8 +155,8 @@ TEST(ObjectEvidence, MatchesPartsAndAddsUnmatchedGoodMasks) {
   options.part_containment = 0;
   options.stuff_yields = false;
   options.min_predicted_iou = 2;
-  const ObjectEvidence plain = AttachDetections(masks, detections,
-                                                detection_masks, options);
+  const ObjectEvidence plain =
+      AttachDetections(masks, detections, detection_masks, options);
   EXPECT_EQ(plain.masks.size(), 3u);
   EXPECT_EQ(plain.parts + plain.added, 0);
   EXPECT_FLOAT_EQ(plain.evidence[1].stuff_scale, 1.0f);
@@ -217,9 +218,9 @@ TEST(ObjectEvidence, InstanceConfidenceOfMasksAndUnmaskedPixels) {
   const VoteResult vote = Vote(semantic, {RectMask(10, 2, {0, 0, 4, 2})});
   const std::map<uint16_t, float> c = InstanceConfidence(vote, probability);
   ASSERT_EQ(c.size(), 3u);
-  EXPECT_FLOAT_EQ(c.at(1), 0.75f);                      // the mask's share
-  EXPECT_NEAR(c.at(2), (0.8 + 5 * 0.5) / 6, 1e-6);      // unmasked class 3
-  EXPECT_NEAR(c.at(3), 0.9, 1e-6);                      // unmasked class 5
+  EXPECT_FLOAT_EQ(c.at(1), 0.75f);                  // the mask's share
+  EXPECT_NEAR(c.at(2), (0.8 + 5 * 0.5) / 6, 1e-6);  // unmasked class 3
+  EXPECT_NEAR(c.at(3), 0.9, 1e-6);                  // unmasked class 5
   EXPECT_FLOAT_EQ(InstanceConfidence(vote, Image<float>()).at(2), 1.0f);
   EXPECT_THROW(InstanceConfidence(vote, Image<float>(3, 3)), InvalidArgument);
 }
@@ -231,8 +232,8 @@ TEST(ObjectEvidence, InstanceConfidenceOfMasksAndUnmaskedPixels) {
 class TinyHybrid : public ::testing::Test {
  protected:
   static ColorImage Scene() {
-    const auto palette = nlohmann::json::parse(ReadTextFile(
-        semrec::testing::TinyModelDir() / "tiny_palette150.json"));
+    const auto palette = nlohmann::json::parse(
+        ReadTextFile(semrec::testing::TinyModelDir() / "tiny_palette150.json"));
     ColorImage rgb(320, 240, 3);
     for (int y = 0; y < 240; ++y) {
       for (int x = 0; x < 320; ++x) {
@@ -290,9 +291,9 @@ TEST_F(TinyHybrid, ADetectedChairOverridesTheWallTheClassifierSaw) {
   // Given detections replace the detector (shared with people tracking):
   // none given, none used.
   const std::vector<track::LabeledDetection> none;
-  EXPECT_EQ(ade.Get(segmenter.Segment(Scene(), &none).vote.semantic(80, 100))
-                .name,
-            "wall");
+  EXPECT_EQ(
+      ade.Get(segmenter.Segment(Scene(), &none).vote.semantic(80, 100)).name,
+      "wall");
   // Only the added weight: 0.9 < 1.0 wall.
   options.objects.stuff_yields = false;
   EXPECT_EQ(ade.Get(ClassAt(options)).name, "wall");
