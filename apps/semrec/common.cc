@@ -82,10 +82,13 @@ void AddObjectDetectorArgs(CLI::App* cmd,
                   "decoder's predicted IoU is >= this (above 1 = never)")
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
-  cmd->add_flag("--object-keep-stuff{false}", options->stuff_yields,
-                "Do not scale down stuff classes (wall, floor...) in masks "
-                "matching a detection (by default their pixel share is "
-                "multiplied by 1 - score)");
+  // An option, not a negating flag: run.yaml writes every option's value and
+  // --config must read the same back.
+  cmd->add_option("--object-stuff-yields", options->stuff_yields,
+                  "In masks matching a detection, scale the pixel share of "
+                  "stuff classes (wall, floor...) by 1 - score (false: only "
+                  "the added weight)")
+      ->capture_default_str();
   cmd->add_option("--object-class-map", options->class_map,
                   "JSON map from detector class names to label-set class "
                   "names (default: data/class_maps/<detector "

@@ -7,7 +7,7 @@ set -u
 SEMREC="$1"
 source "$(dirname "${BASH_SOURCE[0]}")/test_lib.sh"
 tmp="$(mktemp -d)"; trap 'rm -rf "$tmp"' EXIT
-data="$SEMREC_SOURCE_DIR/../shared/data"
+data="${SEMREC_DATA:-$SEMREC_SOURCE_DIR/../shared/data}"
 models="${SEMREC_MODELS:-$SEMREC_SOURCE_DIR/.deps/models}"
 frame="$data/7scenes_chess_0_99/frame-000060.color.jpg"
 [ -f "$frame" ] || skip "7-Scenes chess sample missing ($frame)"
