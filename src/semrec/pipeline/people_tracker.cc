@@ -10,6 +10,7 @@
 
 #include "semrec/core/error.h"
 #include "semrec/core/label_map.h"
+#include "semrec/segment/object_evidence.h"
 
 namespace semrec::pipeline {
 namespace {
@@ -17,15 +18,6 @@ namespace {
 using Clock = std::chrono::steady_clock;
 double Seconds(Clock::time_point a, Clock::time_point b) {
   return std::chrono::duration<double>(b - a).count();
-}
-
-// The detection box clipped to the image, as a SAM box prompt.
-segment::Box PromptBox(const track::Box& b, int width, int height) {
-  const auto clip = [](double v, int hi) {
-    return std::clamp(static_cast<int>(std::lround(v)), 0, hi);
-  };
-  return {clip(b.left, width), clip(b.top, height),
-          clip(b.left + b.width, width), clip(b.top + b.height, height)};
 }
 
 }  // namespace
@@ -81,7 +73,8 @@ PeopleFrame PeopleTracker::Process(
     frame.encode_seconds = Seconds(t1, t2);
     tbb::parallel_for(static_cast<size_t>(0), detections.size(), [&](size_t i) {
       segment::Prompt prompt;
-      prompt.box = PromptBox(detections[i].box, rgb.width(), rgb.height());
+      prompt.box =
+          segment::PromptBox(detections[i].box, rgb.width(), rgb.height());
       const segment::LowResMask low = masks_->Decode(prompt);
       masks[i] = masks_->Upsample(low);
       if (options_.embedding == "auto" && !low.object_pointer.empty()) {
@@ -143,7 +136,7 @@ LabelMap PersonInstanceMap(const std::vector<PersonObservation>& people,
         }
       }
     } else {
-      const segment::Box b = PromptBox(p.box.box, width, height);
+      const segment::Box b = segment::PromptBox(p.box.box, width, height);
       for (int y = b.y0; y < b.y1; ++y) {
         for (int x = b.x0; x < b.x1; ++x) map(x, y) = id;
       }

@@ -81,21 +81,24 @@ std::optional<uint16_t> DetectorClassMap::Map(int detector_class) const {
   return it->second;
 }
 
-std::vector<ObjectDetection> MapDetections(
-    const std::vector<track::LabeledDetection>& detections,
-    const DetectorClassMap& class_map, float min_score, int width, int height) {
+Box PromptBox(const track::Box& b, int width, int height) {
   const auto clip = [](double v, int hi) {
     return std::clamp(static_cast<int>(std::lround(v)), 0, hi);
   };
+  return {clip(b.left, width), clip(b.top, height),
+          clip(b.left + b.width, width), clip(b.top + b.height, height)};
+}
+
+std::vector<ObjectDetection> MapDetections(
+    const std::vector<track::LabeledDetection>& detections,
+    const DetectorClassMap& class_map, float min_score, int width, int height) {
   std::vector<ObjectDetection> out;
   for (const track::LabeledDetection& d : detections) {
     if (d.detection.score < min_score) continue;
     const auto id = class_map.Map(d.class_id);
     if (!id) continue;
-    const track::Box& b = d.detection.box;
     ObjectDetection o;
-    o.box = {clip(b.left, width), clip(b.top, height),
-             clip(b.left + b.width, width), clip(b.top + b.height, height)};
+    o.box = PromptBox(d.detection.box, width, height);
     if (o.box.area() == 0) continue;
     o.class_id = *id;
     o.detector_class = d.class_id;

@@ -87,6 +87,10 @@ class DetectorClassMap {
   std::map<int, uint16_t> map_;
 };
 
+/// A detector's box (pixels, fractional) rounded and clipped to a
+/// width x height image, as a box prompt.
+Box PromptBox(const track::Box& box, int width, int height);
+
 /// Detections of mapped classes with score >= min_score, boxes clipped to
 /// the image (empty boxes dropped), in the given order.
 std::vector<ObjectDetection> MapDetections(
