@@ -30,6 +30,7 @@ struct SceneArgs {
   std::string observed_in;
   int observed_stride = 1;
   bool json = false;
+  bool objects = false;
   eval::SceneEvalOptions options;
 };
 
@@ -239,6 +240,21 @@ void RunScene(const SceneArgs& args) {
       }
       classes.push_back(jc);
     }
+    nlohmann::json objects = nlohmann::json::array();
+    for (const auto& o : m.objects) {
+      nlohmann::json shares = nlohmann::json::array();
+      for (const auto& s : o.shares) {
+        shares.push_back({{"predicted_id", s.predicted_id},
+                          {"class", name(s.class_id)},
+                          {"share", s.share}});
+      }
+      objects.push_back({{"id", o.id},
+                         {"class", name(o.class_id)},
+                         {"points", o.points},
+                         {"best_iou", o.best_iou},
+                         {"uncovered", o.uncovered},
+                         {"shares", shares}});
+    }
     nlohmann::json pieces = nlohmann::json::object();
     for (const auto& [object, n] : m.pieces_per_gt_object) {
       pieces[std::to_string(object)] = n;
@@ -256,7 +272,8 @@ void RunScene(const SceneArgs& args) {
         {"objects_per_gt_object", m.objects_per_gt_object},
         {"pieces_per_gt_object", pieces},
         {"unmapped_predicted_classes", unmapped},
-        {"classes", classes}};
+        {"classes", classes},
+        {"objects", objects}};
     std::printf("%s\n", j.dump(2).c_str());
     return;
   }
@@ -294,6 +311,23 @@ void RunScene(const SceneArgs& args) {
             : fmt::format("{:>5}  {:<16} {:>7.2f}\n", c.id, name(c.id),
                           100 * c.iou);
   }
+  if (args.objects) {
+    text += fmt::format(
+        "\nwhere each ground-truth object's points went (predicted objects "
+        "with >= 5%):\n{:>5}  {:<16} {:>7} {:>7} {:>9}  {}\n",
+        "id", "class", "points", "IoU", "uncovered",
+        "predicted id:class share");
+    for (const auto& o : m.objects) {
+      std::string shares;
+      for (const auto& s : o.shares) {
+        shares += fmt::format(" {}:{} {:.0f}%", s.predicted_id,
+                              name(s.class_id), 100 * s.share);
+      }
+      text += fmt::format("{:>5}  {:<16} {:>7} {:>7.2f} {:>8.0f}% {}\n", o.id,
+                          name(o.class_id), o.points, 100 * o.best_iou,
+                          100 * o.uncovered, shares);
+    }
+  }
   std::printf("%s", text.c_str());
 }
 
@@ -324,6 +358,10 @@ void AddEvalScene(CLI::App* eval) {
                   "JSON object mapping predicted class names to ground-truth "
                   "names or ids (data/class_maps/); unmapped names match by "
                   "name");
+  cmd->add_flag("--objects", args->objects,
+                "Also list each ground-truth object: its best IoU with a "
+                "predicted object of its class and which predicted objects "
+                "took its points (in --json always)");
   cmd->add_option("--observed-in", args->observed_in,
                   "Score only ground-truth points some frame of this "
                   "sequence saw (depth within 2 cm): ground truth sampled "

@@ -213,6 +213,36 @@ double ScanNetAveragePrecision(const std::vector<bool>& true_positive,
   return ap;
 }
 
+GtObjectReport ReportObject(int32_t gt_id, int32_t class_id,
+                            const std::vector<PredictedObject>& predicted,
+                            const Overlaps& overlaps) {
+  GtObjectReport r;
+  r.id = gt_id;
+  r.class_id = class_id;
+  r.points = overlaps.gt_size.at(gt_id);
+  if (r.points == 0) return r;
+  const auto total = static_cast<double>(r.points);
+  size_t covered = 0;
+  for (size_t p = 0; p < predicted.size(); ++p) {
+    const auto it = overlaps.intersection.find({p, gt_id});
+    if (it == overlaps.intersection.end()) continue;
+    covered += it->second;
+    if (predicted[p].class_id == class_id) {
+      r.best_iou = std::max(r.best_iou, overlaps.Iou(p, gt_id));
+    }
+    const double share = static_cast<double>(it->second) / total;
+    if (share >= 0.05) {
+      r.shares.push_back({predicted[p].id, predicted[p].class_id, share});
+    }
+  }
+  std::sort(r.shares.begin(), r.shares.end(),
+            [](const auto& a, const auto& b) { return a.share > b.share; });
+  // Points of this object that took no predicted object at all. Those that
+  // took one are counted in `covered` (also below the 5% listing floor).
+  r.uncovered = 1.0 - static_cast<double>(covered) / total;
+  return r;
+}
+
 SceneMetrics EvaluateScene(const SceneGroundTruth& gt,
                            const std::vector<PredictedObject>& predicted,
                            const std::set<int32_t>& thing_classes,
@@ -339,8 +369,11 @@ SceneMetrics EvaluateScene(const SceneGroundTruth& gt,
         }
       }
       m.pieces_per_gt_object[g] = pieces;
+      m.objects.push_back(ReportObject(g, cls, predicted, overlaps));
     }
   }
+  std::sort(m.objects.begin(), m.objects.end(),
+            [](const auto& a, const auto& b) { return a.id < b.id; });
   if (classes_with_objects > 0) {
     m.ap25 = ap25_sum / static_cast<double>(classes_with_objects);
     m.ap50 = ap50_sum / static_cast<double>(classes_with_objects);

@@ -68,6 +68,25 @@ struct SceneClassMetrics {
   double ap25 = 0.0, ap50 = 0.0;
 };
 
+/// Where one ground-truth object's points went: the predicted objects that
+/// took them, largest share first (the rest took no object or another
+/// object's share below 5%).
+struct GtObjectReport {
+  int32_t id = 0;
+  int32_t class_id = -1;
+  size_t points = 0;
+  /// Best IoU with a predicted object of its class (0 = none).
+  double best_iou = 0.0;
+  struct Share {
+    uint32_t predicted_id = 0;
+    int32_t class_id = -1;
+    double share = 0.0;
+  };
+  std::vector<Share> shares;
+  /// Share of its points near no predicted surface.
+  double uncovered = 0.0;
+};
+
 struct SceneMetrics {
   size_t gt_points = 0;
   /// Ground-truth points with a predicted surface within the radius.
@@ -85,6 +104,8 @@ struct SceneMetrics {
   /// 10% of it (1 = whole; more = in parts).
   std::map<int32_t, size_t> pieces_per_gt_object;
   std::vector<SceneClassMetrics> classes;
+  /// One per ground-truth object of a thing class, by id.
+  std::vector<GtObjectReport> objects;
 };
 
 /// Ground-truth points some frame of `reader` saw: in its image, in front of

@@ -128,6 +128,37 @@ TEST(SceneMetrics, AnObjectInTwoPartsCountsAsComputedByHand) {
   EXPECT_EQ(m.pieces_per_gt_object.at(1), 1u);
 }
 
+TEST(SceneMetrics, ReportsWhereEachGroundTruthObjectWent) {
+  const Fixture f;
+  // Chair 1: 70 points in a chair, 20 in the table object, 10 uncovered.
+  // Chair 2 and the table: whole, in one object each.
+  std::vector<Eigen::Vector3f> table = f.Points(3, kTable);
+  const auto stray = f.Points(1, kChair, 70, 90);
+  table.insert(table.end(), stray.begin(), stray.end());
+  const std::vector<PredictedObject> predicted = {
+      {11, kChair, 0.9, f.Points(1, kChair, 0, 70)},
+      {12, kChair, 0.8, f.Points(2, kChair)},
+      {14, kTable, 0.5, table}};
+  const SceneMetrics m = EvaluateScene(f.gt, predicted, kThings, Tight());
+  ASSERT_EQ(m.objects.size(), 3u);
+  const GtObjectReport& c1 = m.objects[0];
+  EXPECT_EQ(c1.id, 1);
+  EXPECT_EQ(c1.class_id, kChair);
+  EXPECT_EQ(c1.points, 100u);
+  EXPECT_DOUBLE_EQ(c1.best_iou, 0.7);  // 70 / (100 + 70 - 70)
+  ASSERT_EQ(c1.shares.size(), 2u);
+  EXPECT_EQ(c1.shares[0].predicted_id, 11u);
+  EXPECT_DOUBLE_EQ(c1.shares[0].share, 0.7);
+  EXPECT_EQ(c1.shares[1].predicted_id, 14u);
+  EXPECT_EQ(c1.shares[1].class_id, kTable);
+  EXPECT_DOUBLE_EQ(c1.shares[1].share, 0.2);
+  EXPECT_NEAR(c1.uncovered, 0.1, 1e-12);
+  EXPECT_DOUBLE_EQ(m.objects[1].best_iou, 1.0);
+  // The table object holds 120 points, 100 of them the table's.
+  EXPECT_NEAR(m.objects[2].best_iou, 100.0 / 120.0, 1e-12);
+  EXPECT_DOUBLE_EQ(m.objects[2].uncovered, 0.0);
+}
+
 TEST(SceneMetrics, MergedNeighboursMatchNeitherAtHalf) {
   const Fixture f;
   std::vector<Eigen::Vector3f> both = f.Points(1, kChair);

@@ -15,7 +15,9 @@
 //     views put it in; structure voxels to their class's structure object.
 //     Thing voxels no object of their class claimed (they were fused into the
 //     wall) join the touching object of their class, or form a new one.
-//  4. An object's pieces that do not touch (within touch_voxels) are split
+//  4. A fusion object whose parts the views held in different masks (two
+//     monitors side by side that the overlap rule fused) is cut into them.
+//     An object's pieces that do not touch (within touch_voxels) are split
 //     into objects unless the views that saw both mostly put them in one mask
 //     (MaskClustering-style consensus); touching objects of one class are
 //     merged unless several views held them in different masks and few in
@@ -74,6 +76,10 @@ struct MapObjectOptions {
   size_t min_one_views = 2;
   double two_weight = 0.5;
   double min_hold_share = 0.2;
+  /// Parts of one fusion object are cut apart when views held them in
+  /// different masks and at most this share of those views held them in one
+  /// mask.
+  double max_one_share = 0.25;
   /// Touching objects of different classes merge when views held both in
   /// one mask and one's votes give the other's class at least this share.
   double confusion_share = 0.25;

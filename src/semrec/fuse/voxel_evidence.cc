@@ -59,6 +59,35 @@ T* FindOrAdd(std::vector<T>* items, Key T::*field, Key value) {
   return &items->back();
 }
 
+// The object mask holding most of the pixels in votes[begin, end) (one
+// voxel's); 0 when none does (ties: the smaller label). Only the dominant mask
+// is kept per view: where two touching objects' depths mix in a voxel, it
+// stays with the object most of its pixels show, so the two do not look like
+// one mask's.
+uint16_t DominantMask(const std::vector<Vote>& votes, size_t begin,
+                      size_t end) {
+  std::vector<std::pair<uint16_t, uint32_t>> counts;  // few per voxel
+  for (size_t k = begin; k < end; ++k) {
+    if (votes[k].label == 0) continue;
+    auto it = std::find_if(counts.begin(), counts.end(), [&](const auto& c) {
+      return c.first == votes[k].label;
+    });
+    if (it == counts.end()) {
+      counts.emplace_back(votes[k].label, 1);
+    } else {
+      ++it->second;
+    }
+  }
+  uint16_t best = 0;
+  uint32_t best_count = 0;
+  for (const auto& [label, count] : counts) {
+    if (count > best_count || (count == best_count && label < best)) {
+      best = label, best_count = count;
+    }
+  }
+  return best;
+}
+
 }  // namespace
 
 void VoxelEvidenceMap::AddFrame(const std::vector<FrameSegment>& segments,
@@ -130,20 +159,12 @@ void VoxelEvidenceMap::AddFrame(const std::vector<FrameSegment>& segments,
           FindOrAdd(&v.objects, &ObjectVote::id, votes[o].object)->views +=
               static_cast<float>(object_end - o) / n;
         }
-        for (size_t m = o; m < object_end; ++m) {
-          if (votes[m].label == 0) continue;
-          // This frame's masks are the last entries: a short scan.
-          const uint64_t id = MaskId(frame_index, votes[m].label);
-          bool known = false;
-          for (auto it = v.masks.rbegin();
-               it != v.masks.rend() && MaskFrame(*it) == frame_index; ++it) {
-            known = known || *it == id;
-          }
-          if (!known) v.masks.push_back(id);
-        }
         o = object_end;
       }
       k = class_end;
+    }
+    if (const uint16_t label = DominantMask(votes, i, end); label != 0) {
+      v.masks.push_back(MaskId(frame_index, label));
     }
     ++v.views;
     seen_this_frame.insert(votes[i].key);

@@ -70,8 +70,9 @@ struct VoxelEvidence {
   uint32_t views = 0;
   std::vector<ClassEvidence> classes;
   std::vector<ObjectVote> objects;
-  /// The object masks (MaskId) that covered it, one per view and mask: which
-  /// parts views saw inside one mask (structure masks are not kept).
+  /// Per view that put object pixels here, the object mask (MaskId) holding
+  /// most of them, in frame order: which parts views saw inside one mask
+  /// (structure masks are not kept).
   std::vector<uint64_t> masks;
 
   Eigen::Vector3f Centroid() const {

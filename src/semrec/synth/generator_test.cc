@@ -36,6 +36,29 @@ SynthOptions Small(const std::string& preset, int frames) {
   return o;
 }
 
+// Office tables each carry at most one monitor (all of them once stood on the
+// first table, inside each other: no view could tell them apart).
+TEST(Synth, OfficeMonitorsStandOnTablesOfTheirOwn) {
+  for (const uint64_t seed : {1u, 2u, 3u}) {
+    SynthOptions o = SynthOptions::Preset("office");
+    o.scene.seed = seed;
+    const Scene scene = GenerateScene(o.scene);
+    std::vector<Eigen::AlignedBox3d> monitors;
+    for (const SceneObject& object : scene.objects) {
+      if (object.name.rfind("monitor", 0) == 0) {
+        monitors.push_back(object.Bounds());
+      }
+    }
+    ASSERT_EQ(monitors.size(), 3u);
+    for (size_t i = 0; i < monitors.size(); ++i) {
+      for (size_t j = i + 1; j < monitors.size(); ++j) {
+        EXPECT_FALSE(monitors[i].intersects(monitors[j]))
+            << "seed " << seed << ": monitors " << i << " and " << j;
+      }
+    }
+  }
+}
+
 TEST(Synth, BadOptionsGiveClearErrors) {
   EXPECT_THROW(SynthOptions::Preset("kitchen"), InvalidArgument);
   try {

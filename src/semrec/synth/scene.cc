@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <map>
+#include <set>
 
 #include <fmt/format.h>
 
@@ -296,6 +297,7 @@ Scene GenerateScene(const SceneOptions& options) {
       hi(W, D);
   std::vector<Footprint> footprints;
   std::vector<size_t> footprint_object;
+  std::set<size_t> tables_with_monitor;  // footprint indices
   for (const std::string& cls : options.object_classes) {
     Blueprint bp = Build(cls, rng);
     const uint16_t class_id = *classes.FindByName(cls);
@@ -307,12 +309,15 @@ Scene GenerateScene(const SceneOptions& options) {
     bool placed = false;
     Footprint fp{{0, 0}, 0, bp.hx, bp.hy};
     double base_z = 0.0;
-    // A monitor stands on a table top when there is a table (stacked,
-    // touching).
+    // A monitor stands on a table top when there is a table without one
+    // (stacked, touching); one per table, not three in one place.
     if (cls == "monitor") {
       for (size_t k = 0; k < footprints.size() && !placed; ++k) {
         const SceneObject& other = scene.objects[footprint_object[k]];
-        if (classes.Get(other.class_id).name != "table") continue;
+        if (classes.Get(other.class_id).name != "table" ||
+            !tables_with_monitor.insert(k).second) {
+          continue;
+        }
         fp.center = footprints[k].center;
         fp.yaw = footprints[k].yaw;
         base_z = other.Bounds().max().z();

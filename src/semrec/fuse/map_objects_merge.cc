@@ -1,0 +1,157 @@
+// Orphan voxels, merges by masks and fragments judged by visibility (see
+// map_resolver.h).
+#include <algorithm>
+#include <map>
+#include <set>
+#include <vector>
+
+#include <spdlog/spdlog.h>
+
+#include "semrec/fuse/map_resolver.h"
+
+namespace semrec::fuse::internal {
+
+bool MapResolver::OneObject(const std::vector<size_t>& a,
+                            const std::vector<size_t>& b, uint32_t id_a,
+                            uint32_t id_b, const PairViews& views) const {
+  const uint16_t ca = owner_class_.at(id_a), cb = owner_class_.at(id_b);
+  if (ca == cb) {
+    return views.two == 0 || SaysOne(views, options_.min_one_views);
+  }
+  return SaysOne(views, 1) && std::max(VoteShare(a, cb), VoteShare(b, ca)) >=
+                                  options_.confusion_share;
+}
+
+void MapResolver::MergeByMasks() {
+  std::map<uint32_t, std::vector<size_t>> members;
+  for (size_t i = 0; i < cells_.size(); ++i) {
+    if (cells_[i].owner != 0 && IsThingCell(cells_[i])) {
+      members[cells_[i].owner].push_back(i);
+    }
+  }
+  std::map<uint32_t, std::map<size_t, std::set<uint64_t>>> holders;
+  for (const auto& [id, cells] : members) holders[id] = Holders(cells);
+  std::set<std::pair<uint32_t, uint32_t>> pairs;
+  for (const auto& entry : members) {
+    const uint32_t id = entry.first;
+    for (size_t i : entry.second) {
+      ForNeighbours(i, [&](size_t n) {
+        const uint32_t other = cells_[n].owner;
+        if (other > id && IsThingCell(cells_[n])) pairs.emplace(id, other);
+      });
+    }
+  }
+  // Judged on the objects as they were: a chain of merges does not change
+  // the evidence of a pair.
+  std::vector<std::pair<uint32_t, uint32_t>> one;
+  for (const auto& [a, b] : pairs) {
+    const PairViews v = CoViews(holders[a], holders[b]);
+    if (OneObject(members[a], members[b], a, b, v)) {
+      one.emplace_back(a, b);
+    }
+    spdlog::debug("objects {} and {} ({} and {} voxels): {} views one, {} two",
+                  a, b, members[a].size(), members[b].size(), v.one, v.two);
+  }
+  std::map<uint32_t, uint32_t> into;
+  auto find = [&](uint32_t id) {
+    while (into.count(id)) id = into[id];
+    return id;
+  };
+  for (const auto& [a, b] : one) {
+    const uint32_t x = find(a), y = find(b);
+    if (x == y) continue;
+    const bool x_keeps = members[x].size() >= members[y].size();
+    const uint32_t keep = x_keeps ? x : y, gone = x_keeps ? y : x;
+    into[gone] = keep;
+    members[keep].insert(members[keep].end(), members[gone].begin(),
+                         members[gone].end());
+    // Confused classes: the one with more votes over both takes the whole
+    // (not the larger part's: sparse views tie voxel by voxel).
+    const uint16_t ck = owner_class_[keep], cg = owner_class_[gone];
+    if (ck != cg &&
+        VoteShare(members[keep], cg) > VoteShare(members[keep], ck)) {
+      owner_class_[keep] = cg;
+    }
+    ++result_.merged_objects;
+  }
+  for (Cell& c : cells_) {
+    if (c.owner == 0 || !IsThingCell(c)) continue;
+    c.owner = find(c.owner);
+    c.class_id = owner_class_[c.owner];
+  }
+}
+
+void MapResolver::AttachOrphans() {
+  std::vector<bool> done(cells_.size(), false);
+  for (size_t i = 0; i < cells_.size(); ++i) {
+    const Cell& c = cells_[i];
+    if (done[i] || c.owner != 0 || !IsThingCell(c)) continue;
+    const uint16_t cls = c.class_id;
+    const auto group = Component(i, &done, [&](size_t n) {
+      return cells_[n].owner == 0 && cells_[n].class_id == cls;
+    });
+    uint32_t id = MostTouching(group, cls, 0);
+    spdlog::debug("orphan voxels: {} of class {} -> object {}", group.size(),
+                  cls, id);
+    if (id == 0) {
+      id = (*next_id_)++;
+      owner_class_[id] = cls;
+      ++result_.new_objects;
+    }
+    for (size_t n : group) cells_[n].owner = id;
+  }
+}
+
+void MapResolver::JudgeFragments() {
+  std::map<uint32_t, std::vector<size_t>> members;
+  for (size_t i = 0; i < cells_.size(); ++i) {
+    if (cells_[i].owner != 0 && IsThingCell(cells_[i])) {
+      members[cells_[i].owner].push_back(i);
+    }
+  }
+  std::vector<std::pair<size_t, uint32_t>> fragments;  // (size, id)
+  for (const auto& [id, cells] : members) {
+    const auto [ratio, max_views] = Visibility(cells);
+    seen_[id] = {ratio, max_views};
+    if (cells.size() < options_.min_voxels || ratio < options_.min_seen_ratio) {
+      fragments.emplace_back(cells.size(), id);
+      spdlog::debug("fragment {}: {} voxels, seen ratio {:.2f}", id,
+                    cells.size(), ratio);
+    }
+  }
+  std::sort(fragments.begin(), fragments.end());
+  std::set<uint32_t> refused;
+  for (const auto& [size, id] : fragments) refused.insert(id);
+  for (const auto& [size, id] : fragments) {
+    const std::vector<size_t>& cells = members[id];
+    const uint32_t into = MostTouching(cells, owner_class_[id], id, refused);
+    for (size_t i : cells) {
+      cells_[i].owner = into;
+      if (into == 0) cells_[i].class_id = kNoClass;
+    }
+    ++(into ? result_.fragments_folded : result_.fragments_dropped);
+  }
+}
+
+std::pair<double, uint32_t> MapResolver::Visibility(
+    const std::vector<size_t>& cells) const {
+  double labelled = 0.0, observed = 0.0;
+  uint32_t max_views = 0;
+  for (size_t i : cells) {
+    const Cell& c = cells_[i];
+    uint32_t views = 0;
+    for (const ClassEvidence& e : c.evidence->classes) {
+      if (e.class_id == c.class_id ||
+          std::find(c.excluded.begin(), c.excluded.end(), e.class_id) !=
+              c.excluded.end()) {
+        views += e.views;
+      }
+    }
+    labelled += views;
+    observed += std::max(c.evidence->views, views);
+    max_views = std::max(max_views, views);
+  }
+  return {observed > 0.0 ? labelled / observed : 0.0, max_views};
+}
+
+}  // namespace semrec::fuse::internal

@@ -1,0 +1,228 @@
+// Cuts of the map's objects: by the views' masks and by connectivity (see
+// map_resolver.h).
+#include <algorithm>
+#include <limits>
+#include <map>
+#include <set>
+#include <tuple>
+#include <unordered_map>
+
+#include <spdlog/spdlog.h>
+
+#include "semrec/core/union_find.h"
+#include "semrec/fuse/map_resolver.h"
+
+namespace semrec::fuse::internal {
+
+void MapResolver::SplitByMasks() {
+  for (int round = 0; round < 3; ++round) {
+    std::map<uint32_t, std::vector<size_t>> members;
+    for (size_t i = 0; i < cells_.size(); ++i) {
+      if (cells_[i].owner != 0 && IsThingCell(cells_[i])) {
+        members[cells_[i].owner].push_back(i);
+      }
+    }
+    bool split = false;
+    for (const auto& [owner, cells] : members) {
+      split = SplitObjectByMasks(owner, cells) || split;
+    }
+    if (!split) break;
+  }
+}
+
+bool MapResolver::SplitObjectByMasks(uint32_t owner,
+                                     const std::vector<size_t>& cells) {
+  std::unordered_map<uint64_t, std::vector<size_t>> mask_cells;
+  for (size_t k = 0; k < cells.size(); ++k) {
+    for (uint64_t m : cells_[cells[k]].evidence->masks) {
+      mask_cells[m].push_back(k);
+    }
+  }
+  std::map<size_t, std::vector<std::pair<size_t, uint64_t>>> large;
+  for (const auto& [m, ks] : mask_cells) {
+    if (ks.size() >= options_.min_piece_voxels) {
+      large[MaskFrame(m)].emplace_back(ks.size(), m);
+    }
+  }
+  std::vector<std::pair<size_t, size_t>> candidates;  // (2nd size, frame)
+  for (auto& [frame, masks] : large) {
+    if (masks.size() < 2) continue;
+    std::sort(masks.rbegin(), masks.rend());
+    candidates.emplace_back(masks[1].first, frame);
+  }
+  std::sort(candidates.rbegin(), candidates.rend());
+  if (candidates.size() > 3) candidates.resize(3);
+  for (const auto& [second, frame] : candidates) {
+    const auto pieces = PiecesSeededBy(cells, mask_cells, large[frame]);
+    const std::vector<size_t> group = GroupPieces(pieces);
+    std::set<size_t> groups(group.begin(), group.end());
+    spdlog::debug("object {}: {} cells, frame {} cuts {} pieces, {} groups",
+                  owner, cells.size(), frame, pieces.size(), groups.size());
+    if (groups.size() < 2) continue;
+    // The group with the most cells keeps the id.
+    std::map<size_t, size_t> group_cells;
+    for (size_t p = 0; p < pieces.size(); ++p) {
+      group_cells[group[p]] += pieces[p].size();
+    }
+    const size_t keep = std::max_element(group_cells.begin(), group_cells.end(),
+                                         [](const auto& a, const auto& b) {
+                                           return a.second < b.second;
+                                         })
+                            ->first;
+    std::map<size_t, uint32_t> id_of_group{{keep, owner}};
+    for (size_t p = 0; p < pieces.size(); ++p) {
+      if (!id_of_group.count(group[p])) {
+        id_of_group[group[p]] = (*next_id_)++;
+        owner_class_[id_of_group[group[p]]] = owner_class_[owner];
+        ++result_.split_objects;
+      }
+      for (size_t i : pieces[p]) cells_[i].owner = id_of_group[group[p]];
+    }
+    return true;
+  }
+  return false;
+}
+
+std::vector<std::vector<size_t>> MapResolver::PiecesSeededBy(
+    const std::vector<size_t>& cells,
+    const std::unordered_map<uint64_t, std::vector<size_t>>& mask_cells,
+    const std::vector<std::pair<size_t, uint64_t>>& seeds) const {
+  constexpr size_t kNone = std::numeric_limits<size_t>::max();
+  const size_t n = seeds.size();
+  std::vector<size_t> piece_of(cells.size(), kNone);
+  for (size_t j = 0; j < n; ++j) {
+    for (size_t k : mask_cells.at(seeds[j].second)) piece_of[k] = j;
+  }
+  std::unordered_map<uint64_t, size_t> mask_piece;
+  for (const auto& [m, ks] : mask_cells) {
+    std::vector<size_t> count(n, 0);
+    for (size_t k : ks) {
+      if (piece_of[k] != kNone) ++count[piece_of[k]];
+    }
+    const auto best = std::max_element(count.begin(), count.end());
+    if (*best > 0) mask_piece[m] = static_cast<size_t>(best - count.begin());
+  }
+  std::unordered_map<size_t, size_t> local;
+  for (size_t k = 0; k < cells.size(); ++k) local[cells[k]] = k;
+  std::vector<size_t> unplaced;
+  for (size_t k = 0; k < cells.size(); ++k) {
+    if (piece_of[k] != kNone) continue;
+    std::vector<size_t> count(n, 0);
+    for (uint64_t m : cells_[cells[k]].evidence->masks) {
+      if (const auto it = mask_piece.find(m); it != mask_piece.end()) {
+        ++count[it->second];
+      }
+    }
+    const auto best = std::max_element(count.begin(), count.end());
+    if (*best > 0) {
+      piece_of[k] = static_cast<size_t>(best - count.begin());
+    } else {
+      unplaced.push_back(k);
+    }
+  }
+  // Unplaced cells (no masks of their own that overlap) spread from placed
+  // neighbours, a ring per pass.
+  for (int pass = 0; pass < 8 && !unplaced.empty(); ++pass) {
+    std::vector<std::pair<size_t, size_t>> placed;
+    std::vector<size_t> left;
+    for (size_t k : unplaced) {
+      std::vector<size_t> count(n, 0);
+      ForNeighbours(cells[k], [&](size_t i) {
+        const auto it = local.find(i);
+        if (it != local.end() && piece_of[it->second] != kNone) {
+          ++count[piece_of[it->second]];
+        }
+      });
+      const auto best = std::max_element(count.begin(), count.end());
+      if (*best > 0) {
+        placed.emplace_back(k, static_cast<size_t>(best - count.begin()));
+      } else {
+        left.push_back(k);
+      }
+    }
+    for (const auto& [k, p] : placed) piece_of[k] = p;
+    unplaced = std::move(left);
+  }
+  std::vector<std::vector<size_t>> pieces(n);
+  for (size_t k = 0; k < cells.size(); ++k) {
+    pieces[piece_of[k] == kNone ? 0 : piece_of[k]].push_back(cells[k]);
+  }
+  return pieces;
+}
+
+std::vector<size_t> MapResolver::GroupPieces(
+    const std::vector<std::vector<size_t>>& pieces) const {
+  const size_t n = pieces.size();
+  std::vector<std::map<size_t, std::set<uint64_t>>> holders;
+  for (const auto& piece : pieces) holders.push_back(Holders(piece));
+  std::vector<std::vector<bool>> apart(n, std::vector<bool>(n));
+  std::vector<std::tuple<size_t, size_t, size_t>> pairs;  // (one, a, b)
+  for (size_t a = 0; a < n; ++a) {
+    for (size_t b = a + 1; b < n; ++b) {
+      const PairViews v = CoViews(holders[a], holders[b]);
+      apart[a][b] = apart[b][a] = SaysApart(v);
+      if (!apart[a][b]) pairs.emplace_back(v.one, a, b);
+    }
+  }
+  std::stable_sort(pairs.begin(), pairs.end(),
+                   [](const auto& x, const auto& y) {
+                     return std::get<0>(x) > std::get<0>(y);
+                   });
+  std::vector<size_t> group(n);
+  for (size_t p = 0; p < n; ++p) group[p] = p;
+  for (const auto& [one, a, b] : pairs) {
+    const size_t ga = group[a], gb = group[b];
+    if (ga == gb) continue;
+    bool held_apart = false;
+    for (size_t x = 0; x < n && !held_apart; ++x) {
+      for (size_t y = 0; y < n && !held_apart; ++y) {
+        held_apart = group[x] == ga && group[y] == gb && apart[x][y];
+      }
+    }
+    if (held_apart) continue;
+    for (size_t& g : group) {
+      if (g == gb) g = ga;
+    }
+  }
+  return group;
+}
+
+void MapResolver::SplitDisconnected() {
+  std::vector<bool> done(cells_.size(), false);
+  std::map<uint32_t, std::vector<std::vector<size_t>>> pieces;
+  for (size_t i = 0; i < cells_.size(); ++i) {
+    if (done[i] || cells_[i].owner == 0 || !IsThingCell(cells_[i])) continue;
+    const uint32_t owner = cells_[i].owner;
+    pieces[owner].push_back(Component(
+        i, &done, [&](size_t n) { return cells_[n].owner == owner; }));
+  }
+  for (auto& [owner, list] : pieces) {
+    if (list.size() < 2) continue;
+    std::stable_sort(
+        list.begin(), list.end(),
+        [](const auto& a, const auto& b) { return a.size() > b.size(); });
+    std::vector<std::map<size_t, std::set<uint64_t>>> holders;
+    for (const auto& piece : list) holders.push_back(Holders(piece));
+    UnionFind groups(list.size());
+    for (size_t a = 0; a < list.size(); ++a) {
+      for (size_t b = a + 1; b < list.size(); ++b) {
+        if (SaysOne(CoViews(holders[a], holders[b]), 1)) groups.Unite(a, b);
+      }
+    }
+    std::map<size_t, uint32_t> group_id{{groups.Find(0), owner}};
+    for (size_t k = 1; k < list.size(); ++k) {
+      const size_t g = groups.Find(k);
+      if (!group_id.count(g)) {
+        group_id[g] = 0;
+        if (list[k].size() >= options_.min_piece_voxels) {
+          group_id[g] = (*next_id_)++;
+          owner_class_[group_id[g]] = owner_class_[owner];
+          ++result_.split_objects;
+        }
+      }
+      for (size_t i : list[k]) cells_[i].owner = group_id[g];
+    }
+  }
+}
+
+}  // namespace semrec::fuse::internal

@@ -1,0 +1,231 @@
+// Internal to fuse/map_objects.h: the resolver whose steps decide the map's
+// objects, shared by map_objects.cc (cells, structure gate, owners, the
+// result), map_objects_split.cc (cuts by masks and by connectivity) and
+// map_objects_merge.cc (orphans, merges by masks, fragments). Not installed.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <functional>
+#include <map>
+#include <set>
+#include <unordered_map>
+#include <utility>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "semrec/fuse/map_objects.h"
+#include "semrec/fuse/voxel.h"
+
+namespace semrec::fuse::internal {
+
+constexpr uint16_t kNoClass = 0xFFFF;
+
+// The id with the most votes (ties: the smaller id) among `votes` passing
+// `accept`; 0 when none.
+template <typename Accept>
+uint32_t MostVoted(const std::map<uint32_t, float>& votes,
+                   const Accept& accept) {
+  uint32_t best = 0;
+  float best_views = 0.0f;
+  for (const auto& [id, views] : votes) {
+    if (views > best_views && accept(id)) best = id, best_views = views;
+  }
+  return best;
+}
+
+class MapResolver {
+ public:
+  MapResolver(const VoxelEvidenceMap& map, const MapContext& context,
+              const MapObjectOptions& options,
+              const std::function<uint32_t(uint32_t)>& resolve,
+              uint32_t* next_id)
+      : map_(map),
+        context_(context),
+        options_(options),
+        resolve_(resolve),
+        next_id_(next_id) {}
+
+  MapResolution Run();
+
+ private:
+  struct Cell {
+    uint64_t key = 0;
+    Eigen::Vector3f p;
+    const VoxelEvidence* evidence = nullptr;
+    uint16_t class_id = kNoClass;
+    uint32_t owner = 0;
+    uint32_t source = 0;
+    /// Structure classes set aside here (off their planes).
+    std::vector<uint16_t> excluded;
+  };
+
+  bool IsStuff(uint16_t class_id) const {
+    const auto it = context_.kinds.find(class_id);
+    return it != context_.kinds.end() && it->second == ClassKind::kStuff;
+  }
+  bool IsThingCell(const Cell& c) const {
+    return c.class_id != kNoClass && !IsStuff(c.class_id);
+  }
+
+  // Labelled voxels in key order (deterministic), with their winners.
+  void CollectCells();
+
+  // Structure evidence off its planes is set aside; the next class wins.
+  void GateStructure();
+
+  // The next class takes a voxel off structure only on real evidence: a view
+  // where it held most of the voxel's pixels and a share of its votes (not
+  // the stray vote of a mask's fringe).
+  bool CanTakeOver(const VoxelEvidence& v, uint16_t class_id) const;
+
+  uint32_t StructureId(uint16_t class_id);
+
+  // Thing voxels go to the object of their class most views put them in;
+  // unclaimed ones stay 0 (orphans) for now.
+  void AssignOwners();
+
+  // Cells within `radius` voxels (Chebyshev; 0: touch_voxels) of cell i.
+  template <typename Visit>
+  void ForNeighbours(size_t i, const Visit& visit, int radius = 0) const {
+    const Eigen::Vector3i v = UnpackVoxel(cells_[i].key);
+    const int r = radius > 0 ? radius : options_.touch_voxels;
+    for (int dx = -r; dx <= r; ++dx) {
+      for (int dy = -r; dy <= r; ++dy) {
+        for (int dz = -r; dz <= r; ++dz) {
+          if (dx == 0 && dy == 0 && dz == 0) continue;
+          const auto it =
+              index_.find(PackVoxel(v.x() + dx, v.y() + dy, v.z() + dz));
+          if (it != index_.end()) visit(it->second);
+        }
+      }
+    }
+  }
+
+  // Connected cells (from `seed`) for which `member` holds.
+  template <typename Member>
+  std::vector<size_t> Component(size_t seed, std::vector<bool>* done,
+                                const Member& member) const {
+    std::vector<size_t> component{seed};
+    (*done)[seed] = true;
+    for (size_t k = 0; k < component.size(); ++k) {
+      ForNeighbours(component[k], [&](size_t n) {
+        if (!(*done)[n] && member(n)) {
+          (*done)[n] = true;
+          component.push_back(n);
+        }
+      });
+    }
+    return component;
+  }
+
+  // The thing object of `class_id` (other than `except`) touching `cells`
+  // most; 0 when none.
+  uint32_t MostTouching(const std::vector<size_t>& cells, uint16_t class_id,
+                        uint32_t except,
+                        const std::set<uint32_t>& refused = {}) const;
+
+  // Views that saw two groups of cells: holding both in one mask, or in
+  // different masks.
+  struct PairViews {
+    size_t one = 0, two = 0;
+  };
+  // Per frame, the masks holding `cells`: covering min_hold_share of the
+  // cells that view put in object masks (a view sees part of a large object)
+  // and at least 5 of them (or all of a smaller part), not a few voxels at the
+  // contact where the depths of two touching objects mix.
+  std::map<size_t, std::set<uint64_t>> Holders(
+      const std::vector<size_t>& cells) const;
+  static PairViews CoViews(const std::map<size_t, std::set<uint64_t>>& a,
+                           const std::map<size_t, std::set<uint64_t>>& b);
+  // Cut apart: some view put them in different masks and the views putting
+  // them in one mask are at most max_one_share of those. Stricter than not
+  // merging (OneObject): the overlap rule fused them on geometry, so a cut
+  // needs the views' clear majority (a 5% join of two cabinets does not keep
+  // them one; a chair cut in two by half its views stays a chair).
+  bool SaysApart(const PairViews& v) const;
+  bool SaysOne(const PairViews& v, size_t min_one) const;
+
+  // The overlap rule fuses touching objects of one class (monitors side by
+  // side, two cabinets) that every view showed in different masks: such a
+  // fusion object is cut into the parts the views held apart. A cut can
+  // reveal another (three monitors, one view showing two of them): a few
+  // rounds.
+  void SplitByMasks();
+
+  // Candidate cuts come from the views that put the object in two or more
+  // large masks (min_piece_voxels each; the most even first, a few): each
+  // such mask seeds a piece, every other view's mask joins the piece it
+  // overlaps most, and each voxel the piece most of its masks joined. The
+  // pieces are then grouped by all views (GroupPieces); the first candidate
+  // that leaves two groups or more cuts the object.
+  bool SplitObjectByMasks(uint32_t owner, const std::vector<size_t>& cells);
+
+  // Pieces (global cell indices) seeded by one view's masks `seeds` (size,
+  // mask): the seeds' cells, then each other mask joins the piece holding
+  // most of its cells, each remaining cell the piece most of its masks
+  // joined; cells no mask places (none, or no overlap) take their touching
+  // neighbours' piece, or the first.
+  std::vector<std::vector<size_t>> PiecesSeededBy(
+      const std::vector<size_t>& cells,
+      const std::unordered_map<uint64_t, std::vector<size_t>>& mask_cells,
+      const std::vector<std::pair<size_t, uint64_t>>& seeds) const;
+
+  // Groups pieces; returns each one's group (a piece index). Pieces join
+  // unless the views hold them apart (SaysApart), and never into a group
+  // holding a piece held apart from one of theirs; pairs more views held in
+  // one mask join first.
+  std::vector<size_t> GroupPieces(
+      const std::vector<std::vector<size_t>>& pieces) const;
+
+  // Pieces of an object that do not touch: those the views held in one mask
+  // stay with the largest; other large groups become objects, small ones
+  // orphans (joined below).
+  void SplitDisconnected();
+
+  // Share of `cells`' class evidence that goes to `class_id`.
+  double VoteShare(const std::vector<size_t>& cells, uint16_t class_id) const;
+
+  // Whether touching objects a and b are one. One class: unless two views or
+  // more held them in different masks and the views holding both in one mask
+  // are too few (masks cut one object apart far more often than they join
+  // two; sparse views see an object once or twice). Two classes: when views
+  // held both in one mask, none said two more often, and one's votes give the
+  // other's class at least confusion_share (one object, its class confused).
+  bool OneObject(const std::vector<size_t>& a, const std::vector<size_t>& b,
+                 uint32_t id_a, uint32_t id_b, const PairViews& views) const;
+
+  // Touching objects that are one (OneObject) become one; the larger keeps
+  // its id.
+  void MergeByMasks();
+
+  // Thing voxels no object of their class claimed: each connected group joins
+  // the object of its class it touches most, or becomes a new object.
+  void AttachOrphans();
+
+  // Seen in few of the views that observed it: folded into the touching object
+  // of its class, or dropped. A view that called the place structure where no
+  // structure can be (set aside by the gate) did see it: it counts as a
+  // sighting.
+  void JudgeFragments();
+
+  std::pair<double, uint32_t> Visibility(
+      const std::vector<size_t>& cells) const;
+
+  MapResolution Build();
+
+  const VoxelEvidenceMap& map_;
+  const MapContext& context_;
+  const MapObjectOptions& options_;
+  const std::function<uint32_t(uint32_t)>& resolve_;
+  uint32_t* next_id_;
+  std::vector<Cell> cells_;
+  std::unordered_map<uint64_t, size_t> index_;
+  std::map<uint16_t, uint32_t> structure_ids_;
+  std::map<uint32_t, uint16_t> owner_class_;
+  std::map<uint32_t, std::pair<double, uint32_t>> seen_;
+  MapResolution result_;
+};
+
+}  // namespace semrec::fuse::internal
