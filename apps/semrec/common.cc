@@ -89,6 +89,11 @@ void AddObjectDetectorArgs(CLI::App* cmd,
                   "stuff classes (wall, floor...) by 1 - score (false: only "
                   "the added weight)")
       ->capture_default_str();
+  cmd->add_option("--object-join-parts", options->join_parts,
+                  "Masks of one detected object that voted its class (its "
+                  "seat, back, legs) become one instance (false: each mask "
+                  "its own)")
+      ->capture_default_str();
   cmd->add_option("--object-class-map", options->class_map,
                   "JSON map from detector class names to label-set class "
                   "names (default: data/class_maps/<detector "

@@ -383,6 +383,7 @@ RunResult RunSequence(const io::SequenceReader& reader,
         {"matched_masks", c.matched},
         {"added_masks", c.added},
         {"parts", c.parts},
+        {"parts_joined", c.parts_joined},
         {"frames_sharing_the_people_pass", c.shared_passes}};
   }
   WriteTextFileAtomic(out_dir / "report.json", result.report.dump(2) + "\n");

@@ -259,6 +259,7 @@ fuse::FrameLabels ScenePipeline::SegmentFrame(
   object_counts_.matched += static_cast<size_t>(hybrid.detections_matched);
   object_counts_.added += static_cast<size_t>(hybrid.detections_added);
   object_counts_.parts += static_cast<size_t>(hybrid.detection_parts);
+  object_counts_.parts_joined += static_cast<size_t>(hybrid.parts_joined);
   std::map<uint16_t, float> confidence = segment::InstanceConfidence(
       hybrid.vote, hybrid.semantic_branch.confidence);
   if (decision.mode == FrameMode::kFull) {

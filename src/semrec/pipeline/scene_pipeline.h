@@ -130,6 +130,8 @@ struct ObjectDetectionCounts {
   size_t matched = 0;
   size_t added = 0;
   size_t parts = 0;
+  /// Masks joined into their detected object's instance.
+  size_t parts_joined = 0;
   /// Frames whose one detector pass served both people tracking and the
   /// object evidence.
   size_t shared_passes = 0;

@@ -112,6 +112,7 @@ void HybridSegmenter::AddObjectEvidence(
   result->masks = std::move(evidence.masks);
   result->mask_evidence = std::move(evidence.evidence);
   result->mask_detection = std::move(evidence.detection);
+  result->mask_part_of = std::move(evidence.part_of);
   result->detections_matched = evidence.matched;
   result->detections_added = evidence.added;
   result->detection_parts = evidence.parts;
@@ -149,6 +150,11 @@ HybridResult HybridSegmenter::Run(
       Vote(result.semantic_branch.labels, result.masks,
            result.mask_evidence.empty() ? nullptr : &result.mask_evidence,
            &semantic_->label_set());
+  if (options_.objects.join_parts && !result.mask_detection.empty()) {
+    result.mask_instance = JoinDetectedParts(
+        result.detections, result.mask_detection, result.mask_part_of,
+        &result.vote, &result.parts_joined);
+  }
   result.vote_seconds =
       std::chrono::duration<double>(Clock::now() - t2).count();
   return result;

@@ -41,6 +41,12 @@ struct HybridResult {
   int detections_matched = 0;
   int detections_added = 0;
   int detection_parts = 0;
+  /// Per mask: the detection holding it as a part (-1: none), and its
+  /// instance id in vote.instance (i + 1 unless joined into its object's
+  /// largest mask: ObjectDetectorOptions::join_parts); masks joined.
+  std::vector<int> mask_part_of;
+  std::vector<uint16_t> mask_instance;
+  int parts_joined = 0;
   double semantic_seconds = 0;
   /// Detector (0 when detections were given) and the box prompts' masks.
   double detect_seconds = 0;

@@ -8,8 +8,10 @@
 
 #include "semrec/core/error.h"
 #include "semrec/core/file_util.h"
+#include "semrec/core/union_find.h"
 #include "semrec/io/json_file.h"
 #include "semrec/segment/mask_generator.h"
+#include "semrec/segment/vote.h"
 
 namespace semrec::segment {
 
@@ -145,6 +147,8 @@ ObjectEvidence AttachDetections(std::vector<Mask> masks,
     }
   };
   std::vector<int> source(generated, -1);
+  // Per generated mask: (share inside, detection) of the best holder.
+  std::vector<std::pair<double, int>> holder(generated, {0.0, -1});
   ObjectEvidence result;
   for (size_t d = 0; d < detections.size(); ++d) {
     const Mask& dm = detection_masks[d];
@@ -185,6 +189,7 @@ ObjectEvidence AttachDetections(std::vector<Mask> masks,
     for (const auto& [m, inside] : parts) {
       if (static_cast<int>(m) == best) continue;
       add(&evidence[m], cls, static_cast<float>(score * inside), false);
+      if (inside > holder[m].first) holder[m] = {inside, static_cast<int>(d)};
       ++result.parts;
     }
   }
@@ -198,8 +203,57 @@ ObjectEvidence AttachDetections(std::vector<Mask> masks,
     result.masks.push_back(std::move(masks[i]));
     result.evidence.push_back(std::move(evidence[i]));
     result.detection.push_back(source[i]);
+    result.part_of.push_back(i < generated ? holder[i].second : -1);
   }
   return result;
+}
+
+std::vector<uint16_t> JoinDetectedParts(
+    const std::vector<ObjectDetection>& detections,
+    const std::vector<int>& mask_detection, const std::vector<int>& part_of,
+    VoteResult* vote, int* joined) {
+  CheckArgument(vote != nullptr, "JoinDetectedParts: vote is null");
+  const size_t n = vote->mask_labels.size();
+  CheckArgument(mask_detection.size() == n && part_of.size() == n,
+                "JoinDetectedParts: one detection and holder per mask");
+  // Masks are largest first: the first member of a group keeps its id.
+  UnionFind groups(n);
+  std::vector<int> first(detections.size(), -1);
+  for (size_t m = 0; m < n; ++m) {
+    for (const int d : {mask_detection[m], part_of[m]}) {
+      if (d < 0 || static_cast<size_t>(d) >= detections.size() ||
+          vote->mask_labels[m] != detections[static_cast<size_t>(d)].class_id) {
+        continue;
+      }
+      int& f = first[static_cast<size_t>(d)];
+      if (f < 0) {
+        f = static_cast<int>(m);
+      } else {
+        groups.Unite(static_cast<size_t>(f), m);
+      }
+    }
+  }
+  std::vector<uint16_t> instance(n);
+  std::vector<size_t> smallest(n, n);
+  for (size_t m = 0; m < n; ++m) {
+    size_t& s = smallest[groups.Find(m)];
+    s = std::min(s, m);
+  }
+  int count = 0;
+  std::vector<uint16_t> remap(n + 1);
+  for (size_t m = 0; m < n; ++m) {
+    instance[m] = static_cast<uint16_t>(smallest[groups.Find(m)] + 1);
+    remap[m + 1] = instance[m];
+    count += instance[m] != m + 1;
+  }
+  if (count > 0) {
+    uint16_t* ids = vote->instance.data();
+    for (size_t i = 0; i < vote->instance.NumPixels(); ++i) {
+      if (ids[i] >= 1 && ids[i] <= n) ids[i] = remap[ids[i]];
+    }
+  }
+  if (joined != nullptr) *joined = count;
+  return instance;
 }
 
 }  // namespace semrec::segment

@@ -52,6 +52,12 @@ struct ObjectDetectorOptions {
   /// a mask shaped like the detected object is that object, however much of
   /// it the pixel classifier called wall. false = only the added weight.
   bool stuff_yields = true;
+  /// After the vote, the masks of one detected object that voted its class
+  /// (the matched or added mask and its parts: a chair's seat, back and legs,
+  /// which a mask generator cuts apart in most views, the same way each time)
+  /// become one instance. Parts that voted another class (a cup on a detected
+  /// table) stay apart.
+  bool join_parts = true;
   /// Threads, provider of the detector.
   infer::OnnxModelOptions runtime;
   bool enabled() const { return !model.empty(); }
@@ -125,6 +131,9 @@ struct ObjectEvidence {
   std::vector<MaskEvidence> evidence;
   /// Per mask: the detection it matched or came from (-1: none).
   std::vector<int> detection;
+  /// Per mask: the detection whose mask holds it as a part (-1: none; of
+  /// several, the one holding most of it).
+  std::vector<int> part_of;
   int matched = 0;  // detections a generated mask matched
   int parts = 0;    // generated masks that took evidence as a part
   int added = 0;    // detections that added their own mask
@@ -139,5 +148,18 @@ ObjectEvidence AttachDetections(std::vector<Mask> masks,
                                 const std::vector<ObjectDetection>& detections,
                                 std::vector<Mask> detection_masks,
                                 const ObjectDetectorOptions& options);
+
+struct VoteResult;  // segment/vote.h
+
+/// Joins the masks of each detected object that voted its class into one
+/// instance (ObjectDetectorOptions::join_parts): in `vote->instance` their
+/// pixels take the id of the largest of them. `mask_detection` and
+/// `part_of` as in ObjectEvidence. Returns each mask's instance id after the
+/// join (mask i was i + 1) and counts the masks joined into another in
+/// `joined`.
+std::vector<uint16_t> JoinDetectedParts(
+    const std::vector<ObjectDetection>& detections,
+    const std::vector<int>& mask_detection, const std::vector<int>& part_of,
+    VoteResult* vote, int* joined);
 
 }  // namespace semrec::segment

@@ -136,6 +136,7 @@ TEST(ObjectEvidence, MatchesPartsAndAddsUnmatchedGoodMasks) {
   EXPECT_EQ(e.masks[0].area, 3000);
   EXPECT_EQ(e.masks[1].area, 1500);
   EXPECT_EQ(e.detection, (std::vector<int>{-1, 1, 0, -1}));
+  EXPECT_EQ(e.part_of, (std::vector<int>{-1, -1, -1, 0}));
   EXPECT_TRUE(e.evidence[0].empty());
   ASSERT_EQ(e.evidence[1].weights.size(), 1u);
   EXPECT_EQ(e.evidence[1].weights[0].class_id, 16);
@@ -162,6 +163,62 @@ TEST(ObjectEvidence, MatchesPartsAndAddsUnmatchedGoodMasks) {
   EXPECT_FLOAT_EQ(plain.evidence[1].stuff_scale, 1.0f);
   EXPECT_THROW(AttachDetections(masks, detections, {}, options),
                InvalidArgument);
+}
+
+// A mask generator cuts a chair into back, seat and legs in most views, the
+// same way each time, so views that agree still show three objects: the
+// detection's masks that voted chair become one instance; a cup on the chair
+// (inside its mask, voted cup) and the wall stay apart.
+TEST(ObjectEvidence, PartsOfADetectedObjectBecomeOneInstance) {
+  const int w = 100, h = 100;
+  ObjectDetectorOptions options;
+  options.model = "tiny_yolox";
+  constexpr uint16_t kWall = 1, kChair = 20, kCup = 33;
+  const std::vector<Mask> masks = {
+      RectMask(w, h, {0, 0, 100, 20}),    // wall
+      RectMask(w, h, {20, 20, 50, 50}),   // back
+      RectMask(w, h, {20, 52, 50, 70}),   // seat
+      RectMask(w, h, {22, 72, 48, 90}),   // legs
+      RectMask(w, h, {30, 55, 36, 61})};  // cup on the seat
+  const std::vector<ObjectDetection> detections = {
+      Detected({20, 20, 50, 90}, kChair, 0.8f)};
+  // The box-prompted mask is poor (predicted IoU 0.5): not added, so only the
+  // parts carry the object.
+  const ObjectEvidence e = AttachDetections(
+      masks, detections, {RectMask(w, h, {20, 20, 50, 90}, 0.5f)}, options);
+  ASSERT_EQ(e.masks.size(), 5u);
+  EXPECT_EQ(e.part_of, (std::vector<int>{-1, 0, 0, 0, 0}));
+  LabelMap semantic(w, h);
+  for (int y = 0; y < h; ++y) {
+    for (int x = 0; x < w; ++x) {
+      semantic(x, y) = y < 20                                     ? kWall
+                       : (x >= 30 && x < 36 && y >= 55 && y < 61) ? kCup
+                                                                  : kChair;
+    }
+  }
+  VoteResult vote = Vote(semantic, e.masks, &e.evidence);
+  ASSERT_EQ(vote.mask_labels,
+            (std::vector<uint16_t>{kWall, kChair, kChair, kChair, kCup}));
+  int joined = 0;
+  const std::vector<uint16_t> instance =
+      JoinDetectedParts(detections, e.detection, e.part_of, &vote, &joined);
+  EXPECT_EQ(instance, (std::vector<uint16_t>{1, 2, 2, 2, 5}));
+  EXPECT_EQ(joined, 2);
+  EXPECT_EQ(vote.instance(25, 30), 2);  // back
+  EXPECT_EQ(vote.instance(25, 60), 2);  // seat
+  EXPECT_EQ(vote.instance(25, 80), 2);  // legs
+  EXPECT_EQ(vote.instance(32, 57), 5);  // the cup stays itself
+  EXPECT_EQ(vote.instance(50, 10), 1);  // the wall too
+  // A part that voted another class than the detection's stays apart.
+  VoteResult wall_seat = Vote(semantic, e.masks, &e.evidence);
+  wall_seat.mask_labels[2] = kWall;
+  EXPECT_EQ(JoinDetectedParts(detections, e.detection, e.part_of, &wall_seat,
+                              &joined),
+            (std::vector<uint16_t>{1, 2, 3, 2, 5}));
+  EXPECT_EQ(joined, 1);
+  EXPECT_THROW(
+      JoinDetectedParts(detections, {}, e.part_of, &wall_seat, &joined),
+      InvalidArgument);
 }
 
 TEST(ObjectEvidence, VoteCombinesPixelSharesWithDetections) {

@@ -178,8 +178,12 @@ void WriteSegmentation(const fs::path& out_dir, const SegmentInput& input,
     }
     const int detection =
         m < result.mask_detection.size() ? result.mask_detection[m] : -1;
+    const int part_of =
+        m < result.mask_part_of.size() ? result.mask_part_of[m] : -1;
     masks.push_back(
-        {{"instance", m + 1},
+        {{"instance", m < result.mask_instance.size()
+                          ? result.mask_instance[m]
+                          : static_cast<uint16_t>(m + 1)},
          {"label", id},
          {"class", labels.Contains(id) ? labels.Get(id).name : ""},
          {"area", mask.area},
@@ -193,6 +197,7 @@ void WriteSegmentation(const fs::path& out_dir, const SegmentInput& input,
                             : result.vote.mask_agreement[m]},
          {"point", {mask.point_x, mask.point_y}},
          {"detection", detection},
+         {"part_of", part_of},
          {"detector_evidence", evidence},
          {"stuff_scale", stuff_scale}});
   }
@@ -215,6 +220,7 @@ void WriteSegmentation(const fs::path& out_dir, const SegmentInput& input,
       {"detections_matched", result.detections_matched},
       {"detections_added", result.detections_added},
       {"detection_parts", result.detection_parts},
+      {"parts_joined", result.parts_joined},
       {"seconds",
        {{"semantic", result.semantic_seconds},
         {"detect", result.detect_seconds},
