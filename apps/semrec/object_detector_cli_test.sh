@@ -2,7 +2,8 @@
 # Issue 29: the object detector as a second source of class evidence, with the real models on one
 # 7-Scenes chess frame where the pixel classifier calls most of a chair wall: with the detector
 # (the default) the chair's mask is voted chair although most of its pixels say otherwise; with
-# --object-detector none the detector plays no part. Bad class maps are clear errors.
+# --object-detector none the detector plays no part; the chair's parts become one instance
+# (--object-join-parts). Bad class maps are clear errors.
 set -u
 SEMREC="$1"
 source "$(dirname "${BASH_SOURCE[0]}")/test_lib.sh"
@@ -20,10 +21,21 @@ mkdir -p "$tmp/in" && cp "$frame" "$tmp/in/chess60.jpg"
   fail "segment (detector on by default) failed: $(tail -3 "$tmp/det.log")"
 "$SEMREC" segment "$tmp/in" --object-detector none --out "$tmp/plain" >"$tmp/plain.log" 2>&1 ||
   fail "segment --object-detector none failed: $(tail -3 "$tmp/plain.log")"
+"$SEMREC" segment "$tmp/in" --object-join-parts false --out "$tmp/apart" >"$tmp/apart.log" 2>&1 ||
+  fail "segment --object-join-parts false failed: $(tail -3 "$tmp/apart.log")"
 python3 - "$tmp/det/masks/chess60.json" "$tmp/plain/masks/chess60.json" \
-  "$tmp/det/summary.json" <<'PY' || fail "detector evidence did not act as expected"
+  "$tmp/det/summary.json" "$tmp/apart/masks/chess60.json" <<'PY' || fail "detector evidence did not act as expected"
 import json, sys
-det, plain, summary = (json.load(open(p)) for p in sys.argv[1:])
+det, plain, summary, apart = (json.load(open(p)) for p in sys.argv[1:])
+# The chair's parts (seat, back: cut apart by the mask generator) that voted chair are one
+# instance with the chair's mask; with --object-join-parts false each keeps its own.
+chair = [d for d, x in enumerate(det["detections"]) if x["class"] == "chair"]
+members = [m for m in det["masks"] if m["class"] == "chair"
+           and (m["detection"] in chair or m["part_of"] in chair)]
+assert len(members) >= 2 and len({m["instance"] for m in members}) == 1, members
+assert det["parts_joined"] >= len(members) - 1, det["parts_joined"]
+assert apart["parts_joined"] == 0
+assert all(m["instance"] == i + 1 for i, m in enumerate(apart["masks"]))
 classes = {d["class"] for d in det["detections"]}
 assert {"chair", "table"} <= classes, f"detections: {classes}"
 # A mask matched to the chair detection, voted chair against its pixels' majority.
