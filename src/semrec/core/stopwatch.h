@@ -2,6 +2,7 @@
 #pragma once
 
 #include <chrono>
+#include <ctime>
 
 namespace semrec {
 
@@ -24,6 +25,40 @@ class Stopwatch {
  private:
   std::chrono::steady_clock::time_point last_ =
       std::chrono::steady_clock::now();
+};
+
+/// CPU time the calling thread has used, in seconds (not its waits; not the
+/// time of threads it hands work to, such as ONNX Runtime's pool).
+inline double ThreadCpuSeconds() {
+  timespec t{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+  return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec);
+}
+
+/// CPU time all threads of the process have used, in seconds.
+inline double ProcessCpuSeconds() {
+  timespec t{};
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t);
+  return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec);
+}
+
+/// Wall and calling-thread CPU time of consecutive laps: a stage that
+/// waited (for the cores, for another thread) shows wall > CPU.
+class StageWatch {
+ public:
+  struct Lap {
+    double wall = 0.0, cpu = 0.0;
+  };
+  Lap Next() {
+    const double cpu = ThreadCpuSeconds();
+    const Lap lap{wall_.Lap(), cpu - cpu_};
+    cpu_ = cpu;
+    return lap;
+  }
+
+ private:
+  Stopwatch wall_;
+  double cpu_ = ThreadCpuSeconds();
 };
 
 }  // namespace semrec

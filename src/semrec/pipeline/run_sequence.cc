@@ -124,12 +124,64 @@ size_t PeakRssBytes() {
   return static_cast<size_t>(usage.ru_maxrss) * 1024;  // Linux: kilobytes
 }
 
+// Where the main thread's time went, and what the other threads did: reading
+// runs ahead on a prefetch thread, fusion, volumes, overlays and checkpoints
+// of frame i on an integration thread while frame i + 1 is segmented.
+struct RunTiming {
+  double setup = 0.0, wait_frames = 0.0, prepare = 0.0, wait_integration = 0.0,
+         finish = 0.0;
+  double read_cpu = 0.0;
+  double integrate_wall = 0.0, integrate_cpu = 0.0;
+  double main_cpu_start = ThreadCpuSeconds();
+  double process_cpu_start = ProcessCpuSeconds();
+};
+
+nlohmann::json TimingJson(const RunTiming& t, const StageSeconds& wall,
+                          const StageSeconds& cpu, double run_seconds) {
+  const auto stage = [](double w, double c) {
+    return nlohmann::json{{"wall", w}, {"cpu", c}};
+  };
+  const double accounted =
+      t.setup + t.wait_frames + t.prepare + t.wait_integration + t.finish;
+  return {
+      {"run_wall", run_seconds},
+      {"process_cpu", ProcessCpuSeconds() - t.process_cpu_start},
+      {"main_thread",
+       {{"setup", t.setup},
+        {"waiting_for_frames", t.wait_frames},
+        {"segment_and_track", t.prepare},
+        {"waiting_for_integration", t.wait_integration},
+        {"finish_and_write", t.finish},
+        {"other", run_seconds - accounted},
+        {"cpu", ThreadCpuSeconds() - t.main_cpu_start}}},
+      {"read_thread", stage(wall.read, t.read_cpu)},
+      {"integration_thread", stage(t.integrate_wall, t.integrate_cpu)},
+      {"stages",
+       {{"read", stage(wall.read, t.read_cpu)},
+        {"segment", stage(wall.segment, cpu.segment)},
+        {"track", stage(wall.track, cpu.track)},
+        {"fuse", stage(wall.fuse, cpu.fuse)},
+        {"volumes", stage(wall.volumes, cpu.volumes)},
+        {"overlay", stage(wall.overlay, cpu.overlay)},
+        {"write", stage(wall.write, cpu.write)}}},
+      {"note",
+       "main_thread's parts add up to run_wall. read runs on its own thread "
+       "ahead of the main thread (waiting_for_frames is what it cost); fuse, "
+       "volumes and overlay run on the integration thread while the next "
+       "frame is segmented, so their wall time overlaps segment's "
+       "(waiting_for_integration is what they cost the run). cpu is the "
+       "running thread's CPU time: ONNX Runtime's worker threads are in "
+       "process_cpu only; wall well above cpu means the stage waited for the "
+       "cores."}};
+}
+
 RunResult RunSequence(const io::SequenceReader& reader,
                       const infer::ModelRegistry* registry,
                       const RunOptions& options, const fs::path& out_dir,
                       const ProgressOptions& progress_options) {
   options.Check();
   const Stopwatch run_time;
+  RunTiming timing;
   const bool models =
       options.pipeline.labels == ScenePipelineOptions::Labels::kModels;
   if (!options.resume) RequireEmptyOrOverwrite(out_dir, options.overwrite);
@@ -190,11 +242,12 @@ RunResult RunSequence(const io::SequenceReader& reader,
   struct Loaded {
     PipelineInput input;
     std::exception_ptr error;
-    double seconds = 0.0;
+    double seconds = 0.0, cpu = 0.0;
   };
   const auto load = [&](size_t i) {
     Loaded loaded;
     const Stopwatch read_time;
+    const double read_cpu = ThreadCpuSeconds();
     loaded.input.name =
         reader.index().frames[i].color_path.stem().string() + ".png";
     try {
@@ -207,6 +260,7 @@ RunResult RunSequence(const io::SequenceReader& reader,
       loaded.error = std::current_exception();
     }
     loaded.seconds = read_time.Elapsed();
+    loaded.cpu = ThreadCpuSeconds() - read_cpu;
     return loaded;
   };
   std::future<Loaded> next;
@@ -222,16 +276,21 @@ RunResult RunSequence(const io::SequenceReader& reader,
   std::future<void> integrating;
   bool tick_pending = false;
   const auto wait_integrating = [&] {
+    const Stopwatch wait;
     if (integrating.valid()) integrating.get();
+    timing.wait_integration += wait.Elapsed();
     if (tick_pending) {
       progress.set_detail(StageDetail(pipeline.seconds(), pipeline.frames()));
       progress.Tick();
       tick_pending = false;
     }
   };
+  timing.setup = run_time.Elapsed();
   start_loading(0);
   for (size_t i = 0; i < reader.size(); ++i) {
+    const Stopwatch wait_frame;
     Loaded loaded = next.get();
+    timing.wait_frames += wait_frame.Elapsed();
     start_loading(i + 1);
     PipelineInput& input = loaded.input;
     const bool replay = i < begin;
@@ -246,6 +305,7 @@ RunResult RunSequence(const io::SequenceReader& reader,
       }
     }
     read_seconds += loaded.seconds;
+    timing.read_cpu += loaded.cpu;
     if (loaded.error) {
       wait_integrating();
       try {
@@ -261,7 +321,9 @@ RunResult RunSequence(const io::SequenceReader& reader,
     }
     if (replay && models) input.replay = std::move(saved->outputs);
     std::string name = input.name;
+    const Stopwatch prepare;
     PreparedFrame prepared = pipeline.Prepare(std::move(input));
+    timing.prepare += prepare.Elapsed();
     wait_integrating();
     const auto integrate = [&, i, replay, name = std::move(name),
                             prepared = std::move(prepared)]() mutable {
@@ -288,11 +350,18 @@ RunResult RunSequence(const io::SequenceReader& reader,
     };
     integrating =
         std::async(options.overlap ? std::launch::async : std::launch::deferred,
-                   std::move(integrate));
+                   [&timing, integrate = std::move(integrate)]() mutable {
+                     StageWatch watch;
+                     integrate();
+                     const StageWatch::Lap lap = watch.Next();
+                     timing.integrate_wall += lap.wall;
+                     timing.integrate_cpu += lap.cpu;
+                   });
     tick_pending = true;
   }
   wait_integrating();
   progress.Finish();
+  const Stopwatch finish;
   store.Commit(reader.size());
 
   pipeline.Finish();
@@ -304,6 +373,7 @@ RunResult RunSequence(const io::SequenceReader& reader,
   result.tracks = track_ids.size();
   result.frames = reader.size();
   result.skipped_frames = skipped.size();
+  timing.finish = finish.Elapsed();
   result.seconds = run_time.Elapsed();
 
   // Report.
@@ -336,6 +406,7 @@ RunResult RunSequence(const io::SequenceReader& reader,
         {"volumes", per_frame(s.volumes)},
         {"overlay", per_frame(s.overlay)},
         {"write", per_frame(s.write)}}},
+      {"timing", TimingJson(timing, s, pipeline.cpu_seconds(), result.seconds)},
       {"peak_rss_mb", static_cast<double>(PeakRssBytes()) / (1 << 20)},
       {"objects", result.scene.objects - result.scene.structure},
       {"structure", result.scene.structure},

@@ -153,7 +153,7 @@ SceneFrameStats SceneBuilder::Add(const Frame& frame,
   std::optional<fuse::FrameLabels> cleared;
   if (person_ids != nullptr) cleared = WithoutPeople(*labels, *person_ids);
   const fuse::FrameLabels& static_labels = cleared ? *cleared : *labels;
-  Stopwatch watch;
+  StageWatch watch;
   const auto segments = fuse::ExtractFrameSegments(
       frame, static_labels, classes_, options_.extraction);
   // Voxel evidence: what the frame saw, labelled or not (visibility).
@@ -165,7 +165,9 @@ SceneFrameStats SceneBuilder::Add(const Frame& frame,
   const fuse::FrameFusionStats fused = fusion_.Integrate(
       segments, frame.index, observation ? &*observation : nullptr);
   stats.segments = segments.size();
-  stats.fusion_seconds = watch.Lap();
+  const StageWatch::Lap fusion = watch.Next();
+  stats.fusion_seconds = fusion.wall;
+  stats.fusion_cpu_seconds = fusion.cpu;
   auto pairs = Assignments(segments, fused);
   if (options_.stream_volumes) {
     if (!pairs.empty()) {
@@ -176,7 +178,9 @@ SceneFrameStats SceneBuilder::Add(const Frame& frame,
   } else {
     assignments_.push_back(std::move(pairs));
   }
-  stats.volume_seconds = watch.Lap();
+  const StageWatch::Lap volumes = watch.Next();
+  stats.volume_seconds = volumes.wall;
+  stats.volume_cpu_seconds = volumes.cpu;
   return stats;
 }
 

@@ -63,6 +63,9 @@ struct SceneFrameStats {
   size_t volumes_merged = 0;
   double fusion_seconds = 0.0;
   double volume_seconds = 0.0;
+  /// The same stages' CPU time on the calling thread.
+  double fusion_cpu_seconds = 0.0;
+  double volume_cpu_seconds = 0.0;
 };
 
 /// What Write() wrote.

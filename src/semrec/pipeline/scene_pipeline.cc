@@ -115,7 +115,7 @@ PreparedFrame ScenePipeline::Prepare(PipelineInput input) {
   prepared.position = frames_;
   prepared.replay = input.replay.has_value();
   const Frame& frame = prepared.frame;
-  Stopwatch watch;
+  StageWatch watch;
 
   // One detector pass for people and objects (when they share a detector).
   std::optional<std::vector<track::LabeledDetection>> detections;
@@ -164,7 +164,7 @@ PreparedFrame ScenePipeline::Prepare(PipelineInput input) {
           {static_cast<int>(frame.index) + 1, p.box, false});
     }
   }
-  seconds_.track += watch.Lap();
+  AddLap(watch.Next(), &StageSeconds::track);
 
   // Segmentation: every segment_every-th frame (the first one always).
   std::optional<fuse::FrameLabels>& labels = prepared.labels;
@@ -186,7 +186,7 @@ PreparedFrame ScenePipeline::Prepare(PipelineInput input) {
       labels = std::move(input.labels);
     }
   }
-  seconds_.segment += watch.Lap();
+  AddLap(watch.Next(), &StageSeconds::segment);
   ++frames_;
   return prepared;
 }
@@ -333,14 +333,15 @@ PipelineFrameResult ScenePipeline::Integrate(PreparedFrame prepared) {
   const std::optional<fuse::FrameLabels>& labels = prepared.labels;
   const std::optional<LabelMap>& person_ids = prepared.person_ids;
   PipelineFrameResult result;
-  Stopwatch watch;
+  StageWatch watch;
   const SceneFrameStats stats =
       builder_->Add(prepared.frame, labels ? &*labels : nullptr,
                     person_ids ? &*person_ids : nullptr);
-  seconds_.fuse += stats.fusion_seconds;
-  seconds_.volumes += stats.volume_seconds;
+  AddLap({stats.fusion_seconds, stats.fusion_cpu_seconds}, &StageSeconds::fuse);
+  AddLap({stats.volume_seconds, stats.volume_cpu_seconds},
+         &StageSeconds::volumes);
   if (options_.map_guidance && labels) PublishMap(prepared.position);
-  watch.Lap();
+  watch.Next();
 
   if (options_.overlays && !prepared.replay) {
     const ColorImage base = labels ? segment::RenderLabelOverlay(
@@ -353,7 +354,7 @@ PipelineFrameResult ScenePipeline::Integrate(PreparedFrame prepared) {
           RenderGuidanceOverlay(result.overlay, *prepared.decision);
     }
   }
-  seconds_.overlay += watch.Lap();
+  AddLap(watch.Next(), &StageSeconds::overlay);
 
   if (models) {
     result.outputs.tracker_input = std::move(prepared.tracker_input);
@@ -384,9 +385,9 @@ void ScenePipeline::Finish() {
 
 SceneWriteResult ScenePipeline::Write(const std::filesystem::path& out_dir,
                                       const SceneWriteOptions& write_options) {
-  Stopwatch watch;
+  StageWatch watch;
   SceneWriteResult result = builder_->Write(out_dir, write_options);
-  seconds_.write += watch.Lap();
+  AddLap(watch.Next(), &StageSeconds::write);
   return result;
 }
 

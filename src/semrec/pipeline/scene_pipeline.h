@@ -20,6 +20,7 @@
 
 #include "semrec/core/frame.h"
 #include "semrec/core/label_map.h"
+#include "semrec/core/stopwatch.h"
 #include "semrec/fuse/map_projection.h"
 #include "semrec/fuse/segments.h"
 #include "semrec/infer/model_registry.h"
@@ -199,7 +200,10 @@ class ScenePipeline {
 
   const LabelSet& classes() const { return builder_->classes(); }
   const SceneBuilder& scene() const { return *builder_; }
+  /// Wall time per stage, and the CPU time of the thread that ran it (ONNX
+  /// Runtime's worker threads not included: see the process CPU time).
   const StageSeconds& seconds() const { return seconds_; }
+  const StageSeconds& cpu_seconds() const { return cpu_seconds_; }
   /// Frames prepared, and segmented frames integrated.
   size_t frames() const { return frames_; }
   size_t segmented_frames() const { return segmented_frames_; }
@@ -231,7 +235,13 @@ class ScenePipeline {
   std::vector<track::TrackPoint> track_points_;
   std::vector<track::TrackPoint> finished_tracks_;
   bool finished_ = false;
+  void AddLap(const StageWatch::Lap& lap, double StageSeconds::*stage) {
+    seconds_.*stage += lap.wall;
+    cpu_seconds_.*stage += lap.cpu;
+  }
+
   StageSeconds seconds_;
+  StageSeconds cpu_seconds_;
   size_t frames_ = 0;
   size_t segmented_frames_ = 0;
   // Map guidance: Prepare() side.

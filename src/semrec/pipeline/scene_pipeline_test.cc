@@ -276,6 +276,50 @@ TEST(SceneBuilder, TrackedPeopleStayOutOfTheStaticMap) {
 
 // A corrupt or missing frame is skipped with its file named and counted;
 // --strict stops there instead.
+// report.json's timing: the main thread's parts add up to the run's wall
+// time, no stage's thread CPU exceeds its wall time, and the integration
+// thread's wall time holds fusion, volumes and overlays (which overlap the
+// segmentation of the next frame and so are not part of the run's sum).
+TEST(RunSequence, TimingAccountsForTheRunsWallTime) {
+  testing::TempDir dir;
+  synth::WriteSyntheticSequence(SmallScene("six-objects", 8), dir / "seq",
+                                Quiet());
+  const io::SequenceReader reader = io::SequenceReader::Open(dir / "seq");
+  RunOptions options;
+  options.pipeline.labels = ScenePipelineOptions::Labels::kGiven;
+  options.config_text = "labels: gt\n";
+  const RunResult r =
+      RunSequence(reader, nullptr, options, dir / "out", Quiet());
+  const nlohmann::json& t = r.report.at("timing");
+  const double run = t.at("run_wall").get<double>();
+  EXPECT_NEAR(run, r.seconds, 1e-9);
+  const nlohmann::json& main = t.at("main_thread");
+  double parts = 0.0;
+  for (const char* part :
+       {"setup", "waiting_for_frames", "segment_and_track",
+        "waiting_for_integration", "finish_and_write"}) {
+    const double seconds = main.at(part).get<double>();
+    EXPECT_GE(seconds, 0.0) << part;
+    parts += seconds;
+  }
+  EXPECT_NEAR(main.at("other").get<double>(), run - parts, 1e-9);
+  EXPECT_GE(run - parts, -1e-6) << "parts measured on one thread overlap";
+  EXPECT_LT(run - parts, 0.25 * run) << "the main thread's time is unaccounted";
+  for (const auto& [stage, time] : t.at("stages").items()) {
+    EXPECT_LE(time.at("cpu").get<double>(),
+              time.at("wall").get<double>() * 1.05 + 0.01)
+        << stage;
+  }
+  const nlohmann::json& stages = t.at("stages");
+  EXPECT_GE(t.at("integration_thread").at("wall").get<double>() + 1e-6,
+            stages.at("fuse").at("wall").get<double>() +
+                stages.at("volumes").at("wall").get<double>() +
+                stages.at("overlay").at("wall").get<double>());
+  EXPECT_GT(stages.at("volumes").at("wall").get<double>(), 0.0);
+  EXPECT_GE(t.at("process_cpu").get<double>(),
+            main.at("cpu").get<double>());
+}
+
 TEST(RunSequence, CorruptFramesAreSkippedAndCounted) {
   testing::TempDir dir;
   synth::SynthOptions o = SmallScene("six-objects", 6);
