@@ -35,6 +35,10 @@ members = [m for m in det["masks"] if m["class"] == "chair"
 assert len(members) >= 2 and len({m["instance"] for m in members}) == 1, members
 assert det["parts_joined"] >= len(members) - 1, det["parts_joined"]
 assert apart["parts_joined"] == 0
+# Each final instance's confidence, for `run --labels DIR` to weigh the votes as `run` does.
+conf = det["instance_confidence"]
+assert {str(m["instance"]) for m in det["masks"]} <= set(conf), conf.keys()
+assert all(0 <= v <= 1 for v in conf.values()), conf
 assert all(m["instance"] == i + 1 for i, m in enumerate(apart["masks"]))
 classes = {d["class"] for d in det["detections"]}
 assert {"chair", "table"} <= classes, f"detections: {classes}"

@@ -202,6 +202,45 @@ TEST(Fusion, OptionsAreChecked) {
   EXPECT_THROW(SceneFusion{o}, InvalidArgument);
 }
 
+// `semrec segment` writes each instance's confidence into masks/<stem>.json;
+// `--labels DIR` reads it back, so fusion weighs the votes as `semrec run`
+// with the models does. Folders without it weigh 1; a bad entry names the
+// file.
+TEST(SegmentationSource, LabelFoldersCarryTheSegmentersConfidence) {
+  testing::TempDir dir;
+  synth::WriteSyntheticSequence(testing::SmallScene("six-objects", 2),
+                                dir / "seq", testing::QuietProgress());
+  const io::SequenceReader reader = io::SequenceReader::Open(dir / "seq");
+  const fs::path labels = dir / "labels";
+  for (const char* layer : {"instance", "semantic"}) {
+    fs::create_directories(labels / layer);
+    for (size_t i = 0; i < 2; ++i) {
+      const fs::path name = reader.index().frames[i].depth_path.filename();
+      fs::copy_file(reader.index().frames[i].layers.at(layer),
+                    labels / layer / name);
+    }
+  }
+  fs::copy_file(dir / "seq/gt/classes.json", labels / "classes.json");
+  fs::create_directories(labels / "masks");
+  const std::string stem = reader.index().frames[0].depth_path.stem().string();
+  testing::WriteText(labels / "masks" / (stem + ".json"),
+                     R"({"instance_confidence": {"3": 0.25, "7": 1}})");
+  const auto source = SegmentationSource::Create(labels.string(), reader);
+  const FrameLabels first = source->Get(reader, 0);
+  EXPECT_EQ(first.confidence,
+            (std::map<uint16_t, float>{{3, 0.25f}, {7, 1.0f}}));
+  EXPECT_TRUE(source->Get(reader, 1).confidence.empty());
+  testing::WriteText(labels / "masks" / (stem + ".json"),
+                     R"({"instance_confidence": {"3": 1.5}})");
+  try {
+    source->Get(reader, 0);
+    ADD_FAILURE() << "accepted a confidence of 1.5";
+  } catch (const FormatError& e) {
+    EXPECT_NE(std::string(e.what()).find(stem + ".json"), std::string::npos)
+        << e.what();
+  }
+}
+
 // On a synthetic sequence with ground-truth labels (a hand-held pace: 2 degrees
 // of orbit per frame), every object ends as exactly one segment, no segment
 // mixes objects, and fast and brute force agree on rendered data too.

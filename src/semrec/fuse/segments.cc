@@ -1,11 +1,14 @@
 #include "semrec/fuse/segments.h"
 
+#include <cstdlib>
 #include <map>
 
 #include <fmt/format.h>
+#include <nlohmann/json.hpp>
 
 #include "semrec/core/error.h"
 #include "semrec/io/image_io.h"
+#include "semrec/io/json_file.h"
 #include "semrec/io/label_set_io.h"
 
 namespace fs = std::filesystem;
@@ -55,6 +58,32 @@ class LayerSource : public SegmentationSource {
   LabelSet classes_;
 };
 
+// `semrec segment` writes each instance's confidence (what fusion weighs its
+// votes by) into masks/<stem>.json; label folders without it weigh 1.
+void ReadConfidence(const fs::path& file, FrameLabels* labels) {
+  std::error_code ec;
+  if (!fs::exists(file, ec)) return;
+  const nlohmann::json j = io::ReadJsonFile(file);
+  const auto it = j.find("instance_confidence");
+  if (it == j.end()) return;
+  if (!it->is_object()) {
+    throw FormatError(file, "'instance_confidence' is not an object");
+  }
+  for (const auto& [key, value] : it->items()) {
+    char* end = nullptr;
+    const long id = std::strtol(key.c_str(), &end, 10);
+    if (end == key.c_str() || *end != '\0' || id < 1 || id > 65535 ||
+        !value.is_number() || value.get<double>() < 0.0 ||
+        value.get<double>() > 1.0) {
+      throw FormatError(file, fmt::format("instance_confidence: '{}': {} is "
+                                          "not an instance id with a "
+                                          "confidence in [0, 1]",
+                                          key, value.dump()));
+    }
+    labels->confidence[static_cast<uint16_t>(id)] = value.get<float>();
+  }
+}
+
 class FolderSource : public SegmentationSource {
  public:
   explicit FolderSource(const fs::path& folder) : folder_(folder) {
@@ -71,9 +100,13 @@ class FolderSource : public SegmentationSource {
                                 "--stride N`, fuse with the same --stride",
                                 i, name.string(), folder_.string()));
     }
-    return {ReadChecked(folder_ / "instance" / name, reader.intrinsics()),
-            ReadChecked(folder_ / "semantic" / name, reader.intrinsics()),
-            (folder_ / "instance" / name).string()};
+    FrameLabels labels{
+        ReadChecked(folder_ / "instance" / name, reader.intrinsics()),
+        ReadChecked(folder_ / "semantic" / name, reader.intrinsics()),
+        (folder_ / "instance" / name).string()};
+    ReadConfidence(folder_ / "masks" / (name.stem().string() + ".json"),
+                   &labels);
+    return labels;
   }
   const LabelSet& classes() const override { return classes_; }
 

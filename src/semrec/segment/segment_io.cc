@@ -210,6 +210,14 @@ void WriteSegmentation(const fs::path& out_dir, const SegmentInput& input,
          {"score", d.score},
          {"bbox", {d.box.x0, d.box.y0, d.box.width(), d.box.height()}}});
   }
+  // What `semrec run` would give fusion for each instance (the vote's mass on
+  // the winning class; unmasked pixels: mean softmax): `run --labels` on this
+  // folder reads it back.
+  nlohmann::json instance_confidence = nlohmann::json::object();
+  for (const auto& [id, c] :
+       InstanceConfidence(result.vote, result.semantic_branch.confidence)) {
+    instance_confidence[std::to_string(id)] = c;
+  }
   const nlohmann::json j = {
       {"image", input.image.string()},
       {"width", rgb.width()},
@@ -221,6 +229,7 @@ void WriteSegmentation(const fs::path& out_dir, const SegmentInput& input,
       {"detections_added", result.detections_added},
       {"detection_parts", result.detection_parts},
       {"parts_joined", result.parts_joined},
+      {"instance_confidence", instance_confidence},
       {"seconds",
        {{"semantic", result.semantic_seconds},
         {"detect", result.detect_seconds},
