@@ -115,8 +115,8 @@ void MapResolver::JudgeFragments() {
     seen_[id] = {ratio, max_views};
     if (cells.size() < options_.min_voxels || ratio < options_.min_seen_ratio) {
       fragments.emplace_back(cells.size(), id);
-      spdlog::debug("fragment {}: {} voxels, seen ratio {:.2f}", id,
-                    cells.size(), ratio);
+      spdlog::debug("fragment {} (class {}): {} voxels, seen ratio {:.2f}", id,
+                    owner_class_[id], cells.size(), ratio);
     }
   }
   std::sort(fragments.begin(), fragments.end());
@@ -129,6 +129,7 @@ void MapResolver::JudgeFragments() {
       cells_[i].owner = into;
       if (into == 0) cells_[i].class_id = kNoClass;
     }
+    spdlog::debug("fragment {} {}", id, into ? "folded" : "dropped");
     ++(into ? result_.fragments_folded : result_.fragments_dropped);
   }
 }
