@@ -208,6 +208,15 @@ class SceneFusion {
   /// stay; ResolveId is not changed (volumes keep their fusion ids: see
   /// map_resolution()'s owners). Returns the resolution, also kept.
   const MapResolution& ResolveMap(MapContext context);
+  /// What ResolveMap() would decide from the evidence so far, without
+  /// changing the fusion (snapshots while frames still come: a user watching
+  /// the scene grow sees the objects the end would give, not the wall that
+  /// will give the chair back). Merge::kVoxel only.
+  struct MapPreview {
+    MapResolution resolution;
+    std::vector<SceneSegment> segments;
+  };
+  MapPreview PreviewMap(MapContext context) const;
   /// The last ResolveMap() result, or nullptr.
   const MapResolution* map_resolution() const {
     return resolution_ ? &*resolution_ : nullptr;
@@ -310,6 +319,8 @@ class SceneFusion {
   /// Moves `from`'s points, votes and history into `into` (clouds not rebuilt).
   void Absorb(SceneSegment* into, SceneSegment* from);
   void Rebuild(SceneSegment* s) const;
+  /// ResolveMap's decision; new ids from `next_id` (advanced).
+  MapPreview DecideMap(MapContext context, uint32_t* next_id) const;
   void UpdateClass(SceneSegment* s) const;
 
   FusionOptions options_;

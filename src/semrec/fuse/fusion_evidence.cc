@@ -281,6 +281,19 @@ size_t SceneFusion::Finish() {
 }
 
 const MapResolution& SceneFusion::ResolveMap(MapContext context) {
+  MapPreview decided = DecideMap(std::move(context), &next_id_);
+  resolution_ = std::move(decided.resolution);
+  segments_ = std::move(decided.segments);
+  return *resolution_;
+}
+
+SceneFusion::MapPreview SceneFusion::PreviewMap(MapContext context) const {
+  uint32_t next_id = next_id_;  // ids a snapshot hands out are not kept
+  return DecideMap(std::move(context), &next_id);
+}
+
+SceneFusion::MapPreview SceneFusion::DecideMap(MapContext context,
+                                               uint32_t* next_id) const {
   CheckArgument(voxel_map_.has_value(),
                 "SceneFusion::ResolveMap: only with merge 'voxel'");
   std::map<uint32_t, const SceneSegment*> by_id;
@@ -288,11 +301,11 @@ const MapResolution& SceneFusion::ResolveMap(MapContext context) {
     context.objects[s.id] = {s.class_id, s.kind};
     by_id[s.id] = &s;
   }
-  resolution_ = ResolveMapObjects(
+  MapPreview decided;
+  decided.resolution = ResolveMapObjects(
       *voxel_map_, context, options_.map_objects,
-      [this](uint32_t id) { return ResolveId(id); }, &next_id_);
-  std::vector<SceneSegment> next;
-  for (const MapObject& o : resolution_->objects) {
+      [this](uint32_t id) { return ResolveId(id); }, next_id);
+  for (const MapObject& o : decided.resolution.objects) {
     SceneSegment s;
     s.id = o.id;
     s.class_id = o.class_id;
@@ -312,10 +325,9 @@ const MapResolution& SceneFusion::ResolveMap(MapContext context) {
       s.points.push_back(voxel_map_->voxels().at(key).Centroid());
     }
     Rebuild(&s);
-    next.push_back(std::move(s));
+    decided.segments.push_back(std::move(s));
   }
-  segments_ = std::move(next);
-  return *resolution_;
+  return decided;
 }
 
 }  // namespace semrec::fuse

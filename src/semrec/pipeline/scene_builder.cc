@@ -230,14 +230,25 @@ SceneWriteResult SceneBuilder::Write(const fs::path& out_dir,
   SceneWriteResult result;
   MeshMap meshes = mesher_.UpdateMeshes();
   result.remeshed = mesher_.remeshed_last_update();
-  // Objects decided per voxel: each takes the surface of its own voxels.
-  if (const fuse::MapResolution* r = fusion_.map_resolution()) {
-    meshes = CutMeshesByOwner(meshes, *r, options_.fusion.store_voxel_size_m);
-  }
-
   // Upright: the scene's points and the cameras decide which way is up.
   result.gravity =
       fuse::EstimateSceneGravity(fusion_, classes_, cameras_, options_.gravity);
+  // Objects decided per voxel: each takes the surface of its own voxels.
+  // While frames still come (a snapshot), what the evidence decides so far.
+  std::optional<fuse::SceneFusion::MapPreview> preview;
+  if (!finished_ && fusion_.voxel_evidence() != nullptr &&
+      fusion_.voxel_evidence()->labelled_voxels() > 0) {
+    preview = fusion_.PreviewMap(
+        fuse::MakeMapContext(classes_, result.gravity.up_world));
+  }
+  const fuse::MapResolution* resolution =
+      preview ? &preview->resolution : fusion_.map_resolution();
+  if (resolution != nullptr) {
+    meshes = CutMeshesByOwner(meshes, *resolution,
+                              options_.fusion.store_voxel_size_m);
+  }
+  const std::vector<fuse::SceneSegment>& segments =
+      preview ? preview->segments : fusion_.segments();
   // An upright scene declared Y-up gets its axes turned: (x, y, z) -> (x, z,
   // -y). With gravity "none" the stage only declares the user's own axis.
   if (options_.stage.up_axis == "Y" &&
@@ -253,7 +264,7 @@ SceneWriteResult SceneBuilder::Write(const fs::path& out_dir,
   const Eigen::Vector3f t_up = T_up.translation().cast<float>();
 
   std::vector<usd::MeshPrim> prims;
-  for (const fuse::SceneSegment& s : fusion_.segments()) {
+  for (const fuse::SceneSegment& s : segments) {
     const auto it = meshes.find(s.id);
     const LabelClass& cls = classes_.Get(s.class_id);
     if (it == meshes.end() || it->second->triangles_.empty()) {
