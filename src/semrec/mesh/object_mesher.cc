@@ -9,8 +9,9 @@ namespace semrec::mesh {
 
 void ObjectMeshingOptions::Check() const {
   tsdf.Check();
-  CheckArgument(mask_erosion_px >= 0 && mask_erosion_px <= 20,
-                "object meshing: mask_erosion_px must be in [0, 20]");
+  CheckArgument(mask_erosion_px >= -1 && mask_erosion_px <= 20,
+                "object meshing: mask_erosion_px must be in [0, 20] (or -1: "
+                "auto)");
 }
 
 // Separable: rows, then columns; the offset loops outside so that the inner
@@ -60,7 +61,7 @@ void ObjectMesher::Integrate(
   CheckArgument(labels.SameSize(frame.depth),
                 "ObjectMesher: labels and depth sizes differ");
   const std::vector<uint8_t> interior =
-      InteriorMask(labels, options_.mask_erosion_px);
+      InteriorMask(labels, options_.ErosionPx());
   // Each object's volume sees only the bounding box of its pixels (the
   // principal point shifted accordingly): integration then costs in proportion
   // to the object's image area, not the whole frame per object. Voxels that

@@ -26,8 +26,13 @@ struct ObjectMeshingOptions {
   /// Mask pixels within this many pixels of another label are not integrated:
   /// depth at mask borders often belongs to the neighbour (mixed pixels,
   /// lateral noise, imprecise masks) and would add stray surfaces to the
-  /// object.
-  int mask_erosion_px = 1;
+  /// object. -1 (auto): 1, or 0 where the meshes are cut by the map's voxel
+  /// owners (SceneBuilder with fusion merge "voxel": a border triangle lands
+  /// in the neighbour's voxel and goes to it), since erosion also eats thin
+  /// and far objects (a lamp's pole, a split mask's jittered rim).
+  int mask_erosion_px = -1;
+  /// The erosion used (auto resolved as without the voxel cut).
+  int ErosionPx() const { return mask_erosion_px < 0 ? 1 : mask_erosion_px; }
   void Check() const;
 };
 

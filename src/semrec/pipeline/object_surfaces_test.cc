@@ -154,6 +154,9 @@ size_t WallVerticesInside(const std::filesystem::path& out,
   if (box.isEmpty()) return 0;
   box.min().array() += 0.04f;
   box.max().array() -= 0.04f;
+  // Not the floor contact: the synthetic floor is z = 0, and a mesh that
+  // reaches below it (TSDF) would put the shrunk box's bottom on the floor.
+  box.min().z() = std::max(box.min().z(), 0.04f);
   return static_cast<size_t>(
       std::count_if(wall.points.begin(), wall.points.end(),
                     [&](const Eigen::Vector3f& p) { return box.contains(p); }));

@@ -52,6 +52,16 @@ usd::MeshPrim ToPrim(const open3d::geometry::TriangleMesh& m,
   return prim;
 }
 
+// Mask erosion "auto": none where the meshes are cut by the voxel owners.
+mesh::ObjectMeshingOptions ResolvedMeshing(const SceneBuilderOptions& o) {
+  mesh::ObjectMeshingOptions meshing = o.meshing;
+  if (meshing.mask_erosion_px < 0) {
+    meshing.mask_erosion_px =
+        o.fusion.merge == fuse::FusionOptions::Merge::kVoxel ? 0 : 1;
+  }
+  return meshing;
+}
+
 }  // namespace
 
 SceneWriteOptions SceneWriteOptions::For(const io::SequenceReader& reader,
@@ -133,7 +143,7 @@ SceneBuilder::SceneBuilder(const LabelSet& classes,
     : classes_(classes),
       options_((options.Check(), options)),
       fusion_(options.fusion),
-      mesher_(options.meshing),
+      mesher_(ResolvedMeshing(options)),
       people_(options.people_3d) {}
 
 SceneBuilder::~SceneBuilder() = default;
