@@ -3,19 +3,12 @@
 #include <gtest/gtest.h>
 
 #include "semrec/core/error.h"
+#include "semrec/testing/masks.h"
 
 namespace semrec::segment {
 namespace {
 
-Mask RectMask(int w, int h, Box box, float iou = 0.9f) {
-  Image<uint8_t> img(w, h);
-  for (int y = box.y0; y < box.y1; ++y) {
-    for (int x = box.x0; x < box.x1; ++x) img(x, y) = 1;
-  }
-  Mask m = MaskFromImage(img);
-  m.predicted_iou = iou;
-  return m;
-}
+using testing::RectMask;
 
 TEST(MaskGenerator, StabilityScoreIsTheIouOfTheOffsetThresholds) {
   // Values: 3 above +1, 2 in (-1, 1], 1 below: 3 / 5.

@@ -14,6 +14,7 @@
 #include "semrec/io/label_set_io.h"
 #include "semrec/segment/hybrid_segmenter.h"
 #include "semrec/segment/vote.h"
+#include "semrec/testing/masks.h"
 #include "semrec/testing/test_util.h"
 
 namespace fs = std::filesystem;
@@ -23,15 +24,7 @@ namespace {
 
 using ::testing::HasSubstr;
 
-Mask RectMask(int w, int h, Box box, float predicted_iou = 0.95f) {
-  Image<uint8_t> img(w, h);
-  for (int y = box.y0; y < box.y1; ++y) {
-    for (int x = box.x0; x < box.x1; ++x) img(x, y) = 1;
-  }
-  Mask m = MaskFromImage(img);
-  m.predicted_iou = predicted_iou;
-  return m;
-}
+using testing::RectMask;
 
 ObjectDetection Detected(Box box, uint16_t class_id, float score) {
   ObjectDetection d;

@@ -7,17 +7,12 @@
 
 #include "semrec/core/error.h"
 #include "semrec/core/random.h"
+#include "semrec/testing/masks.h"
 
 namespace semrec::segment {
 namespace {
 
-Mask RectMask(int w, int h, Box box) {
-  Image<uint8_t> img(w, h);
-  for (int y = box.y0; y < box.y1; ++y) {
-    for (int x = box.x0; x < box.x1; ++x) img(x, y) = 1;
-  }
-  return MaskFromImage(img);
-}
+using testing::RectMask;
 
 TEST(Vote, MajorityClassTakesTheWholeMask) {
   // 10 x 4: left 6 columns class 3, right 4 columns class 5. One mask over
