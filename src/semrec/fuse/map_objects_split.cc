@@ -102,8 +102,6 @@ std::vector<std::vector<size_t>> MapResolver::PiecesSeededBy(
     const auto best = std::max_element(count.begin(), count.end());
     if (*best > 0) mask_piece[m] = static_cast<size_t>(best - count.begin());
   }
-  std::unordered_map<size_t, size_t> local;
-  for (size_t k = 0; k < cells.size(); ++k) local[cells[k]] = k;
   std::vector<size_t> unplaced;
   for (size_t k = 0; k < cells.size(); ++k) {
     if (piece_of[k] != kNone) continue;
@@ -122,6 +120,10 @@ std::vector<std::vector<size_t>> MapResolver::PiecesSeededBy(
   }
   // Unplaced cells (no masks of their own that overlap) spread from placed
   // neighbours, a ring per pass.
+  std::unordered_map<size_t, size_t> local;  // cell -> position in `cells`
+  if (!unplaced.empty()) {
+    for (size_t k = 0; k < cells.size(); ++k) local[cells[k]] = k;
+  }
   for (int pass = 0; pass < 8 && !unplaced.empty(); ++pass) {
     std::vector<std::pair<size_t, size_t>> placed;
     std::vector<size_t> left;

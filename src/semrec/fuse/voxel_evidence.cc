@@ -64,9 +64,12 @@ T* FindOrAdd(std::vector<T>* items, Key T::*field, Key value) {
 // is kept per view: where two touching objects' depths mix in a voxel, it
 // stays with the object most of its pixels show, so the two do not look like
 // one mask's.
-uint16_t DominantMask(const std::vector<Vote>& votes, size_t begin,
-                      size_t end) {
-  std::vector<std::pair<uint16_t, uint32_t>> counts;  // few per voxel
+// `counts`: scratch (label, pixels), reused across voxels: this runs for
+// every voxel of every frame.
+uint16_t DominantMask(const std::vector<Vote>& votes, size_t begin, size_t end,
+                      std::vector<std::pair<uint16_t, uint32_t>>* scratch) {
+  std::vector<std::pair<uint16_t, uint32_t>>& counts = *scratch;
+  counts.clear();
   for (size_t k = begin; k < end; ++k) {
     if (votes[k].label == 0) continue;
     auto it = std::find_if(counts.begin(), counts.end(), [&](const auto& c) {
@@ -119,6 +122,7 @@ void VoxelEvidenceMap::AddFrame(const std::vector<FrameSegment>& segments,
   const Eigen::Vector3f eye = observation ? observation->camera_position_world
                                           : Eigen::Vector3f::Zero();
   std::unordered_set<uint64_t> seen_this_frame;
+  std::vector<std::pair<uint16_t, uint32_t>> mask_counts;
   for (size_t i = 0; i < votes.size();) {
     size_t end = i;
     while (end < votes.size() && votes[end].key == votes[i].key) ++end;
@@ -163,7 +167,8 @@ void VoxelEvidenceMap::AddFrame(const std::vector<FrameSegment>& segments,
       }
       k = class_end;
     }
-    if (const uint16_t label = DominantMask(votes, i, end); label != 0) {
+    if (const uint16_t label = DominantMask(votes, i, end, &mask_counts);
+        label != 0) {
       v.masks.push_back(MaskId(frame_index, label));
     }
     ++v.views;
