@@ -1,5 +1,6 @@
 // `semrec run <sequence> --out DIR`: the whole pipeline in one pass.
 #include <cstdio>
+#include <cstdlib>
 #include <fstream>
 #include <sstream>
 
@@ -223,6 +224,25 @@ void RegisterRun(CLI::App& app) {
   cmd->add_option("--points-per-side",
                   args->run.pipeline.segmenter.masks.points_per_side,
                   "Mask generation: point-prompt grid size")
+      ->capture_default_str();
+  cmd->add_option("--dense-stride",
+                  args->run.pipeline.segmenter.masks.dense_stride,
+                  "Mask generation: prompts on every n-th grid row and column "
+                  "are always decoded, finer ones skipped where covered or "
+                  "between rejected ones (a power of 2; 4: ~1.2x faster full "
+                  "frames, a few masks lost; bench/bench_prompts)")
+      ->check([](const std::string& s) {
+        const int v = std::atoi(s.c_str());
+        return v >= 1 && (v & (v - 1)) == 0 ? std::string()
+                                            : "must be a power of 2";
+      })
+      ->capture_default_str();
+  cmd->add_option("--rejected-similarity",
+                  args->run.pipeline.segmenter.masks.rejected_similarity,
+                  "Mask generation: skip a prompt between rejected ones only "
+                  "where the image embedding is this similar to theirs (0 = "
+                  "always)")
+      ->check(CLI::Range(0.0, 1.0))
       ->capture_default_str();
   pipeline::ScenePipelineOptions& pipe = args->run.pipeline;
   AddObjectDetectorArgs(cmd, &pipe.segmenter.objects);

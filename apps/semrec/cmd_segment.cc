@@ -1,6 +1,7 @@
 // `semrec segment <image|folder|sequence> --out DIR`: hybrid semantic
 // segmentation (semantic branch + automatic masks + vote).
 #include <cstdio>
+#include <cstdlib>
 #include <memory>
 
 #include <fmt/format.h>
@@ -108,6 +109,23 @@ void RegisterSegment(CLI::App& app) {
                   "similar (cosine) to there; 0 = skip all such prompts "
                   "(faster, loses nested masks)")
       ->check(CLI::Range(0.0, 1.0))
+      ->capture_default_str();
+  cmd->add_option("--rejected-similarity", args->amg.rejected_similarity,
+                  "Skip a prompt between rejected ones only where the image "
+                  "embedding is this similar to theirs (0 = always: faster, "
+                  "loses masks; bench/bench_prompts)")
+      ->check(CLI::Range(0.0, 1.0))
+      ->capture_default_str();
+  cmd->add_option("--dense-stride", args->amg.dense_stride,
+                  "Prompts on every n-th grid row and column are always "
+                  "decoded, finer ones skipped where covered or between "
+                  "rejected ones (a power of 2; 4 or 8: fewer prompts, a few "
+                  "masks lost; bench/bench_prompts)")
+      ->check([](const std::string& s) {
+        const int v = std::atoi(s.c_str());
+        return v >= 1 && (v & (v - 1)) == 0 ? std::string()
+                                            : "must be a power of 2";
+      })
       ->capture_default_str();
   AddObjectDetectorArgs(cmd, &args->objects);
   args->cmd = cmd;

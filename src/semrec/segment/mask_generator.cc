@@ -30,6 +30,8 @@ void MaskGeneratorOptions::Check() const {
                 "mask generator: dense_stride must be a power of 2");
   CheckArgument(covered_similarity >= 0 && covered_similarity <= 1,
                 "mask generator: covered_similarity must be in [0, 1]");
+  CheckArgument(rejected_similarity >= 0 && rejected_similarity <= 1,
+                "mask generator: rejected_similarity must be in [0, 1]");
   CheckArgument(crop_layers >= 0 && crop_layers <= 4,
                 "mask generator: crop_layers must be in 0..4");
   CheckArgument(crop_overlap_ratio >= 0 && crop_overlap_ratio < 1,
@@ -438,7 +440,9 @@ class AutomaticMaskGenerator : public MaskGenerator {
     // Outcome per grid cell: 0 not decoded, 1 rejected, 2 accepted. A fine
     // point whose surrounding dense points were all rejected lies in a region
     // where SAM finds no good mask; decoding it again rarely helps.
-    const int n = grid_side_, stride = options_.dense_stride;
+    // (A point skipped between rejected ones counts as rejected: with
+    // several skippable levels its finer neighbours are judged by it.)
+    const int n = grid_side_;
     std::vector<uint8_t> outcome(static_cast<size_t>(n) * n, 0);
     std::vector<size_t> point_of_cell(static_cast<size_t>(n) * n, 0);
     for (size_t p = 0; p < cells_.size(); ++p) {
@@ -447,6 +451,8 @@ class AutomaticMaskGenerator : public MaskGenerator {
     const auto between_rejected = [&](size_t p) {
       if (!options_.skip_between_rejected) return false;
       const auto [i, j] = cells_[p];
+      // The surrounding points of the next coarser level.
+      const int stride = 2 << levels[p];
       const auto neighbours = [&](int v) {
         const int lo = v / stride * stride;
         return v % stride == 0 || lo + stride >= n
@@ -459,13 +465,13 @@ class AutomaticMaskGenerator : public MaskGenerator {
           const size_t cell = static_cast<size_t>(v) * n + u;
           if (outcome[cell] != 1) return false;
           // Only where the image looks the same as at the rejected points.
-          if (options_.covered_similarity > 0) {
+          if (options_.rejected_similarity > 0) {
             if (here.empty()) {
               here = model_->EmbeddingAt(points[p][0], points[p][1]);
             }
             const auto& q = points[point_of_cell[cell]];
             if (Cosine(here, model_->EmbeddingAt(q[0], q[1])) <
-                options_.covered_similarity) {
+                options_.rejected_similarity) {
               return false;
             }
           }
@@ -478,9 +484,21 @@ class AutomaticMaskGenerator : public MaskGenerator {
       std::vector<size_t> wave;
       while (next < points.size() &&
              static_cast<int>(wave.size()) < options_.prompts_per_wave) {
-        if (!options_.skip_covered_points || levels[next] >= dense_level ||
-            (!is_covered(points[next]) && !between_rejected(next))) {
+        // A skippable level starts a wave of its own: its points are judged
+        // by the results of the level above.
+        if (!wave.empty() && levels[next] < dense_level &&
+            levels[next] != levels[wave.front()]) {
+          break;
+        }
+        if (!options_.skip_covered_points || levels[next] >= dense_level) {
           wave.push_back(next);
+        } else if (!is_covered(points[next])) {
+          if (between_rejected(next)) {
+            outcome[static_cast<size_t>(cells_[next][1]) * n +
+                    cells_[next][0]] = 1;
+          } else {
+            wave.push_back(next);
+          }
         }
         ++next;
       }

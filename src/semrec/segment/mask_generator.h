@@ -38,9 +38,13 @@ struct MaskGeneratorOptions {
   bool skip_covered_points = true;
   /// Points of the coarser grid with this stride (every dense_stride-th row
   /// and column, decoded first) are never skipped, so masks nested in larger
-  /// ones (a sofa in a room) are still found; only the finer points are
-  /// skipped when covered. 1 = no skipping at all; must be a power of 2.
-  int dense_stride = 2;
+  /// ones (a sofa in a room) are still found; each finer level (stride / 2,
+  /// ..., 1) is skipped where covered or between rejected points of the level
+  /// above. 1 = no skipping at all; must be a power of 2. 4 (was 2): 1.19x
+  /// faster full frames, 99% of stride 2's instances (>= 1000 px) at IoU >=
+  /// 0.8, 99.8% of pixels voted alike, ADE20K mIoU unchanged
+  /// (bench/bench_prompts).
+  int dense_stride = 4;
   /// Also skip a finer point when every dense point around it produced a
   /// rejected mask: SAM's quality varies smoothly, so such a point mostly
   /// yields another rejected mask.
@@ -54,6 +58,9 @@ struct MaskGeneratorOptions {
   /// 23-43% of the straightforward result's masks). 0.8 found 91-100% of them
   /// on 7 test images at 8.4-12.3 s per image (bench/bench_segment).
   float covered_similarity = 0.8f;
+  /// The same test for a point between rejected ones: skipped when its
+  /// embedding is at least this similar to each of theirs.
+  float rejected_similarity = 0.8f;
   /// SAM's crop layers (off by default, as in SAM): layer l adds a 2^l x 2^l
   /// grid of overlapping crops, each encoded and prompted with
   /// points_per_side / crop_points_downscale^l points per side; masks cut by

@@ -224,6 +224,44 @@ TEST(TinyModels, PromptsOnlyWhereTheRegionAllows) {
                InvalidArgument);
 }
 
+// dense_stride sets how many grid points are always decoded (every
+// dense_stride-th row and column); each finer level is skipped where an
+// accepted mask covers it, or between rejected points of the level above
+// (points skipped so count as rejected for the next level).
+TEST(TinyModels, CoarserDenseGridsDecodeFewerPromptsAndFindTheSameRegions) {
+  ASSERT_FALSE(semrec::testing::TinyModelDir().empty());
+  const Scene s = MakeScene();
+  int previous = 16 * 16 + 1;
+  for (int stride : {2, 4, 8}) {
+    MaskGeneratorOptions options = TinySamOptions();
+    options.dense_stride = stride;
+    auto generator = MaskGenerator::Create(TinyRegistry(), options);
+    const std::vector<Mask> masks = generator->Generate(s.rgb);
+    EXPECT_EQ(masks.size(), 5u) << stride;
+    for (const Box& b : s.boxes) {
+      EXPECT_GT(BestIou(BoxMask(320, 240, b), masks), 0.9) << stride;
+    }
+    const int decoded = generator->stats().prompts_decoded;
+    EXPECT_LE(decoded, previous) << stride;
+    EXPECT_GE(decoded, (16 / stride) * (16 / stride)) << stride;
+    previous = decoded;
+
+    // Every mask rejected: only the dense points are decoded when points
+    // between rejected ones are skipped whatever the embedding says; each
+    // level's skipped points stand for rejected ones for the next level.
+    options.pred_iou_threshold = 1.0f;  // above the tiny model's IoUs
+    options.rejected_similarity = 0.0f;
+    auto rejecting = MaskGenerator::Create(TinyRegistry(), options);
+    EXPECT_TRUE(rejecting->Generate(s.rgb).empty());
+    EXPECT_EQ(rejecting->stats().prompts_decoded, (16 / stride) * (16 / stride))
+        << stride;
+    options.skip_between_rejected = false;
+    auto every = MaskGenerator::Create(TinyRegistry(), options);
+    every->Generate(s.rgb);
+    EXPECT_EQ(every->stats().prompts_decoded, 256) << stride;
+  }
+}
+
 TEST(TinyModels, CropLayersStillFindEveryRegionOnce) {
   ASSERT_FALSE(semrec::testing::TinyModelDir().empty());
   MaskGeneratorOptions options = TinySamOptions();

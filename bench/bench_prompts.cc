@@ -1,0 +1,174 @@
+// Full-frame segmentation cost, step by step: the hybrid segmenter as
+// `semrec segment` ran it before issue 32 (dense stride 2, the reference)
+// against the default and variants that decode fewer mask prompts, on the same
+// frames in one process. Per step: time per frame, prompts decoded, and whether
+// the masks hold: the share of the reference's instances (>= 1000 px)
+// recovered at IoU >= 0.8 and the per-pixel agreement of the voted classes
+// with the reference's output.
+//   bench_prompts [image ...]   (default: 7-Scenes chess, Redwood, 3DMatch)
+// Needs the real models (scripts/setup).
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <functional>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "semrec/io/image_io.h"
+#include "semrec/segment/hybrid_segmenter.h"
+
+namespace fs = std::filesystem;
+using namespace semrec;
+using Clock = std::chrono::steady_clock;
+
+namespace {
+
+double Since(Clock::time_point t) {
+  return std::chrono::duration<double>(Clock::now() - t).count();
+}
+
+struct Step {
+  std::string name;
+  std::function<void(segment::HybridSegmenterOptions*)> apply;
+};
+
+struct Outcome {
+  double seconds = 0;
+  int prompts = 0;
+  size_t masks = 0;
+};
+
+// Today's instances of >= min_px pixels and how many a result recovers at
+// IoU >= 0.8 (best-matching instance).
+std::pair<size_t, size_t> Recovered(const LabelMap& reference,
+                                    const LabelMap& now, size_t min_px) {
+  std::map<uint16_t, size_t> area_reference, area_now;
+  std::map<std::pair<uint16_t, uint16_t>, size_t> both;
+  for (size_t i = 0; i < reference.NumPixels(); ++i) {
+    const uint16_t a = reference.values()[i], b = now.values()[i];
+    if (a != 0) ++area_reference[a];
+    if (b != 0) ++area_now[b];
+    if (a != 0 && b != 0) ++both[{a, b}];
+  }
+  std::map<uint16_t, double> best;
+  for (const auto& [pair, n] : both) {
+    const double iou = static_cast<double>(n) /
+                       static_cast<double>(area_reference[pair.first] +
+                                           area_now[pair.second] - n);
+    best[pair.first] = std::max(best[pair.first], iou);
+  }
+  size_t large = 0, found = 0;
+  for (const auto& [id, area] : area_reference) {
+    if (area < min_px) continue;
+    ++large;
+    found += best[id] >= 0.8;
+  }
+  return {large, found};
+}
+
+int Run(int argc, char** argv) {
+  std::vector<fs::path> images;
+  for (int i = 1; i < argc; ++i) {
+    if (std::string(argv[i]) == "--help") {
+      std::printf(
+          "bench_prompts [image ...]\n  Full-frame hybrid segmentation: "
+          "the former defaults vs fewer mask prompts, per step time, prompts, "
+          "masks recovered and class agreement (default images: 7-Scenes "
+          "chess, Redwood, 3DMatch from ../shared/data).\n");
+      return 0;
+    }
+    images.emplace_back(argv[i]);
+  }
+  if (images.empty()) {
+    const fs::path data =
+        fs::path(SEMREC_SOURCE_DIR) / ".." / "shared" / "data";
+    const fs::path chess = data / "7scenes_chess_0_99";
+    images = {chess / "frame-000000.color.jpg",
+              chess / "frame-000050.color.jpg",
+              chess / "frame-000099.color.jpg",
+              data / "redwood_livingroom1_5" / "color" / "00000.jpg",
+              data / "3dmatch_5" / "seq-01" / "frame-000000.color.png"};
+  }
+  const auto registry = infer::ModelRegistry::LoadDefault();
+  segment::HybridSegmenterOptions defaults;
+  defaults.objects.model = "yolox_nano";  // as `semrec segment` runs
+  // The first step is the reference (the former default); the others are
+  // the default and variants of it, each compared with the reference.
+  const std::vector<Step> steps = {
+      {"dense stride 2 (before)", [](auto* o) { o->masks.dense_stride = 2; }},
+      {"dense stride 4 (default)", [](auto*) {}},
+      {"dense stride 8", [](auto* o) { o->masks.dense_stride = 8; }},
+      {"default + rejected sim. 0.6",
+       [](auto* o) { o->masks.rejected_similarity = 0.6f; }},
+      {"default + rejected sim. 0",
+       [](auto* o) { o->masks.rejected_similarity = 0.0f; }},
+      {"default + covered sim. 0.6",
+       [](auto* o) { o->masks.covered_similarity = 0.6f; }},
+  };
+
+  std::vector<segment::HybridSegmenter> segmenters;
+  for (const Step& s : steps) {
+    segment::HybridSegmenterOptions o = defaults;
+    s.apply(&o);
+    segmenters.emplace_back(registry, o);
+  }
+  std::vector<Outcome> total(steps.size());
+  std::vector<size_t> large(steps.size()), found(steps.size());
+  std::vector<double> agree(steps.size());
+  size_t pixels = 0;
+  for (const fs::path& path : images) {
+    const ColorImage rgb = io::ReadColorImage(path);
+    std::printf("%s %dx%d\n", path.filename().string().c_str(), rgb.width(),
+                rgb.height());
+    segment::HybridResult first;
+    for (size_t s = 0; s < steps.size(); ++s) {
+      const auto t = Clock::now();
+      segment::HybridResult r = segmenters[s].Segment(rgb);
+      const double seconds = Since(t);
+      total[s].seconds += seconds;
+      total[s].prompts += r.mask_stats.prompts_decoded;
+      total[s].masks += r.masks.size();
+      if (s == 0) first = r;
+      const auto [l, f] = Recovered(first.vote.instance, r.vote.instance, 1000);
+      size_t same = 0;
+      for (size_t i = 0; i < rgb.NumPixels(); ++i) {
+        same += first.vote.semantic.values()[i] == r.vote.semantic.values()[i];
+      }
+      large[s] += l;
+      found[s] += f;
+      agree[s] += static_cast<double>(same);
+      std::printf(
+          "  %-28s %6.2f s %5d prompts %4zu masks  %zu/%zu recovered "
+          "%.1f%% agree\n",
+          steps[s].name.c_str(), seconds, r.mask_stats.prompts_decoded,
+          r.masks.size(), f, l,
+          100.0 * static_cast<double>(same) / rgb.NumPixels());
+    }
+    pixels += rgb.NumPixels();
+  }
+  std::printf("\n%-28s %10s %8s %8s %10s %9s\n", "step (all images)", "s/frame",
+              "prompts", "speed-up", "recovered", "agree");
+  const double n = static_cast<double>(images.size());
+  for (size_t s = 0; s < steps.size(); ++s) {
+    std::printf("%-28s %10.2f %8.0f %7.2fx %9.1f%% %8.1f%%\n",
+                steps[s].name.c_str(), total[s].seconds / n,
+                total[s].prompts / n, total[0].seconds / total[s].seconds,
+                100.0 * static_cast<double>(found[s]) /
+                    static_cast<double>(std::max<size_t>(1, large[s])),
+                100.0 * agree[s] / static_cast<double>(pixels));
+  }
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  try {
+    return Run(argc, argv);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "bench_prompts: %s\n", e.what());
+    return 1;
+  }
+}
