@@ -9,6 +9,7 @@
 #include "semrec/core/file_util.h"
 #include "semrec/eval/c2c.h"
 #include "semrec/eval/mot.h"
+#include "semrec/eval/scene_result.h"
 #include "semrec/eval/seg_metrics.h"
 #include "semrec/io/image_io.h"
 #include "semrec/io/label_set_io.h"
@@ -71,30 +72,8 @@ struct MotArgs {
 };
 
 void RunMot(const MotArgs& args) {
-  const eval::MotMetrics m =
-      eval::EvaluateMot(io::ReadMotFile(args.gt), io::ReadMotFile(args.result));
-  const nlohmann::json j = {{"frames", m.frames},
-                            {"gt_boxes", m.gt_boxes},
-                            {"gt_ids", m.gt_ids},
-                            {"predicted_boxes", m.predicted_boxes},
-                            {"predicted_ids", m.predicted_ids},
-                            {"mota", m.mota},
-                            {"motp", m.motp},
-                            {"idf1", m.idf1},
-                            {"idp", m.idp},
-                            {"idr", m.idr},
-                            {"precision", m.precision},
-                            {"recall", m.recall},
-                            {"fp", m.false_positives},
-                            {"fn", m.false_negatives},
-                            {"id_switches", m.id_switches},
-                            {"fragmentations", m.fragmentations},
-                            {"mostly_tracked", m.mostly_tracked},
-                            {"partially_tracked", m.partially_tracked},
-                            {"mostly_lost", m.mostly_lost},
-                            {"hota", m.hota},
-                            {"deta", m.deta},
-                            {"assa", m.assa}};
+  const eval::MotMetrics m = eval::EvaluateMotFiles(args.gt, args.result);
+  const nlohmann::json j = eval::MotMetricsJson(m);
   if (args.json) {
     std::printf("%s\n", j.dump(2).c_str());
     return;
@@ -126,45 +105,14 @@ struct SegArgs {
 void RunSeg(const SegArgs& args) {
   CheckUsage(args.options);
   const LabelSet labels = io::LoadLabelSet(args.labels);
-  eval::SegEvaluator evaluator(args.options);
-  for (const auto& [pred_file, gt_file] :
-       eval::MatchSegFiles(args.pred, args.gt)) {
-    const LabelMap pred = io::ReadLabelImage(pred_file);
-    LabelMap gt = io::ReadLabelImage(gt_file);
-    eval::FoldUnnamedIntoCatchAll(labels, &gt);
-    if (!pred.SameSize(gt)) {
-      throw FormatError(
-          pred_file, fmt::format("is {}x{} but the ground truth {} is {}x{}",
-                                 pred.width(), pred.height(), gt_file.string(),
-                                 gt.width(), gt.height()));
-    }
-    evaluator.Add(pred, gt);
-  }
-  const eval::SegMetrics m = evaluator.Result();
+  const eval::SegMetrics m =
+      eval::EvaluateSegFolders(args.pred, args.gt, labels, args.options);
   const auto name = [&](uint16_t id) {
     return labels.Contains(id) ? labels.Get(id).name
                                : "(not in " + labels.name() + ")";
   };
   if (args.json) {
-    nlohmann::json classes = nlohmann::json::array();
-    for (const auto& c : m.classes) {
-      classes.push_back({{"id", c.id},
-                         {"name", name(c.id)},
-                         {"iou", c.iou},
-                         {"accuracy", c.accuracy},
-                         {"gt_pixels", c.gt_pixels},
-                         {"pred_pixels", c.pred_pixels},
-                         {"boundary_iou", c.boundary_iou},
-                         {"boundary_f", c.boundary_f}});
-    }
-    const nlohmann::json j = {{"images", m.images},
-                              {"pixel_accuracy", m.pixel_accuracy},
-                              {"mean_iou", m.mean_iou},
-                              {"mean_accuracy", m.mean_accuracy},
-                              {"mean_boundary_iou", m.mean_boundary_iou},
-                              {"mean_boundary_f", m.mean_boundary_f},
-                              {"classes", classes}};
-    std::printf("%s\n", j.dump(2).c_str());
+    std::printf("%s\n", eval::SegMetricsJson(m, labels).dump(2).c_str());
     return;
   }
   std::string text = fmt::format(

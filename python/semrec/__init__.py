@@ -22,11 +22,12 @@ from ._semrec import (  # noqa: F401
     Pipeline,
     Segmenter,
     Sequence,
+    eval,
     run,
     set_log_level,
 )
 
-__all__ = ["Error", "FormatError", "Frame", "IoError", "Pipeline", "Segmenter", "Sequence", "open_sequence",
+__all__ = ["Error", "FormatError", "Frame", "IoError", "Pipeline", "Segmenter", "Sequence", "eval", "open_sequence",
            "segment",
            "run", "set_log_level"]
 

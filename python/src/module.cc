@@ -18,6 +18,7 @@
 #include "arrays.h"
 #include "semrec/core/error.h"
 #include "semrec/core/logging.h"
+#include "semrec/eval/scene_result.h"
 #include "semrec/infer/model_registry.h"
 #include "semrec/io/label_set_io.h"
 #include "semrec/io/sequence_reader.h"
@@ -541,6 +542,66 @@ NB_MODULE(_semrec, m) {
       .def("__call__", &PySegmenter::Segment, nb::arg("image"),
            "image: H x W x 3 uint8 RGB -> dict(semantic=H x W uint16, "
            "instance=H x W uint16, classes={id: name}, masks=count).");
+
+  nb::module_ ev = m.def_submodule(
+      "eval", "Evaluation against ground truth, as `semrec eval ... --json`.");
+  ev.def(
+      "scene",
+      [](const std::string& result, const std::string& gt,
+         const std::optional<std::string>& gt_classes,
+         const std::optional<std::string>& class_map,
+         const std::optional<std::string>& observed_in, int observed_stride,
+         double radius_m) {
+        eval::SceneResultOptions o;
+        o.result = result;
+        o.gt = gt;
+        if (gt_classes) o.gt_classes = *gt_classes;
+        if (class_map) o.class_map = *class_map;
+        if (observed_in) o.observed_in = *observed_in;
+        o.observed_stride = observed_stride;
+        o.metrics.radius_m = radius_m;
+        nlohmann::json j;
+        {
+          nb::gil_scoped_release release;
+          j = eval::EvaluateSceneResult(o).ToJson();
+        }
+        return FromJson(j);
+      },
+      nb::arg("result"), nb::arg("gt"),
+      nb::arg("gt_classes").none() = nb::none(),
+      nb::arg("class_map").none() = nb::none(),
+      nb::arg("observed_in").none() = nb::none(),
+      nb::arg("observed_stride") = 1, nb::arg("radius_m") = 0.05,
+      "3D semantic and instance quality of a result folder (or scene.usda) "
+      "against a ground-truth PLY: mean_iou, ap25, ap50, per class and per "
+      "ground-truth object.");
+  ev.def(
+      "mot",
+      [](const std::string& gt, const std::string& result) {
+        return FromJson(
+            eval::MotMetricsJson(eval::EvaluateMotFiles(gt, result)));
+      },
+      nb::arg("gt"), nb::arg("result"),
+      "MOTChallenge metrics (MOTA, IDF1, HOTA, ...) of a tracker's output "
+      "file against gt.txt.");
+  ev.def(
+      "seg",
+      [](const std::string& pred, const std::string& gt,
+         const std::string& labels, int boundary_tolerance_px) {
+        eval::SegEvalOptions o;
+        o.boundary_tolerance_px = boundary_tolerance_px;
+        const LabelSet set = io::LoadLabelSet(labels);
+        eval::SegMetrics m;
+        {
+          nb::gil_scoped_release release;
+          m = eval::EvaluateSegFolders(pred, gt, set, o);
+        }
+        return FromJson(eval::SegMetricsJson(m, set));
+      },
+      nb::arg("pred"), nb::arg("gt"), nb::arg("labels") = "ade20k",
+      nb::arg("boundary_tolerance_px") = 2,
+      "Semantic segmentation metrics (pAcc, mIoU, boundary IoU/F) of label "
+      "PNGs (or a `semrec segment` folder) against ground-truth PNGs.");
 
   m.def("set_log_level", &InitLogging, nb::arg("level") = "info",
         "semrec's messages on stderr: trace, debug, info (default), warn, "

@@ -92,6 +92,15 @@ def test_pipeline_gives_the_objects_semrec_run_gives(synthetic, tmp_path):
         assert o["class_votes"] and o["frames_seen"]
     assert pipe.report()["frames"] == 8
 
+    # The Python result scores as the CLI's does (semrec.eval = `semrec eval`).
+    gt = str(synthetic / "gt" / "surface_points.ply")
+    py_scores = semrec.eval.scene(str(tmp_path / "py"), gt, observed_in=str(synthetic))
+    cli_scores = json.loads(subprocess.run(
+        [SEMREC, "eval", "scene", str(cli), gt, "--observed-in", str(synthetic), "--json"],
+        check=True, capture_output=True, text=True).stdout)
+    assert py_scores == cli_scores
+    assert py_scores["ap50"] > 0.5 and py_scores["mean_iou"] > 0.5
+
 
 def test_bad_arrays_are_clear_errors(synthetic):
     seq = semrec.open_sequence(synthetic, labels="gt")
@@ -199,3 +208,21 @@ def test_models_segment_a_real_frame(tmp_path):
     assert names & {"table", "chair"}, names
     with pytest.raises(TypeError, match="image: expected dtype uint8"):
         semrec.segment(f.depth)
+
+
+def test_eval_functions_give_the_clis_numbers():
+    mot = SHARED / "mot15_tud_campus"
+    ade = SHARED / "ade20k_val_3"
+    if not mot.is_dir() or not ade.is_dir():
+        skip_or_fail(f"no sample data at {SHARED}")
+    m = semrec.eval.mot(str(mot / "gt" / "gt.txt"), str(mot / "reference_tracker_output.txt"))
+    # The published values of this tracker output (py-motmetrics, TrackEval).
+    assert m["mota"] == pytest.approx(0.526462, abs=1e-6)
+    assert m["idf1"] == pytest.approx(0.557659, abs=1e-6)
+    assert m["hota"] == pytest.approx(0.3914, abs=1e-4)
+    assert (m["fp"], m["fn"], m["id_switches"]) == (13, 150, 7)
+    # Ground truth against itself: perfect.
+    s = semrec.eval.seg(str(ade / "annotations"), str(ade / "annotations"))
+    assert s["images"] == 3 and s["mean_iou"] == 1.0 and s["pixel_accuracy"] == 1.0
+    with pytest.raises(semrec.IoError):
+        semrec.eval.mot(str(mot / "missing.txt"), str(mot / "gt" / "gt.txt"))
