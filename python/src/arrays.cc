@@ -2,6 +2,8 @@
 
 #include <cstring>
 
+#include <nanobind/stl/string.h>
+
 namespace semrec::python {
 
 void Require(bool ok, bool type_error, const std::string& message) {
@@ -29,6 +31,10 @@ std::string DescribeDtype(const AnyArray& a) {
       break;
   }
   return std::string(kind) + std::to_string(d.bits);
+}
+
+nb::object FromJson(const nlohmann::json& j) {
+  return nb::module_::import_("json").attr("loads")(j.dump());
 }
 
 nb::ndarray<nb::numpy, double> MatrixToArray(const Eigen::MatrixXd& m) {

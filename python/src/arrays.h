@@ -1,6 +1,7 @@
 // numpy <-> semrec images for the Python module: checked conversions in (a
 // clear TypeError / ValueError naming the argument for a wrong dtype, shape or
-// layout) and zero-copy arrays out (the image moves into the array's owner).
+// layout) and zero-copy arrays out (the image moves into the array's owner);
+// JSON out as Python objects.
 #pragma once
 
 #include <cstdint>
@@ -11,6 +12,7 @@
 #include <nanobind/nanobind.h>
 #include <nanobind/ndarray.h>
 #include <Eigen/Core>
+#include <nlohmann/json.hpp>
 
 #include "semrec/core/image.h"
 
@@ -128,6 +130,14 @@ Eigen::Matrix<double, Rows, Cols> ToMatrix(const AnyArray& a,
 
 /// A matrix as a new float64 numpy array.
 nb::ndarray<nb::numpy, double> MatrixToArray(const Eigen::MatrixXd& m);
+
+/// A JSON value as Python objects (through Python's json module: small
+/// documents only).
+nb::object FromJson(const nlohmann::json& j);
+
+/// The module's parts defined in analysis.cc.
+void BindSegmenter(nb::module_& m);
+void BindEval(nb::module_& m);
 
 /// N x 3 float32 points (copied).
 nb::ndarray<nb::numpy, float> PointsToArray(
