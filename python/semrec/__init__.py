@@ -23,11 +23,12 @@ from ._semrec import (  # noqa: F401
     Segmenter,
     Sequence,
     eval,
+    load,
     run,
     set_log_level,
 )
 
-__all__ = ["Error", "FormatError", "Frame", "IoError", "Pipeline", "Segmenter", "Sequence", "eval", "open_sequence",
+__all__ = ["Error", "FormatError", "Frame", "IoError", "Pipeline", "Segmenter", "Sequence", "eval", "load", "open_sequence",
            "segment",
            "run", "set_log_level"]
 

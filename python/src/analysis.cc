@@ -1,5 +1,6 @@
-// The module's single-image segmenter (semrec.Segmenter) and evaluations
-// (semrec.eval): thin wrappers over the library's calls.
+// The module's single-image segmenter (semrec.Segmenter), evaluations
+// (semrec.eval) and written results read back (semrec.load): thin wrappers
+// over the library's calls.
 #include <memory>
 #include <optional>
 #include <string>
@@ -13,6 +14,7 @@
 #include "semrec/infer/model_registry.h"
 #include "semrec/io/label_set_io.h"
 #include "semrec/segment/hybrid_segmenter.h"
+#include "semrec/usd/usda_reader.h"
 
 namespace semrec::python {
 namespace {
@@ -133,6 +135,48 @@ void BindEval(nb::module_& m) {
       nb::arg("boundary_tolerance_px") = 2,
       "Semantic segmentation metrics (pAcc, mIoU, boundary IoU/F) of label "
       "PNGs (or a `semrec segment` folder) against ground-truth PNGs.");
+}
+
+void BindLoad(nb::module_& m) {
+  m.def(
+      "load",
+      [](const std::string& result) {
+        namespace fs = std::filesystem;
+        const fs::path scene = fs::is_directory(result)
+                                   ? fs::path(result) / "scene.usda"
+                                   : fs::path(result);
+        std::vector<usd::MeshPrim> meshes;
+        Transform T_upright_world;
+        {
+          nb::gil_scoped_release release;
+          T_upright_world = eval::ResultUprightTransform(scene);
+          meshes = usd::ReadScene(scene);
+        }
+        nb::list objects;
+        for (const usd::MeshPrim& p : meshes) {
+          nb::dict d;
+          d["id"] = p.instance_id;
+          d["class"] = p.label;
+          d["kind"] = p.structure ? "stuff" : "thing";
+          d["vertices"] = PointsToArray(p.points);
+          d["faces"] = TrianglesToArray(p.triangles);
+          d["fused_points"] = p.point_count;
+          d["confidence"] = p.confidence;
+          d["first_seen_frame"] = p.first_seen_frame;
+          d["last_seen_frame"] = p.last_seen_frame;
+          objects.append(d);
+        }
+        nb::dict out;
+        out["scene"] = scene.string();
+        out["objects"] = objects;
+        out["T_upright_world"] = MatrixToArray(T_upright_world.Matrix());
+        return out;
+      },
+      nb::arg("result"),
+      "Reads a written result (a `semrec run` / `semrec mesh` folder, or its "
+      "scene.usda) back: objects with id, class, kind, vertices (N x 3 "
+      "float32, the scene's upright frame), faces (M x 3 uint32), fused "
+      "points, confidence; and T_upright_world (input world -> scene).");
 }
 
 }  // namespace semrec::python

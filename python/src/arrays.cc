@@ -53,6 +53,18 @@ nb::ndarray<nb::numpy, double> MatrixToArray(const Eigen::MatrixXd& m) {
   return nb::ndarray<nb::numpy, double>(data, 2, shape, owner);
 }
 
+nb::ndarray<nb::numpy, uint32_t> TrianglesToArray(
+    const std::vector<std::array<uint32_t, 3>>& triangles) {
+  auto* data = new uint32_t[triangles.size() * 3 + 1];
+  for (size_t i = 0; i < triangles.size(); ++i) {
+    std::memcpy(data + 3 * i, triangles[i].data(), 3 * sizeof(uint32_t));
+  }
+  nb::capsule owner(
+      data, [](void* p) noexcept { delete[] static_cast<uint32_t*>(p); });
+  const size_t shape[2] = {triangles.size(), 3};
+  return nb::ndarray<nb::numpy, uint32_t>(data, 2, shape, owner);
+}
+
 nb::ndarray<nb::numpy, float> PointsToArray(
     const std::vector<Eigen::Vector3f>& points) {
   auto* data = new float[points.size() * 3 + 1];

@@ -4,6 +4,7 @@
 // JSON out as Python objects.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <string>
 #include <utility>
@@ -138,6 +139,11 @@ nb::object FromJson(const nlohmann::json& j);
 /// The module's parts defined in analysis.cc.
 void BindSegmenter(nb::module_& m);
 void BindEval(nb::module_& m);
+void BindLoad(nb::module_& m);
+
+/// M x 3 uint32 triangle vertex indices (copied).
+nb::ndarray<nb::numpy, uint32_t> TrianglesToArray(
+    const std::vector<std::array<uint32_t, 3>>& triangles);
 
 /// N x 3 float32 points (copied).
 nb::ndarray<nb::numpy, float> PointsToArray(

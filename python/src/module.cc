@@ -9,6 +9,7 @@
 #include <string>
 
 #include <nanobind/nanobind.h>
+#include <nanobind/stl/function.h>
 #include <nanobind/stl/map.h>
 #include <nanobind/stl/optional.h>
 #include <nanobind/stl/string.h>
@@ -334,8 +335,8 @@ class PyPipeline {
 nb::object Run(const std::string& sequence, const std::string& out,
                const std::optional<std::string>& labels,
                const std::optional<std::string>& models, int segment_every,
-               bool map_guidance, bool overwrite, int stride,
-               size_t max_frames) {
+               bool map_guidance, bool overwrite, int stride, size_t max_frames,
+               const std::optional<nb::callable>& on_progress) {
   pipeline::RunOptions o;
   o.pipeline.segment_every = segment_every;
   o.pipeline.map_guidance = map_guidance;
@@ -362,6 +363,14 @@ nb::object Run(const std::string& sequence, const std::string& out,
     const io::SequenceReader reader = io::SequenceReader::Open(sequence, ro);
     ProgressOptions progress;
     progress.mode = ProgressOptions::Mode::kOff;
+    if (on_progress) {
+      // On the run's main thread, which holds no GIL here; an exception the
+      // callback raises stops the run and comes back to the caller.
+      progress.on_tick = [&on_progress](size_t done, size_t total) {
+        nb::gil_scoped_acquire gil;
+        (*on_progress)(done, total);
+      };
+    }
     r = pipeline::RunSequence(reader, registry.get(), o, out, progress);
   }
   return FromJson(r.report);
@@ -484,6 +493,7 @@ NB_MODULE(_semrec, m) {
 
   BindSegmenter(m);
   BindEval(m);
+  BindLoad(m);
 
   m.def("set_log_level", &InitLogging, nb::arg("level") = "info",
         "semrec's messages on stderr: trace, debug, info (default), warn, "
@@ -494,8 +504,11 @@ NB_MODULE(_semrec, m) {
         nb::arg("models").none() = nb::none(), nb::arg("segment_every") = 1,
         nb::arg("map_guidance") = false, nb::arg("overwrite") = false,
         nb::arg("stride") = 1, nb::arg("max_frames") = 0,
+        nb::arg("progress").none() = nb::none(),
         "As `semrec run`: the whole sequence into out/; returns report.json "
-        "as a dict. labels='gt' (or a label folder) skips the models.");
+        "as a dict. labels='gt' (or a label folder) skips the models. "
+        "progress: called with (frames done, frames) after each frame (e.g. "
+        "to update a tqdm bar); an exception it raises stops the run.");
 }
 
 }  // namespace semrec::python

@@ -92,6 +92,19 @@ def test_pipeline_gives_the_objects_semrec_run_gives(synthetic, tmp_path):
         assert o["class_votes"] and o["frames_seen"]
     assert pipe.report()["frames"] == 8
 
+    # Read back: the meshes as arrays, the objects written.
+    loaded = semrec.load(str(tmp_path / "py"))
+    assert sorted(o["id"] for o in loaded["objects"]) == sorted(o["id"] for o in report["scene"])
+    by_id = {o["id"]: o for o in report["scene"]}
+    for o in loaded["objects"]:
+        assert o["class"] == by_id[o["id"]]["class"]
+        assert o["vertices"].shape == (by_id[o["id"]]["vertices"], 3)
+        assert o["faces"].dtype == np.uint32 and o["faces"].shape == (by_id[o["id"]]["triangles"], 3)
+        assert o["faces"].max() < len(o["vertices"])
+    np.testing.assert_allclose(loaded["T_upright_world"], written["T_upright_world"], atol=1e-5)
+    with pytest.raises(semrec.IoError):
+        semrec.load(str(tmp_path / "nothing"))
+
     # The Python result scores as the CLI's does (semrec.eval = `semrec eval`).
     gt = str(synthetic / "gt" / "surface_points.ply")
     py_scores = semrec.eval.scene(str(tmp_path / "py"), gt, observed_in=str(synthetic))
@@ -226,3 +239,23 @@ def test_eval_functions_give_the_clis_numbers():
     assert s["images"] == 3 and s["mean_iou"] == 1.0 and s["pixel_accuracy"] == 1.0
     with pytest.raises(semrec.IoError):
         semrec.eval.mot(str(mot / "missing.txt"), str(mot / "gt" / "gt.txt"))
+
+
+def test_run_reports_progress_and_stops_when_told(synthetic, tmp_path):
+    seen = []
+    report = semrec.run(str(synthetic), str(tmp_path / "a"), labels="gt",
+                        progress=lambda done, total: seen.append((done, total)))
+    assert seen == [(i, 8) for i in range(1, 9)]
+    assert report["frames"] == 8 and report["objects"] >= 5
+
+    class Stop(Exception):
+        pass
+
+    def stop_after_three(done, total):
+        if done == 3:
+            raise Stop()
+
+    with pytest.raises(Stop):
+        semrec.run(str(synthetic), str(tmp_path / "b"), labels="gt", progress=stop_after_three)
+    with pytest.raises(semrec.Error):  # the output folder is not empty
+        semrec.run(str(synthetic), str(tmp_path / "a"), labels="gt")

@@ -106,6 +106,7 @@ void Progress::Tick(size_t n) {
   if (finished_) return;
   done_ += n;
   Emit(false);
+  if (options_.on_tick) options_.on_tick(done_, total_);
 }
 
 void Progress::Finish() {

@@ -5,6 +5,7 @@
 #include <chrono>
 #include <cstddef>
 #include <cstdio>
+#include <functional>
 #include <string>
 #include <utility>
 
@@ -20,6 +21,10 @@ struct ProgressOptions {
   double line_interval_s = 5.0;
   /// Bar width in characters.
   int bar_width = 30;
+  /// Called on every Tick() with (done, total), on the ticking thread, in any
+  /// mode (kOff too): for callers that show progress their own way (the
+  /// Python module). May throw to stop the loop.
+  std::function<void(size_t, size_t)> on_tick;
   void Check() const;
 };
 

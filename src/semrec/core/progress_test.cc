@@ -2,6 +2,8 @@
 
 #include <cstdio>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -88,6 +90,22 @@ TEST(Progress, OffPrintsNothingAndOptionsAreChecked) {
   ProgressOptions bad;
   bad.bar_width = 0;
   EXPECT_THROW(Progress("x", 1, bad, nullptr), InvalidArgument);
+}
+
+TEST(Progress, OnTickSeesEveryTickEvenWhenOff) {
+  ProgressOptions off;
+  off.mode = ProgressOptions::Mode::kOff;
+  std::vector<std::pair<size_t, size_t>> seen;
+  off.on_tick = [&](size_t done, size_t total) {
+    seen.emplace_back(done, total);
+  };
+  Progress progress("quiet", 4, off, nullptr);
+  progress.Tick();
+  progress.Tick(2);
+  progress.Finish();
+  progress.Tick();  // after Finish: ignored
+  const std::vector<std::pair<size_t, size_t>> expected = {{1, 4}, {3, 4}};
+  EXPECT_EQ(seen, expected);
 }
 
 TEST(FormatDuration, Units) {
