@@ -37,24 +37,27 @@ def main():
     pipe.finish()
 
     fig, ax = plt.subplots(figsize=(8, 8))
-    classes = sorted({o["class"] for o in pipe.objects()})
-    cmap = plt.get_cmap("tab20")
-    for o in sorted(pipe.objects(), key=lambda o: o["kind"] != "stuff"):  # structure below
+    objects = pipe.objects()
+    things = sorted({o["class"] for o in objects if o["kind"] != "stuff"})
+    stuff = sorted({o["class"] for o in objects if o["kind"] == "stuff"})
+    # Structure in greys underneath, things in distinct colours on top.
+    colour = {name: plt.get_cmap("tab10")(i % 10) for i, name in enumerate(things)}
+    colour.update({name: str(0.55 + 0.3 * i / max(1, len(stuff))) for i, name in enumerate(stuff)})
+    for o in sorted(objects, key=lambda o: o["kind"] != "stuff"):
         p = o["points"]
         if len(p) == 0:
             continue
-        c = cmap(classes.index(o["class"]) % 20)
-        ax.scatter(p[:, 0], p[:, 1], s=1, color=c, alpha=0.3 if o["kind"] == "stuff" else 0.9)
+        ax.scatter(p[:, 0], p[:, 1], s=2, color=colour[o["class"]], linewidths=0)
         if o["kind"] != "stuff":
             ax.annotate(f"{o['class']} {o['id']}", p.mean(axis=0)[:2], fontsize=7)
-    for name in classes:
-        ax.scatter([], [], color=cmap(classes.index(name) % 20), label=name)
+    handles = [plt.Line2D([], [], marker="o", linestyle="", color=colour[n], label=n)
+               for n in stuff + things]
+    ax.legend(handles=handles, loc="upper right", fontsize=7)
     ax.set_aspect("equal")
     ax.set_xlabel("x (m)")
     ax.set_ylabel("y (m)")
-    ax.legend(loc="upper right", fontsize=7, markerscale=4)
     fig.savefig(args.png, dpi=120)
-    print("wrote", args.png, f"({len(pipe.objects())} objects, classes: {', '.join(classes)})")
+    print("wrote", args.png, f"({len(objects)} objects; classes: {', '.join(stuff + things)})")
 
 
 if __name__ == "__main__":

@@ -259,3 +259,22 @@ def test_run_reports_progress_and_stops_when_told(synthetic, tmp_path):
         semrec.run(str(synthetic), str(tmp_path / "b"), labels="gt", progress=stop_after_three)
     with pytest.raises(semrec.Error):  # the output folder is not empty
         semrec.run(str(synthetic), str(tmp_path / "a"), labels="gt")
+
+
+def test_examples_run(synthetic, tmp_path):
+    env = dict(os.environ)
+    examples = SOURCE / "examples" / "python"
+    live = subprocess.run(["/usr/bin/python3", str(examples / "live_loop.py"), str(synthetic),
+                           "--labels", "gt", "--out", str(tmp_path / "live")],
+                          check=True, capture_output=True, text=True, env=env).stdout
+    assert "new table" in live and "final: " in live
+    assert (tmp_path / "live" / "scene.usda").is_file()
+    try:
+        import matplotlib  # noqa: F401
+    except ImportError:
+        skip_or_fail("matplotlib missing (scripts/setup installs python3-matplotlib)")
+    png = tmp_path / "top.png"
+    out = subprocess.run(["/usr/bin/python3", str(examples / "plot_classes.py"), str(synthetic),
+                          "--labels", "gt", "--png", str(png)],
+                         check=True, capture_output=True, text=True, env=env).stdout
+    assert png.stat().st_size > 10000 and "table" in out
