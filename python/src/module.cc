@@ -140,11 +140,18 @@ class PyPipeline {
  public:
   PyPipeline(const std::optional<std::string>& models,
              const std::optional<std::string>& classes, int segment_every,
-             bool track_people, bool map_guidance) {
+             bool track_people, bool map_guidance, const std::string& merge,
+             double alpha, double tsdf_voxel_m, double tsdf_trunc_m,
+             double max_depth_m) {
     pipeline::ScenePipelineOptions o;
     o.segment_every = segment_every;
     o.track_people = track_people;
     o.map_guidance = map_guidance;
+    o.scene.fusion.merge = fuse::ParseMerge(merge);
+    o.scene.fusion.alpha = alpha;
+    o.scene.meshing.tsdf.voxel_size_m = tsdf_voxel_m;
+    o.scene.meshing.tsdf.sdf_trunc_m = tsdf_trunc_m;
+    o.scene.meshing.tsdf.max_depth_m = max_depth_m;
     o.overlays = false;
     if (models) {
       o.labels = pipeline::ScenePipelineOptions::Labels::kModels;
@@ -464,10 +471,20 @@ NB_MODULE(_semrec, m) {
       "people tracker; models=None takes labels with every frame (classes= "
       "names their label set).")
       .def(nb::init<const std::optional<std::string>&,
-                    const std::optional<std::string>&, int, bool, bool>(),
+                    const std::optional<std::string>&, int, bool, bool,
+                    const std::string&, double, double, double, double>(),
            nb::arg("models").none() = "default",
            nb::arg("classes").none() = nb::none(), nb::arg("segment_every") = 1,
-           nb::arg("track_people") = true, nb::arg("map_guidance") = false)
+           nb::arg("track_people") = true, nb::arg("map_guidance") = false,
+           nb::arg("merge") = "voxel", nb::arg("alpha") = 0.5,
+           nb::arg("tsdf_voxel_m") = 0.02, nb::arg("tsdf_trunc_m") = 0.08,
+           nb::arg("max_depth_m") = 4.0,
+           "models: 'default', a registry YAML, or None (labels come with "
+           "the frames; classes= names their label set). segment_every: "
+           "segment every n-th frame (people every frame). merge: 'voxel' "
+           "(objects decided per map voxel), 'evidence' or 'paper' (the "
+           "overlap rule alone, merge when sigma > alpha). tsdf_*: each "
+           "object's volume. Bad values raise ValueError.")
       .def("add_frame", &PyPipeline::AddFrame, nb::arg("color"),
            nb::arg("depth"), nb::arg("K"), nb::arg("T_world_camera"),
            nb::arg("timestamp").none() = nb::none(),

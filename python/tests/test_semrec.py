@@ -145,6 +145,13 @@ def test_bad_arrays_are_clear_errors(synthetic):
     assert pipe.frames == 1
     with pytest.raises(ValueError, match="classes="):
         semrec.Pipeline(models=None)
+    classes = str(synthetic / "gt" / "classes.json")
+    with pytest.raises(ValueError, match="merge"):
+        semrec.Pipeline(models=None, classes=classes, merge="magic")
+    with pytest.raises(ValueError):
+        semrec.Pipeline(models=None, classes=classes, tsdf_voxel_m=0.1, tsdf_trunc_m=0.05)
+    with pytest.raises(ValueError):
+        semrec.Pipeline(models=None, classes=classes, segment_every=0)
     with pytest.raises(ValueError, match="level"):
         semrec.set_log_level("loud")
     semrec.set_log_level("warn")
