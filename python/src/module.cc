@@ -272,6 +272,30 @@ class PyPipeline {
     return out;
   }
 
+  nb::dict Meshes() {
+    pipeline::SceneWriteResult r;
+    std::vector<usd::MeshPrim> prims;
+    {
+      nb::gil_scoped_release release;
+      prims = pipeline_->Meshes(&r);
+    }
+    nb::list objects;
+    for (const usd::MeshPrim& p : prims) {
+      nb::dict d;
+      d["id"] = p.instance_id;
+      d["class"] = p.label;
+      d["kind"] = p.structure ? "stuff" : "thing";
+      d["vertices"] = PointsToArray(p.points);
+      d["faces"] = TrianglesToArray(p.triangles);
+      d["confidence"] = p.confidence;
+      objects.append(d);
+    }
+    nb::dict out;
+    out["objects"] = objects;
+    out["T_upright_world"] = MatrixToArray(r.gravity.T_upright_world.Matrix());
+    return out;
+  }
+
   nb::list People() const {
     nb::list out;
     for (const io::MotBox& b : pipeline_->Tracks()) {
@@ -500,6 +524,11 @@ NB_MODULE(_semrec, m) {
       .def("objects", &PyPipeline::Objects,
            "The objects (after finish(): the final ones): id, class, kind, "
            "class votes, frames seen, points (N x 3 float32, world frame).")
+      .def("meshes", &PyPipeline::Meshes,
+           "Each object's mesh as write() would write it, without files: "
+           "dict(objects=[id, class, kind, vertices N x 3 float32, faces M x "
+           "3 uint32, confidence], T_upright_world: input world -> the "
+           "meshes' upright frame).")
       .def("people", &PyPipeline::People, "Tracked people boxes per frame.")
       .def("write", &PyPipeline::Write, nb::arg("out_dir"),
            nb::arg("ply") = true, nb::arg("glb") = false,

@@ -92,6 +92,9 @@ def test_pipeline_gives_the_objects_semrec_run_gives(synthetic, tmp_path):
         assert o["class_votes"] and o["frames_seen"]
     assert pipe.report()["frames"] == 8
 
+    # The meshes without files are the ones written.
+    meshes = pipe.meshes()
+    np.testing.assert_allclose(meshes["T_upright_world"], written["T_upright_world"], atol=1e-5)
     # Read back: the meshes as arrays, the objects written.
     loaded = semrec.load(str(tmp_path / "py"))
     assert sorted(o["id"] for o in loaded["objects"]) == sorted(o["id"] for o in report["scene"])
@@ -102,6 +105,13 @@ def test_pipeline_gives_the_objects_semrec_run_gives(synthetic, tmp_path):
         assert o["faces"].dtype == np.uint32 and o["faces"].shape == (by_id[o["id"]]["triangles"], 3)
         assert o["faces"].max() < len(o["vertices"])
     np.testing.assert_allclose(loaded["T_upright_world"], written["T_upright_world"], atol=1e-5)
+    in_memory = {o["id"]: o for o in meshes["objects"]}
+    assert sorted(in_memory) == sorted(o["id"] for o in loaded["objects"])
+    for o in loaded["objects"]:
+        m = in_memory[o["id"]]
+        assert m["class"] == o["class"]
+        np.testing.assert_array_equal(m["faces"], o["faces"])
+        np.testing.assert_allclose(m["vertices"], o["vertices"], atol=1e-4)
     with pytest.raises(semrec.IoError):
         semrec.load(str(tmp_path / "nothing"))
 

@@ -235,9 +235,9 @@ void SceneBuilder::RebuildVolumes(
   assignments_.clear();
 }
 
-SceneWriteResult SceneBuilder::Write(const fs::path& out_dir,
-                                     const SceneWriteOptions& write_options) {
-  SceneWriteResult result;
+std::vector<usd::MeshPrim> SceneBuilder::Meshes(SceneWriteResult* out) {
+  SceneWriteResult local;
+  SceneWriteResult& result = out != nullptr ? *out : local;
   MeshMap meshes = mesher_.UpdateMeshes();
   result.remeshed = mesher_.remeshed_last_update();
   // Upright: the scene's points and the cameras decide which way is up.
@@ -299,15 +299,6 @@ SceneWriteResult SceneBuilder::Write(const fs::path& out_dir,
     prim.confidence = fuse::ClassConfidence(s);
     prim.class_votes = fuse::ClassVotesText(s, classes_);
     result.triangles += prim.triangles.size();
-    const std::string ply =
-        fmt::format("objects/{:04}_{}.ply", s.id, usd::SanitizeName(name));
-    if (write_options.write_ply) {
-      io::PlyData data;
-      data.points = prim.points;
-      data.colors = prim.vertex_colors;
-      data.triangles = prim.triangles;
-      io::WritePly(out_dir / ply, data);
-    }
     result.structure += prim.structure ? 1 : 0;
     result.objects_json.push_back(
         {{"id", s.id},
@@ -321,10 +312,41 @@ SceneWriteResult SceneBuilder::Write(const fs::path& out_dir,
          {"class_votes", fuse::ClassVotesJson(s, classes_)},
          {"first_seen_frame", s.first_seen_frame},
          {"last_seen_frame", s.last_seen_frame},
-         {"ply", write_options.write_ply ? ply : ""}});
+         {"ply", ""}});
     prims.push_back(std::move(prim));
   }
   result.objects = prims.size();
+  const auto& gm = result.gravity.T_upright_world.Matrix();
+  result.upright_matrix.clear();
+  for (int r = 0; r < 4; ++r) {
+    for (int c = 0; c < 4; ++c) {
+      result.upright_matrix +=
+          fmt::format("{}{:.6g}", r + c ? " " : "", gm(r, c));
+    }
+  }
+  return prims;
+}
+
+SceneWriteResult SceneBuilder::Write(const fs::path& out_dir,
+                                     const SceneWriteOptions& write_options) {
+  SceneWriteResult result;
+  const std::vector<usd::MeshPrim> prims = Meshes(&result);
+  for (size_t k = 0; k < prims.size(); ++k) {
+    const usd::MeshPrim& prim = prims[k];
+    if (!write_options.write_ply) continue;
+    const std::string ply =
+        fmt::format("objects/{:04}_{}.ply", prim.instance_id,
+                    usd::SanitizeName(prim.label));
+    io::PlyData data;
+    data.points = prim.points;
+    data.colors = prim.vertex_colors;
+    data.triangles = prim.triangles;
+    io::WritePly(out_dir / ply, data);
+    result.objects_json[k]["ply"] = ply;
+  }
+  const Transform& T_up = result.gravity.T_upright_world;
+  const Eigen::Matrix3f R_up = T_up.rotation().cast<float>();
+  const Eigen::Vector3f t_up = T_up.translation().cast<float>();
 
   usd::StageOptions stage = options_.stage;
   for (const auto& [key, value] : write_options.custom_layer_data) {
@@ -342,13 +364,6 @@ SceneWriteResult SceneBuilder::Write(const fs::path& out_dir,
       t.max_depth_m);
   if (!stage.custom_layer_data.contains("options")) {
     stage.custom_layer_data["options"] = result.options_text;
-  }
-  const auto& gm = T_up.Matrix();
-  for (int r = 0; r < 4; ++r) {
-    for (int c = 0; c < 4; ++c) {
-      result.upright_matrix +=
-          fmt::format("{}{:.6g}", r + c ? " " : "", gm(r, c));
-    }
   }
   stage.custom_layer_data["T_upright_world"] = result.upright_matrix;
   stage.custom_layer_data["gravity"] = result.gravity.method;

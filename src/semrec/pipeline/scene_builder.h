@@ -126,6 +126,12 @@ class SceneBuilder {
   void RebuildVolumes(const std::function<Frame(size_t)>& frame,
                       const std::function<fuse::FrameLabels(size_t)>& labels);
 
+  /// The object and structure meshes Write() writes (upright frame, empty
+  /// ones left out), without writing; `result` (optional) gets the counts,
+  /// gravity, per-object summary (no "ply") and upright matrix. Re-meshes
+  /// the objects that changed, as Write() does.
+  std::vector<usd::MeshPrim> Meshes(SceneWriteResult* result = nullptr);
+
   /// Writes `out_dir`/scene.usda, static.usda, dynamic.usda (people) and
   /// objects/*.ply (each atomically). Callable mid-stream for a snapshot.
   /// Objects of a set's catch-all class ("other", VOC "background") are named

@@ -391,6 +391,10 @@ SceneWriteResult ScenePipeline::Write(const std::filesystem::path& out_dir,
   return result;
 }
 
+std::vector<usd::MeshPrim> ScenePipeline::Meshes(SceneWriteResult* result) {
+  return builder_->Meshes(result);
+}
+
 std::vector<io::MotBox> ScenePipeline::Tracks() const {
   return track::ToMotBoxes(finished_ ? finished_tracks_ : track_points_);
 }

@@ -194,6 +194,9 @@ class ScenePipeline {
   SceneWriteResult Write(const std::filesystem::path& out_dir,
                          const SceneWriteOptions& write_options);
 
+  /// The meshes Write() would write (SceneBuilder::Meshes), without files.
+  std::vector<usd::MeshPrim> Meshes(SceneWriteResult* result = nullptr);
+
   /// People boxes (MOTChallenge; frame = frame index + 1): after Finish() the
   /// offline-smoothed tracks, before it the online ones.
   std::vector<io::MotBox> Tracks() const;
