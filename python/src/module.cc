@@ -12,6 +12,7 @@
 #include <nanobind/stl/function.h>
 #include <nanobind/stl/map.h>
 #include <nanobind/stl/optional.h>
+#include <nanobind/stl/pair.h>
 #include <nanobind/stl/string.h>
 #include <nanobind/stl/vector.h>
 
@@ -173,13 +174,20 @@ class PyPipeline {
         registry_.get(), given_ ? &classes_ : nullptr, o);
   }
 
-  nb::dict AddFrame(const AnyArray& color, const AnyArray& depth,
-                    const AnyArray& K, const AnyArray& T_world_camera,
-                    std::optional<double> timestamp,
-                    const std::optional<AnyArray>& semantic,
-                    const std::optional<AnyArray>& instance,
-                    const std::optional<AnyArray>& person, double depth_scale) {
+  nb::dict AddFrame(
+      const AnyArray& color, const AnyArray& depth, const AnyArray& K,
+      const AnyArray& T_world_camera, std::optional<double> timestamp,
+      std::optional<AnyArray> semantic, std::optional<AnyArray> instance,
+      const std::optional<AnyArray>& person, double depth_scale,
+      const std::optional<std::pair<AnyArray, AnyArray>>& labels) {
     Require(!finished_, false, "Pipeline: add_frame() after finish()");
+    if (labels) {
+      Require(!semantic && !instance, false,
+              "add_frame: give labels=(semantic, instance) or semantic= and "
+              "instance=, not both");
+      semantic = labels->first;
+      instance = labels->second;
+    }
     pipeline::PipelineInput input;
     Frame& f = input.frame;
     f.index = frames_;
@@ -516,7 +524,10 @@ NB_MODULE(_semrec, m) {
            nb::arg("instance").none() = nb::none(),
            nb::arg("person").none() = nb::none(),
            nb::arg("depth_scale") = 1000.0,
-           "Runs every stage on one frame. color: H x W x 3 uint8; depth: H x "
+           nb::arg("labels").none() = nb::none(),
+           "Runs every stage on one frame. labels=(semantic, instance) (or "
+           "semantic=, instance=): uint16 maps, for a Pipeline without models. "
+           "color: H x W x 3 uint8; depth: H x "
            "W float32 metres or uint16 (divided by depth_scale); K 3 x 3; "
            "T_world_camera 4 x 4 (camera to world).")
       .def("finish", &PyPipeline::Finish,

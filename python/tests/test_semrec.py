@@ -153,6 +153,11 @@ def test_bad_arrays_are_clear_errors(synthetic):
     assert pipe.frames == 0
     pipe.add_frame(f.color, (f.depth * 1000).astype(np.uint16), f.K, f.T_world_camera, **args)
     assert pipe.frames == 1
+    pipe.add_frame(f.color, f.depth, f.K, f.T_world_camera, labels=(f.semantic, f.instance))
+    assert pipe.frames == 2
+    with pytest.raises(ValueError, match="not both"):
+        pipe.add_frame(f.color, f.depth, f.K, f.T_world_camera,
+                       labels=(f.semantic, f.instance), semantic=f.semantic)
     with pytest.raises(ValueError, match="classes="):
         semrec.Pipeline(models=None)
     classes = str(synthetic / "gt" / "classes.json")
