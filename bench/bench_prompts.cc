@@ -16,18 +16,16 @@
 #include <string>
 #include <vector>
 
+#include "bench_util.h"
 #include "semrec/io/image_io.h"
 #include "semrec/segment/hybrid_segmenter.h"
 
 namespace fs = std::filesystem;
 using namespace semrec;
-using Clock = std::chrono::steady_clock;
+using bench::Clock;
+using bench::Since;
 
 namespace {
-
-double Since(Clock::time_point t) {
-  return std::chrono::duration<double>(Clock::now() - t).count();
-}
 
 struct Step {
   std::string name;
@@ -82,8 +80,7 @@ int Run(int argc, char** argv) {
     images.emplace_back(argv[i]);
   }
   if (images.empty()) {
-    const fs::path data =
-        fs::path(SEMREC_SOURCE_DIR) / ".." / "shared" / "data";
+    const fs::path data = bench::SampleDataDir();
     const fs::path chess = data / "7scenes_chess_0_99";
     images = {chess / "frame-000000.color.jpg",
               chess / "frame-000050.color.jpg",

@@ -1,6 +1,7 @@
 // Helpers the end-to-end benchmarks share.
 #pragma once
 
+#include <chrono>
 #include <cstdlib>
 #include <filesystem>
 
@@ -8,6 +9,13 @@
 #include "semrec/core/progress.h"
 
 namespace semrec::bench {
+
+using Clock = std::chrono::steady_clock;
+
+/// Seconds since `t`.
+inline double Since(Clock::time_point t) {
+  return std::chrono::duration<double>(Clock::now() - t).count();
+}
 
 /// No progress output (the benchmarks print their own tables).
 inline ProgressOptions Quiet() {

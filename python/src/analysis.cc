@@ -154,17 +154,7 @@ void BindLoad(nb::module_& m) {
         }
         nb::list objects;
         for (const usd::MeshPrim& p : meshes) {
-          nb::dict d;
-          d["id"] = p.instance_id;
-          d["class"] = p.label;
-          d["kind"] = p.structure ? "stuff" : "thing";
-          d["vertices"] = PointsToArray(p.points);
-          d["faces"] = TrianglesToArray(p.triangles);
-          d["fused_points"] = p.point_count;
-          d["confidence"] = p.confidence;
-          d["first_seen_frame"] = p.first_seen_frame;
-          d["last_seen_frame"] = p.last_seen_frame;
-          objects.append(d);
+          objects.append(MeshPrimDict(p));
         }
         nb::dict out;
         out["scene"] = scene.string();

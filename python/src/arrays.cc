@@ -65,6 +65,20 @@ nb::ndarray<nb::numpy, uint32_t> TrianglesToArray(
   return nb::ndarray<nb::numpy, uint32_t>(data, 2, shape, owner);
 }
 
+nb::dict MeshPrimDict(const usd::MeshPrim& p) {
+  nb::dict d;
+  d["id"] = p.instance_id;
+  d["class"] = p.label;
+  d["kind"] = p.structure ? "stuff" : "thing";
+  d["vertices"] = PointsToArray(p.points);
+  d["faces"] = TrianglesToArray(p.triangles);
+  d["fused_points"] = p.point_count;
+  d["confidence"] = p.confidence;
+  d["first_seen_frame"] = p.first_seen_frame;
+  d["last_seen_frame"] = p.last_seen_frame;
+  return d;
+}
+
 nb::ndarray<nb::numpy, float> PointsToArray(
     const std::vector<Eigen::Vector3f>& points) {
   auto* data = new float[points.size() * 3 + 1];

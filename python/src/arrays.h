@@ -16,6 +16,7 @@
 #include <nlohmann/json.hpp>
 
 #include "semrec/core/image.h"
+#include "semrec/usd/usda_writer.h"
 
 namespace semrec::python {
 
@@ -144,6 +145,10 @@ void BindLoad(nb::module_& m);
 /// M x 3 uint32 triangle vertex indices (copied).
 nb::ndarray<nb::numpy, uint32_t> TrianglesToArray(
     const std::vector<std::array<uint32_t, 3>>& triangles);
+
+/// A mesh prim as a dict: id, class, kind ("stuff"/"thing"), vertices,
+/// faces, fused_points, confidence, first/last seen frame.
+nb::dict MeshPrimDict(const usd::MeshPrim& p);
 
 /// N x 3 float32 points (copied).
 nb::ndarray<nb::numpy, float> PointsToArray(

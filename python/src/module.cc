@@ -288,16 +288,7 @@ class PyPipeline {
       prims = pipeline_->Meshes(&r);
     }
     nb::list objects;
-    for (const usd::MeshPrim& p : prims) {
-      nb::dict d;
-      d["id"] = p.instance_id;
-      d["class"] = p.label;
-      d["kind"] = p.structure ? "stuff" : "thing";
-      d["vertices"] = PointsToArray(p.points);
-      d["faces"] = TrianglesToArray(p.triangles);
-      d["confidence"] = p.confidence;
-      objects.append(d);
-    }
+    for (const usd::MeshPrim& p : prims) objects.append(MeshPrimDict(p));
     nb::dict out;
     out["objects"] = objects;
     out["T_upright_world"] = MatrixToArray(r.gravity.T_upright_world.Matrix());
