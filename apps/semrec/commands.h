@@ -4,6 +4,7 @@
 // command line (exit 2).
 #pragma once
 
+#include <cstdlib>
 #include <string>
 
 #include <CLI/CLI.hpp>
@@ -27,6 +28,12 @@ class UsageError : public Error {
 /// Throws UsageError(message) unless `ok`.
 inline void CheckUsage(bool ok, const std::string& message) {
   if (!ok) throw UsageError(message);
+}
+
+/// CLI11 check: a positive power of 2 (e.g. --dense-stride).
+inline std::string PowerOfTwo(const std::string& text) {
+  const int v = std::atoi(text.c_str());
+  return v >= 1 && (v & (v - 1)) == 0 ? std::string() : "must be a power of 2";
 }
 
 /// Checks options filled from the command line before any work: an invalid
