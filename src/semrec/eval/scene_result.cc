@@ -255,21 +255,20 @@ nlohmann::json SceneResultEvaluation::ToJson() const {
   for (const auto& [object, n] : m.pieces_per_gt_object) {
     pieces[std::to_string(object)] = n;
   }
-  const nlohmann::json j = {{"gt_points", m.gt_points},
-                            {"covered_points", m.covered_points},
-                            {"mean_iou", m.mean_iou},
-                            {"ap25", m.ap25},
-                            {"ap50", m.ap50},
-                            {"recall50", m.recall50},
-                            {"precision50", m.precision50},
-                            {"gt_objects", m.gt_objects},
-                            {"predicted_objects", m.predicted_objects},
-                            {"objects_per_gt_object", m.objects_per_gt_object},
-                            {"pieces_per_gt_object", pieces},
-                            {"unmapped_predicted_classes", unmapped},
-                            {"classes", classes},
-                            {"objects", objects}};
-  return j;
+  return {{"gt_points", m.gt_points},
+          {"covered_points", m.covered_points},
+          {"mean_iou", m.mean_iou},
+          {"ap25", m.ap25},
+          {"ap50", m.ap50},
+          {"recall50", m.recall50},
+          {"precision50", m.precision50},
+          {"gt_objects", m.gt_objects},
+          {"predicted_objects", m.predicted_objects},
+          {"objects_per_gt_object", m.objects_per_gt_object},
+          {"pieces_per_gt_object", pieces},
+          {"unmapped_predicted_classes", unmapped},
+          {"classes", classes},
+          {"objects", objects}};
 }
 
 nlohmann::json MotMetricsJson(const MotMetrics& m) {
