@@ -105,8 +105,6 @@ Agreement Compare(const fs::path& full_dir, const fs::path& guided_dir,
     const fuse::FrameLabels& lf = *f.outputs->labels;
     const fuse::FrameLabels& lg = *g.outputs->labels;
     const Frame frame = reader.Read(i);
-    std::map<uint16_t, size_t> area_f, area_g;
-    std::map<std::pair<uint16_t, uint16_t>, size_t> overlap;
     for (size_t p = 0; p < lf.semantic.NumPixels(); ++p) {
       if (!(frame.depth.data()[p] > 0)) continue;
       const uint16_t cf = lf.semantic.data()[p];
@@ -119,22 +117,14 @@ Agreement Compare(const fs::path& full_dir, const fs::path& guided_dir,
           consecutive_same += previous->data()[p] == cf ? 1 : 0;
         }
       }
-      const uint16_t mf = lf.instance.data()[p], mg = lg.instance.data()[p];
-      ++area_f[mf];
-      ++area_g[mg];
-      if (mf != 0 && mg != 0) ++overlap[{mf, mg}];
     }
-    std::map<uint16_t, double> best;
-    for (const auto& [pair, n] : overlap) {
-      const double iou =
-          static_cast<double>(n) /
-          static_cast<double>(area_f[pair.first] + area_g[pair.second] - n);
-      best[pair.first] = std::max(best[pair.first], iou);
-    }
-    for (const auto& [id, area] : area_f) {
-      if (id == 0 || area < 1000) continue;
+    const auto matches = bench::MatchInstances(
+        lf.instance, lg.instance,
+        [&](size_t p) { return frame.depth.data()[p] > 0; });
+    for (const auto& [id, m] : matches) {
+      if (m.area < 1000) continue;
       ++a.masks;
-      a.recovered += best[id] >= 0.5 ? 1 : 0;
+      a.recovered += m.best_iou >= 0.5 ? 1 : 0;
     }
     previous = lf.semantic;
   }

@@ -38,30 +38,16 @@ struct Outcome {
   size_t masks = 0;
 };
 
-// Today's instances of >= min_px pixels and how many a result recovers at
-// IoU >= 0.8 (best-matching instance).
+// The reference's instances of >= min_px pixels and how many a result
+// recovers at IoU >= 0.8 (best-matching instance).
 std::pair<size_t, size_t> Recovered(const LabelMap& reference,
                                     const LabelMap& now, size_t min_px) {
-  std::map<uint16_t, size_t> area_reference, area_now;
-  std::map<std::pair<uint16_t, uint16_t>, size_t> both;
-  for (size_t i = 0; i < reference.NumPixels(); ++i) {
-    const uint16_t a = reference.values()[i], b = now.values()[i];
-    if (a != 0) ++area_reference[a];
-    if (b != 0) ++area_now[b];
-    if (a != 0 && b != 0) ++both[{a, b}];
-  }
-  std::map<uint16_t, double> best;
-  for (const auto& [pair, n] : both) {
-    const double iou = static_cast<double>(n) /
-                       static_cast<double>(area_reference[pair.first] +
-                                           area_now[pair.second] - n);
-    best[pair.first] = std::max(best[pair.first], iou);
-  }
   size_t large = 0, found = 0;
-  for (const auto& [id, area] : area_reference) {
-    if (area < min_px) continue;
+  for (const auto& [id, m] :
+       bench::MatchInstances(reference, now, [](size_t) { return true; })) {
+    if (m.area < min_px) continue;
     ++large;
-    found += best[id] >= 0.8;
+    found += m.best_iou >= 0.8;
   }
   return {large, found};
 }

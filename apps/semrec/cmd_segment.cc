@@ -103,10 +103,10 @@ void RegisterSegment(CLI::App& app) {
   cmd->add_flag("--no-skip-covered", args->no_skip_covered,
                 "Decode every grid prompt (slower; see bench/)");
   cmd->add_option("--covered-similarity", args->amg.covered_similarity,
-                  "Skip a prompt covered by an accepted mask (or between "
-                  "rejected ones) only where the image embedding is this "
-                  "similar (cosine) to there; 0 = skip all such prompts "
-                  "(faster, loses nested masks)")
+                  "Skip a prompt covered by an accepted mask only where the "
+                  "image embedding is this similar (cosine) to the mask's; 0 "
+                  "= skip all such prompts (faster, loses nested masks; "
+                  "prompts between rejected ones: --rejected-similarity)")
       ->check(CLI::Range(0.0, 1.0))
       ->capture_default_str();
   cmd->add_option("--rejected-similarity", args->amg.rejected_similarity,

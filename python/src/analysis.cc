@@ -24,9 +24,7 @@ class PySegmenter {
  public:
   PySegmenter(const std::string& models, bool use_masks,
               const std::optional<std::string>& object_detector) {
-    registry_ = std::make_unique<infer::ModelRegistry>(
-        models == "default" ? infer::ModelRegistry::LoadDefault()
-                            : infer::ModelRegistry::Load(models));
+    registry_ = LoadRegistry(models);
     segment::HybridSegmenterOptions o;
     o.use_masks = use_masks;
     if (use_masks && object_detector) o.objects.model = *object_detector;
@@ -69,7 +67,7 @@ void BindSegmenter(nb::module_& m) {
       .def(nb::init<const std::string&, bool,
                     const std::optional<std::string>&>(),
            nb::arg("models") = "default", nb::arg("masks") = true,
-           nb::arg("object_detector").none() = "yolox_nano")
+           nb::arg("object_detector").none() = DefaultDetector())
       .def("__call__", &PySegmenter::Segment, nb::arg("image"),
            "image: H x W x 3 uint8 RGB -> dict(semantic=H x W uint16, "
            "instance=H x W uint16, classes={id: name}, masks=count).");

@@ -4,6 +4,8 @@
 
 #include <nanobind/stl/string.h>
 
+#include "semrec/track/yolox_detector.h"
+
 namespace semrec::python {
 
 void Require(bool ok, bool type_error, const std::string& message) {
@@ -32,6 +34,14 @@ std::string DescribeDtype(const AnyArray& a) {
   }
   return std::string(kind) + std::to_string(d.bits);
 }
+
+std::unique_ptr<infer::ModelRegistry> LoadRegistry(const std::string& name) {
+  return std::make_unique<infer::ModelRegistry>(
+      name == "default" ? infer::ModelRegistry::LoadDefault()
+                        : infer::ModelRegistry::Load(name));
+}
+
+std::string DefaultDetector() { return track::YoloxOptions().model; }
 
 nb::object FromJson(const nlohmann::json& j) {
   return nb::module_::import_("json").attr("loads")(j.dump());

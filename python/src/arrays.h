@@ -1,11 +1,12 @@
 // numpy <-> semrec images for the Python module: checked conversions in (a
 // clear TypeError / ValueError naming the argument for a wrong dtype, shape or
 // layout) and zero-copy arrays out (the image moves into the array's owner);
-// JSON out as Python objects.
+// JSON out as Python objects; the helpers the module's parts share.
 #pragma once
 
 #include <array>
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <utility>
 #include <vector>
@@ -16,6 +17,7 @@
 #include <nlohmann/json.hpp>
 
 #include "semrec/core/image.h"
+#include "semrec/infer/model_registry.h"
 #include "semrec/usd/usda_writer.h"
 
 namespace semrec::python {
@@ -136,6 +138,13 @@ nb::ndarray<nb::numpy, double> MatrixToArray(const Eigen::MatrixXd& m);
 /// A JSON value as Python objects (through Python's json module: small
 /// documents only).
 nb::object FromJson(const nlohmann::json& j);
+
+/// The models of a registry: "default" (data/models.yaml) or a registry
+/// file.
+std::unique_ptr<infer::ModelRegistry> LoadRegistry(const std::string& name);
+
+/// The object detector `semrec run` and `semrec segment` use by default.
+std::string DefaultDetector();
 
 /// The module's parts defined in analysis.cc.
 void BindSegmenter(nb::module_& m);

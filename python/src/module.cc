@@ -5,7 +5,6 @@
 // TypeError for arrays of the wrong dtype.
 #include <memory>
 #include <optional>
-#include <sstream>
 #include <string>
 
 #include <nanobind/nanobind.h>
@@ -156,10 +155,8 @@ class PyPipeline {
     o.overlays = false;
     if (models) {
       o.labels = pipeline::ScenePipelineOptions::Labels::kModels;
-      o.segmenter.objects.model = "yolox_nano";  // as `semrec run`
-      registry_ = std::make_unique<infer::ModelRegistry>(
-          *models == "default" ? infer::ModelRegistry::LoadDefault()
-                               : infer::ModelRegistry::Load(*models));
+      o.segmenter.objects.model = DefaultDetector();  // as `semrec run`
+      registry_ = LoadRegistry(*models);
     } else {
       Require(classes.has_value(), false,
               "Pipeline: without models every frame brings its labels; say "
@@ -195,11 +192,8 @@ class PyPipeline {
     f.color = ToImage<uint8_t>(color, "color", 3);
     if (depth.dtype() == nb::dtype<uint16_t>()) {
       Require(depth_scale > 0.0, false, "depth_scale must be > 0");
-      const Image<uint16_t> raw = ToImage<uint16_t>(depth, "depth", 1);
-      f.depth = DepthImage(raw.width(), raw.height());
-      for (size_t i = 0; i < raw.values().size(); ++i) {
-        f.depth.values()[i] = static_cast<float>(raw.values()[i] / depth_scale);
-      }
+      f.depth =
+          DepthToMeters(ToImage<uint16_t>(depth, "depth", 1), depth_scale);
     } else {
       Require(depth.dtype() == nb::dtype<float>(), true,
               "depth: expected float32 (metres) or uint16 (raw, divided by "
@@ -328,10 +322,7 @@ class PyPipeline {
     d["summary"] = FromJson(r.objects_json);
     // The scene is written upright (z up, floor at 0); objects() are in the
     // input's world frame: this maps one into the other.
-    Eigen::Matrix4d upright = Eigen::Matrix4d::Identity();
-    std::istringstream in(r.upright_matrix);
-    for (int i = 0; i < 16 && in; ++i) in >> upright(i / 4, i % 4);
-    d["T_upright_world"] = MatrixToArray(upright);
+    d["T_upright_world"] = MatrixToArray(r.gravity.T_upright_world.Matrix());
     return d;
   }
 
@@ -376,10 +367,8 @@ nb::object Run(const std::string& sequence, const std::string& out,
     o.pipeline.labels = pipeline::ScenePipelineOptions::Labels::kGiven;
     o.given_labels = *labels;
   } else {
-    o.pipeline.segmenter.objects.model = "yolox_nano";
-    registry = std::make_unique<infer::ModelRegistry>(
-        !models || *models == "default" ? infer::ModelRegistry::LoadDefault()
-                                        : infer::ModelRegistry::Load(*models));
+    o.pipeline.segmenter.objects.model = DefaultDetector();
+    registry = LoadRegistry(models.value_or("default"));
   }
   o.config_text = "python: semrec.run(" + sequence + ")";
   o.Check();

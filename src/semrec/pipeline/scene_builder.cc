@@ -331,9 +331,8 @@ SceneWriteResult SceneBuilder::Write(const fs::path& out_dir,
                                      const SceneWriteOptions& write_options) {
   SceneWriteResult result;
   const std::vector<usd::MeshPrim> prims = Meshes(&result);
-  for (size_t k = 0; k < prims.size(); ++k) {
+  for (size_t k = 0; write_options.write_ply && k < prims.size(); ++k) {
     const usd::MeshPrim& prim = prims[k];
-    if (!write_options.write_ply) continue;
     const std::string ply =
         fmt::format("objects/{:04}_{}.ply", prim.instance_id,
                     usd::SanitizeName(prim.label));

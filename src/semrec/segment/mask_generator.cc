@@ -445,9 +445,10 @@ class AutomaticMaskGenerator : public MaskGenerator {
     const int n = grid_side_;
     std::vector<uint8_t> outcome(static_cast<size_t>(n) * n, 0);
     std::vector<size_t> point_of_cell(static_cast<size_t>(n) * n, 0);
-    for (size_t p = 0; p < cells_.size(); ++p) {
-      point_of_cell[static_cast<size_t>(cells_[p][1]) * n + cells_[p][0]] = p;
-    }
+    const auto cell_of = [&](size_t p) {
+      return static_cast<size_t>(cells_[p][1]) * n + cells_[p][0];
+    };
+    for (size_t p = 0; p < cells_.size(); ++p) point_of_cell[cell_of(p)] = p;
     const auto between_rejected = [&](size_t p) {
       if (!options_.skip_between_rejected) return false;
       const auto [i, j] = cells_[p];
@@ -494,8 +495,7 @@ class AutomaticMaskGenerator : public MaskGenerator {
           wave.push_back(next);
         } else if (!is_covered(points[next])) {
           if (between_rejected(next)) {
-            outcome[static_cast<size_t>(cells_[next][1]) * n +
-                    cells_[next][0]] = 1;
+            outcome[cell_of(next)] = 1;
           } else {
             wave.push_back(next);
           }
@@ -527,9 +527,8 @@ class AutomaticMaskGenerator : public MaskGenerator {
       for (size_t k = 0; k < wave.size(); ++k) {
         const LowResMask& m = decoded[k];
         stats_.prompts_rejected_early += m.rejected_early;
-        const auto [gi, gj] = cells_[wave[k]];
         const bool passes = Passes(m, stability[k]);
-        outcome[static_cast<size_t>(gj) * n + gi] = passes ? 2 : 1;
+        outcome[cell_of(wave[k])] = passes ? 2 : 1;
         if (!passes) continue;
         if (covered.empty()) {
           cw = m.width;

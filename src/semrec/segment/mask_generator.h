@@ -52,11 +52,11 @@ struct MaskGeneratorOptions {
   /// Skip only where the image looks alike: a covered finer point is decoded
   /// anyway when the image embedding there has cosine similarity below this
   /// to the covering mask's mean embedding (a mask nested in an accepted one,
-  /// a cushion on a sofa, starts where the embedding changes), and a point
-  /// between rejected ones when it is below this to any of their embeddings.
-  /// 0 = skip regardless (the former default: ~2x faster, but it missed
-  /// 23-43% of the straightforward result's masks). 0.8 found 91-100% of them
-  /// on 7 test images at 8.4-12.3 s per image (bench/bench_segment).
+  /// a cushion on a sofa, starts where the embedding changes); for points
+  /// between rejected ones see rejected_similarity. 0 = skip regardless (the
+  /// former default: ~2x faster, but it missed 23-43% of the straightforward
+  /// result's masks). 0.8 found 91-100% of them on 7 test images at 8.4-12.3 s
+  /// per image (bench/bench_segment).
   float covered_similarity = 0.8f;
   /// The same test for a point between rejected ones: skipped when its
   /// embedding is at least this similar to each of theirs.
