@@ -89,6 +89,11 @@ int Run(int argc, char** argv) {
        [](auto* o) { o->masks.rejected_similarity = 0.0f; }},
       {"default + covered sim. 0.6",
        [](auto* o) { o->masks.covered_similarity = 0.6f; }},
+      {"default + covered/rejected 0.6",
+       [](auto* o) {
+         o->masks.covered_similarity = 0.6f;
+         o->masks.rejected_similarity = 0.6f;
+       }},
   };
 
   std::vector<segment::HybridSegmenter> segmenters;

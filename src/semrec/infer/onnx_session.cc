@@ -85,6 +85,10 @@ OnnxSession::OnnxSession(const std::filesystem::path& model_path,
   session_options.SetGraphOptimizationLevel(
       options.optimize ? GraphOptimizationLevel::ORT_ENABLE_ALL
                        : GraphOptimizationLevel::ORT_DISABLE_ALL);
+  if (const char* prefix = std::getenv("SEMREC_ORT_PROFILE")) {
+    const std::string p = std::string(prefix) + model_path.stem().string();
+    session_options.EnableProfiling(p.c_str());
+  }
   if (!options.disabled_optimizers.empty()) {
     session_options.AddConfigEntry(
         kOrtSessionOptionsDisableSpecifiedOptimizers,
