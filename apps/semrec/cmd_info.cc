@@ -62,6 +62,7 @@ void RunInfo(const InfoArgs& args) {
          {{"fx", k.fx}, {"fy", k.fy}, {"cx", k.cx}, {"cy", k.cy}}},
         {"intrinsics_source", reader.index().intrinsics_source},
         {"depth_scale", reader.index().depth_scale},
+        {"details", reader.index().details},
         {"pose_source", reader.index().pose_source},
         {"depth_min_m", min_depth},
         {"depth_max_m", max_depth},
@@ -91,6 +92,9 @@ void RunInfo(const InfoArgs& args) {
           max_depth, scan > 0 ? 100.0 * valid_sum / scan : 0.0, scan,
           reader.TrajectoryLengthM(), duration)
           .c_str());
+  for (const std::string& line : reader.index().details) {
+    std::printf("%s\n", line.c_str());
+  }
 }
 
 }  // namespace

@@ -56,6 +56,7 @@ struct SequenceArgs {
   size_t max_frames = 0;
   std::string intrinsics;
   std::string pose_correction;
+  io::BagOptions bag;
   io::SequenceReaderOptions ReaderOptions() const;
 };
 void AddSequenceArgs(CLI::App* cmd, SequenceArgs* args);

@@ -8,11 +8,14 @@ io::SequenceReaderOptions SequenceArgs::ReaderOptions() const {
   options.max_frames = max_frames;
   options.intrinsics_path = intrinsics;
   options.pose_correction_path = pose_correction;
+  options.bag = bag;
   return options;
 }
 
 void AddSequenceArgs(CLI::App* cmd, SequenceArgs* args) {
-  cmd->add_option("sequence", args->path, "Sequence folder (or sequence.yaml)")
+  cmd->add_option("sequence", args->path,
+                  "Sequence folder, sequence.yaml, or a ROS 2 bag (*.mcap, "
+                  "*.db3, or a folder with metadata.yaml)")
       ->required();
   cmd->add_option("--stride", args->stride, "Use every n-th frame")
       ->capture_default_str();
@@ -25,6 +28,38 @@ void AddSequenceArgs(CLI::App* cmd, SequenceArgs* args) {
                   "YAML with pre/post 4x4 matrices: T_world_camera = pre * "
                   "pose * post (e.g. data/poses/bonn_rgbd_dynamic.yaml for "
                   "the Bonn RGB-D Dynamic dataset's mocap poses)");
+  const char* bags = "ROS 2 bags";
+  cmd->add_option("--color-topic", args->bag.color_topic,
+                  "Colour images (Image or CompressedImage; default: the "
+                  "image topic named color/rgb, raw before compressed)")
+      ->group(bags);
+  cmd->add_option("--depth-topic", args->bag.depth_topic,
+                  "Depth images (16UC1 mm, 32FC1 m, or compressedDepth; "
+                  "default: the image topic named depth, aligned/registered "
+                  "first)")
+      ->group(bags);
+  cmd->add_option("--camera-info-topic", args->bag.camera_info_topic,
+                  "CameraInfo of the colour camera (default: the one beside "
+                  "the colour topic)")
+      ->group(bags);
+  cmd->add_option("--pose-source", args->bag.pose_source,
+                  "tf, or an Odometry / PoseStamped topic")
+      ->capture_default_str()
+      ->group(bags);
+  cmd->add_option("--world-frame", args->bag.world_frame,
+                  "TF frame the poses are in (default: map, then odom, then "
+                  "the TF root above the camera)")
+      ->group(bags);
+  cmd->add_option("--camera-frame", args->bag.camera_frame,
+                  "TF frame of the colour camera (default: the colour "
+                  "images' header.frame_id)")
+      ->group(bags);
+  cmd->add_option("--sync-tol-ms", args->bag.sync_tol_ms,
+                  "Colour and depth pair up when their stamps differ by at "
+                  "most this")
+      ->capture_default_str()
+      ->check(CLI::NonNegativeNumber)
+      ->group(bags);
 }
 
 infer::ModelRegistry ModelArgs::LoadRegistry() const {

@@ -16,6 +16,9 @@ inline constexpr const char* kNoPoses =
     "(pose estimation is out of scope): run a SLAM or odometry tool first and "
     "store its trajectory in the layout's pose file";
 
+/// ROS 2 bags: a *.mcap file, or a folder with metadata.yaml or *.mcap.
+std::optional<SequenceIndex> IndexBag(const std::filesystem::path& path,
+                                      const SequenceReaderOptions& options);
 std::optional<SequenceIndex> IndexManifest(
     const std::filesystem::path& path, const SequenceReaderOptions& options);
 std::optional<SequenceIndex> IndexTum(const std::filesystem::path& folder,

@@ -26,6 +26,8 @@ void SequenceReaderOptions::Check() const {
                 "sequence reader: max_depth_m must be >= 0 (0 = no limit)");
   CheckArgument(max_time_diff_s > 0.0,
                 "sequence reader: max_time_diff_s must be > 0");
+  CheckArgument(std::isfinite(bag.sync_tol_ms) && bag.sync_tol_ms >= 0.0,
+                "sequence reader: the bag sync tolerance must be >= 0 ms");
 }
 
 namespace internal {
@@ -66,7 +68,8 @@ std::optional<SequenceReader> SequenceReader::TryOpen(
   options.Check();
   std::error_code ec;
   if (!fs::exists(path, ec)) return std::nullopt;
-  std::optional<SequenceIndex> index = internal::IndexManifest(path, options);
+  std::optional<SequenceIndex> index = internal::IndexBag(path, options);
+  if (!index) index = internal::IndexManifest(path, options);
   if (!index && fs::is_directory(path, ec)) {
     for (auto detect : {internal::IndexTum, internal::IndexRedwood,
                         internal::IndexSevenScenes}) {
@@ -93,7 +96,8 @@ SequenceReader SequenceReader::Open(const fs::path& path,
         "(sequence.yaml/.json), TUM (rgb.txt + depth.txt + groundtruth.txt), "
         "Redwood "
         "(color/ + depth/ + *.log), 7-Scenes/3DMatch (frame-XXXXXX.depth.png + "
-        ".pose.txt). See README.md, 'Sequence layouts'.");
+        ".pose.txt), a ROS 2 bag (*.mcap, or a folder with metadata.yaml). "
+        "See README.md, 'Sequence layouts'.");
   }
   return std::move(*reader);
 }
@@ -144,6 +148,26 @@ Frame SequenceReader::Read(size_t i) const {
   frame.intrinsics = index_.intrinsics;
   frame.color_path = record.color_path;
   frame.depth_path = record.depth_path;
+  if (index_.source) {
+    index_.source->Read(record.source_index, &frame.color, &frame.depth);
+    if (options_.max_depth_m > 0.0) {
+      for (float& d : frame.depth.values()) {
+        if (d >= options_.max_depth_m) d = 0.0f;
+      }
+    }
+    const CameraIntrinsics& k = index_.intrinsics;
+    if (!frame.depth.SameSize(k.width, k.height) ||
+        !frame.color.SameSize(frame.depth)) {
+      throw FormatError(
+          record.color_path,
+          fmt::format("colour {}x{} and depth {}x{} do not match the camera "
+                      "({}: {}x{})",
+                      frame.color.width(), frame.color.height(),
+                      frame.depth.width(), frame.depth.height(),
+                      index_.intrinsics_source, k.width, k.height));
+    }
+    return frame;
+  }
   const DepthImage16 raw = ReadDepthImage(record.depth_path);
   const CameraIntrinsics& k = index_.intrinsics;
   if (!raw.SameSize(k.width, k.height)) {

@@ -15,9 +15,27 @@
 
 #include "semrec/core/camera.h"
 #include "semrec/core/frame.h"
+#include "semrec/core/image.h"
 #include "semrec/core/transform.h"
 
 namespace semrec::io {
+
+/// ROS 2 bags (MCAP or SQLite rosbag2): which topics and frames make the
+/// RGB-D frames. Empty = chosen from the bag (see README.md, "ROS 2 bags").
+struct BagOptions {
+  std::string color_topic;
+  std::string depth_topic;
+  std::string camera_info_topic;
+  /// "tf" (the camera frame in the TF tree) or a topic of
+  /// nav_msgs/msg/Odometry or geometry_msgs/msg/PoseStamped.
+  std::string pose_source = "tf";
+  /// Empty: "map", then "odom", then the root of the camera's TF tree.
+  std::string world_frame;
+  /// Empty: the colour image's header.frame_id.
+  std::string camera_frame;
+  /// Colour and depth pair up when their stamps differ by at most this.
+  double sync_tol_ms = 20.0;
+};
 
 struct SequenceReaderOptions {
   /// Use every `stride`-th frame of the dataset.
@@ -38,6 +56,7 @@ struct SequenceReaderOptions {
   /// pose: T_world_camera = pre * T_file * post. For datasets whose poses
   /// are not the camera's (e.g. data/poses/bonn_rgbd_dynamic.yaml).
   std::filesystem::path pose_correction_path;
+  BagOptions bag;
 
   /// Throws InvalidArgument for out-of-range values.
   void Check() const;
@@ -52,6 +71,19 @@ struct FrameRecord {
   /// Extra per-frame images by name (e.g. "semantic", "instance", "person"),
   /// generic layout only.
   std::map<std::string, std::filesystem::path> layers;
+  /// The frame's number in the index's FrameSource (bags: the paths above
+  /// are names only, under the bag's path).
+  size_t source_index = 0;
+};
+
+/// Frames that are not image files (messages in a bag): the layout decodes
+/// them. Safe to call from several threads.
+class FrameSource {
+ public:
+  virtual ~FrameSource() = default;
+  /// Colour (RGB8) and depth in metres (0 = none) of frame `i`. Throws
+  /// FormatError naming the file and message.
+  virtual void Read(size_t i, ColorImage* color, DepthImage* depth) const = 0;
 };
 
 /// What a layout detector found: everything needed to read frames.
@@ -70,6 +102,11 @@ struct SequenceIndex {
   /// Where the intrinsics came from (file name or "default ..."), for reports.
   std::string intrinsics_source;
   std::vector<FrameRecord> frames;
+  /// Set when frames are decoded by the layout rather than read from files.
+  std::shared_ptr<const FrameSource> source;
+  /// What the layout chose and found, for `semrec info` (bags: topics,
+  /// TF chain, pairing).
+  std::vector<std::string> details;
 };
 
 class SequenceReader {

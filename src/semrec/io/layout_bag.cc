@@ -1,0 +1,489 @@
+// ROS 2 bags as a sequence layout: colour and depth images paired by header
+// stamp, intrinsics from CameraInfo, the camera's pose from the TF tree (or a
+// pose topic) interpolated at the colour stamp. Depth in its own optical
+// frame is registered into the colour camera. One scan indexes the bag;
+// frames are decoded on demand (BagFrames).
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <map>
+#include <mutex>
+
+#include <fmt/format.h>
+#include <fmt/ranges.h>
+#include <spdlog/spdlog.h>
+
+#include "semrec/core/error.h"
+#include "semrec/io/bag_storage.h"
+#include "semrec/io/layouts.h"
+#include "semrec/io/ros_messages.h"
+#include "semrec/io/tf_tree.h"
+
+namespace fs = std::filesystem;
+
+namespace semrec::io::internal {
+namespace {
+
+constexpr const char* kImage = "sensor_msgs/msg/Image";
+constexpr const char* kCompressed = "sensor_msgs/msg/CompressedImage";
+constexpr const char* kCameraInfo = "sensor_msgs/msg/CameraInfo";
+constexpr const char* kTf = "tf2_msgs/msg/TFMessage";
+constexpr const char* kOdometry = "nav_msgs/msg/Odometry";
+constexpr const char* kPoseStamped = "geometry_msgs/msg/PoseStamped";
+
+struct Stamped {
+  int64_t stamp_ns = 0;
+  BagMessageRef ref;
+};
+
+struct TopicData {
+  std::string type;
+  size_t count = 0;
+  int64_t first_ns = 0, last_ns = 0;
+  std::string frame_id;             // of the first message with a header
+  std::vector<Stamped> messages;    // images
+  std::vector<RosCameraInfo> info;  // the first CameraInfo
+  std::vector<RosPose> poses;       // Odometry / PoseStamped
+};
+
+bool IsImage(const TopicData& t) {
+  return t.type == kImage || t.type == kCompressed;
+}
+
+std::string Lower(std::string s) {
+  std::transform(s.begin(), s.end(), s.begin(),
+                 [](unsigned char c) { return std::tolower(c); });
+  return s;
+}
+
+bool Contains(const std::string& s, const char* part) {
+  return Lower(s).find(part) != std::string::npos;
+}
+
+// Everything one scan of the bag collects.
+struct BagScan {
+  std::map<std::string, TopicData> topics;
+  TfTree tf;
+  size_t undecodable = 0;
+};
+
+BagScan ScanBag(BagStorage* bag) {
+  BagScan scan;
+  bag->Scan([&](const BagMessage& m) {
+    TopicData& t = scan.topics[*m.topic];
+    if (t.count == 0) {
+      t.type = *m.type;
+      t.first_ns = m.log_time_ns;
+    }
+    ++t.count;
+    t.last_ns = m.log_time_ns;
+    try {
+      if (t.type == kTf) {
+        const bool is_static = *m.topic == "/tf_static";
+        for (const RosTransform& x : DecodeRosTfMessage(m.data, m.size)) {
+          scan.tf.Add(x, is_static);
+        }
+      } else if (IsImage(t)) {
+        const RosHeader h = DecodeRosHeader(m.data, m.size);
+        if (t.frame_id.empty()) t.frame_id = h.frame_id;
+        t.messages.push_back({h.StampNs(), m.ref});
+      } else if (t.type == kCameraInfo && t.info.empty()) {
+        t.info.push_back(DecodeRosCameraInfo(m.data, m.size));
+        t.frame_id = t.info[0].header.frame_id;
+      } else if (t.type == kOdometry || t.type == kPoseStamped) {
+        t.poses.push_back(t.type == kOdometry
+                              ? DecodeRosOdometry(m.data, m.size)
+                              : DecodeRosPoseStamped(m.data, m.size));
+      }
+    } catch (const CdrError& e) {
+      if (scan.undecodable++ == 0) {
+        spdlog::warn("{}: a {} message on {} cannot be decoded ({}); such "
+                     "messages are skipped",
+                     bag->File(m.ref).string(), t.type, *m.topic, e.what());
+      }
+    }
+  });
+  return scan;
+}
+
+// The topic given, or the best-scoring candidate (ties: more messages).
+std::string PickTopic(const BagScan& scan, const std::string& given,
+                      const std::function<int(const std::string&,
+                                              const TopicData&)>& score,
+                      const fs::path& path, const std::string& what) {
+  if (!given.empty()) {
+    if (!scan.topics.count(given)) {
+      throw FormatError(path, fmt::format("no topic '{}' in the bag (for {})",
+                                          given, what));
+    }
+    if (score(given, scan.topics.at(given)) < 0) {
+      throw FormatError(path, fmt::format("topic '{}' ({}) cannot be the {}",
+                                          given, scan.topics.at(given).type,
+                                          what));
+    }
+    return given;
+  }
+  std::string best;
+  int best_score = -1;
+  size_t best_count = 0;
+  for (const auto& [name, t] : scan.topics) {
+    const int s = score(name, t);
+    if (s > best_score || (s == best_score && s >= 0 && t.count > best_count)) {
+      best = name;
+      best_score = s;
+      best_count = t.count;
+    }
+  }
+  return best_score >= 0 ? best : std::string();
+}
+
+int ColorScore(const std::string& name, const TopicData& t) {
+  if (!IsImage(t) || Contains(name, "depth")) return -1;
+  if (t.type == kCompressed && Contains(name, "compresseddepth")) return -1;
+  return 4 * (Contains(name, "color") || Contains(name, "rgb")) +
+         2 * (t.type == kImage);
+}
+
+int DepthScore(const std::string& name, const TopicData& t) {
+  if (!IsImage(t) || !Contains(name, "depth")) return -1;
+  return 4 * (Contains(name, "aligned") || Contains(name, "registered")) +
+         2 * (t.type == kImage);
+}
+
+size_t CommonPrefix(const std::string& a, const std::string& b) {
+  size_t n = 0;
+  while (n < a.size() && n < b.size() && a[n] == b[n]) ++n;
+  return n;
+}
+
+// The CameraInfo topic beside `image_topic` (the longest shared prefix).
+std::string InfoTopicFor(const BagScan& scan, const std::string& image_topic) {
+  std::string best;
+  size_t best_n = 0;
+  for (const auto& [name, t] : scan.topics) {
+    if (t.type != kCameraInfo || t.info.empty()) continue;
+    const size_t n = CommonPrefix(name, image_topic);
+    if (best.empty() || n > best_n) {
+      best = name;
+      best_n = n;
+    }
+  }
+  return best;
+}
+
+CameraIntrinsics FromInfo(const RosCameraInfo& info) {
+  CameraIntrinsics k;
+  k.width = static_cast<int>(info.width);
+  k.height = static_cast<int>(info.height);
+  k.fx = info.k[0];
+  k.fy = info.k[4];
+  k.cx = info.k[2];
+  k.cy = info.k[5];
+  return k;
+}
+
+// Depth pixels moved into the colour camera (z-buffered; holes stay 0).
+struct Registration {
+  CameraIntrinsics depth, color;
+  Transform T_color_depth;
+};
+
+DepthImage Register(const DepthImage& d, const Registration& r) {
+  DepthImage out(r.color.width, r.color.height);
+  for (int v = 0; v < d.height(); ++v) {
+    for (int u = 0; u < d.width(); ++u) {
+      const float z = d(u, v);
+      if (z <= 0.0f) continue;
+      const Eigen::Vector3d p_depth((u - r.depth.cx) / r.depth.fx * z,
+                                    (v - r.depth.cy) / r.depth.fy * z, z);
+      const Eigen::Vector3d p = r.T_color_depth * p_depth;
+      if (p.z() <= 0.0) continue;
+      const long x = std::lround(r.color.fx * p.x() / p.z() + r.color.cx);
+      const long y = std::lround(r.color.fy * p.y() / p.z() + r.color.cy);
+      if (x < 0 || y < 0 || x >= r.color.width || y >= r.color.height) {
+        continue;
+      }
+      float& dst = out(static_cast<int>(x), static_cast<int>(y));
+      const auto zc = static_cast<float>(p.z());
+      if (dst == 0.0f || zc < dst) dst = zc;
+    }
+  }
+  return out;
+}
+
+class BagFrames : public FrameSource {
+ public:
+  struct Pair {
+    BagMessageRef color, depth;
+  };
+  BagFrames(std::unique_ptr<BagStorage> bag, std::string color_type,
+            std::string depth_type, std::optional<Registration> registration)
+      : bag_(std::move(bag)),
+        color_compressed_(color_type == kCompressed),
+        depth_compressed_(depth_type == kCompressed),
+        registration_(std::move(registration)) {}
+
+  std::vector<Pair> pairs;
+
+  void Read(size_t i, ColorImage* color, DepthImage* depth) const override {
+    std::lock_guard<std::mutex> lock(mutex_);
+    const Pair& p = pairs.at(i);
+    try {
+      const std::vector<uint8_t> c = bag_->Read(p.color);
+      *color = color_compressed_
+                   ? RosColor(DecodeRosCompressedImage(c.data(), c.size()))
+                   : RosColor(DecodeRosImage(c.data(), c.size()));
+    } catch (const CdrError& e) {
+      throw FormatError(bag_->File(p.color),
+                        fmt::format("frame {} colour: {}", i, e.what()));
+    }
+    try {
+      const std::vector<uint8_t> d = bag_->Read(p.depth);
+      *depth = depth_compressed_
+                   ? RosDepth(DecodeRosCompressedImage(d.data(), d.size()))
+                   : RosDepth(DecodeRosImage(d.data(), d.size()));
+    } catch (const CdrError& e) {
+      throw FormatError(bag_->File(p.depth),
+                        fmt::format("frame {} depth: {}", i, e.what()));
+    }
+    if (registration_) *depth = Register(*depth, *registration_);
+  }
+
+ private:
+  mutable std::mutex mutex_;
+  std::unique_ptr<BagStorage> bag_;
+  bool color_compressed_, depth_compressed_;
+  std::optional<Registration> registration_;
+};
+
+std::string WorldFrame(const TfTree& tf, const std::string& given,
+                       const std::string& camera) {
+  if (!given.empty()) return given;
+  for (const char* f : {"map", "odom"}) {
+    if (!tf.Chain(f, camera).empty()) return f;
+  }
+  // The root above the camera ("map" when there is none: the lookups then
+  // say what is missing).
+  std::string root = "map";
+  for (const std::string& r : tf.Roots()) {
+    if (!tf.Chain(r, camera).empty()) root = r;
+  }
+  return root;
+}
+
+std::vector<std::string> TopicTable(const BagScan& scan) {
+  std::vector<std::string> lines = {
+      fmt::format("{:<44} {:<34} {:>7} {:>8}", "topic", "type", "count",
+                  "rate Hz")};
+  for (const auto& [name, t] : scan.topics) {
+    const double span_s = 1e-9 * static_cast<double>(t.last_ns - t.first_ns);
+    const double rate = t.count > 1 && span_s > 0 ? (t.count - 1) / span_s : 0;
+    lines.push_back(
+        fmt::format("{:<44} {:<34} {:>7} {:>8.2f}", name, t.type, t.count, rate));
+  }
+  return lines;
+}
+
+}  // namespace
+
+std::optional<SequenceIndex> IndexBag(const fs::path& path,
+                                      const SequenceReaderOptions& options) {
+  std::unique_ptr<BagStorage> bag = OpenBag(path);
+  if (!bag) return std::nullopt;
+  const BagOptions& o = options.bag;
+  BagScan scan = ScanBag(bag.get());
+  SequenceIndex index;
+  index.layout = "rosbag2 (" + bag->Storage() + ")";
+  index.root = path;
+  index.details = TopicTable(scan);
+  index.details.push_back("storage: " + bag->Describe());
+
+  const std::string color_topic =
+      PickTopic(scan, o.color_topic, ColorScore, path, "colour images");
+  if (color_topic.empty()) {
+    throw FormatError(path, "no colour image topic (sensor_msgs/msg/Image or "
+                            "CompressedImage without 'depth' in its name); "
+                            "name one with --color-topic");
+  }
+  const std::string depth_topic =
+      PickTopic(scan, o.depth_topic, DepthScore, path, "depth images");
+  if (depth_topic.empty()) {
+    throw FormatError(path, "no depth image topic (an Image or "
+                            "CompressedImage topic with 'depth' in its "
+                            "name); name one with --depth-topic");
+  }
+  const TopicData& color = scan.topics.at(color_topic);
+  const TopicData& depth = scan.topics.at(depth_topic);
+  const std::string info_topic = o.camera_info_topic.empty()
+                                     ? InfoTopicFor(scan, color_topic)
+                                     : o.camera_info_topic;
+  // Intrinsics: an explicit file, else the colour camera's CameraInfo.
+  if (!options.intrinsics_path.empty()) {
+    index.intrinsics = ReadIntrinsicsFile(options.intrinsics_path, 0, 0);
+    index.intrinsics_source = options.intrinsics_path.filename().string();
+  } else {
+    if (info_topic.empty() || !scan.topics.count(info_topic) ||
+        scan.topics.at(info_topic).info.empty()) {
+      throw FormatError(path, fmt::format("no CameraInfo for the colour "
+                                          "topic {}; name one with "
+                                          "--camera-info-topic or give "
+                                          "--intrinsics",
+                                          color_topic));
+    }
+    const RosCameraInfo& info = scan.topics.at(info_topic).info[0];
+    index.intrinsics = FromInfo(info);
+    index.intrinsics_source =
+        fmt::format("{} (distortion model '{}'{})", info_topic,
+                    info.distortion_model,
+                    std::all_of(info.d.begin(), info.d.end(),
+                                [](double v) { return v == 0.0; })
+                        ? ", no distortion"
+                        : ", distortion not corrected");
+  }
+  const std::string camera =
+      o.camera_frame.empty() ? color.frame_id : o.camera_frame;
+
+  // Depth in its own optical frame is registered into the colour camera.
+  std::optional<Registration> registration;
+  std::string depth_note = "depth aligned with colour (same frame '" +
+                           depth.frame_id + "')";
+  if (!depth.frame_id.empty() && !color.frame_id.empty() &&
+      depth.frame_id != color.frame_id) {
+    const std::string depth_info = InfoTopicFor(scan, depth_topic);
+    std::string why;
+    const auto T = scan.tf.Lookup(color.frame_id, depth.frame_id,
+                                  color.messages.empty()
+                                      ? 0
+                                      : color.messages.front().stamp_ns,
+                                  &why);
+    if (depth_info.empty() || depth_info == info_topic || !T) {
+      throw FormatError(
+          path, fmt::format("depth ({}, frame '{}') is not in the colour "
+                            "frame '{}' and cannot be registered: {}",
+                            depth_topic, depth.frame_id, color.frame_id,
+                            !T ? why : "no CameraInfo of its own"));
+    }
+    registration = Registration{FromInfo(scan.topics.at(depth_info).info[0]),
+                                index.intrinsics, *T};
+    depth_note = fmt::format(
+        "depth registered into the colour camera (depth frame '{}', "
+        "intrinsics {}, extrinsic from TF)",
+        depth.frame_id, depth_info);
+  }
+
+  // Poses: TF (world -> camera) or a pose topic (world -> its child, then
+  // TF to the camera).
+  TfTree poses;
+  std::string world = "";
+  std::string pose_child = camera;
+  if (o.pose_source == "tf") {
+    world = WorldFrame(scan.tf, o.world_frame, camera);
+    const auto chain = scan.tf.Chain(world, camera);
+    index.pose_source = chain.empty()
+                            ? fmt::format("TF {} -> {} (not connected)", world,
+                                          camera)
+                            : "TF " + fmt::format("{}", fmt::join(chain, " -> "));
+  } else {
+    if (!scan.topics.count(o.pose_source) ||
+        scan.topics.at(o.pose_source).poses.empty()) {
+      throw FormatError(path, fmt::format("pose source '{}' is not an "
+                                          "Odometry or PoseStamped topic of "
+                                          "the bag",
+                                          o.pose_source));
+    }
+    for (RosPose p : scan.topics.at(o.pose_source).poses) {
+      if (p.child_frame_id.empty()) p.child_frame_id = camera;
+      world = p.header.frame_id;
+      pose_child = p.child_frame_id;
+      poses.Add({p.header, p.child_frame_id, p.T_parent_child}, false);
+    }
+    index.pose_source = fmt::format("{} ({} in {}{})", o.pose_source,
+                                    pose_child, world,
+                                    pose_child == camera
+                                        ? ""
+                                        : ", then TF to " + camera);
+  }
+
+  // Pair colour and depth by stamp; resolve each pose.
+  std::vector<Stamped> depths = depth.messages;
+  std::sort(depths.begin(), depths.end(),
+            [](const Stamped& a, const Stamped& b) {
+              return a.stamp_ns < b.stamp_ns;
+            });
+  std::vector<Stamped> colors = color.messages;
+  std::stable_sort(colors.begin(), colors.end(),
+                   [](const Stamped& a, const Stamped& b) {
+                     return a.stamp_ns < b.stamp_ns;
+                   });
+  auto frames = std::make_shared<BagFrames>(std::move(bag), color.type,
+                                            depth.type, registration);
+  const auto tol_ns = static_cast<int64_t>(o.sync_tol_ms * 1e6);
+  size_t no_depth = 0, no_pose = 0;
+  std::string first_pose_problem;
+  for (const Stamped& c : colors) {
+    const auto after = std::lower_bound(
+        depths.begin(), depths.end(), c.stamp_ns,
+        [](const Stamped& d, int64_t t) { return d.stamp_ns < t; });
+    const Stamped* best = nullptr;
+    for (auto it : {after, after == depths.begin() ? after : after - 1}) {
+      if (it == depths.end()) continue;
+      if (!best || std::llabs(it->stamp_ns - c.stamp_ns) <
+                       std::llabs(best->stamp_ns - c.stamp_ns)) {
+        best = &*it;
+      }
+    }
+    if (!best || std::llabs(best->stamp_ns - c.stamp_ns) > tol_ns) {
+      ++no_depth;
+      continue;
+    }
+    std::string why;
+    std::optional<Transform> T;
+    if (o.pose_source == "tf") {
+      T = scan.tf.Lookup(world, camera, c.stamp_ns, &why);
+    } else {
+      const auto T_world_child = poses.Lookup(world, pose_child, c.stamp_ns,
+                                              &why);
+      const auto T_child_camera =
+          scan.tf.Lookup(pose_child, camera, c.stamp_ns, &why);
+      if (T_world_child && T_child_camera) T = *T_world_child * *T_child_camera;
+    }
+    if (!T) {
+      if (no_pose++ == 0) first_pose_problem = why;
+      continue;
+    }
+    FrameRecord r;
+    const size_t i = frames->pairs.size();
+    r.color_path = path / fmt::format("frame-{:06}.color.png", i);
+    r.depth_path = path / fmt::format("frame-{:06}.depth.png", i);
+    r.T_world_camera = *T;
+    r.timestamp_s = 1e-9 * static_cast<double>(c.stamp_ns);
+    r.source_index = i;
+    frames->pairs.push_back({c.ref, best->ref});
+    index.frames.push_back(std::move(r));
+  }
+  index.details.push_back(fmt::format("colour: {} ({}, frame '{}')",
+                                      color_topic, color.type, color.frame_id));
+  index.details.push_back(fmt::format("depth: {} ({}); {}", depth_topic,
+                                      depth.type, depth_note));
+  const size_t frames_line = index.details.size();
+  index.details.push_back(fmt::format(
+      "frames: {} of {} colour images paired (depth within {} ms); {} "
+      "skipped without depth, {} without a pose{}",
+      index.frames.size(), colors.size(), o.sync_tol_ms, no_depth, no_pose,
+      no_pose ? " (" + first_pose_problem + ")" : ""));
+  if (scan.undecodable > 0) {
+    index.details.push_back(
+        fmt::format("{} messages could not be decoded", scan.undecodable));
+  }
+  for (size_t d = 3; d < index.details.size(); ++d) {
+    spdlog::debug("{}: {}", path.string(), index.details[d]);
+  }
+  if (index.frames.empty()) {
+    throw FormatError(path, "no usable frames: " + index.details[frames_line]);
+  }
+  index.depth_scale = 1000.0;
+  index.source = std::move(frames);
+  return index;
+}
+
+}  // namespace semrec::io::internal

@@ -1,0 +1,437 @@
+#include "semrec/io/ros_messages.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+
+#include <fmt/format.h>
+#include <opencv2/imgcodecs.hpp>
+
+namespace semrec::io {
+namespace {
+
+// XCDR1 reader: a 4-byte encapsulation header (0x00 0x00 big endian,
+// 0x00 0x01 little endian), then primitives aligned to their size counted
+// from the end of the header.
+class CdrReader {
+ public:
+  CdrReader(const uint8_t* data, size_t size, const char* type)
+      : type_(type) {
+    if (size < 4 || data[0] != 0) {
+      throw CdrError(fmt::format("{}: not CDR (bad encapsulation header)",
+                                 type_));
+    }
+    if (data[1] > 1) {
+      throw CdrError(fmt::format(
+          "{}: encapsulation {} is not plain CDR (XCDR2 is not read)", type_,
+          data[1]));
+    }
+    little_ = data[1] == 1;
+    data_ = data + 4;
+    size_ = size - 4;
+  }
+
+  template <typename T>
+  T Get() {
+    Align(sizeof(T));
+    Need(sizeof(T));
+    uint8_t bytes[sizeof(T)];
+    std::memcpy(bytes, data_ + pos_, sizeof(T));
+    if (!little_) std::reverse(bytes, bytes + sizeof(T));
+    pos_ += sizeof(T);
+    T v;
+    std::memcpy(&v, bytes, sizeof(T));
+    return v;
+  }
+  std::string String() {
+    const uint32_t n = Get<uint32_t>();
+    Need(n);
+    if (n == 0) return {};
+    // The length counts the terminating NUL.
+    std::string s(reinterpret_cast<const char*>(data_ + pos_), n - 1);
+    pos_ += n;
+    return s;
+  }
+  std::vector<uint8_t> Bytes() {
+    const uint32_t n = Get<uint32_t>();
+    Need(n);
+    std::vector<uint8_t> out(data_ + pos_, data_ + pos_ + n);
+    pos_ += n;
+    return out;
+  }
+  std::vector<double> Doubles() {
+    const uint32_t n = Get<uint32_t>();
+    Need(uint64_t{n} * 8);
+    std::vector<double> out(n);
+    for (double& v : out) v = Get<double>();
+    return out;
+  }
+  uint32_t Count(size_t min_element_bytes) {
+    const uint32_t n = Get<uint32_t>();
+    Need(uint64_t{n} * min_element_bytes);
+    return n;
+  }
+  RosHeader Header() {
+    RosHeader h;
+    h.stamp_sec = Get<int32_t>();
+    h.stamp_nanosec = Get<uint32_t>();
+    h.frame_id = String();
+    return h;
+  }
+  Transform Pose() {
+    // Point/Vector3 then Quaternion (x, y, z, w).
+    Eigen::Vector3d t;
+    for (int i = 0; i < 3; ++i) t[i] = Get<double>();
+    double q[4];
+    for (double& v : q) v = Get<double>();
+    const Eigen::Quaterniond quat(q[3], q[0], q[1], q[2]);
+    if (!t.allFinite() || !quat.coeffs().allFinite() ||
+        quat.norm() < 1e-6) {
+      throw CdrError(fmt::format("{}: a pose with a non-finite or zero "
+                                 "rotation",
+                                 type_));
+    }
+    return Transform::FromQuaternion(quat, t);
+  }
+  void Skip(size_t n) {
+    Need(n);
+    pos_ += n;
+  }
+
+ private:
+  void Align(size_t n) {
+    const size_t pad = (n - pos_ % n) % n;
+    Need(pad);
+    pos_ += pad;
+  }
+  void Need(uint64_t n) const {
+    if (n > size_ - pos_) {
+      throw CdrError(fmt::format("{}: message ends early (needs {} more "
+                                 "bytes at offset {}, has {})",
+                                 type_, n, pos_ + 4, size_ - pos_));
+    }
+  }
+
+  const char* type_;
+  const uint8_t* data_ = nullptr;
+  size_t size_ = 0;
+  size_t pos_ = 0;
+  bool little_ = true;
+};
+
+class CdrWriter {
+ public:
+  CdrWriter() { out_ = {0x00, 0x01, 0x00, 0x00}; }
+  template <typename T>
+  void Put(T v) {
+    while ((out_.size() - 4) % sizeof(T) != 0) out_.push_back(0);
+    const size_t at = out_.size();
+    out_.resize(at + sizeof(T));
+    std::memcpy(out_.data() + at, &v, sizeof(T));
+  }
+  void String(const std::string& s) {
+    Put<uint32_t>(static_cast<uint32_t>(s.size() + 1));
+    out_.insert(out_.end(), s.begin(), s.end());
+    out_.push_back(0);
+  }
+  void Bytes(const std::vector<uint8_t>& b) {
+    Put<uint32_t>(static_cast<uint32_t>(b.size()));
+    out_.insert(out_.end(), b.begin(), b.end());
+  }
+  void Header(const RosHeader& h) {
+    Put<int32_t>(h.stamp_sec);
+    Put<uint32_t>(h.stamp_nanosec);
+    String(h.frame_id);
+  }
+  void Pose(const Transform& T) {
+    for (int i = 0; i < 3; ++i) Put<double>(T.translation()[i]);
+    const Eigen::Quaterniond q = T.Quaternion();
+    Put<double>(q.x());
+    Put<double>(q.y());
+    Put<double>(q.z());
+    Put<double>(q.w());
+  }
+  std::vector<uint8_t> Take() { return std::move(out_); }
+
+ private:
+  std::vector<uint8_t> out_;
+};
+
+cv::Mat Decode(const std::vector<uint8_t>& bytes, size_t offset, int flags,
+               const std::string& what) {
+  if (offset >= bytes.size()) {
+    throw CdrError(what + ": no image data");
+  }
+  const cv::Mat buf(1, static_cast<int>(bytes.size() - offset), CV_8UC1,
+                    const_cast<uint8_t*>(bytes.data() + offset));
+  cv::Mat img;
+  try {
+    img = cv::imdecode(buf, flags);
+  } catch (const cv::Exception&) {
+    img.release();
+  }
+  if (img.empty()) throw CdrError(what + ": the image data cannot be decoded");
+  return img;
+}
+
+void CheckImage(const RosImage& m, int bytes_per_pixel) {
+  if (m.width == 0 || m.height == 0 || m.width > 1 << 15 ||
+      m.height > 1 << 15) {
+    throw CdrError(fmt::format("Image: size {}x{} is not usable", m.width,
+                               m.height));
+  }
+  const uint64_t row = uint64_t{m.width} * bytes_per_pixel;
+  if (m.step < row || uint64_t{m.step} * m.height > m.data.size()) {
+    throw CdrError(fmt::format(
+        "Image ({}): step {} and {} rows need {} bytes, the message has {}",
+        m.encoding, m.step, m.height, uint64_t{m.step} * m.height,
+        m.data.size()));
+  }
+}
+
+template <typename T>
+T Sample(const RosImage& m, size_t at) {
+  uint8_t b[sizeof(T)];
+  std::memcpy(b, m.data.data() + at, sizeof(T));
+  if (m.is_bigendian) std::reverse(b, b + sizeof(T));
+  T v;
+  std::memcpy(&v, b, sizeof(T));
+  return v;
+}
+
+}  // namespace
+
+RosHeader DecodeRosHeader(const uint8_t* data, size_t size) {
+  return CdrReader(data, size, "Header").Header();
+}
+
+RosImage DecodeRosImage(const uint8_t* data, size_t size) {
+  CdrReader r(data, size, "sensor_msgs/msg/Image");
+  RosImage m;
+  m.header = r.Header();
+  m.height = r.Get<uint32_t>();
+  m.width = r.Get<uint32_t>();
+  m.encoding = r.String();
+  m.is_bigendian = r.Get<uint8_t>();
+  m.step = r.Get<uint32_t>();
+  m.data = r.Bytes();
+  return m;
+}
+
+RosCompressedImage DecodeRosCompressedImage(const uint8_t* data,
+                                            size_t size) {
+  CdrReader r(data, size, "sensor_msgs/msg/CompressedImage");
+  RosCompressedImage m;
+  m.header = r.Header();
+  m.format = r.String();
+  m.data = r.Bytes();
+  return m;
+}
+
+RosCameraInfo DecodeRosCameraInfo(const uint8_t* data, size_t size) {
+  CdrReader r(data, size, "sensor_msgs/msg/CameraInfo");
+  RosCameraInfo m;
+  m.header = r.Header();
+  m.height = r.Get<uint32_t>();
+  m.width = r.Get<uint32_t>();
+  m.distortion_model = r.String();
+  m.d = r.Doubles();
+  for (double& v : m.k) v = r.Get<double>();
+  return m;  // r, p, binning and roi are not used
+}
+
+std::vector<RosTransform> DecodeRosTfMessage(const uint8_t* data,
+                                             size_t size) {
+  CdrReader r(data, size, "tf2_msgs/msg/TFMessage");
+  // A transform is at least a header (12 bytes) + child (4) + 56 bytes.
+  const uint32_t n = r.Count(72);
+  std::vector<RosTransform> out(n);
+  for (RosTransform& t : out) {
+    t.header = r.Header();
+    t.child_frame_id = r.String();
+    t.T_parent_child = r.Pose();
+  }
+  return out;
+}
+
+RosPose DecodeRosOdometry(const uint8_t* data, size_t size) {
+  CdrReader r(data, size, "nav_msgs/msg/Odometry");
+  RosPose m;
+  m.header = r.Header();
+  m.child_frame_id = r.String();
+  m.T_parent_child = r.Pose();
+  return m;  // covariance and twist are not used
+}
+
+RosPose DecodeRosPoseStamped(const uint8_t* data, size_t size) {
+  CdrReader r(data, size, "geometry_msgs/msg/PoseStamped");
+  RosPose m;
+  m.header = r.Header();
+  m.T_parent_child = r.Pose();
+  return m;
+}
+
+ColorImage RosColor(const RosImage& m) {
+  int channels = 0;
+  bool bgr = false;
+  if (m.encoding == "rgb8") {
+    channels = 3;
+  } else if (m.encoding == "bgr8") {
+    channels = 3;
+    bgr = true;
+  } else if (m.encoding == "rgba8") {
+    channels = 4;
+  } else if (m.encoding == "bgra8") {
+    channels = 4;
+    bgr = true;
+  } else if (m.encoding == "mono8") {
+    channels = 1;
+  } else {
+    throw CdrError(fmt::format(
+        "Image: colour encoding '{}' is not read (rgb8, bgr8, rgba8, bgra8 "
+        "and mono8 are)",
+        m.encoding));
+  }
+  CheckImage(m, channels);
+  ColorImage out(static_cast<int>(m.width), static_cast<int>(m.height), 3);
+  for (uint32_t y = 0; y < m.height; ++y) {
+    const uint8_t* row = m.data.data() + size_t{y} * m.step;
+    for (uint32_t x = 0; x < m.width; ++x) {
+      const uint8_t* p = row + size_t{x} * channels;
+      for (int c = 0; c < 3; ++c) {
+        const int src = channels == 1 ? 0 : (bgr ? 2 - c : c);
+        out(static_cast<int>(x), static_cast<int>(y), c) = p[src];
+      }
+    }
+  }
+  return out;
+}
+
+ColorImage RosColor(const RosCompressedImage& m) {
+  const cv::Mat bgr = Decode(m.data, 0, cv::IMREAD_COLOR,
+                             "CompressedImage (" + m.format + ")");
+  ColorImage out(bgr.cols, bgr.rows, 3);
+  for (int y = 0; y < bgr.rows; ++y) {
+    for (int x = 0; x < bgr.cols; ++x) {
+      const cv::Vec3b& p = bgr.at<cv::Vec3b>(y, x);
+      for (int c = 0; c < 3; ++c) out(x, y, c) = p[2 - c];
+    }
+  }
+  return out;
+}
+
+DepthImage RosDepth(const RosImage& m) {
+  const bool mm = m.encoding == "16UC1" || m.encoding == "mono16";
+  const bool metres = m.encoding == "32FC1";
+  if (!mm && !metres) {
+    throw CdrError(fmt::format(
+        "Image: depth encoding '{}' is not read (16UC1 in millimetres and "
+        "32FC1 in metres are)",
+        m.encoding));
+  }
+  CheckImage(m, mm ? 2 : 4);
+  DepthImage out(static_cast<int>(m.width), static_cast<int>(m.height));
+  for (uint32_t y = 0; y < m.height; ++y) {
+    for (uint32_t x = 0; x < m.width; ++x) {
+      const size_t at = size_t{y} * m.step + size_t{x} * (mm ? 2 : 4);
+      float d = mm ? 0.001f * Sample<uint16_t>(m, at) : Sample<float>(m, at);
+      if (!std::isfinite(d) || d < 0.0f) d = 0.0f;
+      out(static_cast<int>(x), static_cast<int>(y)) = d;
+    }
+  }
+  return out;
+}
+
+DepthImage RosDepth(const RosCompressedImage& m) {
+  const std::string what = "CompressedImage (" + m.format + ")";
+  const bool depth_transport =
+      m.format.find("compressedDepth") != std::string::npos;
+  if (depth_transport && m.format.find("png") == std::string::npos) {
+    throw CdrError(what + ": only PNG compressedDepth is read");
+  }
+  // image_transport's compressedDepth: int32 format + two float32
+  // quantisation parameters before the PNG (used for 32FC1 only).
+  const cv::Mat img =
+      Decode(m.data, depth_transport ? 12 : 0, cv::IMREAD_UNCHANGED, what);
+  if (img.type() != CV_16UC1) {
+    throw CdrError(what + ": depth must be a 16-bit single-channel PNG");
+  }
+  DepthImage out(img.cols, img.rows);
+  for (int y = 0; y < img.rows; ++y) {
+    for (int x = 0; x < img.cols; ++x) {
+      out(x, y) = 0.001f * img.at<uint16_t>(y, x);
+    }
+  }
+  return out;
+}
+
+std::vector<uint8_t> EncodeRosImage(const RosImage& m) {
+  CdrWriter w;
+  w.Header(m.header);
+  w.Put<uint32_t>(m.height);
+  w.Put<uint32_t>(m.width);
+  w.String(m.encoding);
+  w.Put<uint8_t>(m.is_bigendian);
+  w.Put<uint32_t>(m.step);
+  w.Bytes(m.data);
+  return w.Take();
+}
+
+std::vector<uint8_t> EncodeRosCompressedImage(const RosCompressedImage& m) {
+  CdrWriter w;
+  w.Header(m.header);
+  w.String(m.format);
+  w.Bytes(m.data);
+  return w.Take();
+}
+
+std::vector<uint8_t> EncodeRosCameraInfo(const RosCameraInfo& m) {
+  CdrWriter w;
+  w.Header(m.header);
+  w.Put<uint32_t>(m.height);
+  w.Put<uint32_t>(m.width);
+  w.String(m.distortion_model);
+  w.Put<uint32_t>(static_cast<uint32_t>(m.d.size()));
+  for (double v : m.d) w.Put<double>(v);
+  for (double v : m.k) w.Put<double>(v);
+  const double r[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};
+  for (double v : r) w.Put<double>(v);
+  const double p[12] = {m.k[0], m.k[1], m.k[2], 0, m.k[3], m.k[4],
+                        m.k[5], 0,      m.k[6], m.k[7], m.k[8], 0};
+  for (double v : p) w.Put<double>(v);
+  w.Put<uint32_t>(0);  // binning
+  w.Put<uint32_t>(0);
+  for (int i = 0; i < 4; ++i) w.Put<uint32_t>(0);  // roi
+  w.Put<uint8_t>(0);
+  return w.Take();
+}
+
+std::vector<uint8_t> EncodeRosTfMessage(const std::vector<RosTransform>& m) {
+  CdrWriter w;
+  w.Put<uint32_t>(static_cast<uint32_t>(m.size()));
+  for (const RosTransform& t : m) {
+    w.Header(t.header);
+    w.String(t.child_frame_id);
+    w.Pose(t.T_parent_child);
+  }
+  return w.Take();
+}
+
+std::vector<uint8_t> EncodeRosOdometry(const RosPose& m) {
+  CdrWriter w;
+  w.Header(m.header);
+  w.String(m.child_frame_id);
+  w.Pose(m.T_parent_child);
+  for (int i = 0; i < 36; ++i) w.Put<double>(0.0);  // pose covariance
+  for (int i = 0; i < 6 + 36; ++i) w.Put<double>(0.0);  // twist
+  return w.Take();
+}
+
+std::vector<uint8_t> EncodeRosPoseStamped(const RosPose& m) {
+  CdrWriter w;
+  w.Header(m.header);
+  w.Pose(m.T_parent_child);
+  return w.Take();
+}
+
+}  // namespace semrec::io
