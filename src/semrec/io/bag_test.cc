@@ -313,17 +313,17 @@ std::vector<testing::BagFrame> Frames(CameraIntrinsics* k) {
 
 void ExpectSameFrames(const SequenceReader& bag,
                       const std::vector<testing::BagFrame>& frames,
-                      bool lossy_color) {
+                      bool lossy_color, double pose_tolerance = 1e-9) {
   ASSERT_EQ(bag.size(), frames.size());
   for (size_t i = 0; i < frames.size(); ++i) {
     const Frame f = bag.Read(i);
     EXPECT_TRUE(f.T_world_camera.Matrix().isApprox(
-        frames[i].T_world_camera.Matrix(), 1e-9))
+        frames[i].T_world_camera.Matrix(), pose_tolerance))
         << "frame " << i;
     ASSERT_TRUE(f.depth.SameSize(32, 24));
     for (int y = 0; y < 24; ++y) {
       for (int x = 0; x < 32; ++x) {
-        ASSERT_FLOAT_EQ(f.depth(x, y), frames[i].depth_m(x, y));
+        ASSERT_NEAR(f.depth(x, y), frames[i].depth_m(x, y), 1e-6);
       }
     }
     if (lossy_color) {
@@ -413,6 +413,24 @@ TEST(BagLayout, DepthInItsOwnFrameIsRegisteredIntoTheColourCamera) {
   }
 }
 
+TEST(BagLayout, PosesFromAnOdometryTopicChainedToTheCameraByTf) {
+  TempDir dir;
+  CameraIntrinsics k;
+  const auto frames = Frames(&k);
+  testing::TestBagOptions o;
+  o.odometry = true;
+  testing::WriteTestBag(dir.path() / "bag", frames, k, o);
+  SequenceReaderOptions ro;
+  ro.bag.pose_source = "/odom";
+  const SequenceReader r = SequenceReader::Open(dir.path() / "bag", ro);
+  EXPECT_NE(r.index().pose_source.find("base_link in map, then TF"),
+            std::string::npos)
+      << r.index().pose_source;
+  ExpectSameFrames(r, frames, false);
+  ro.bag.pose_source = "/tf";  // not a pose topic
+  EXPECT_THROW(SequenceReader::Open(dir.path() / "bag", ro), FormatError);
+}
+
 TEST(BagLayout, BagsWithoutDepthOrPosesAreClearErrors) {
   TempDir dir;
   CameraIntrinsics k;
@@ -451,6 +469,73 @@ TEST(BagLayout, BagsWithoutDepthOrPosesAreClearErrors) {
   SequenceReaderOptions named;
   named.bag.color_topic = "/nope";
   EXPECT_THROW(SequenceReader::Open(dir.path() / "late", named), FormatError);
+}
+
+TEST(Sens, ScanNetFilesReadBackTheirFrames) {
+  TempDir dir;
+  CameraIntrinsics k;
+  const auto frames = Frames(&k);
+  // Lossless colour at the depth size: every frame exactly, frame 2 with
+  // ScanNet's invalid pose skipped.
+  testing::WriteTestSens(dir.path() / "a.sens", frames, k, false, 1, {2});
+  const SequenceReader r = SequenceReader::Open(dir.path() / "a.sens");
+  EXPECT_EQ(r.layout(), "scannet-sens");
+  ASSERT_EQ(r.size(), frames.size() - 1);
+  EXPECT_NE(r.index().details[0].find("1 skipped with an invalid pose"),
+            std::string::npos)
+      << r.index().details[0];
+  std::vector<testing::BagFrame> kept = frames;
+  kept.erase(kept.begin() + 2);
+  for (size_t i = 0; i < kept.size(); ++i) {
+    const Frame f = r.Read(i);
+    EXPECT_EQ(f.color, kept[i].color) << i;
+    ASSERT_TRUE(f.depth.SameSize(kept[i].depth_m));
+    for (size_t p = 0; p < f.depth.values().size(); ++p) {
+      ASSERT_NEAR(f.depth.values()[p], kept[i].depth_m.values()[p], 1e-6);
+    }
+    // Poses are stored as float.
+    EXPECT_TRUE(f.T_world_camera.Matrix().isApprox(
+        kept[i].T_world_camera.Matrix(), 1e-6));
+  }
+  // JPEG colour at twice the depth size (as ScanNet's 1296x968 vs 640x480)
+  // in a folder: resized to the depth size, intrinsics the depth camera's.
+  fs::create_directories(dir.path() / "scene0000_00");
+  testing::WriteTestSens(dir.path() / "scene0000_00" / "scene0000_00.sens",
+                         frames, k, true, 2);
+  const SequenceReader big = SequenceReader::Open(dir.path() / "scene0000_00");
+  EXPECT_EQ(big.intrinsics().fx, 30);
+  EXPECT_EQ(big.intrinsics().width, 32);
+  ExpectSameFrames(big, frames, true, 1e-6);  // .sens stores float poses
+}
+
+TEST(Sens, DamagedFilesAreClearErrors) {
+  TempDir dir;
+  CameraIntrinsics k;
+  const auto frames = Frames(&k);
+  testing::WriteTestSens(dir.path() / "a.sens", frames, k, false, 1);
+  std::vector<char> bytes;
+  {
+    std::ifstream in(dir.path() / "a.sens", std::ios::binary);
+    bytes.assign(std::istreambuf_iterator<char>(in), {});
+  }
+  auto expect_error = [&](const std::vector<char>& b, const std::string& what) {
+    const fs::path p = dir.path() / "bad.sens";
+    std::ofstream(p, std::ios::binary).write(b.data(),
+                                              static_cast<long>(b.size()));
+    try {
+      SequenceReader::Open(p).Read(0);
+      FAIL() << "no error for " << what;
+    } catch (const FormatError& e) {
+      EXPECT_NE(std::string(e.what()).find("bad.sens"), std::string::npos);
+      EXPECT_NE(std::string(e.what()).find(what), std::string::npos)
+          << e.what();
+    }
+  };
+  expect_error({bytes.begin(), bytes.begin() + bytes.size() / 2},
+               "truncated .sens file");
+  std::vector<char> v3 = bytes;
+  v3[0] = 3;
+  expect_error(v3, ".sens version 3 is not read");
 }
 
 }  // namespace

@@ -284,204 +284,255 @@ std::vector<std::string> TopicTable(const BagScan& scan) {
   return lines;
 }
 
+// The chosen topics and what the frames need besides them.
+struct Choice {
+  std::string color_topic, depth_topic, info_topic;
+  std::string camera;  // TF frame of the colour camera
+  std::optional<Registration> registration;
+  std::string depth_note;
+};
+
+Choice ChooseTopics(const BagScan& scan, const fs::path& path,
+                    const BagOptions& o) {
+  Choice c;
+  c.color_topic =
+      PickTopic(scan, o.color_topic, ColorScore, path, "colour images");
+  if (c.color_topic.empty()) {
+    throw FormatError(path, "no colour image topic (sensor_msgs/msg/Image or "
+                            "CompressedImage without 'depth' in its name); "
+                            "name one with --color-topic");
+  }
+  c.depth_topic =
+      PickTopic(scan, o.depth_topic, DepthScore, path, "depth images");
+  if (c.depth_topic.empty()) {
+    throw FormatError(path, "no depth image topic (an Image or "
+                            "CompressedImage topic with 'depth' in its "
+                            "name); name one with --depth-topic");
+  }
+  c.info_topic = o.camera_info_topic.empty()
+                     ? InfoTopicFor(scan, c.color_topic)
+                     : o.camera_info_topic;
+  const TopicData& color = scan.topics.at(c.color_topic);
+  c.camera = o.camera_frame.empty() ? color.frame_id : o.camera_frame;
+  return c;
+}
+
+// Intrinsics: an explicit file, else the colour camera's CameraInfo.
+void SetIntrinsics(const BagScan& scan, const Choice& c, const fs::path& path,
+                   const SequenceReaderOptions& options,
+                   SequenceIndex* index) {
+  if (!options.intrinsics_path.empty()) {
+    index->intrinsics = ReadIntrinsicsFile(options.intrinsics_path, 0, 0);
+    index->intrinsics_source = options.intrinsics_path.filename().string();
+    return;
+  }
+  const auto it = scan.topics.find(c.info_topic);
+  if (c.info_topic.empty() || it == scan.topics.end() ||
+      it->second.info.empty()) {
+    throw FormatError(path, fmt::format("no CameraInfo for the colour topic "
+                                        "{}; name one with "
+                                        "--camera-info-topic or give "
+                                        "--intrinsics",
+                                        c.color_topic));
+  }
+  const RosCameraInfo& info = it->second.info[0];
+  index->intrinsics = FromInfo(info);
+  const bool undistorted = std::all_of(info.d.begin(), info.d.end(),
+                                       [](double v) { return v == 0.0; });
+  index->intrinsics_source = fmt::format(
+      "{} (distortion model '{}', {})", c.info_topic, info.distortion_model,
+      undistorted ? "no distortion" : "distortion not corrected");
+}
+
+// Depth in its own optical frame is registered into the colour camera.
+void ChooseRegistration(const BagScan& scan, const fs::path& path,
+                        const CameraIntrinsics& color_k, Choice* c) {
+  const TopicData& color = scan.topics.at(c->color_topic);
+  const TopicData& depth = scan.topics.at(c->depth_topic);
+  c->depth_note =
+      "depth aligned with colour (same frame '" + depth.frame_id + "')";
+  if (depth.frame_id.empty() || color.frame_id.empty() ||
+      depth.frame_id == color.frame_id) {
+    return;
+  }
+  const std::string depth_info = InfoTopicFor(scan, c->depth_topic);
+  std::string why = "no CameraInfo of its own";
+  std::optional<Transform> T;
+  if (!depth_info.empty() && depth_info != c->info_topic) {
+    T = scan.tf.Lookup(
+        color.frame_id, depth.frame_id,
+        color.messages.empty() ? 0 : color.messages.front().stamp_ns, &why);
+  }
+  if (!T) {
+    throw FormatError(path, fmt::format("depth ({}, frame '{}') is not in the "
+                                        "colour frame '{}' and cannot be "
+                                        "registered: {}",
+                                        c->depth_topic, depth.frame_id,
+                                        color.frame_id, why));
+  }
+  c->registration = Registration{
+      FromInfo(scan.topics.at(depth_info).info[0]), color_k, *T};
+  c->depth_note = fmt::format(
+      "depth registered into the colour camera (depth frame '{}', intrinsics "
+      "{}, extrinsic from TF)",
+      depth.frame_id, depth_info);
+}
+
+// The camera's pose at a stamp: from TF (world -> camera), or from a pose
+// topic (world -> its child) then TF (child -> camera).
+class PoseLookup {
+ public:
+  PoseLookup(const BagScan& scan, const BagOptions& o,
+             const std::string& camera, const fs::path& path)
+      : tf_(scan.tf), camera_(camera), use_tf_(o.pose_source == "tf") {
+    child_ = camera;
+    if (use_tf_) {
+      world_ = WorldFrame(scan.tf, o.world_frame, camera);
+      const auto chain = scan.tf.Chain(world_, camera);
+      source_ = chain.empty() ? fmt::format("TF {} -> {} (not connected)",
+                                            world_, camera)
+                              : fmt::format("TF {}", fmt::join(chain, " -> "));
+      return;
+    }
+    const auto it = scan.topics.find(o.pose_source);
+    if (it == scan.topics.end() || it->second.poses.empty()) {
+      throw FormatError(path, fmt::format("pose source '{}' is not an "
+                                          "Odometry or PoseStamped topic of "
+                                          "the bag",
+                                          o.pose_source));
+    }
+    for (RosPose p : it->second.poses) {
+      if (p.child_frame_id.empty()) p.child_frame_id = camera;
+      world_ = p.header.frame_id;
+      child_ = p.child_frame_id;
+      poses_.Add({p.header, p.child_frame_id, p.T_parent_child}, false);
+    }
+    source_ = fmt::format("{} ({} in {}{})", o.pose_source, child_, world_,
+                          child_ == camera ? "" : ", then TF to " + camera);
+  }
+
+  std::optional<Transform> At(int64_t t_ns, std::string* why) const {
+    if (use_tf_) return tf_.Lookup(world_, camera_, t_ns, why);
+    const auto T_world_child = poses_.Lookup(world_, child_, t_ns, why);
+    if (!T_world_child) return std::nullopt;
+    const auto T_child_camera = tf_.Lookup(child_, camera_, t_ns, why);
+    if (!T_child_camera) return std::nullopt;
+    return *T_world_child * *T_child_camera;
+  }
+  const std::string& source() const { return source_; }
+
+ private:
+  const TfTree& tf_;
+  TfTree poses_;
+  std::string camera_, world_, child_, source_;
+  bool use_tf_;
+};
+
+std::vector<Stamped> ByStamp(std::vector<Stamped> v) {
+  std::stable_sort(v.begin(), v.end(), [](const Stamped& a, const Stamped& b) {
+    return a.stamp_ns < b.stamp_ns;
+  });
+  return v;
+}
+
+// The depth message nearest to `t_ns` within `tol_ns`, or nullptr.
+const Stamped* NearestDepth(const std::vector<Stamped>& depths, int64_t t_ns,
+                            int64_t tol_ns) {
+  const auto after = std::lower_bound(
+      depths.begin(), depths.end(), t_ns,
+      [](const Stamped& d, int64_t t) { return d.stamp_ns < t; });
+  const Stamped* best = nullptr;
+  for (auto it : {after, after == depths.begin() ? after : after - 1}) {
+    if (it == depths.end()) continue;
+    if (!best || std::llabs(it->stamp_ns - t_ns) <
+                     std::llabs(best->stamp_ns - t_ns)) {
+      best = &*it;
+    }
+  }
+  return best && std::llabs(best->stamp_ns - t_ns) <= tol_ns ? best : nullptr;
+}
+
+// Colour frames with a depth image near their stamp and a pose; the others
+// are counted (the returned line says how many and why).
+std::string PairFrames(const BagScan& scan, const Choice& c,
+                       const PoseLookup& poses, const BagOptions& o,
+                       const fs::path& path, BagFrames* frames,
+                       SequenceIndex* index) {
+  const std::vector<Stamped> colors =
+      ByStamp(scan.topics.at(c.color_topic).messages);
+  const std::vector<Stamped> depths =
+      ByStamp(scan.topics.at(c.depth_topic).messages);
+  const auto tol_ns = static_cast<int64_t>(o.sync_tol_ms * 1e6);
+  size_t no_depth = 0, no_pose = 0;
+  std::string first_pose_problem;
+  for (const Stamped& color : colors) {
+    const Stamped* depth = NearestDepth(depths, color.stamp_ns, tol_ns);
+    if (depth == nullptr) {
+      ++no_depth;
+      continue;
+    }
+    std::string why;
+    const std::optional<Transform> T = poses.At(color.stamp_ns, &why);
+    if (!T) {
+      if (no_pose++ == 0) first_pose_problem = why;
+      continue;
+    }
+    const size_t i = frames->pairs.size();
+    FrameRecord r;
+    r.color_path = path / fmt::format("frame-{:06}.color.png", i);
+    r.depth_path = path / fmt::format("frame-{:06}.depth.png", i);
+    r.T_world_camera = *T;
+    r.timestamp_s = 1e-9 * static_cast<double>(color.stamp_ns);
+    r.source_index = i;
+    frames->pairs.push_back({color.ref, depth->ref});
+    index->frames.push_back(std::move(r));
+  }
+  return fmt::format(
+      "frames: {} of {} colour images paired (depth within {} ms); {} "
+      "skipped without depth, {} without a pose{}",
+      index->frames.size(), colors.size(), o.sync_tol_ms, no_depth, no_pose,
+      no_pose ? " (" + first_pose_problem + ")" : "");
+}
+
 }  // namespace
 
 std::optional<SequenceIndex> IndexBag(const fs::path& path,
                                       const SequenceReaderOptions& options) {
   std::unique_ptr<BagStorage> bag = OpenBag(path);
   if (!bag) return std::nullopt;
-  const BagOptions& o = options.bag;
-  BagScan scan = ScanBag(bag.get());
+  const BagScan scan = ScanBag(bag.get());
   SequenceIndex index;
   index.layout = "rosbag2 (" + bag->Storage() + ")";
   index.root = path;
+  index.depth_scale = 1000.0;  // unused: the frames come decoded
   index.details = TopicTable(scan);
   index.details.push_back("storage: " + bag->Describe());
 
-  const std::string color_topic =
-      PickTopic(scan, o.color_topic, ColorScore, path, "colour images");
-  if (color_topic.empty()) {
-    throw FormatError(path, "no colour image topic (sensor_msgs/msg/Image or "
-                            "CompressedImage without 'depth' in its name); "
-                            "name one with --color-topic");
-  }
-  const std::string depth_topic =
-      PickTopic(scan, o.depth_topic, DepthScore, path, "depth images");
-  if (depth_topic.empty()) {
-    throw FormatError(path, "no depth image topic (an Image or "
-                            "CompressedImage topic with 'depth' in its "
-                            "name); name one with --depth-topic");
-  }
-  const TopicData& color = scan.topics.at(color_topic);
-  const TopicData& depth = scan.topics.at(depth_topic);
-  const std::string info_topic = o.camera_info_topic.empty()
-                                     ? InfoTopicFor(scan, color_topic)
-                                     : o.camera_info_topic;
-  // Intrinsics: an explicit file, else the colour camera's CameraInfo.
-  if (!options.intrinsics_path.empty()) {
-    index.intrinsics = ReadIntrinsicsFile(options.intrinsics_path, 0, 0);
-    index.intrinsics_source = options.intrinsics_path.filename().string();
-  } else {
-    if (info_topic.empty() || !scan.topics.count(info_topic) ||
-        scan.topics.at(info_topic).info.empty()) {
-      throw FormatError(path, fmt::format("no CameraInfo for the colour "
-                                          "topic {}; name one with "
-                                          "--camera-info-topic or give "
-                                          "--intrinsics",
-                                          color_topic));
-    }
-    const RosCameraInfo& info = scan.topics.at(info_topic).info[0];
-    index.intrinsics = FromInfo(info);
-    index.intrinsics_source =
-        fmt::format("{} (distortion model '{}'{})", info_topic,
-                    info.distortion_model,
-                    std::all_of(info.d.begin(), info.d.end(),
-                                [](double v) { return v == 0.0; })
-                        ? ", no distortion"
-                        : ", distortion not corrected");
-  }
-  const std::string camera =
-      o.camera_frame.empty() ? color.frame_id : o.camera_frame;
-
-  // Depth in its own optical frame is registered into the colour camera.
-  std::optional<Registration> registration;
-  std::string depth_note = "depth aligned with colour (same frame '" +
-                           depth.frame_id + "')";
-  if (!depth.frame_id.empty() && !color.frame_id.empty() &&
-      depth.frame_id != color.frame_id) {
-    const std::string depth_info = InfoTopicFor(scan, depth_topic);
-    std::string why;
-    const auto T = scan.tf.Lookup(color.frame_id, depth.frame_id,
-                                  color.messages.empty()
-                                      ? 0
-                                      : color.messages.front().stamp_ns,
-                                  &why);
-    if (depth_info.empty() || depth_info == info_topic || !T) {
-      throw FormatError(
-          path, fmt::format("depth ({}, frame '{}') is not in the colour "
-                            "frame '{}' and cannot be registered: {}",
-                            depth_topic, depth.frame_id, color.frame_id,
-                            !T ? why : "no CameraInfo of its own"));
-    }
-    registration = Registration{FromInfo(scan.topics.at(depth_info).info[0]),
-                                index.intrinsics, *T};
-    depth_note = fmt::format(
-        "depth registered into the colour camera (depth frame '{}', "
-        "intrinsics {}, extrinsic from TF)",
-        depth.frame_id, depth_info);
-  }
-
-  // Poses: TF (world -> camera) or a pose topic (world -> its child, then
-  // TF to the camera).
-  TfTree poses;
-  std::string world = "";
-  std::string pose_child = camera;
-  if (o.pose_source == "tf") {
-    world = WorldFrame(scan.tf, o.world_frame, camera);
-    const auto chain = scan.tf.Chain(world, camera);
-    index.pose_source = chain.empty()
-                            ? fmt::format("TF {} -> {} (not connected)", world,
-                                          camera)
-                            : "TF " + fmt::format("{}", fmt::join(chain, " -> "));
-  } else {
-    if (!scan.topics.count(o.pose_source) ||
-        scan.topics.at(o.pose_source).poses.empty()) {
-      throw FormatError(path, fmt::format("pose source '{}' is not an "
-                                          "Odometry or PoseStamped topic of "
-                                          "the bag",
-                                          o.pose_source));
-    }
-    for (RosPose p : scan.topics.at(o.pose_source).poses) {
-      if (p.child_frame_id.empty()) p.child_frame_id = camera;
-      world = p.header.frame_id;
-      pose_child = p.child_frame_id;
-      poses.Add({p.header, p.child_frame_id, p.T_parent_child}, false);
-    }
-    index.pose_source = fmt::format("{} ({} in {}{})", o.pose_source,
-                                    pose_child, world,
-                                    pose_child == camera
-                                        ? ""
-                                        : ", then TF to " + camera);
-  }
-
-  // Pair colour and depth by stamp; resolve each pose.
-  std::vector<Stamped> depths = depth.messages;
-  std::sort(depths.begin(), depths.end(),
-            [](const Stamped& a, const Stamped& b) {
-              return a.stamp_ns < b.stamp_ns;
-            });
-  std::vector<Stamped> colors = color.messages;
-  std::stable_sort(colors.begin(), colors.end(),
-                   [](const Stamped& a, const Stamped& b) {
-                     return a.stamp_ns < b.stamp_ns;
-                   });
+  Choice choice = ChooseTopics(scan, path, options.bag);
+  SetIntrinsics(scan, choice, path, options, &index);
+  ChooseRegistration(scan, path, index.intrinsics, &choice);
+  const PoseLookup poses(scan, options.bag, choice.camera, path);
+  index.pose_source = poses.source();
+  const TopicData& color = scan.topics.at(choice.color_topic);
+  const TopicData& depth = scan.topics.at(choice.depth_topic);
   auto frames = std::make_shared<BagFrames>(std::move(bag), color.type,
-                                            depth.type, registration);
-  const auto tol_ns = static_cast<int64_t>(o.sync_tol_ms * 1e6);
-  size_t no_depth = 0, no_pose = 0;
-  std::string first_pose_problem;
-  for (const Stamped& c : colors) {
-    const auto after = std::lower_bound(
-        depths.begin(), depths.end(), c.stamp_ns,
-        [](const Stamped& d, int64_t t) { return d.stamp_ns < t; });
-    const Stamped* best = nullptr;
-    for (auto it : {after, after == depths.begin() ? after : after - 1}) {
-      if (it == depths.end()) continue;
-      if (!best || std::llabs(it->stamp_ns - c.stamp_ns) <
-                       std::llabs(best->stamp_ns - c.stamp_ns)) {
-        best = &*it;
-      }
-    }
-    if (!best || std::llabs(best->stamp_ns - c.stamp_ns) > tol_ns) {
-      ++no_depth;
-      continue;
-    }
-    std::string why;
-    std::optional<Transform> T;
-    if (o.pose_source == "tf") {
-      T = scan.tf.Lookup(world, camera, c.stamp_ns, &why);
-    } else {
-      const auto T_world_child = poses.Lookup(world, pose_child, c.stamp_ns,
-                                              &why);
-      const auto T_child_camera =
-          scan.tf.Lookup(pose_child, camera, c.stamp_ns, &why);
-      if (T_world_child && T_child_camera) T = *T_world_child * *T_child_camera;
-    }
-    if (!T) {
-      if (no_pose++ == 0) first_pose_problem = why;
-      continue;
-    }
-    FrameRecord r;
-    const size_t i = frames->pairs.size();
-    r.color_path = path / fmt::format("frame-{:06}.color.png", i);
-    r.depth_path = path / fmt::format("frame-{:06}.depth.png", i);
-    r.T_world_camera = *T;
-    r.timestamp_s = 1e-9 * static_cast<double>(c.stamp_ns);
-    r.source_index = i;
-    frames->pairs.push_back({c.ref, best->ref});
-    index.frames.push_back(std::move(r));
-  }
+                                            depth.type, choice.registration);
+  const std::string pairing =
+      PairFrames(scan, choice, poses, options.bag, path, frames.get(), &index);
   index.details.push_back(fmt::format("colour: {} ({}, frame '{}')",
-                                      color_topic, color.type, color.frame_id));
-  index.details.push_back(fmt::format("depth: {} ({}); {}", depth_topic,
-                                      depth.type, depth_note));
-  const size_t frames_line = index.details.size();
-  index.details.push_back(fmt::format(
-      "frames: {} of {} colour images paired (depth within {} ms); {} "
-      "skipped without depth, {} without a pose{}",
-      index.frames.size(), colors.size(), o.sync_tol_ms, no_depth, no_pose,
-      no_pose ? " (" + first_pose_problem + ")" : ""));
+                                      choice.color_topic, color.type,
+                                      color.frame_id));
+  index.details.push_back(fmt::format("depth: {} ({}); {}",
+                                      choice.depth_topic, depth.type,
+                                      choice.depth_note));
+  index.details.push_back(pairing);
   if (scan.undecodable > 0) {
     index.details.push_back(
         fmt::format("{} messages could not be decoded", scan.undecodable));
   }
-  for (size_t d = 3; d < index.details.size(); ++d) {
-    spdlog::debug("{}: {}", path.string(), index.details[d]);
-  }
   if (index.frames.empty()) {
-    throw FormatError(path, "no usable frames: " + index.details[frames_line]);
+    throw FormatError(path, "no usable frames: " + pairing);
   }
-  index.depth_scale = 1000.0;
   index.source = std::move(frames);
   return index;
 }

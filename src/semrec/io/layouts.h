@@ -19,6 +19,9 @@ inline constexpr const char* kNoPoses =
 /// ROS 2 bags: a *.mcap file, or a folder with metadata.yaml or *.mcap.
 std::optional<SequenceIndex> IndexBag(const std::filesystem::path& path,
                                       const SequenceReaderOptions& options);
+/// ScanNet .sens (version 4): the file, or a folder holding exactly one.
+std::optional<SequenceIndex> IndexSens(const std::filesystem::path& path,
+                                       const SequenceReaderOptions& options);
 std::optional<SequenceIndex> IndexManifest(
     const std::filesystem::path& path, const SequenceReaderOptions& options);
 std::optional<SequenceIndex> IndexTum(const std::filesystem::path& folder,

@@ -69,6 +69,7 @@ std::optional<SequenceReader> SequenceReader::TryOpen(
   std::error_code ec;
   if (!fs::exists(path, ec)) return std::nullopt;
   std::optional<SequenceIndex> index = internal::IndexBag(path, options);
+  if (!index) index = internal::IndexSens(path, options);
   if (!index) index = internal::IndexManifest(path, options);
   if (!index && fs::is_directory(path, ec)) {
     for (auto detect : {internal::IndexTum, internal::IndexRedwood,
@@ -96,7 +97,8 @@ SequenceReader SequenceReader::Open(const fs::path& path,
         "(sequence.yaml/.json), TUM (rgb.txt + depth.txt + groundtruth.txt), "
         "Redwood "
         "(color/ + depth/ + *.log), 7-Scenes/3DMatch (frame-XXXXXX.depth.png + "
-        ".pose.txt), a ROS 2 bag (*.mcap, or a folder with metadata.yaml). "
+        ".pose.txt), a ROS 2 bag (*.mcap, *.db3, or a folder with metadata.yaml), ScanNet "
+        "*.sens. "
         "See README.md, 'Sequence layouts'.");
   }
   return std::move(*reader);

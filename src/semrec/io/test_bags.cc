@@ -1,16 +1,19 @@
 #include "semrec/io/test_bags.h"
 
 #include <sqlite3.h>
+#include <zlib.h>
 
 #include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <fstream>
+#include <limits>
 #include <map>
 #include <memory>
 
 #include <fmt/format.h>
 #include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 
 #include "semrec/core/error.h"
 #include "semrec/io/mcap_writer.h"
@@ -179,6 +182,13 @@ std::vector<Message> Messages(const std::vector<BagFrame>& frames,
                      EncodeRosTfMessage({Tf(t, "odom", "base_link",
                                             T_odom_base)})});
     }
+    if (o.odometry) {
+      const Transform T_base_camera = BaseCamera() * LinkOptical();
+      out.push_back({"/odom", t,
+                     EncodeRosOdometry({Header(t, "map"), "base_link",
+                                        f.T_world_camera *
+                                            T_base_camera.Inverse()})});
+    }
     info.header = Header(t, kCameraFrame);
     out.push_back({"/camera/color/camera_info", t, EncodeRosCameraInfo(info)});
     out.push_back({color_topic, t, ColorMessage(f, t, o)});
@@ -202,6 +212,7 @@ std::vector<Message> Messages(const std::vector<BagFrame>& frames,
 
 std::string TypeOf(const std::string& topic) {
   if (topic == "/tf" || topic == "/tf_static") return "tf2_msgs/msg/TFMessage";
+  if (topic == "/odom") return "nav_msgs/msg/Odometry";
   if (topic.find("camera_info") != std::string::npos) {
     return "sensor_msgs/msg/CameraInfo";
   }
@@ -327,6 +338,92 @@ void WriteTestBag(const fs::path& path, const std::vector<BagFrame>& frames,
   } else {
     WriteMcap(file, messages, options);
   }
+}
+
+void WriteTestSens(const fs::path& path, const std::vector<BagFrame>& frames,
+                   const CameraIntrinsics& k, bool jpeg, int color_scale,
+                   const std::vector<size_t>& invalid_poses) {
+  std::vector<uint8_t> out;
+  auto put = [&](const void* p, size_t n) {
+    const auto* b = static_cast<const uint8_t*>(p);
+    out.insert(out.end(), b, b + n);
+  };
+  auto put_u32 = [&](uint32_t v) { put(&v, 4); };
+  auto put_u64 = [&](uint64_t v) { put(&v, 8); };
+  auto put_matrix = [&](const Eigen::Matrix4d& m) {
+    for (int r = 0; r < 4; ++r) {
+      for (int c = 0; c < 4; ++c) {
+        const auto v = static_cast<float>(m(r, c));
+        put(&v, 4);
+      }
+    }
+  };
+  Eigen::Matrix4d K = Eigen::Matrix4d::Identity();
+  K(0, 0) = k.fx;
+  K(1, 1) = k.fy;
+  K(0, 2) = k.cx;
+  K(1, 2) = k.cy;
+  Eigen::Matrix4d Kc = K;
+  Kc.topRows(2) *= color_scale;
+  put_u32(4);
+  const std::string sensor = "StructureSensor";
+  put_u64(sensor.size());
+  put(sensor.data(), sensor.size());
+  put_matrix(Kc);
+  put_matrix(Eigen::Matrix4d::Identity());
+  put_matrix(K);
+  put_matrix(Eigen::Matrix4d::Identity());
+  const int32_t color_type = jpeg ? 2 : 1, depth_type = 1;
+  put(&color_type, 4);
+  put(&depth_type, 4);
+  put_u32(static_cast<uint32_t>(k.width * color_scale));
+  put_u32(static_cast<uint32_t>(k.height * color_scale));
+  put_u32(static_cast<uint32_t>(k.width));
+  put_u32(static_cast<uint32_t>(k.height));
+  const float shift = 1000.0f;
+  put(&shift, 4);
+  put_u64(frames.size());
+  for (size_t i = 0; i < frames.size(); ++i) {
+    const BagFrame& f = frames[i];
+    Eigen::Matrix4d pose = f.T_world_camera.Matrix();
+    if (std::find(invalid_poses.begin(), invalid_poses.end(), i) !=
+        invalid_poses.end()) {
+      pose.setConstant(-std::numeric_limits<double>::infinity());
+    }
+    put_matrix(pose);
+    put_u64(static_cast<uint64_t>(std::llround(f.timestamp_s * 1e6)));
+    put_u64(static_cast<uint64_t>(std::llround(f.timestamp_s * 1e6)));
+    cv::Mat bgr(f.color.height(), f.color.width(), CV_8UC3);
+    for (int y = 0; y < bgr.rows; ++y) {
+      for (int x = 0; x < bgr.cols; ++x) {
+        for (int c = 0; c < 3; ++c) {
+          bgr.at<cv::Vec3b>(y, x)[2 - c] = f.color(x, y, c);
+        }
+      }
+    }
+    if (color_scale != 1) {
+      cv::resize(bgr, bgr, cv::Size(), color_scale, color_scale,
+                 cv::INTER_NEAREST);
+    }
+    const std::vector<uint8_t> color = Encode(bgr, jpeg ? ".jpg" : ".png");
+    std::vector<uint16_t> mm(f.depth_m.values().size());
+    for (size_t p = 0; p < mm.size(); ++p) {
+      mm[p] = static_cast<uint16_t>(std::lround(f.depth_m.values()[p] * 1000));
+    }
+    uLongf n = compressBound(static_cast<uLong>(mm.size() * 2));
+    std::vector<uint8_t> depth(n);
+    compress(depth.data(), &n, reinterpret_cast<const Bytef*>(mm.data()),
+             static_cast<uLong>(mm.size() * 2));
+    depth.resize(n);
+    put_u64(color.size());
+    put_u64(depth.size());
+    put(color.data(), color.size());
+    put(depth.data(), depth.size());
+  }
+  put_u64(0);  // no IMU frames
+  std::ofstream(path, std::ios::binary)
+      .write(reinterpret_cast<const char*>(out.data()),
+             static_cast<std::streamsize>(out.size()));
 }
 
 }  // namespace semrec::io::testing

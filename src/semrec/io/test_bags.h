@@ -41,6 +41,9 @@ struct TestBagOptions {
   double depth_offset_ms = 3.0;
   /// Write /tf (off: a bag without poses).
   bool tf = true;
+  /// Also write /odom (nav_msgs/msg/Odometry, base_link in map), the
+  /// pose source for `--pose-source /odom`.
+  bool odometry = false;
   /// Write the depth topic (off: a bag without depth).
   bool depth = true;
   /// Depth in its own optical frame "camera_depth_optical_frame", this far
@@ -60,5 +63,14 @@ inline constexpr const char* kCameraFrame = "camera_color_optical_frame";
 void WriteTestBag(const std::filesystem::path& path,
                   const std::vector<BagFrame>& frames,
                   const CameraIntrinsics& k, const TestBagOptions& options);
+
+/// Writes a ScanNet .sens file (version 4) of `frames`: depth zlib-
+/// compressed in millimetres (shift 1000), colour as PNG (lossless) or JPEG,
+/// optionally at `color_scale` times the depth size (ScanNet's colour is
+/// larger). Frames listed in `invalid_poses` get ScanNet's -inf pose.
+void WriteTestSens(const std::filesystem::path& path,
+                   const std::vector<BagFrame>& frames,
+                   const CameraIntrinsics& k, bool jpeg, int color_scale,
+                   const std::vector<size_t>& invalid_poses = {});
 
 }  // namespace semrec::io::testing
