@@ -6,13 +6,16 @@
 #include <stdexcept>
 
 #include "semrec/core/error.h"
+#include "semrec/core/file_util.h"
 #include "semrec/infer/model_registry.h"
 #include "semrec/io/image_io.h"
 #include "semrec/io/label_set_io.h"
 #include "semrec/io/layouts.h"
+#include "semrec/io/mcap_reader.h"
 #include "semrec/io/mot_io.h"
 #include "semrec/io/ply_io.h"
 #include "semrec/io/pose_io.h"
+#include "semrec/io/ros_messages.h"
 #include "semrec/io/sequence_reader.h"
 #include "semrec/usd/usda_reader.h"
 
@@ -67,6 +70,70 @@ void ParseManifest(const fs::path& path) {
   if (reader.size() > 0) reader.Read(0);
 }
 
+// One ROS 2 message by its type name, images turned into semrec's too.
+void DecodeRosMessage(const std::string& type, const uint8_t* data,
+                      size_t size) {
+  if (type == "sensor_msgs/msg/Image") {
+    const io::RosImage m = io::DecodeRosImage(data, size);
+    Attempts attempt;
+    attempt([&] { io::RosColor(m); });
+    attempt([&] { io::RosDepth(m); });
+  } else if (type == "sensor_msgs/msg/CompressedImage") {
+    const io::RosCompressedImage m = io::DecodeRosCompressedImage(data, size);
+    Attempts attempt;
+    attempt([&] { io::RosColor(m); });
+    attempt([&] { io::RosDepth(m); });
+  } else if (type == "sensor_msgs/msg/CameraInfo") {
+    io::DecodeRosCameraInfo(data, size);
+  } else if (type == "tf2_msgs/msg/TFMessage") {
+    io::DecodeRosTfMessage(data, size);
+  } else if (type == "nav_msgs/msg/Odometry") {
+    io::DecodeRosOdometry(data, size);
+  } else if (type == "geometry_msgs/msg/PoseStamped") {
+    io::DecodeRosPoseStamped(data, size);
+  }
+}
+
+// An MCAP file: every record and message, each message decoded by its
+// schema, some read again by reference; then the file as a bag layout.
+void ParseMcap(const fs::path& path) {
+  {
+    io::McapReader reader(path);
+    std::vector<io::McapMessageRef> refs;
+    reader.Scan([&](const io::McapMessageInfo& info, const uint8_t* data,
+                    size_t size) {
+      const auto& channel = reader.channels().at(info.channel_id);
+      const auto schema = reader.schemas().find(channel.schema_id);
+      if (schema != reader.schemas().end()) {
+        Attempts attempt;
+        attempt([&] { DecodeRosMessage(schema->second.name, data, size); });
+      }
+      if (refs.size() < 16) refs.push_back(info.ref);
+    });
+    for (const auto& ref : refs) reader.Read(ref);
+  }
+  const io::SequenceReader bag = io::SequenceReader::Open(path);
+  bag.Read(0);
+}
+
+// A CDR message; the first byte picks its type.
+void ParseCdr(const fs::path& path) {
+  const std::vector<unsigned char> bytes = ReadFileBytes(path);
+  if (bytes.empty()) throw Error("empty");
+  static const char* kTypes[] = {
+      "sensor_msgs/msg/Image",       "sensor_msgs/msg/CompressedImage",
+      "sensor_msgs/msg/CameraInfo",  "tf2_msgs/msg/TFMessage",
+      "nav_msgs/msg/Odometry",       "geometry_msgs/msg/PoseStamped"};
+  DecodeRosMessage(kTypes[bytes[0] % 6], bytes.data() + 1, bytes.size() - 1);
+}
+
+// A ScanNet .sens file: the index and the first and last frames.
+void ParseSens(const fs::path& path) {
+  const io::SequenceReader sens = io::SequenceReader::Open(path);
+  sens.Read(0);
+  sens.Read(sens.size() - 1);
+}
+
 const std::vector<Target> kTargets = {
     {"png", "PNG colour, depth and label images (libpng)", "image.png",
      ParseImage},
@@ -99,6 +166,11 @@ const std::vector<Target> kTargets = {
      [](const fs::path& p) { io::ReadLabelSetJson(p); }},
     {"model_registry", "model registry YAML (--registry)", "models.yaml",
      [](const fs::path& p) { infer::ModelRegistry::Load(p); }},
+    {"mcap", "MCAP files (ROS 2 bags): records, chunks, messages, layout",
+     "bag.mcap", ParseMcap},
+    {"cdr", "ROS 2 CDR messages (first byte: the type)", "message.cdr",
+     ParseCdr},
+    {"sens", "ScanNet .sens files", "scene.sens", ParseSens},
 };
 
 // A private folder on a RAM disk where there is one: inputs are written and

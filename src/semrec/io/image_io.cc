@@ -216,10 +216,9 @@ void CheckNetpbm(const fs::path& path, const std::vector<unsigned char>& b) {
   }
 }
 
-cv::Mat ReadWithOpenCv(const fs::path& path, int flags) {
-  RequireFile(path, "image");
-  const std::vector<unsigned char> bytes = ReadFileBytes(path);
-  if (bytes.empty()) throw FormatError(path, "image file is empty");
+cv::Mat DecodeWithOpenCv(const fs::path& path,
+                         const std::vector<unsigned char>& bytes, int flags) {
+  if (bytes.empty()) throw FormatError(path, "image data is empty");
   // OpenCV picks a decoder by content from every codec it was built with
   // (DICOM, OpenEXR, JPEG 2000, ...), some of which abort on crafted files:
   // only the formats semrec reads get through, sizes checked first.
@@ -235,6 +234,14 @@ cv::Mat ReadWithOpenCv(const fs::path& path, int flags) {
                         "cannot decode image: corrupt JPEG (no frame header)");
     }
     CheckPixels(path, size->first, size->second);
+  } else if (png) {
+    // IHDR: width and height, big endian, after the signature and chunk head.
+    if (bytes.size() < 24) throw FormatError(path, "truncated PNG header");
+    auto be32 = [&](size_t at) {
+      return (int64_t{bytes[at]} << 24) | (int64_t{bytes[at + 1]} << 16) |
+             (int64_t{bytes[at + 2]} << 8) | int64_t{bytes[at + 3]};
+    };
+    CheckPixels(path, be32(16), be32(20));
   } else if (netpbm) {
     CheckNetpbm(path, bytes);
   } else if (!png) {
@@ -253,6 +260,36 @@ cv::Mat ReadWithOpenCv(const fs::path& path, int flags) {
         path, "cannot decode image (corrupt, truncated or unsupported format)");
   }
   return mat;
+}
+
+cv::Mat ReadWithOpenCv(const fs::path& path, int flags) {
+  RequireFile(path, "image");
+  return DecodeWithOpenCv(path, ReadFileBytes(path), flags);
+}
+
+ColorImage BgrToColor(const cv::Mat& bgr) {
+  cv::Mat rgb;
+  cv::cvtColor(bgr, rgb, cv::COLOR_BGR2RGB);
+  ColorImage out(rgb.cols, rgb.rows, 3);
+  for (int y = 0; y < rgb.rows; ++y) {
+    std::memcpy(&out(0, y), rgb.ptr<uint8_t>(y),
+                static_cast<size_t>(rgb.cols) * 3);
+  }
+  return out;
+}
+
+DepthImage16 MatToDepth(const fs::path& path, const cv::Mat& mat) {
+  if (mat.type() != CV_16UC1) {
+    throw FormatError(
+        path, "depth image must be single-channel 16-bit (OpenCV type " +
+                  std::to_string(mat.type()) + ")");
+  }
+  DepthImage16 out(mat.cols, mat.rows, 1);
+  for (int y = 0; y < mat.rows; ++y) {
+    std::memcpy(&out(0, y), mat.ptr<uint16_t>(y),
+                static_cast<size_t>(mat.cols) * 2);
+  }
+  return out;
 }
 
 template <typename T>
@@ -334,15 +371,18 @@ ColorImage ReadColorImage(const fs::path& path) {
     }
     return out;
   }
-  cv::Mat bgr = ReadWithOpenCv(path, cv::IMREAD_COLOR);
-  cv::Mat rgb;
-  cv::cvtColor(bgr, rgb, cv::COLOR_BGR2RGB);
-  ColorImage out(rgb.cols, rgb.rows, 3);
-  for (int y = 0; y < rgb.rows; ++y) {
-    std::memcpy(&out(0, y), rgb.ptr<uint8_t>(y),
-                static_cast<size_t>(rgb.cols) * 3);
-  }
-  return out;
+  return BgrToColor(ReadWithOpenCv(path, cv::IMREAD_COLOR));
+}
+
+ColorImage DecodeColorImage(const std::vector<uint8_t>& bytes,
+                            const fs::path& source) {
+  return BgrToColor(DecodeWithOpenCv(source, bytes, cv::IMREAD_COLOR));
+}
+
+DepthImage16 DecodeDepthImage(const std::vector<uint8_t>& bytes,
+                              const fs::path& source) {
+  return MatToDepth(source,
+                    DecodeWithOpenCv(source, bytes, cv::IMREAD_ANYDEPTH));
 }
 
 DepthImage16 ReadDepthImage(const fs::path& path) {
@@ -358,18 +398,7 @@ DepthImage16 ReadDepthImage(const fs::path& path) {
     out.values() = png.data16;
     return out;
   }
-  cv::Mat mat = ReadWithOpenCv(path, cv::IMREAD_ANYDEPTH);
-  if (mat.type() != CV_16UC1) {
-    throw FormatError(
-        path, "depth image must be single-channel 16-bit (OpenCV type " +
-                  std::to_string(mat.type()) + ")");
-  }
-  DepthImage16 out(mat.cols, mat.rows, 1);
-  for (int y = 0; y < mat.rows; ++y) {
-    std::memcpy(&out(0, y), mat.ptr<uint16_t>(y),
-                static_cast<size_t>(mat.cols) * 2);
-  }
-  return out;
+  return MatToDepth(path, ReadWithOpenCv(path, cv::IMREAD_ANYDEPTH));
 }
 
 LabelMap ReadLabelImage(const fs::path& path) {

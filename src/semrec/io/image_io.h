@@ -5,6 +5,7 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <vector>
 
 #include "semrec/core/image.h"
 #include "semrec/core/label_map.h"
@@ -24,6 +25,14 @@ ColorImage ReadColorImage(const std::filesystem::path& path);
 /// for 8-bit or multi-channel files: those are not depth maps and silently
 /// scaling them would be wrong.
 DepthImage16 ReadDepthImage(const std::filesystem::path& path);
+
+/// Decode an image held in memory (PNG or JPEG bytes: a message in a bag, a
+/// frame of a .sens file) with the checks of the file readers (sizes before
+/// allocating); `source` names it in errors.
+ColorImage DecodeColorImage(const std::vector<uint8_t>& bytes,
+                            const std::filesystem::path& source);
+DepthImage16 DecodeDepthImage(const std::vector<uint8_t>& bytes,
+                              const std::filesystem::path& source);
 
 /// Reads a single-channel 8- or 16-bit PNG as labels.
 LabelMap ReadLabelImage(const std::filesystem::path& path);

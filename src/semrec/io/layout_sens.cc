@@ -15,10 +15,10 @@
 #include <mutex>
 
 #include <fmt/format.h>
-#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include "semrec/core/error.h"
+#include "semrec/io/image_io.h"
 #include "semrec/io/layouts.h"
 
 namespace fs = std::filesystem;
@@ -190,19 +190,12 @@ class SensFrames : public FrameSource {
                     const_cast<uint8_t*>(raw.data()))
                 .clone();
     } else {
-      cv::Mat bgr;
-      try {
-        bgr = cv::imdecode(raw, cv::IMREAD_COLOR);
-      } catch (const cv::Exception&) {
-        bgr.release();
-      }
-      if (bgr.empty()) {
-        throw FormatError(file_.path(),
-                          fmt::format("frame {}: the colour image cannot be "
-                                      "decoded",
-                                      i));
-      }
-      cv::cvtColor(bgr, rgb, cv::COLOR_BGR2RGB);
+      const fs::path source =
+          file_.path().string() + fmt::format(" (frame {})", i);
+      const ColorImage decoded = DecodeColorImage(raw, source);
+      rgb = cv::Mat(decoded.height(), decoded.width(), CV_8UC3,
+                    const_cast<uint8_t*>(decoded.data()))
+                .clone();
     }
     const int w = static_cast<int>(header_.depth_width);
     const int h = static_cast<int>(header_.depth_height);

@@ -3,7 +3,7 @@
 // benchmark.
 //   semrec_make_test_bag SEQUENCE OUT [--storage mcap|sqlite3]
 //       [--compression zstd|lz4|none] [--compressed-color] [--compressed-depth]
-//       [--float-depth] [--max-frames N] [--bare]
+//       [--float-depth] [--max-frames N] [--bare] [--sens: a ScanNet .sens]
 #include <cstdio>
 #include <string>
 
@@ -19,6 +19,7 @@ int main(int argc, char** argv) {
   }
   io::testing::TestBagOptions o;
   io::SequenceReaderOptions ro;
+  bool sens = false;
   for (int a = 3; a < argc; ++a) {
     const std::string arg = argv[a];
     const std::string next = a + 1 < argc ? argv[a + 1] : "";
@@ -34,6 +35,8 @@ int main(int argc, char** argv) {
       ro.max_frames = std::stoul(next), ++a;
     } else if (arg == "--float-depth") {
       o.float_depth = true;
+    } else if (arg == "--sens") {
+      sens = true;
     } else if (arg == "--bare") {
       o.metadata_yaml = false;
     } else {
@@ -54,7 +57,11 @@ int main(int argc, char** argv) {
       b.timestamp_s = i / 30.0;
       frames.push_back(std::move(b));
     }
-    io::testing::WriteTestBag(argv[2], frames, reader.intrinsics(), o);
+    if (sens) {
+      io::testing::WriteTestSens(argv[2], frames, reader.intrinsics(), true, 1);
+    } else {
+      io::testing::WriteTestBag(argv[2], frames, reader.intrinsics(), o);
+    }
   } catch (const Error& e) {
     std::fprintf(stderr, "error: %s\n", e.what());
     return 1;

@@ -5,7 +5,8 @@
 #include <cstring>
 
 #include <fmt/format.h>
-#include <opencv2/imgcodecs.hpp>
+
+#include "semrec/io/image_io.h"
 
 namespace semrec::io {
 namespace {
@@ -157,21 +158,15 @@ class CdrWriter {
   std::vector<uint8_t> out_;
 };
 
-cv::Mat Decode(const std::vector<uint8_t>& bytes, size_t offset, int flags,
-               const std::string& what) {
-  if (offset >= bytes.size()) {
-    throw CdrError(what + ": no image data");
-  }
-  const cv::Mat buf(1, static_cast<int>(bytes.size() - offset), CV_8UC1,
-                    const_cast<uint8_t*>(bytes.data() + offset));
-  cv::Mat img;
+// Images inside messages: the file readers' checks; their FormatError
+// becomes a CdrError (the bag reader names the file and message).
+template <typename F>
+auto Decoded(const std::string& what, F&& decode) {
   try {
-    img = cv::imdecode(buf, flags);
-  } catch (const cv::Exception&) {
-    img.release();
+    return decode();
+  } catch (const FormatError& e) {
+    throw CdrError(what + ": " + e.what());
   }
-  if (img.empty()) throw CdrError(what + ": the image data cannot be decoded");
-  return img;
 }
 
 void CheckImage(const RosImage& m, int bytes_per_pixel) {
@@ -308,16 +303,8 @@ ColorImage RosColor(const RosImage& m) {
 }
 
 ColorImage RosColor(const RosCompressedImage& m) {
-  const cv::Mat bgr = Decode(m.data, 0, cv::IMREAD_COLOR,
-                             "CompressedImage (" + m.format + ")");
-  ColorImage out(bgr.cols, bgr.rows, 3);
-  for (int y = 0; y < bgr.rows; ++y) {
-    for (int x = 0; x < bgr.cols; ++x) {
-      const cv::Vec3b& p = bgr.at<cv::Vec3b>(y, x);
-      for (int c = 0; c < 3; ++c) out(x, y, c) = p[2 - c];
-    }
-  }
-  return out;
+  const std::string what = "CompressedImage (" + m.format + ")";
+  return Decoded(what, [&] { return DecodeColorImage(m.data, "message"); });
 }
 
 DepthImage RosDepth(const RosImage& m) {
@@ -330,13 +317,24 @@ DepthImage RosDepth(const RosImage& m) {
         m.encoding));
   }
   CheckImage(m, mm ? 2 : 4);
-  DepthImage out(static_cast<int>(m.width), static_cast<int>(m.height));
-  for (uint32_t y = 0; y < m.height; ++y) {
-    for (uint32_t x = 0; x < m.width; ++x) {
-      const size_t at = size_t{y} * m.step + size_t{x} * (mm ? 2 : 4);
-      float d = mm ? 0.001f * Sample<uint16_t>(m, at) : Sample<float>(m, at);
+  const int w = static_cast<int>(m.width), h = static_cast<int>(m.height);
+  if (mm) {
+    DepthImage16 raw(w, h);
+    for (int y = 0; y < h; ++y) {
+      for (int x = 0; x < w; ++x) {
+        raw(x, y) = Sample<uint16_t>(m, size_t{static_cast<size_t>(y)} * m.step +
+                                            size_t{static_cast<size_t>(x)} * 2);
+      }
+    }
+    return DepthToMeters(raw, 1000.0);
+  }
+  DepthImage out(w, h);
+  for (int y = 0; y < h; ++y) {
+    for (int x = 0; x < w; ++x) {
+      float d = Sample<float>(m, size_t{static_cast<size_t>(y)} * m.step +
+                                     size_t{static_cast<size_t>(x)} * 4);
       if (!std::isfinite(d) || d < 0.0f) d = 0.0f;
-      out(static_cast<int>(x), static_cast<int>(y)) = d;
+      out(x, y) = d;
     }
   }
   return out;
@@ -351,18 +349,12 @@ DepthImage RosDepth(const RosCompressedImage& m) {
   }
   // image_transport's compressedDepth: int32 format + two float32
   // quantisation parameters before the PNG (used for 32FC1 only).
-  const cv::Mat img =
-      Decode(m.data, depth_transport ? 12 : 0, cv::IMREAD_UNCHANGED, what);
-  if (img.type() != CV_16UC1) {
-    throw CdrError(what + ": depth must be a 16-bit single-channel PNG");
-  }
-  DepthImage out(img.cols, img.rows);
-  for (int y = 0; y < img.rows; ++y) {
-    for (int x = 0; x < img.cols; ++x) {
-      out(x, y) = 0.001f * img.at<uint16_t>(y, x);
-    }
-  }
-  return out;
+  const size_t skip = depth_transport ? 12 : 0;
+  if (m.data.size() <= skip) throw CdrError(what + ": no image data");
+  const std::vector<uint8_t> png(m.data.begin() + skip, m.data.end());
+  const DepthImage16 mm =
+      Decoded(what, [&] { return DecodeDepthImage(png, "message"); });
+  return DepthToMeters(mm, 1000.0);
 }
 
 std::vector<uint8_t> EncodeRosImage(const RosImage& m) {
