@@ -357,6 +357,93 @@ DepthImage RosDepth(const RosCompressedImage& m) {
   return DepthToMeters(mm, 1000.0);
 }
 
+namespace {
+
+const char* kTimeMsg = "int32 sec\nuint32 nanosec\n";
+const char* kHeaderMsg = "builtin_interfaces/Time stamp\nstring frame_id\n";
+const char* kVector3Msg = "float64 x\nfloat64 y\nfloat64 z\n";
+const char* kPointMsg = "float64 x\nfloat64 y\nfloat64 z\n";
+const char* kQuaternionMsg =
+    "float64 x 0\nfloat64 y 0\nfloat64 z 0\nfloat64 w 1\n";
+const char* kPoseMsg = "Point position\nQuaternion orientation\n";
+
+std::string WithDependencies(
+    const std::string& main,
+    const std::vector<std::pair<std::string, std::string>>& deps) {
+  std::string text = main;
+  for (const auto& [name, body] : deps) {
+    text += std::string(80, '=') + "\nMSG: " + name + "\n" + body;
+  }
+  return text;
+}
+
+}  // namespace
+
+std::string RosSchemaText(const std::string& type) {
+  const std::pair<std::string, std::string> time = {"builtin_interfaces/Time",
+                                                    kTimeMsg};
+  const std::pair<std::string, std::string> header = {"std_msgs/Header",
+                                                      kHeaderMsg};
+  const std::pair<std::string, std::string> pose = {"geometry_msgs/Pose",
+                                                    kPoseMsg};
+  const std::pair<std::string, std::string> point = {"geometry_msgs/Point",
+                                                     kPointMsg};
+  const std::pair<std::string, std::string> quaternion = {
+      "geometry_msgs/Quaternion", kQuaternionMsg};
+  if (type == "sensor_msgs/msg/Image") {
+    return WithDependencies(
+        "std_msgs/Header header\nuint32 height\nuint32 width\nstring "
+        "encoding\nuint8 is_bigendian\nuint32 step\nuint8[] data\n",
+        {header, time});
+  }
+  if (type == "sensor_msgs/msg/CompressedImage") {
+    return WithDependencies(
+        "std_msgs/Header header\nstring format\nuint8[] data\n",
+        {header, time});
+  }
+  if (type == "sensor_msgs/msg/CameraInfo") {
+    return WithDependencies(
+        "std_msgs/Header header\nuint32 height\nuint32 width\nstring "
+        "distortion_model\nfloat64[] d\nfloat64[9] k\nfloat64[9] "
+        "r\nfloat64[12] p\nuint32 binning_x\nuint32 binning_y\n"
+        "RegionOfInterest roi\n",
+        {header, time,
+         {"sensor_msgs/RegionOfInterest",
+          "uint32 x_offset\nuint32 y_offset\nuint32 height\nuint32 "
+          "width\nbool do_rectify\n"}});
+  }
+  if (type == "tf2_msgs/msg/TFMessage") {
+    return WithDependencies(
+        "geometry_msgs/TransformStamped[] transforms\n",
+        {{"geometry_msgs/TransformStamped",
+          "std_msgs/Header header\nstring child_frame_id\nTransform "
+          "transform\n"},
+         header, time,
+         {"geometry_msgs/Transform",
+          "Vector3 translation\nQuaternion rotation\n"},
+         {"geometry_msgs/Vector3", kVector3Msg}, quaternion});
+  }
+  if (type == "nav_msgs/msg/Odometry") {
+    return WithDependencies(
+        "std_msgs/Header header\nstring child_frame_id\n"
+        "geometry_msgs/PoseWithCovariance pose\n"
+        "geometry_msgs/TwistWithCovariance twist\n",
+        {header, time,
+         {"geometry_msgs/PoseWithCovariance",
+          "Pose pose\nfloat64[36] covariance\n"},
+         pose, point, quaternion,
+         {"geometry_msgs/TwistWithCovariance",
+          "Twist twist\nfloat64[36] covariance\n"},
+         {"geometry_msgs/Twist", "Vector3 linear\nVector3 angular\n"},
+         {"geometry_msgs/Vector3", kVector3Msg}});
+  }
+  if (type == "geometry_msgs/msg/PoseStamped") {
+    return WithDependencies("std_msgs/Header header\nPose pose\n",
+                            {header, time, pose, point, quaternion});
+  }
+  return {};
+}
+
 std::vector<uint8_t> EncodeRosImage(const RosImage& m) {
   CdrWriter w;
   w.Header(m.header);

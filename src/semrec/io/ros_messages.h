@@ -97,6 +97,11 @@ ColorImage RosColor(const RosCompressedImage& image);
 DepthImage RosDepth(const RosImage& image);
 DepthImage RosDepth(const RosCompressedImage& image);
 
+/// The ros2msg schema text rosbag2 stores for `type` (the .msg text, then
+/// each dependency after a line of 80 '=' and "MSG: pkg/Name"), for the
+/// types above; empty for others.
+std::string RosSchemaText(const std::string& type);
+
 // Serialization, for tests and test bags (CDR little endian, as rosbag2
 // writes on x86 and ARM).
 std::vector<uint8_t> EncodeRosImage(const RosImage& m);

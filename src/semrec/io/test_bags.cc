@@ -234,7 +234,7 @@ void WriteMcap(const fs::path& file, const std::vector<Message>& messages,
     if (!channels.count(m.topic)) {
       const std::string type = TypeOf(m.topic);
       channels[m.topic] = writer.AddChannel(
-          writer.AddSchema(type, "ros2msg", "# " + type + "\n"), m.topic);
+          writer.AddSchema(type, "ros2msg", RosSchemaText(type)), m.topic);
     }
   }
   for (const Message& m : messages) {
