@@ -100,16 +100,16 @@ void ParseMcap(const fs::path& path) {
   {
     io::McapReader reader(path);
     std::vector<io::McapMessageRef> refs;
-    reader.Scan([&](const io::McapMessageInfo& info, const uint8_t* data,
-                    size_t size) {
-      const auto& channel = reader.channels().at(info.channel_id);
-      const auto schema = reader.schemas().find(channel.schema_id);
-      if (schema != reader.schemas().end()) {
-        Attempts attempt;
-        attempt([&] { DecodeRosMessage(schema->second.name, data, size); });
-      }
-      if (refs.size() < 16) refs.push_back(info.ref);
-    });
+    reader.Scan(
+        [&](const io::McapMessageInfo& info, const uint8_t* data, size_t size) {
+          const auto& channel = reader.channels().at(info.channel_id);
+          const auto schema = reader.schemas().find(channel.schema_id);
+          if (schema != reader.schemas().end()) {
+            Attempts attempt;
+            attempt([&] { DecodeRosMessage(schema->second.name, data, size); });
+          }
+          if (refs.size() < 16) refs.push_back(info.ref);
+        });
     for (const auto& ref : refs) reader.Read(ref);
   }
   const io::SequenceReader bag = io::SequenceReader::Open(path);
@@ -121,9 +121,9 @@ void ParseCdr(const fs::path& path) {
   const std::vector<unsigned char> bytes = ReadFileBytes(path);
   if (bytes.empty()) throw Error("empty");
   static const char* kTypes[] = {
-      "sensor_msgs/msg/Image",       "sensor_msgs/msg/CompressedImage",
-      "sensor_msgs/msg/CameraInfo",  "tf2_msgs/msg/TFMessage",
-      "nav_msgs/msg/Odometry",       "geometry_msgs/msg/PoseStamped"};
+      "sensor_msgs/msg/Image",      "sensor_msgs/msg/CompressedImage",
+      "sensor_msgs/msg/CameraInfo", "tf2_msgs/msg/TFMessage",
+      "nav_msgs/msg/Odometry",      "geometry_msgs/msg/PoseStamped"};
   DecodeRosMessage(kTypes[bytes[0] % 6], bytes.data() + 1, bytes.size() - 1);
 }
 

@@ -58,7 +58,8 @@ class McapStorage : public BagStorage {
     std::string text = fmt::format("{} MCAP file(s), profile '{}'",
                                    readers_.size(), readers_[0]->profile());
     for (const auto& [c, n] : chunks) {
-      text += fmt::format(", {} {} chunk(s)", n, c.empty() ? "uncompressed" : c);
+      text +=
+          fmt::format(", {} {} chunk(s)", n, c.empty() ? "uncompressed" : c);
     }
     return text;
   }
@@ -151,9 +152,8 @@ class SqliteStorage : public BagStorage {
     sqlite3_stmt* raw = nullptr;
     if (sqlite3_prepare_v2(dbs_[f].get(), sql.c_str(), -1, &raw, nullptr) !=
         SQLITE_OK) {
-      throw FormatError(files_[f],
-                        fmt::format("not a rosbag2 SQLite bag ({})",
-                                    sqlite3_errmsg(dbs_[f].get())));
+      throw FormatError(files_[f], fmt::format("not a rosbag2 SQLite bag ({})",
+                                               sqlite3_errmsg(dbs_[f].get())));
     }
     std::unique_ptr<sqlite3_stmt, decltype(&sqlite3_finalize)> stmt(
         raw, &sqlite3_finalize);
@@ -200,8 +200,8 @@ std::unique_ptr<BagStorage> FromMetadata(const fs::path& folder) {
   if (files.empty()) throw FormatError(yaml, "lists no bag files");
   if (storage == "mcap") return std::make_unique<McapStorage>(files);
   if (storage == "sqlite3") return std::make_unique<SqliteStorage>(files);
-  throw FormatError(yaml, "storage '" + storage +
-                              "' is not read (mcap and sqlite3 are)");
+  throw FormatError(
+      yaml, "storage '" + storage + "' is not read (mcap and sqlite3 are)");
 }
 
 }  // namespace
@@ -209,8 +209,8 @@ std::unique_ptr<BagStorage> FromMetadata(const fs::path& folder) {
 std::unique_ptr<BagStorage> OpenBag(const fs::path& path) {
   std::error_code ec;
   if (fs::is_regular_file(path, ec)) {
-    if (IsMcapFile(path)) return std::make_unique<McapStorage>(
-        std::vector<fs::path>{path});
+    if (IsMcapFile(path))
+      return std::make_unique<McapStorage>(std::vector<fs::path>{path});
     if (path.extension() == ".db3" && IsSqlite(path)) {
       return std::make_unique<SqliteStorage>(std::vector<fs::path>{path});
     }

@@ -66,8 +66,8 @@ TEST(Cdr, MessagesSurviveEncodingAndDecoding) {
   EXPECT_EQ(ib_back.width, 640u);
 
   const Transform T = Pose(0.7, {1, 2, 3});
-  const auto tb = EncodeRosTfMessage({{Stamp(3, 4, "a"), "b", T},
-                                      {Stamp(5, 6, "b"), "c", T.Inverse()}});
+  const auto tb = EncodeRosTfMessage(
+      {{Stamp(3, 4, "a"), "b", T}, {Stamp(5, 6, "b"), "c", T.Inverse()}});
   const auto tf = DecodeRosTfMessage(tb.data(), tb.size());
   ASSERT_EQ(tf.size(), 2u);
   EXPECT_EQ(tf[1].child_frame_id, "c");
@@ -87,14 +87,14 @@ TEST(Cdr, BigEndianMessagesAreRead) {
   // Header {sec 1, nsec 2, frame "ab"}, then height 1, width 1, "16UC1",
   // is_bigendian 1, step 2, data {0x03, 0xE8} = 1000 mm.
   const std::vector<uint8_t> be = {
-      0, 0, 0, 0,                           // CDR_BE
-      0, 0, 0, 1, 0, 0, 0, 2,               // stamp
-      0, 0, 0, 3, 'a', 'b', 0, 0,           // frame_id + pad
-      0, 0, 0, 1, 0, 0, 0, 1,               // height, width
-      0, 0, 0, 6, '1', '6', 'U', 'C', '1', 0,  // encoding
-      1, 0,                                 // is_bigendian + pad
-      0, 0, 0, 2,                           // step
-      0, 0, 0, 2, 0x03, 0xE8};              // data
+      0, 0, 0, 0,                               // CDR_BE
+      0, 0, 0, 1, 0,    0,   0,   2,            // stamp
+      0, 0, 0, 3, 'a',  'b', 0,   0,            // frame_id + pad
+      0, 0, 0, 1, 0,    0,   0,   1,            // height, width
+      0, 0, 0, 6, '1',  '6', 'U', 'C', '1', 0,  // encoding
+      1, 0,                                     // is_bigendian + pad
+      0, 0, 0, 2,                               // step
+      0, 0, 0, 2, 0x03, 0xE8};                  // data
   const RosImage m = DecodeRosImage(be.data(), be.size());
   EXPECT_EQ(m.header.stamp_sec, 1);
   EXPECT_EQ(m.header.frame_id, "ab");
@@ -165,15 +165,15 @@ TEST(Mcap, EveryCompressionReadsBackTheMessagesWritten) {
       EXPECT_EQ(r.profile(), "ros2");
       std::vector<McapMessageInfo> seen;
       size_t i = 0;
-      r.Scan([&](const McapMessageInfo& info, const uint8_t* data,
-                 size_t size) {
-        ASSERT_LT(i, written.size());
-        EXPECT_EQ(info.channel_id, written[i].channel);
-        EXPECT_EQ(info.log_time_ns, written[i].time);
-        EXPECT_EQ(std::vector<uint8_t>(data, data + size), written[i].data);
-        seen.push_back(info);
-        ++i;
-      });
+      r.Scan(
+          [&](const McapMessageInfo& info, const uint8_t* data, size_t size) {
+            ASSERT_LT(i, written.size());
+            EXPECT_EQ(info.channel_id, written[i].channel);
+            EXPECT_EQ(info.log_time_ns, written[i].time);
+            EXPECT_EQ(std::vector<uint8_t>(data, data + size), written[i].data);
+            seen.push_back(info);
+            ++i;
+          });
       EXPECT_EQ(seen.size(), written.size());
       EXPECT_EQ(r.channels().at(written[0].channel).topic, "/b");
       EXPECT_EQ(r.schemas().begin()->second.name, "std_msgs/msg/String");
@@ -201,8 +201,8 @@ TEST(Mcap, DamagedFilesAreClearErrors) {
     bytes.assign(std::istreambuf_iterator<char>(in), {});
   }
   auto write = [&](const fs::path& p, const std::vector<char>& b) {
-    std::ofstream(p, std::ios::binary).write(b.data(),
-                                              static_cast<long>(b.size()));
+    std::ofstream(p, std::ios::binary)
+        .write(b.data(), static_cast<long>(b.size()));
   };
   auto scan = [](const fs::path& p) {
     McapReader r(p);
@@ -301,7 +301,8 @@ std::vector<testing::BagFrame> Frames(CameraIntrinsics* k) {
         f.color(x, y, 0) = static_cast<uint8_t>(8 * x);
         f.color(x, y, 1) = static_cast<uint8_t>(10 * y);
         f.color(x, y, 2) = static_cast<uint8_t>(40 * i);
-        f.depth_m(x, y) = 0.001f * static_cast<float>(1500 + 10 * x + 3 * y + i);
+        f.depth_m(x, y) =
+            0.001f * static_cast<float>(1500 + 10 * x + 3 * y + i);
       }
     }
     f.T_world_camera = Pose(0.1 * i, {0.2 * i, 0.1, 1.0 - 0.05 * i});
@@ -374,10 +375,10 @@ TEST(BagLayout, BagsGiveTheFramesTheyWereWrittenFrom) {
     EXPECT_EQ(r.layout().rfind("rosbag2", 0), 0u) << r.layout();
     EXPECT_EQ(r.intrinsics().fx, 30);
     EXPECT_EQ(r.intrinsics().width, 32);
-    EXPECT_NE(r.index().pose_source.find(
-                  "map -> odom -> base_link -> camera_link -> "
-                  "camera_color_optical_frame"),
-              std::string::npos)
+    EXPECT_NE(
+        r.index().pose_source.find("map -> odom -> base_link -> camera_link -> "
+                                   "camera_color_optical_frame"),
+        std::string::npos)
         << r.index().pose_source;
     ExpectSameFrames(r, frames, c.lossy);
   }
@@ -520,8 +521,8 @@ TEST(Sens, DamagedFilesAreClearErrors) {
   }
   auto expect_error = [&](const std::vector<char>& b, const std::string& what) {
     const fs::path p = dir.path() / "bad.sens";
-    std::ofstream(p, std::ios::binary).write(b.data(),
-                                              static_cast<long>(b.size()));
+    std::ofstream(p, std::ios::binary)
+        .write(b.data(), static_cast<long>(b.size()));
     try {
       SequenceReader::Open(p).Read(0);
       FAIL() << "no error for " << what;

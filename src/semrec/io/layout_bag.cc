@@ -97,9 +97,10 @@ BagScan ScanBag(BagStorage* bag) {
       }
     } catch (const CdrError& e) {
       if (scan.undecodable++ == 0) {
-        spdlog::warn("{}: a {} message on {} cannot be decoded ({}); such "
-                     "messages are skipped",
-                     bag->File(m.ref).string(), t.type, *m.topic, e.what());
+        spdlog::warn(
+            "{}: a {} message on {} cannot be decoded ({}); such "
+            "messages are skipped",
+            bag->File(m.ref).string(), t.type, *m.topic, e.what());
       }
     }
   });
@@ -107,19 +108,19 @@ BagScan ScanBag(BagStorage* bag) {
 }
 
 // The topic given, or the best-scoring candidate (ties: more messages).
-std::string PickTopic(const BagScan& scan, const std::string& given,
-                      const std::function<int(const std::string&,
-                                              const TopicData&)>& score,
-                      const fs::path& path, const std::string& what) {
+std::string PickTopic(
+    const BagScan& scan, const std::string& given,
+    const std::function<int(const std::string&, const TopicData&)>& score,
+    const fs::path& path, const std::string& what) {
   if (!given.empty()) {
     if (!scan.topics.count(given)) {
-      throw FormatError(path, fmt::format("no topic '{}' in the bag (for {})",
-                                          given, what));
+      throw FormatError(
+          path, fmt::format("no topic '{}' in the bag (for {})", given, what));
     }
     if (score(given, scan.topics.at(given)) < 0) {
-      throw FormatError(path, fmt::format("topic '{}' ({}) cannot be the {}",
-                                          given, scan.topics.at(given).type,
-                                          what));
+      throw FormatError(path,
+                        fmt::format("topic '{}' ({}) cannot be the {}", given,
+                                    scan.topics.at(given).type, what));
     }
     return given;
   }
@@ -272,14 +273,15 @@ std::string WorldFrame(const TfTree& tf, const std::string& given,
 }
 
 std::vector<std::string> TopicTable(const BagScan& scan) {
-  std::vector<std::string> lines = {
-      fmt::format("{:<44} {:<34} {:>7} {:>8}", "topic", "type", "count",
-                  "rate Hz")};
+  std::vector<std::string> lines = {fmt::format(
+      "{:<44} {:<34} {:>7} {:>8}", "topic", "type", "count", "rate Hz")};
   for (const auto& [name, t] : scan.topics) {
-    const double span_s = 1e-9 * static_cast<double>(t.last_ns - t.first_ns);
+    // Log times are the recorder's: any 64-bit values (no overflow here).
+    const double span_s = 1e-9 * (static_cast<double>(t.last_ns) -
+                                  static_cast<double>(t.first_ns));
     const double rate = t.count > 1 && span_s > 0 ? (t.count - 1) / span_s : 0;
-    lines.push_back(
-        fmt::format("{:<44} {:<34} {:>7} {:>8.2f}", name, t.type, t.count, rate));
+    lines.push_back(fmt::format("{:<44} {:<34} {:>7} {:>8.2f}", name, t.type,
+                                t.count, rate));
   }
   return lines;
 }
@@ -298,20 +300,21 @@ Choice ChooseTopics(const BagScan& scan, const fs::path& path,
   c.color_topic =
       PickTopic(scan, o.color_topic, ColorScore, path, "colour images");
   if (c.color_topic.empty()) {
-    throw FormatError(path, "no colour image topic (sensor_msgs/msg/Image or "
-                            "CompressedImage without 'depth' in its name); "
-                            "name one with --color-topic");
+    throw FormatError(path,
+                      "no colour image topic (sensor_msgs/msg/Image or "
+                      "CompressedImage without 'depth' in its name); "
+                      "name one with --color-topic");
   }
   c.depth_topic =
       PickTopic(scan, o.depth_topic, DepthScore, path, "depth images");
   if (c.depth_topic.empty()) {
-    throw FormatError(path, "no depth image topic (an Image or "
-                            "CompressedImage topic with 'depth' in its "
-                            "name); name one with --depth-topic");
+    throw FormatError(path,
+                      "no depth image topic (an Image or "
+                      "CompressedImage topic with 'depth' in its "
+                      "name); name one with --depth-topic");
   }
-  c.info_topic = o.camera_info_topic.empty()
-                     ? InfoTopicFor(scan, c.color_topic)
-                     : o.camera_info_topic;
+  c.info_topic = o.camera_info_topic.empty() ? InfoTopicFor(scan, c.color_topic)
+                                             : o.camera_info_topic;
   const TopicData& color = scan.topics.at(c.color_topic);
   c.camera = o.camera_frame.empty() ? color.frame_id : o.camera_frame;
   return c;
@@ -319,8 +322,7 @@ Choice ChooseTopics(const BagScan& scan, const fs::path& path,
 
 // Intrinsics: an explicit file, else the colour camera's CameraInfo.
 void SetIntrinsics(const BagScan& scan, const Choice& c, const fs::path& path,
-                   const SequenceReaderOptions& options,
-                   SequenceIndex* index) {
+                   const SequenceReaderOptions& options, SequenceIndex* index) {
   if (!options.intrinsics_path.empty()) {
     index->intrinsics = ReadIntrinsicsFile(options.intrinsics_path, 0, 0);
     index->intrinsics_source = options.intrinsics_path.filename().string();
@@ -364,14 +366,14 @@ void ChooseRegistration(const BagScan& scan, const fs::path& path,
         color.messages.empty() ? 0 : color.messages.front().stamp_ns, &why);
   }
   if (!T) {
-    throw FormatError(path, fmt::format("depth ({}, frame '{}') is not in the "
-                                        "colour frame '{}' and cannot be "
-                                        "registered: {}",
-                                        c->depth_topic, depth.frame_id,
-                                        color.frame_id, why));
+    throw FormatError(
+        path, fmt::format("depth ({}, frame '{}') is not in the "
+                          "colour frame '{}' and cannot be "
+                          "registered: {}",
+                          c->depth_topic, depth.frame_id, color.frame_id, why));
   }
-  c->registration = Registration{
-      FromInfo(scan.topics.at(depth_info).info[0]), color_k, *T};
+  c->registration =
+      Registration{FromInfo(scan.topics.at(depth_info).info[0]), color_k, *T};
   c->depth_note = fmt::format(
       "depth registered into the colour camera (depth frame '{}', intrinsics "
       "{}, extrinsic from TF)",
@@ -389,9 +391,9 @@ class PoseLookup {
     if (use_tf_) {
       world_ = WorldFrame(scan.tf, o.world_frame, camera);
       const auto chain = scan.tf.Chain(world_, camera);
-      source_ = chain.empty() ? fmt::format("TF {} -> {} (not connected)",
-                                            world_, camera)
-                              : fmt::format("TF {}", fmt::join(chain, " -> "));
+      source_ = chain.empty()
+                    ? fmt::format("TF {} -> {} (not connected)", world_, camera)
+                    : fmt::format("TF {}", fmt::join(chain, " -> "));
       return;
     }
     const auto it = scan.topics.find(o.pose_source);
@@ -444,8 +446,8 @@ const Stamped* NearestDepth(const std::vector<Stamped>& depths, int64_t t_ns,
   const Stamped* best = nullptr;
   for (auto it : {after, after == depths.begin() ? after : after - 1}) {
     if (it == depths.end()) continue;
-    if (!best || std::llabs(it->stamp_ns - t_ns) <
-                     std::llabs(best->stamp_ns - t_ns)) {
+    if (!best ||
+        std::llabs(it->stamp_ns - t_ns) < std::llabs(best->stamp_ns - t_ns)) {
       best = &*it;
     }
   }
@@ -522,9 +524,8 @@ std::optional<SequenceIndex> IndexBag(const fs::path& path,
   index.details.push_back(fmt::format("colour: {} ({}, frame '{}')",
                                       choice.color_topic, color.type,
                                       color.frame_id));
-  index.details.push_back(fmt::format("depth: {} ({}); {}",
-                                      choice.depth_topic, depth.type,
-                                      choice.depth_note));
+  index.details.push_back(fmt::format("depth: {} ({}); {}", choice.depth_topic,
+                                      depth.type, choice.depth_note));
   index.details.push_back(pairing);
   if (scan.undecodable > 0) {
     index.details.push_back(

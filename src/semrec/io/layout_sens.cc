@@ -40,15 +40,15 @@ struct SensHeader {
   std::string sensor;
   Eigen::Matrix4f color_k, depth_k;
   int32_t color_compression = 0, depth_compression = 0;
-  uint32_t color_width = 0, color_height = 0, depth_width = 0,
-           depth_height = 0;
+  uint32_t color_width = 0, color_height = 0, depth_width = 0, depth_height = 0;
   float depth_shift = 1000.0f;
   uint64_t frames = 0;
 };
 
 class SensFile {
  public:
-  explicit SensFile(const fs::path& path) : path_(path), in_(path, std::ios::binary) {
+  explicit SensFile(const fs::path& path)
+      : path_(path), in_(path, std::ios::binary) {
     if (!in_) throw IoError(path, "cannot open the .sens file");
     in_.seekg(0, std::ios::end);
     size_ = static_cast<uint64_t>(in_.tellg());
@@ -61,8 +61,7 @@ class SensFile {
     return v;
   }
   void Bytes(char* out, uint64_t n, const char* what) {
-    if (n > size_ - Pos() ||
-        !in_.read(out, static_cast<std::streamsize>(n))) {
+    if (n > size_ - Pos() || !in_.read(out, static_cast<std::streamsize>(n))) {
       throw FormatError(path_, fmt::format("truncated .sens file: it ends in "
                                            "the {} at byte {}",
                                            what, Pos()));
@@ -160,8 +159,9 @@ class SensFrames : public FrameSource {
       if (uncompress(reinterpret_cast<Bytef*>(d.data()), &n, raw.data(),
                      static_cast<uLong>(raw.size())) != Z_OK ||
           n != d.size() * 2) {
-        throw FormatError(file_.path(),
-                          fmt::format("frame {}: the depth data is corrupt", i));
+        throw FormatError(
+            file_.path(),
+            fmt::format("frame {}: the depth data is corrupt", i));
       }
     } else if (raw.size() == d.size() * 2) {
       std::memcpy(d.data(), raw.data(), raw.size());
@@ -180,10 +180,11 @@ class SensFrames : public FrameSource {
   ColorImage DecodeColor(size_t i, const std::vector<uint8_t>& raw) const {
     cv::Mat rgb;
     if (header_.color_compression == kColorRaw) {
-      if (raw.size() != size_t{header_.color_width} * header_.color_height * 3) {
-        throw FormatError(file_.path(),
-                          fmt::format("frame {}: raw colour of {} bytes", i,
-                                      raw.size()));
+      if (raw.size() !=
+          size_t{header_.color_width} * header_.color_height * 3) {
+        throw FormatError(
+            file_.path(),
+            fmt::format("frame {}: raw colour of {} bytes", i, raw.size()));
       }
       rgb = cv::Mat(static_cast<int>(header_.color_height),
                     static_cast<int>(header_.color_width), CV_8UC3,
@@ -245,9 +246,9 @@ std::optional<SequenceIndex> IndexSens(const fs::path& path,
   index.intrinsics.cy = K(1, 2);
   index.intrinsics_source = file.filename().string() + " (depth intrinsics)";
   if (!options.intrinsics_path.empty()) {
-    index.intrinsics = ReadIntrinsicsFile(
-        options.intrinsics_path, index.intrinsics.width,
-        index.intrinsics.height);
+    index.intrinsics =
+        ReadIntrinsicsFile(options.intrinsics_path, index.intrinsics.width,
+                           index.intrinsics.height);
     index.intrinsics_source = options.intrinsics_path.filename().string();
   }
   index.pose_source = file.filename().string() + " (camera to world)";
@@ -279,8 +280,8 @@ std::optional<SequenceIndex> IndexSens(const fs::path& path,
     r.color_path = path / fmt::format("frame-{:06}.color.jpg", i);
     r.depth_path = path / fmt::format("frame-{:06}.depth.png", i);
     try {
-      r.T_world_camera = Transform::FromMatrix(pose.cast<double>(),
-                                               "frame pose", 1e-2);
+      r.T_world_camera =
+          Transform::FromMatrix(pose.cast<double>(), "frame pose", 1e-2);
     } catch (const InvalidArgument& e) {
       throw FormatError(file, fmt::format("frame {}: {}", i, e.what()));
     }
@@ -294,9 +295,9 @@ std::optional<SequenceIndex> IndexSens(const fs::path& path,
       "sensor '{}': colour {}x{} ({}), depth {}x{} ({}), depth shift {}; {} "
       "frames, {} skipped with an invalid pose",
       h.sensor, h.color_width, h.color_height,
-      h.color_compression == kColorJpeg ? "jpeg"
+      h.color_compression == kColorJpeg  ? "jpeg"
       : h.color_compression == kColorPng ? "png"
-                                          : "raw",
+                                         : "raw",
       h.depth_width, h.depth_height,
       h.depth_compression == kDepthZlib ? "zlib" : "raw", h.depth_shift,
       h.frames, invalid));

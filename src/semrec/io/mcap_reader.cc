@@ -18,7 +18,7 @@ namespace fs = std::filesystem;
 namespace semrec::io {
 namespace {
 
-constexpr std::array<uint8_t, 8> kMagic = {0x89, 'M', 'C', 'A',
+constexpr std::array<uint8_t, 8> kMagic = {0x89, 'M', 'C',  'A',
                                            'P',  '0', '\r', '\n'};
 constexpr uint8_t kHeader = 0x01, kFooter = 0x02, kSchema = 0x03,
                   kChannel = 0x04, kMessage = 0x05, kChunk = 0x06,
@@ -94,11 +94,11 @@ std::vector<uint8_t> DecompressZstd(const uint8_t* src, size_t size,
   const size_t n = ZSTD_decompress(out.data(), out.size(), src, size);
   if (ZSTD_isError(n) || n != out_size) {
     throw FormatError(
-        path, fmt::format("MCAP chunk at byte {}: zstd data is corrupt ({})",
-                          offset,
-                          ZSTD_isError(n) ? ZSTD_getErrorName(n)
-                                          : fmt::format("{} bytes, not {}", n,
-                                                        out_size)));
+        path,
+        fmt::format("MCAP chunk at byte {}: zstd data is corrupt ({})", offset,
+                    ZSTD_isError(n)
+                        ? ZSTD_getErrorName(n)
+                        : fmt::format("{} bytes, not {}", n, out_size)));
   }
   return out;
 }
@@ -165,16 +165,18 @@ McapReader::McapReader(const fs::path& path) : path_(path) {
   }
   ReadExact(0, head.data(), head.size());
   if (head != kMagic) {
-    throw FormatError(path, "not an MCAP file (its first bytes are not the "
-                            "MCAP magic)");
+    throw FormatError(path,
+                      "not an MCAP file (its first bytes are not the "
+                      "MCAP magic)");
   }
   std::array<uint8_t, 9> rec{};
   ReadExact(8, rec.data(), rec.size());
   uint64_t len = 0;
   std::memcpy(&len, rec.data() + 1, 8);
   if (rec[0] != kHeader || len > file_size_ - 17) {
-    throw FormatError(path, "MCAP file without a Header record after the "
-                            "magic");
+    throw FormatError(path,
+                      "MCAP file without a Header record after the "
+                      "magic");
   }
   std::vector<uint8_t> body(len);
   ReadExact(17, body.data(), body.size());
@@ -188,8 +190,8 @@ void McapReader::ReadExact(uint64_t offset, uint8_t* out, size_t size) {
   file_.seekg(static_cast<std::streamoff>(offset));
   if (!file_.read(reinterpret_cast<char*>(out),
                   static_cast<std::streamsize>(size))) {
-    throw IoError(path_, fmt::format("cannot read {} bytes at byte {}", size,
-                                     offset));
+    throw IoError(path_,
+                  fmt::format("cannot read {} bytes at byte {}", size, offset));
   }
 }
 
@@ -198,9 +200,10 @@ void McapReader::Scan(const Visitor& visit) {
   std::vector<uint8_t> body;
   while (pos < file_size_) {
     if (file_size_ - pos < 9) {
-      spdlog::warn("{}: ends inside a record header at byte {} (a recording "
-                   "cut short?); read what came before",
-                   path_.string(), pos);
+      spdlog::warn(
+          "{}: ends inside a record header at byte {} (a recording "
+          "cut short?); read what came before",
+          path_.string(), pos);
       return;
     }
     std::array<uint8_t, 9> head{};
@@ -210,9 +213,10 @@ void McapReader::Scan(const Visitor& visit) {
     std::memcpy(&len, head.data() + 1, 8);
     const uint64_t body_offset = pos + 9;
     if (len > file_size_ - body_offset) {
-      spdlog::warn("{}: the record at byte {} runs past the end of the file "
-                   "(a recording cut short?); read what came before",
-                   path_.string(), pos);
+      spdlog::warn(
+          "{}: the record at byte {} runs past the end of the file "
+          "(a recording cut short?); read what came before",
+          path_.string(), pos);
       return;
     }
     if (opcode == kDataEnd || opcode == kFooter) return;
@@ -317,11 +321,11 @@ const std::vector<uint8_t>& McapReader::Chunk(uint64_t offset) {
                                          offset));
   }
   if (out_size > kMaxChunkBytes) {
-    throw FormatError(path_, fmt::format("MCAP chunk at byte {}: {} bytes "
-                                         "uncompressed (over the {} MiB "
-                                         "semrec accepts)",
-                                         offset, out_size,
-                                         kMaxChunkBytes >> 20));
+    throw FormatError(path_,
+                      fmt::format("MCAP chunk at byte {}: {} bytes "
+                                  "uncompressed (over the {} MiB "
+                                  "semrec accepts)",
+                                  offset, out_size, kMaxChunkBytes >> 20));
   }
   std::vector<uint8_t> records;
   if (compression.empty()) {
@@ -361,8 +365,8 @@ const std::vector<uint8_t>& McapReader::Chunk(uint64_t offset) {
 std::vector<uint8_t> McapReader::Read(const McapMessageRef& ref) {
   if (ref.chunk_offset == McapMessageRef::kNoChunk) {
     if (ref.offset > file_size_ || ref.size > file_size_ - ref.offset) {
-      throw FormatError(path_, fmt::format("no message at byte {}",
-                                           ref.offset));
+      throw FormatError(path_,
+                        fmt::format("no message at byte {}", ref.offset));
     }
     std::vector<uint8_t> out(ref.size);
     ReadExact(ref.offset, out.data(), out.size());

@@ -76,9 +76,8 @@ class McapReader {
   /// are then complete for the messages visited so far). `data` is valid
   /// only during the call. Throws FormatError naming the file and the byte
   /// offset for a broken record, an unknown compression or a CRC mismatch.
-  using Visitor =
-      std::function<void(const McapMessageInfo& info, const uint8_t* data,
-                         size_t size)>;
+  using Visitor = std::function<void(const McapMessageInfo& info,
+                                     const uint8_t* data, size_t size)>;
   void Scan(const Visitor& visit);
 
   /// The bytes of one message Scan() reported.

@@ -53,7 +53,8 @@ McapWriter::~McapWriter() {
   if (!closed_) {
     try {
       Close();
-    } catch (...) {  // NOLINT(bugprone-empty-catch): a destructor must not throw
+    } catch (
+        ...) {  // NOLINT(bugprone-empty-catch): a destructor must not throw
     }
   }
 }
@@ -121,9 +122,8 @@ void McapWriter::FlushChunk() {
   std::vector<uint8_t> packed;
   if (options_.compression == "zstd") {
     packed.resize(ZSTD_compressBound(chunk_.size()));
-    const size_t n =
-        ZSTD_compress(packed.data(), packed.size(), chunk_.data(),
-                      chunk_.size(), 1);
+    const size_t n = ZSTD_compress(packed.data(), packed.size(), chunk_.data(),
+                                   chunk_.size(), 1);
     if (ZSTD_isError(n)) throw Error("zstd compression failed");
     packed.resize(n);
   } else if (options_.compression == "lz4") {

@@ -16,11 +16,10 @@ namespace {
 // from the end of the header.
 class CdrReader {
  public:
-  CdrReader(const uint8_t* data, size_t size, const char* type)
-      : type_(type) {
+  CdrReader(const uint8_t* data, size_t size, const char* type) : type_(type) {
     if (size < 4 || data[0] != 0) {
-      throw CdrError(fmt::format("{}: not CDR (bad encapsulation header)",
-                                 type_));
+      throw CdrError(
+          fmt::format("{}: not CDR (bad encapsulation header)", type_));
     }
     if (data[1] > 1) {
       throw CdrError(fmt::format(
@@ -86,11 +85,11 @@ class CdrReader {
     double q[4];
     for (double& v : q) v = Get<double>();
     const Eigen::Quaterniond quat(q[3], q[0], q[1], q[2]);
-    if (!t.allFinite() || !quat.coeffs().allFinite() ||
-        quat.norm() < 1e-6) {
-      throw CdrError(fmt::format("{}: a pose with a non-finite or zero "
-                                 "rotation",
-                                 type_));
+    if (!t.allFinite() || !quat.coeffs().allFinite() || quat.norm() < 1e-6) {
+      throw CdrError(
+          fmt::format("{}: a pose with a non-finite or zero "
+                      "rotation",
+                      type_));
     }
     return Transform::FromQuaternion(quat, t);
   }
@@ -107,9 +106,10 @@ class CdrReader {
   }
   void Need(uint64_t n) const {
     if (n > size_ - pos_) {
-      throw CdrError(fmt::format("{}: message ends early (needs {} more "
-                                 "bytes at offset {}, has {})",
-                                 type_, n, pos_ + 4, size_ - pos_));
+      throw CdrError(
+          fmt::format("{}: message ends early (needs {} more "
+                      "bytes at offset {}, has {})",
+                      type_, n, pos_ + 4, size_ - pos_));
     }
   }
 
@@ -172,8 +172,8 @@ auto Decoded(const std::string& what, F&& decode) {
 void CheckImage(const RosImage& m, int bytes_per_pixel) {
   if (m.width == 0 || m.height == 0 || m.width > 1 << 15 ||
       m.height > 1 << 15) {
-    throw CdrError(fmt::format("Image: size {}x{} is not usable", m.width,
-                               m.height));
+    throw CdrError(
+        fmt::format("Image: size {}x{} is not usable", m.width, m.height));
   }
   const uint64_t row = uint64_t{m.width} * bytes_per_pixel;
   if (m.step < row || uint64_t{m.step} * m.height > m.data.size()) {
@@ -213,8 +213,7 @@ RosImage DecodeRosImage(const uint8_t* data, size_t size) {
   return m;
 }
 
-RosCompressedImage DecodeRosCompressedImage(const uint8_t* data,
-                                            size_t size) {
+RosCompressedImage DecodeRosCompressedImage(const uint8_t* data, size_t size) {
   CdrReader r(data, size, "sensor_msgs/msg/CompressedImage");
   RosCompressedImage m;
   m.header = r.Header();
@@ -235,8 +234,7 @@ RosCameraInfo DecodeRosCameraInfo(const uint8_t* data, size_t size) {
   return m;  // r, p, binning and roi are not used
 }
 
-std::vector<RosTransform> DecodeRosTfMessage(const uint8_t* data,
-                                             size_t size) {
+std::vector<RosTransform> DecodeRosTfMessage(const uint8_t* data, size_t size) {
   CdrReader r(data, size, "tf2_msgs/msg/TFMessage");
   // A transform is at least a header (12 bytes) + child (4) + 56 bytes.
   const uint32_t n = r.Count(72);
@@ -322,8 +320,9 @@ DepthImage RosDepth(const RosImage& m) {
     DepthImage16 raw(w, h);
     for (int y = 0; y < h; ++y) {
       for (int x = 0; x < w; ++x) {
-        raw(x, y) = Sample<uint16_t>(m, size_t{static_cast<size_t>(y)} * m.step +
-                                            size_t{static_cast<size_t>(x)} * 2);
+        raw(x, y) =
+            Sample<uint16_t>(m, size_t{static_cast<size_t>(y)} * m.step +
+                                    size_t{static_cast<size_t>(x)} * 2);
       }
     }
     return DepthToMeters(raw, 1000.0);
@@ -407,7 +406,8 @@ std::string RosSchemaText(const std::string& type) {
         "distortion_model\nfloat64[] d\nfloat64[9] k\nfloat64[9] "
         "r\nfloat64[12] p\nuint32 binning_x\nuint32 binning_y\n"
         "RegionOfInterest roi\n",
-        {header, time,
+        {header,
+         time,
          {"sensor_msgs/RegionOfInterest",
           "uint32 x_offset\nuint32 y_offset\nuint32 height\nuint32 "
           "width\nbool do_rectify\n"}});
@@ -418,20 +418,25 @@ std::string RosSchemaText(const std::string& type) {
         {{"geometry_msgs/TransformStamped",
           "std_msgs/Header header\nstring child_frame_id\nTransform "
           "transform\n"},
-         header, time,
+         header,
+         time,
          {"geometry_msgs/Transform",
           "Vector3 translation\nQuaternion rotation\n"},
-         {"geometry_msgs/Vector3", kVector3Msg}, quaternion});
+         {"geometry_msgs/Vector3", kVector3Msg},
+         quaternion});
   }
   if (type == "nav_msgs/msg/Odometry") {
     return WithDependencies(
         "std_msgs/Header header\nstring child_frame_id\n"
         "geometry_msgs/PoseWithCovariance pose\n"
         "geometry_msgs/TwistWithCovariance twist\n",
-        {header, time,
+        {header,
+         time,
          {"geometry_msgs/PoseWithCovariance",
           "Pose pose\nfloat64[36] covariance\n"},
-         pose, point, quaternion,
+         pose,
+         point,
+         quaternion,
          {"geometry_msgs/TwistWithCovariance",
           "Twist twist\nfloat64[36] covariance\n"},
          {"geometry_msgs/Twist", "Vector3 linear\nVector3 angular\n"},
@@ -475,7 +480,7 @@ std::vector<uint8_t> EncodeRosCameraInfo(const RosCameraInfo& m) {
   for (double v : m.k) w.Put<double>(v);
   const double r[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};
   for (double v : r) w.Put<double>(v);
-  const double p[12] = {m.k[0], m.k[1], m.k[2], 0, m.k[3], m.k[4],
+  const double p[12] = {m.k[0], m.k[1], m.k[2], 0,      m.k[3], m.k[4],
                         m.k[5], 0,      m.k[6], m.k[7], m.k[8], 0};
   for (double v : p) w.Put<double>(v);
   w.Put<uint32_t>(0);  // binning
@@ -501,7 +506,7 @@ std::vector<uint8_t> EncodeRosOdometry(const RosPose& m) {
   w.Header(m.header);
   w.String(m.child_frame_id);
   w.Pose(m.T_parent_child);
-  for (int i = 0; i < 36; ++i) w.Put<double>(0.0);  // pose covariance
+  for (int i = 0; i < 36; ++i) w.Put<double>(0.0);      // pose covariance
   for (int i = 0; i < 6 + 36; ++i) w.Put<double>(0.0);  // twist
   return w.Take();
 }

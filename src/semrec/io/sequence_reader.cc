@@ -97,7 +97,8 @@ SequenceReader SequenceReader::Open(const fs::path& path,
         "(sequence.yaml/.json), TUM (rgb.txt + depth.txt + groundtruth.txt), "
         "Redwood "
         "(color/ + depth/ + *.log), 7-Scenes/3DMatch (frame-XXXXXX.depth.png + "
-        ".pose.txt), a ROS 2 bag (*.mcap, *.db3, or a folder with metadata.yaml), ScanNet "
+        ".pose.txt), a ROS 2 bag (*.mcap, *.db3, or a folder with "
+        "metadata.yaml), ScanNet "
         "*.sens. "
         "See README.md, 'Sequence layouts'.");
   }

@@ -143,26 +143,26 @@ std::vector<Message> Messages(const std::vector<BagFrame>& frames,
                                    ? "/camera/depth/"
                                    : "/camera/aligned_depth_to_color/";
   const std::string depth_topic =
-      depth_ns + (o.compressed_depth ? "image_raw/compressedDepth"
-                                     : "image_raw");
+      depth_ns +
+      (o.compressed_depth ? "image_raw/compressedDepth" : "image_raw");
   const int64_t t0 = int64_t{1700000000} * 1000000000;
   auto ns = [&](double s) { return t0 + std::llround(s * 1e9); };
   if (o.tf) {
-    out.push_back({"/tf_static", t0,
-                   EncodeRosTfMessage(
-                       {Tf(t0, "base_link", "camera_link", BaseCamera()),
-                        Tf(t0, "camera_link", kCameraFrame, LinkOptical()),
-                        Tf(t0, "camera_link", kDepthFrame,
-                           Transform(LinkOptical().rotation(),
-                                     Eigen::Vector3d(0, -o.depth_baseline_m,
-                                                     0)))})});
+    out.push_back(
+        {"/tf_static", t0,
+         EncodeRosTfMessage(
+             {Tf(t0, "base_link", "camera_link", BaseCamera()),
+              Tf(t0, "camera_link", kCameraFrame, LinkOptical()),
+              Tf(t0, "camera_link", kDepthFrame,
+                 Transform(LinkOptical().rotation(),
+                           Eigen::Vector3d(0, -o.depth_baseline_m, 0)))})});
     // map -> odom every 40 ms over the whole recording and a bit beyond.
     const double end = frames.empty() ? 0.0 : frames.back().timestamp_s + 0.1;
     for (double t = frames.empty() ? 0.0 : frames.front().timestamp_s - 0.1;
          t <= end; t += 0.04) {
       out.push_back(
-          {"/tf", ns(t), EncodeRosTfMessage({Tf(ns(t), "map", "odom",
-                                                MapOdom(t - 0.0))})});
+          {"/tf", ns(t),
+           EncodeRosTfMessage({Tf(ns(t), "map", "odom", MapOdom(t - 0.0))})});
     }
   }
   RosCameraInfo info;
@@ -176,18 +176,17 @@ std::vector<Message> Messages(const std::vector<BagFrame>& frames,
     if (o.tf) {
       const Transform T_base_camera = BaseCamera() * LinkOptical();
       const Transform T_odom_base = MapOdom(f.timestamp_s).Inverse() *
-                                    f.T_world_camera *
-                                    T_base_camera.Inverse();
-      out.push_back({"/tf", t,
-                     EncodeRosTfMessage({Tf(t, "odom", "base_link",
-                                            T_odom_base)})});
+                                    f.T_world_camera * T_base_camera.Inverse();
+      out.push_back(
+          {"/tf", t,
+           EncodeRosTfMessage({Tf(t, "odom", "base_link", T_odom_base)})});
     }
     if (o.odometry) {
       const Transform T_base_camera = BaseCamera() * LinkOptical();
-      out.push_back({"/odom", t,
-                     EncodeRosOdometry({Header(t, "map"), "base_link",
-                                        f.T_world_camera *
-                                            T_base_camera.Inverse()})});
+      out.push_back(
+          {"/odom", t,
+           EncodeRosOdometry({Header(t, "map"), "base_link",
+                              f.T_world_camera * T_base_camera.Inverse()})});
     }
     info.header = Header(t, kCameraFrame);
     out.push_back({"/camera/color/camera_info", t, EncodeRosCameraInfo(info)});
@@ -203,10 +202,9 @@ std::vector<Message> Messages(const std::vector<BagFrame>& frames,
       out.push_back({depth_topic, td, DepthMessage(f, td, o)});
     }
   }
-  std::stable_sort(out.begin(), out.end(),
-                   [](const Message& a, const Message& b) {
-                     return a.time_ns < b.time_ns;
-                   });
+  std::stable_sort(
+      out.begin(), out.end(),
+      [](const Message& a, const Message& b) { return a.time_ns < b.time_ns; });
   return out;
 }
 

@@ -83,9 +83,8 @@ std::vector<std::string> TfTree::Chain(const std::string& target,
   return {};
 }
 
-std::optional<Transform> TfTree::EdgeAt(const std::string& child,
-                                        const Edge& e, int64_t t_ns,
-                                        std::string* why) const {
+std::optional<Transform> TfTree::EdgeAt(const std::string& child, const Edge& e,
+                                        int64_t t_ns, std::string* why) const {
   if (e.samples.empty()) return std::nullopt;
   if (e.is_static) return e.samples.front().second;
   if (!e.sorted) {
@@ -114,23 +113,25 @@ std::optional<Transform> TfTree::EdgeAt(const std::string& child,
   const auto before = after - 1;
   const double span = static_cast<double>(after->first - before->first);
   const double a = span > 0 ? (t_ns - before->first) / span : 0.0;
-  const Eigen::Quaterniond q = before->second.Quaternion().slerp(
-      a, after->second.Quaternion());
+  const Eigen::Quaterniond q =
+      before->second.Quaternion().slerp(a, after->second.Quaternion());
   const Eigen::Vector3d t = (1.0 - a) * before->second.translation() +
                             a * after->second.translation();
   return Transform::FromQuaternion(q, t);
 }
 
 std::optional<Transform> TfTree::Lookup(const std::string& target,
-                                        const std::string& source,
-                                        int64_t t_ns, std::string* why) const {
+                                        const std::string& source, int64_t t_ns,
+                                        std::string* why) const {
   if (target == source) return Transform();
   const std::vector<std::string> chain = Chain(target, source);
   if (chain.empty()) {
     if (why != nullptr) {
       *why = fmt::format("no TF path from '{}' to '{}'{}", target, source,
-                         Has(source) ? "" : " ('" + source + "' is in no "
-                                                  "transform)");
+                         Has(source) ? ""
+                                     : " ('" + source +
+                                           "' is in no "
+                                           "transform)");
     }
     return std::nullopt;
   }
