@@ -51,6 +51,45 @@ print(f"{len(oa)} objects alike")
 PY
 done
 
+# Real frames (7-Scenes chess, depth in mm as the bag stores it): the same TSDF mesh from the bag
+# (MCAP and SQLite) and from the folder, vertex for vertex within 1 mm.
+chess="$SEMREC_SOURCE_DIR/../shared/data/7scenes_chess_0_99"
+if [ -d "$chess" ]; then
+  "$MAKE_BAG" "$chess" "$tmp/chess" --max-frames 3 || fail "writing the chess bag failed"
+  "$MAKE_BAG" "$chess" "$tmp/chess.db3" --max-frames 3 --storage sqlite3 --bare ||
+    fail "writing the chess SQLite bag failed"
+  "$SEMREC" tsdf "$chess" --max-frames 3 --voxel-size-m 0.02 -o "$tmp/chess_folder.ply" >/dev/null 2>&1 ||
+    fail "tsdf on the chess folder failed"
+  for bag in chess chess.db3; do
+    "$SEMREC" tsdf "$tmp/$bag" --voxel-size-m 0.02 -o "$tmp/$bag.ply" >/dev/null 2>&1 ||
+      fail "tsdf on the $bag bag failed"
+    python3 - "$tmp/chess_folder.ply" "$tmp/$bag.ply" <<'PY' || fail "the $bag bag gives another mesh"
+import struct, sys
+def vertices(path):
+    data = open(path, "rb").read()
+    end = data.index(b"end_header\n") + len(b"end_header\n")
+    header = data[:end].decode().splitlines()
+    n = next(int(l.split()[2]) for l in header if l.startswith("element vertex"))
+    props, in_vertex = [], False
+    for l in header:
+        if l.startswith("element"):
+            in_vertex = l.startswith("element vertex")
+        elif l.startswith("property") and in_vertex:
+            props.append(l.split()[1])
+    sizes = {"float": 4, "double": 8, "uchar": 1, "uint8": 1}
+    fmt = "<" + "".join({"float": "f", "double": "d", "uchar": "B", "uint8": "B"}[p] for p in props)
+    stride = sum(sizes[p] for p in props)
+    return [struct.unpack_from(fmt, data, end + i * stride)[:3] for i in range(n)]
+a, b = vertices(sys.argv[1]), vertices(sys.argv[2])
+worst = max((max(abs(x - y) for x, y in zip(p, q)) for p, q in zip(a, b)), default=0.0)
+print(f"{len(a)} vs {len(b)} vertices, largest difference {worst * 1000:.6f} mm")
+sys.exit(0 if len(a) == len(b) and len(a) > 1000 and worst < 1e-3 else 1)
+PY
+  done
+else
+  missing_chess=1
+fi
+
 # Bad input: not a bag, a damaged one, a missing topic.
 printf 'not a bag' >"$tmp/x.mcap"
 "$SEMREC" info "$tmp/x.mcap" >"$tmp/bad.txt" 2>&1 && fail "info accepted a file that is not MCAP"
@@ -58,3 +97,5 @@ grep -q "x.mcap: not an MCAP file" "$tmp/bad.txt" || { cat "$tmp/bad.txt"; fail 
 "$SEMREC" info "$tmp/zstd" --depth-topic /nope >"$tmp/bad.txt" 2>&1 && fail "info accepted a missing topic"
 grep -q "no topic '/nope'" "$tmp/bad.txt" || { cat "$tmp/bad.txt"; fail "unclear error for a missing topic"; }
 echo "bags: ok"
+# Reported as skipped (a failure in CI) when the real frames were missing.
+[ -z "${missing_chess:-}" ] || { echo "SKIP: no 7-Scenes sample data at $chess"; exit 77; }

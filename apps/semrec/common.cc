@@ -14,8 +14,9 @@ io::SequenceReaderOptions SequenceArgs::ReaderOptions() const {
 
 void AddSequenceArgs(CLI::App* cmd, SequenceArgs* args) {
   cmd->add_option("sequence", args->path,
-                  "Sequence folder, sequence.yaml, or a ROS 2 bag (*.mcap, "
-                  "*.db3, or a folder with metadata.yaml)")
+                  "Sequence folder, sequence.yaml, a ROS 2 bag (*.mcap, "
+                  "*.db3, or a folder with metadata.yaml) or a ScanNet .sens "
+                  "file")
       ->required();
   cmd->add_option("--stride", args->stride, "Use every n-th frame")
       ->capture_default_str();

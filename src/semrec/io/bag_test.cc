@@ -3,9 +3,11 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstring>
 #include <fstream>
 
 #include "semrec/core/error.h"
+#include "semrec/io/image_io.h"
 #include "semrec/io/mcap_reader.h"
 #include "semrec/io/mcap_writer.h"
 #include "semrec/io/ros_messages.h"
@@ -100,6 +102,31 @@ TEST(Cdr, BigEndianMessagesAreRead) {
   EXPECT_EQ(m.header.frame_id, "ab");
   EXPECT_EQ(m.encoding, "16UC1");
   EXPECT_FLOAT_EQ(RosDepth(m)(0, 0), 1.0f);
+}
+
+TEST(Cdr, CompressedDepthOfFloatDepthIsDequantised) {
+  // image_transport stores 32FC1 depth as v = a / d + b in a 16-bit PNG,
+  // a and b (float32) after the int32 format in its 12-byte header.
+  const float a = 1000.0f, b = 10.0f;
+  DepthImage16 v(3, 1);
+  v.values() = {0, static_cast<uint16_t>(a / 2.0f + b),
+                static_cast<uint16_t>(a / 0.5f + b)};
+  TempDir dir;
+  WritePng(dir.path() / "d.png", v);
+  std::ifstream in(dir.path() / "d.png", std::ios::binary);
+  std::vector<uint8_t> png(std::istreambuf_iterator<char>(in), {});
+  RosCompressedImage m;
+  m.format = "32FC1; compressedDepth png";
+  m.data.resize(12, 0);
+  std::memcpy(m.data.data() + 4, &a, 4);
+  std::memcpy(m.data.data() + 8, &b, 4);
+  m.data.insert(m.data.end(), png.begin(), png.end());
+  const DepthImage d = RosDepth(m);
+  EXPECT_EQ(d(0, 0), 0.0f);
+  EXPECT_NEAR(d(1, 0), 2.0f, 1e-5);
+  EXPECT_NEAR(d(2, 0), 0.5f, 1e-5);
+  m.format = "16UC1; compressedDepth png";  // the same PNG as millimetres
+  EXPECT_NEAR(RosDepth(m)(1, 0), 0.51f, 1e-6);
 }
 
 TEST(Cdr, BrokenMessagesAreClearErrors) {

@@ -351,9 +351,22 @@ DepthImage RosDepth(const RosCompressedImage& m) {
   const size_t skip = depth_transport ? 12 : 0;
   if (m.data.size() <= skip) throw CdrError(what + ": no image data");
   const std::vector<uint8_t> png(m.data.begin() + skip, m.data.end());
-  const DepthImage16 mm =
+  const DepthImage16 raw =
       Decoded(what, [&] { return DecodeDepthImage(png, "message"); });
-  return DepthToMeters(mm, 1000.0);
+  if (!depth_transport || m.format.rfind("32FC1", 0) != 0) {
+    return DepthToMeters(raw, 1000.0);  // 16UC1: millimetres
+  }
+  // 32FC1: inverse depth quantised as depth = a / (value - b), 0 = none.
+  float a = 0, b = 0;
+  std::memcpy(&a, m.data.data() + 4, 4);
+  std::memcpy(&b, m.data.data() + 8, 4);
+  DepthImage out(raw.width(), raw.height());
+  for (size_t p = 0; p < raw.values().size(); ++p) {
+    const float v = raw.values()[p];
+    const float d = v == 0.0f ? 0.0f : a / (v - b);
+    out.values()[p] = std::isfinite(d) && d > 0.0f ? d : 0.0f;
+  }
+  return out;
 }
 
 namespace {
