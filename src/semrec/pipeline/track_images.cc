@@ -29,7 +29,7 @@ TrackImagesResult TrackImages(
   for (size_t i = 0; i < inputs.size(); ++i) {
     // The recording's frame number (MOTChallenge frames start at 1).
     const int frame_number = 1 + static_cast<int>(i) * options.frame_step;
-    const ColorImage rgb = io::ReadColorImage(inputs[i].image);
+    const ColorImage rgb = inputs[i].Load();
     std::optional<std::vector<track::Detection>> boxes;
     if (given != nullptr) {
       const auto it = given->find(frame_number);

@@ -28,7 +28,7 @@ SegmentImagesResult SegmentImages(const infer::ModelRegistry& registry,
   double seconds = 0;
   SegmentImagesResult result;
   for (const auto& input : inputs) {
-    const ColorImage rgb = io::ReadColorImage(input.image);
+    const ColorImage rgb = input.Load();
     const auto start = std::chrono::steady_clock::now();
     HybridResult segmented;
     try {

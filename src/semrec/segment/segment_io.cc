@@ -28,26 +28,32 @@ std::vector<SegmentInput> ListSegmentInputs(const fs::path& path, int stride,
                                             size_t max_frames) {
   CheckArgument(stride >= 1, "segment: stride must be >= 1");
   std::vector<SegmentInput> inputs;
-  if (fs::is_regular_file(path)) {
-    if (!IsImageFile(path)) {
-      throw FormatError(path, "not an image (expected .png, .jpg or .jpeg)");
-    }
-    inputs.push_back({path.stem().string() + ".png", path});
+  if (fs::is_regular_file(path) && IsImageFile(path)) {
+    inputs.push_back({path.stem().string() + ".png", path, nullptr, 0});
     return inputs;
   }
-  RequireDirectory(path, "input");
   // An RGB-D sequence first: 7-Scenes and 3DMatch keep colour and depth
-  // images side by side in one folder, which is not an image folder.
+  // images side by side in one folder, which is not an image folder; bags
+  // and .sens files are single files.
   io::SequenceReaderOptions options;
   options.stride = stride;
   options.max_frames = max_frames;
-  if (const auto reader = io::SequenceReader::TryOpen(path, options)) {
-    for (const auto& frame : reader->index().frames) {
+  if (auto reader = io::SequenceReader::TryOpen(path, options)) {
+    auto shared =
+        std::make_shared<const io::SequenceReader>(std::move(*reader));
+    for (size_t i = 0; i < shared->size(); ++i) {
+      const auto& frame = shared->index().frames[i];
       inputs.push_back(
-          {frame.depth_path.filename().string(), frame.color_path});
+          {frame.depth_path.filename().string(), frame.color_path, shared, i});
     }
     return inputs;
   }
+  if (fs::is_regular_file(path)) {
+    throw FormatError(path,
+                      "not an image (.png, .jpg, .jpeg) nor an RGB-D "
+                      "sequence file (.mcap, .db3, .sens)");
+  }
+  RequireDirectory(path, "input");
   std::vector<fs::path> images;
   for (const auto& e : fs::directory_iterator(path)) {
     if (e.is_regular_file() && IsImageFile(e.path())) {
@@ -61,10 +67,15 @@ std::vector<SegmentInput> ListSegmentInputs(const fs::path& path, int stride,
   }
   std::sort(images.begin(), images.end());
   for (size_t i = 0; i < images.size(); i += static_cast<size_t>(stride)) {
-    inputs.push_back({images[i].stem().string() + ".png", images[i]});
+    inputs.push_back(
+        {images[i].stem().string() + ".png", images[i], nullptr, 0});
     if (max_frames && inputs.size() >= max_frames) break;
   }
   return inputs;
+}
+
+ColorImage SegmentInput::Load() const {
+  return sequence ? sequence->Read(frame).color : io::ReadColorImage(image);
 }
 
 ColorImage RenderLabelOverlay(const ColorImage& rgb, const LabelMap& semantic,

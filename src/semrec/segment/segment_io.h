@@ -4,11 +4,13 @@
 #pragma once
 
 #include <filesystem>
+#include <memory>
 #include <string>
 #include <vector>
 
 #include "semrec/core/image.h"
 #include "semrec/core/label_map.h"
+#include "semrec/io/sequence_reader.h"
 #include "semrec/segment/hybrid_segmenter.h"
 
 namespace semrec::segment {
@@ -17,10 +19,19 @@ struct SegmentInput {
   /// Output file name ("<stem>.png"; for sequences the depth file's name, so
   /// fusion's folder source finds the labels).
   std::string name;
+  /// The image file (for sequences: the frame's colour name, for messages).
   std::filesystem::path image;
+  /// Set for sequences: frames are read through the reader (bags, .sens
+  /// have no image files).
+  std::shared_ptr<const io::SequenceReader> sequence = nullptr;
+  size_t frame = 0;
+
+  /// The colour image (RGB8).
+  ColorImage Load() const;
 };
 
-/// An image file; a sequence folder (any layout SequenceReader reads); or a
+/// An image file; a sequence (any layout SequenceReader reads: a folder, a
+/// bag, a .sens file); or a
 /// folder of .png/.jpg/.jpeg images (sorted by name). Throws IoError /
 /// FormatError naming the path when it is none of these.
 std::vector<SegmentInput> ListSegmentInputs(const std::filesystem::path& path,

@@ -4,6 +4,7 @@
 
 #include "semrec/core/error.h"
 #include "semrec/io/sequence_reader.h"
+#include "semrec/io/test_bags.h"
 #include "semrec/testing/test_util.h"
 
 namespace semrec::segment {
@@ -22,6 +23,33 @@ TEST(ListSegmentInputs, SevenScenesFolderIsASequenceNotAnImageFolder) {
   EXPECT_EQ(inputs[0].image.filename(), "frame-000000.color.jpg");
   EXPECT_EQ(inputs[1].image.filename(), "frame-000005.color.jpg");
   EXPECT_EQ(ListSegmentInputs(chess, 1, 7).size(), 7u);
+}
+
+TEST(ListSegmentInputs, BagsAndSensFilesAreSequencesReadThroughTheReader) {
+  // No image files behind their frames: Load() decodes the messages.
+  testing::TempDir dir;
+  CameraIntrinsics k;
+  k.width = 16;
+  k.height = 12;
+  k.fx = k.fy = 15;
+  k.cx = 7.5;
+  k.cy = 5.5;
+  std::vector<io::testing::BagFrame> frames(3);
+  for (size_t i = 0; i < frames.size(); ++i) {
+    frames[i].color = ColorImage(16, 12, 3, static_cast<uint8_t>(40 * i));
+    frames[i].depth_m = DepthImage(16, 12, 1, 1.5f);
+    frames[i].timestamp_s = 0.1 * static_cast<double>(i);
+  }
+  io::testing::TestBagOptions bare;
+  bare.metadata_yaml = false;
+  io::testing::WriteTestBag(dir / "rec.mcap", frames, k, bare);
+  io::testing::WriteTestSens(dir / "scene.sens", frames, k, false, 1);
+  for (const char* file : {"rec.mcap", "scene.sens"}) {
+    const auto inputs = ListSegmentInputs(dir / file, 2);
+    ASSERT_EQ(inputs.size(), 2u) << file;
+    EXPECT_EQ(inputs[1].name, "frame-000002.depth.png") << file;
+    EXPECT_EQ(inputs[1].Load(), frames[2].color) << file;
+  }
 }
 
 TEST(ListSegmentInputs, ImageFolderFileAndErrors) {
