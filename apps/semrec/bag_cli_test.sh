@@ -17,7 +17,7 @@ tmp="$(mktemp -d)"; trap 'rm -rf "$tmp"' EXIT
 "$SEMREC" info "$tmp/zstd" >"$tmp/info.txt" 2>&1 || fail "info on the bag failed: $(tail -3 "$tmp/info.txt")"
 for want in "rosbag2 (mcap)" "/camera/color/image_raw" "sensor_msgs/msg/CameraInfo" \
   "TF map -> odom -> base_link -> camera_link -> camera_color_optical_frame" \
-  "frames: 8 of 8 colour images paired" "zstd chunk"; do
+  "frames: 8 of 8 colour images paired" "zstd chunk" "read by a linear scan"; do
   grep -qF "$want" "$tmp/info.txt" || { cat "$tmp/info.txt"; fail "info does not say '$want'"; }
 done
 

@@ -129,6 +129,9 @@ const readerFor = (text) => new serialization.MessageReader(rosmsg.parse(text, {
     fail(`trajectory ${info.trajectory_length_m} m, not 0.5 (map -> odom moved 0.25 m twice)`);
   }
   if (!info.pose_source.includes("map -> odom -> cam_optical")) fail(`poses: ${info.pose_source}`);
+  if (!info.details.some((d) => d.includes("read by the summary's chunk index"))) {
+    fail(`the summary's chunk index was not used: ${info.details.join("; ")}`);
+  }
   console.log("semrec reads the @mcap/core bag: 3 frames, intrinsics, depth and poses as written");
 }
 

@@ -61,7 +61,11 @@ class McapStorage : public BagStorage {
       text +=
           fmt::format(", {} {} chunk(s)", n, c.empty() ? "uncompressed" : c);
     }
-    return text;
+    const bool indexed =
+        std::all_of(readers_.begin(), readers_.end(),
+                    [](const auto& r) { return r->used_chunk_index(); });
+    return text + (indexed ? ", read by the summary's chunk index"
+                           : ", read by a linear scan");
   }
   fs::path File(const BagMessageRef& ref) const override {
     return readers_.at(ref.file)->path();

@@ -4,6 +4,7 @@
 #include <zlib.h>
 #include <zstd.h>
 
+#include <algorithm>
 #include <array>
 #include <cstring>
 #include <memory>
@@ -22,7 +23,7 @@ constexpr std::array<uint8_t, 8> kMagic = {0x89, 'M', 'C',  'A',
                                            'P',  '0', '\r', '\n'};
 constexpr uint8_t kHeader = 0x01, kFooter = 0x02, kSchema = 0x03,
                   kChannel = 0x04, kMessage = 0x05, kChunk = 0x06,
-                  kMetadata = 0x0C, kDataEnd = 0x0F;
+                  kChunkIndex = 0x08, kMetadata = 0x0C, kDataEnd = 0x0F;
 // Message record: channel id, sequence, log time, publish time, then data.
 constexpr uint64_t kMessageHead = 2 + 4 + 8 + 8;
 // A chunk larger than this decompressed is refused (rosbag2 writes ~1 MB).
@@ -195,7 +196,76 @@ void McapReader::ReadExact(uint64_t offset, uint8_t* out, size_t size) {
   }
 }
 
+void McapReader::VisitChunk(uint64_t offset, const Visitor& visit) {
+  const std::vector<uint8_t>& records = Chunk(offset);
+  uint64_t at = 0;
+  while (at < records.size()) {
+    if (records.size() - at < 9) {
+      throw FormatError(path_, fmt::format("MCAP chunk at byte {}: a record "
+                                           "header is cut off",
+                                           offset));
+    }
+    uint64_t n = 0;
+    std::memcpy(&n, records.data() + at + 1, 8);
+    if (n > records.size() - at - 9) {
+      throw FormatError(path_, fmt::format("MCAP chunk at byte {}: a record "
+                                           "runs past the chunk's end",
+                                           offset));
+    }
+    Record(records[at], records.data() + at + 9, n, offset, at + 9, visit);
+    at += 9 + n;
+  }
+}
+
+std::vector<uint64_t> McapReader::IndexedChunks() {
+  // Footer: opcode, length, summary start, summary offset start, CRC; then
+  // the closing magic.
+  constexpr uint64_t kFooterSize = 9 + 8 + 8 + 4;
+  if (file_size_ < 8 + kFooterSize + 8 + 17) return {};
+  const uint64_t footer_at = file_size_ - 8 - kFooterSize;
+  std::array<uint8_t, kFooterSize> footer{};
+  ReadExact(footer_at, footer.data(), footer.size());
+  uint64_t summary_start = 0;
+  std::memcpy(&summary_start, footer.data() + 9, 8);
+  if (footer[0] != kFooter || summary_start == 0 ||
+      summary_start >= footer_at) {
+    return {};
+  }
+  std::vector<uint8_t> summary(footer_at - summary_start);
+  ReadExact(summary_start, summary.data(), summary.size());
+  std::vector<std::pair<uint64_t, uint64_t>> chunks;  // (start time, offset)
+  uint64_t at = 0;
+  while (summary.size() - at >= 9) {
+    uint64_t n = 0;
+    std::memcpy(&n, summary.data() + at + 1, 8);
+    if (n > summary.size() - at - 9) return {};  // damaged: scan instead
+    const uint8_t opcode = summary[at];
+    Cursor c(summary.data() + at + 9, n, path_, summary_start + at);
+    if (opcode == kChunkIndex) {
+      const uint64_t start_time = c.Get<uint64_t>();
+      c.Skip(8);  // end time
+      const uint64_t offset = c.Get<uint64_t>();
+      if (offset < 8 || offset >= summary_start) return {};
+      chunks.emplace_back(start_time, offset);
+    } else if (opcode == kSchema || opcode == kChannel) {
+      Record(opcode, summary.data() + at + 9, n, McapMessageRef::kNoChunk,
+             summary_start + at + 9, {});
+    }
+    at += 9 + n;
+  }
+  std::sort(chunks.begin(), chunks.end());
+  std::vector<uint64_t> offsets;
+  for (const auto& [time, offset] : chunks) offsets.push_back(offset);
+  return offsets;
+}
+
 void McapReader::Scan(const Visitor& visit) {
+  used_chunk_index_ = false;
+  if (const std::vector<uint64_t> chunks = IndexedChunks(); !chunks.empty()) {
+    used_chunk_index_ = true;
+    for (uint64_t offset : chunks) VisitChunk(offset, visit);
+    return;
+  }
   uint64_t pos = 8;
   std::vector<uint8_t> body;
   while (pos < file_size_) {
@@ -223,25 +293,7 @@ void McapReader::Scan(const Visitor& visit) {
     if (opcode == kSchema || opcode == kChannel || opcode == kMessage ||
         opcode == kChunk || opcode == kMetadata) {
       if (opcode == kChunk) {
-        const std::vector<uint8_t>& records = Chunk(pos);
-        uint64_t at = 0;
-        while (at < records.size()) {
-          if (records.size() - at < 9) {
-            throw FormatError(path_, fmt::format("MCAP chunk at byte {}: a "
-                                                 "record header is cut off",
-                                                 pos));
-          }
-          uint64_t n = 0;
-          std::memcpy(&n, records.data() + at + 1, 8);
-          if (n > records.size() - at - 9) {
-            throw FormatError(
-                path_, fmt::format("MCAP chunk at byte {}: a record runs past "
-                                   "the chunk's end",
-                                   pos));
-          }
-          Record(records[at], records.data() + at + 9, n, pos, at + 9, visit);
-          at += 9 + n;
-        }
+        VisitChunk(pos, visit);
       } else {
         body.resize(len);
         ReadExact(body_offset, body.data(), body.size());

@@ -5,8 +5,9 @@
 // Message records, uncompressed or compressed with zstd or lz4 (frame format);
 // their CRC is checked unless it is 0 ("not computed").
 //
-// Reading is a linear scan of the data section (one chunk decompressed at a
-// time): Scan() visits every message with its location, Read() fetches one
+// Reading goes chunk by chunk in log-time order by the summary's chunk index
+// when the file has one, else by a linear scan of the data section (one chunk
+// decompressed at a time): Scan() visits every message with its location, Read() fetches one
 // message's bytes again by that location (the chunk it lies in is decompressed
 // and kept until another chunk is asked for). Memory does not grow with the
 // file, only with what the caller keeps (a location is 32 bytes).
@@ -91,11 +92,18 @@ class McapReader {
   const std::map<std::string, size_t>& chunk_compressions() const {
     return compressions_;
   }
+  /// Whether the last Scan() went by the summary's chunk index.
+  bool used_chunk_index() const { return used_chunk_index_; }
 
  private:
   // The decompressed records of the chunk at `offset` (cached).
   const std::vector<uint8_t>& Chunk(uint64_t offset);
   void ReadExact(uint64_t offset, uint8_t* out, size_t size);
+  // The chunks' offsets in log-time order from the summary's ChunkIndex
+  // records (empty when the file has no summary or no chunk index).
+  std::vector<uint64_t> IndexedChunks();
+  // The records of the chunk at `offset`, visited.
+  void VisitChunk(uint64_t offset, const Visitor& visit);
   // One record of the data section (top level or inside a chunk).
   void Record(uint8_t opcode, const uint8_t* body, uint64_t size,
               uint64_t chunk_offset, uint64_t body_offset,
@@ -109,6 +117,7 @@ class McapReader {
   std::map<uint16_t, McapChannel> channels_;
   std::vector<McapMetadata> metadata_;
   std::map<std::string, size_t> compressions_;
+  bool used_chunk_index_ = false;
   uint64_t cached_chunk_ = McapMessageRef::kNoChunk;
   std::vector<uint8_t> cached_records_;
 };
