@@ -51,19 +51,8 @@ print(f"{len(oa)} objects alike")
 PY
 done
 
-# Real frames (7-Scenes chess, depth in mm as the bag stores it): the same TSDF mesh from the bag
-# (MCAP and SQLite) and from the folder, vertex for vertex within 1 mm.
-chess="$SEMREC_SOURCE_DIR/../shared/data/7scenes_chess_0_99"
-if [ -d "$chess" ]; then
-  "$MAKE_BAG" "$chess" "$tmp/chess" --max-frames 3 || fail "writing the chess bag failed"
-  "$MAKE_BAG" "$chess" "$tmp/chess.db3" --max-frames 3 --storage sqlite3 --bare ||
-    fail "writing the chess SQLite bag failed"
-  "$SEMREC" tsdf "$chess" --max-frames 3 --voxel-size-m 0.02 -o "$tmp/chess_folder.ply" >/dev/null 2>&1 ||
-    fail "tsdf on the chess folder failed"
-  for bag in chess chess.db3; do
-    "$SEMREC" tsdf "$tmp/$bag" --voxel-size-m 0.02 -o "$tmp/$bag.ply" >/dev/null 2>&1 ||
-      fail "tsdf on the $bag bag failed"
-    python3 - "$tmp/chess_folder.ply" "$tmp/$bag.ply" <<'PY' || fail "the $bag bag gives another mesh"
+same_mesh() {  # folder.ply bag.ply: same vertex count (> 1000), each within 1 mm
+  python3 - "$1" "$2" <<'PY'
 import struct, sys
 def vertices(path):
     data = open(path, "rb").read()
@@ -85,9 +74,36 @@ worst = max((max(abs(x - y) for x, y in zip(p, q)) for p, q in zip(a, b)), defau
 print(f"{len(a)} vs {len(b)} vertices, largest difference {worst * 1000:.6f} mm")
 sys.exit(0 if len(a) == len(b) and len(a) > 1000 and worst < 1e-3 else 1)
 PY
+}
+
+# Real frames (7-Scenes chess, depth in mm as the bag stores it): the same TSDF mesh from the bag
+# (MCAP and SQLite) and from the folder, vertex for vertex within 1 mm.
+chess="$SEMREC_SOURCE_DIR/../shared/data/7scenes_chess_0_99"
+if [ -d "$chess" ]; then
+  "$MAKE_BAG" "$chess" "$tmp/chess" --max-frames 3 || fail "writing the chess bag failed"
+  "$MAKE_BAG" "$chess" "$tmp/chess.db3" --max-frames 3 --storage sqlite3 --bare ||
+    fail "writing the chess SQLite bag failed"
+  "$SEMREC" tsdf "$chess" --max-frames 3 --voxel-size-m 0.02 -o "$tmp/chess_folder.ply" >/dev/null 2>&1 ||
+    fail "tsdf on the chess folder failed"
+  for bag in chess chess.db3; do
+    "$SEMREC" tsdf "$tmp/$bag" --voxel-size-m 0.02 -o "$tmp/$bag.ply" >/dev/null 2>&1 ||
+      fail "tsdf on the $bag bag failed"
+    same_mesh "$tmp/chess_folder.ply" "$tmp/$bag.ply" || fail "the $bag bag gives another mesh"
   done
 else
   missing_chess=1
+fi
+# Bonn (TUM layout, depth in 1/5000 m, mocap poses corrected): as 32FC1 depth, the same mesh too.
+bonn="$SEMREC_SOURCE_DIR/../shared/data/bonn_crowd_150"
+if [ -d "$bonn" ] && [ -z "${missing_chess:-}" ]; then
+  corr=(--pose-correction "$SEMREC_SOURCE_DIR/data/poses/bonn_rgbd_dynamic.yaml")
+  "$SEMREC" tsdf "$bonn" "${corr[@]}" --max-frames 3 --voxel-size-m 0.03 -o "$tmp/bonn_folder.ply" \
+    >/dev/null 2>&1 || fail "tsdf on the Bonn folder failed"
+  "$MAKE_BAG" "$bonn" "$tmp/bonn" --max-frames 3 --float-depth --pose-correction \
+    "$SEMREC_SOURCE_DIR/data/poses/bonn_rgbd_dynamic.yaml" || fail "writing the Bonn bag failed"
+  "$SEMREC" tsdf "$tmp/bonn" --voxel-size-m 0.03 -o "$tmp/bonn_bag.ply" >/dev/null 2>&1 ||
+    fail "tsdf on the Bonn bag failed"
+  same_mesh "$tmp/bonn_folder.ply" "$tmp/bonn_bag.ply" || fail "the Bonn bag gives another mesh"
 fi
 
 # Bad input: not a bag, a damaged one, a missing topic.

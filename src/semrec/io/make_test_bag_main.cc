@@ -3,7 +3,7 @@
 // benchmark.
 //   semrec_make_test_bag SEQUENCE OUT [--storage mcap|sqlite3]
 //       [--compression zstd|lz4|none] [--compressed-color] [--compressed-depth]
-//       [--float-depth] [--max-frames N] [--bare] [--sens: a ScanNet .sens]
+//       [--float-depth] [--pose-correction YAML] [--max-frames N] [--bare] [--sens: a ScanNet .sens]
 #include <cstdio>
 #include <string>
 
@@ -31,6 +31,8 @@ int main(int argc, char** argv) {
       o.compressed_color = true;
     } else if (arg == "--compressed-depth") {
       o.compressed_depth = true;
+    } else if (arg == "--pose-correction") {
+      ro.pose_correction_path = next, ++a;
     } else if (arg == "--max-frames") {
       ro.max_frames = std::stoul(next), ++a;
     } else if (arg == "--float-depth") {
