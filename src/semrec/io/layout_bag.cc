@@ -226,27 +226,34 @@ class BagFrames : public FrameSource {
 
   std::vector<Pair> pairs;
 
+ private:
+  // One image message, as Image or CompressedImage; errors name the file.
+  template <typename Convert>
+  auto Decode(const BagMessageRef& ref, size_t i, const char* what,
+              bool compressed, Convert&& convert) const {
+    std::vector<uint8_t> b;
+    {
+      // The storage reads (seeks, the cached chunk) one at a time; decoding
+      // runs in parallel.
+      std::lock_guard<std::mutex> lock(mutex_);
+      b = bag_->Read(ref);
+    }
+    try {
+      return compressed ? convert(DecodeRosCompressedImage(b.data(), b.size()))
+                        : convert(DecodeRosImage(b.data(), b.size()));
+    } catch (const CdrError& e) {
+      throw FormatError(bag_->File(ref),
+                        fmt::format("frame {} {}: {}", i, what, e.what()));
+    }
+  }
+
+ public:
   void Read(size_t i, ColorImage* color, DepthImage* depth) const override {
-    std::lock_guard<std::mutex> lock(mutex_);
     const Pair& p = pairs.at(i);
-    try {
-      const std::vector<uint8_t> c = bag_->Read(p.color);
-      *color = color_compressed_
-                   ? RosColor(DecodeRosCompressedImage(c.data(), c.size()))
-                   : RosColor(DecodeRosImage(c.data(), c.size()));
-    } catch (const CdrError& e) {
-      throw FormatError(bag_->File(p.color),
-                        fmt::format("frame {} colour: {}", i, e.what()));
-    }
-    try {
-      const std::vector<uint8_t> d = bag_->Read(p.depth);
-      *depth = depth_compressed_
-                   ? RosDepth(DecodeRosCompressedImage(d.data(), d.size()))
-                   : RosDepth(DecodeRosImage(d.data(), d.size()));
-    } catch (const CdrError& e) {
-      throw FormatError(bag_->File(p.depth),
-                        fmt::format("frame {} depth: {}", i, e.what()));
-    }
+    *color = Decode(p.color, i, "colour", color_compressed_,
+                    [](auto&& m) { return RosColor(m); });
+    *depth = Decode(p.depth, i, "depth", depth_compressed_,
+                    [](auto&& m) { return RosDepth(m); });
     if (registration_) *depth = Register(*depth, *registration_);
   }
 

@@ -149,10 +149,15 @@ class SensFrames : public FrameSource {
   std::vector<SensFrame> frames;
 
   void Read(size_t i, ColorImage* color, DepthImage* depth) const override {
-    std::lock_guard<std::mutex> lock(mutex_);
     const SensFrame& f = frames.at(i);
     const uint32_t w = header_.depth_width, h = header_.depth_height;
-    std::vector<uint8_t> raw = file_.Read(f.depth_offset, f.depth_size);
+    std::vector<uint8_t> raw, color_bytes;
+    {
+      // The file reads one at a time; decoding runs in parallel.
+      std::lock_guard<std::mutex> lock(mutex_);
+      raw = file_.Read(f.depth_offset, f.depth_size);
+      color_bytes = file_.Read(f.color_offset, f.color_size);
+    }
     std::vector<uint16_t> d(size_t{w} * h);
     uLongf n = static_cast<uLongf>(d.size() * 2);
     if (header_.depth_compression == kDepthZlib) {
@@ -173,7 +178,7 @@ class SensFrames : public FrameSource {
     DepthImage16 mm(static_cast<int>(w), static_cast<int>(h));
     mm.values() = std::move(d);
     *depth = DepthToMeters(mm, header_.depth_shift);
-    *color = DecodeColor(i, file_.Read(f.color_offset, f.color_size));
+    *color = DecodeColor(i, color_bytes);
   }
 
  private:
