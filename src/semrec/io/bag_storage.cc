@@ -26,7 +26,16 @@ class McapStorage : public BagStorage {
     }
   }
 
+  uint64_t Extent() const override {
+    uint64_t bytes = 0;
+    std::error_code ec;
+    for (const auto& r : readers_) bytes += fs::file_size(r->path(), ec);
+    return bytes;
+  }
+
   void Scan(const std::function<void(const BagMessage&)>& visit) override {
+    uint64_t before = 0;  // bytes of the files already scanned
+    std::error_code ec;
     for (uint32_t f = 0; f < readers_.size(); ++f) {
       McapReader& r = *readers_[f];
       r.Scan([&](const McapMessageInfo& info, const uint8_t* data,
@@ -41,8 +50,12 @@ class McapStorage : public BagStorage {
         m.data = data;
         m.size = size;
         m.ref = {f, info.ref.chunk_offset, info.ref.offset, info.ref.size};
+        m.done = before + (info.ref.chunk_offset == McapMessageRef::kNoChunk
+                               ? info.ref.offset
+                               : info.ref.chunk_offset);
         visit(m);
       });
+      before += fs::file_size(r.path(), ec);
     }
   }
 
@@ -93,10 +106,15 @@ class SqliteStorage : public BagStorage {
               topics[sqlite3_column_int64(s, 0)] = {Text(s, 1), Text(s, 2)};
             });
       topics_.push_back(std::move(topics));
+      Query(dbs_.size() - 1, "SELECT COUNT(*) FROM messages",
+            [&](sqlite3_stmt* s) { count_ += sqlite3_column_int64(s, 0); });
     }
   }
 
+  uint64_t Extent() const override { return count_; }
+
   void Scan(const std::function<void(const BagMessage&)>& visit) override {
+    uint64_t done = 0;
     for (uint32_t f = 0; f < dbs_.size(); ++f) {
       Query(f,
             "SELECT id, topic_id, timestamp, data FROM messages ORDER BY "
@@ -116,6 +134,7 @@ class SqliteStorage : public BagStorage {
               m.size = static_cast<size_t>(sqlite3_column_bytes(s, 3));
               m.ref = {f, static_cast<uint64_t>(sqlite3_column_int64(s, 0)), 0,
                        0};
+              m.done = ++done;
               visit(m);
             });
     }
@@ -172,6 +191,7 @@ class SqliteStorage : public BagStorage {
   std::vector<fs::path> files_;
   std::vector<std::unique_ptr<sqlite3, decltype(&sqlite3_close)>> dbs_;
   std::vector<std::map<int64_t, std::pair<std::string, std::string>>> topics_;
+  uint64_t count_ = 0;
 };
 
 bool IsSqlite(const fs::path& path) {

@@ -25,6 +25,9 @@ struct BagMessage {
   const uint8_t* data = nullptr;
   size_t size = 0;
   BagMessageRef ref;
+  /// How far the scan is, in units of Extent() (bytes of MCAP, messages of
+  /// SQLite), for progress.
+  uint64_t done = 0;
 };
 
 class BagStorage {
@@ -32,6 +35,8 @@ class BagStorage {
   virtual ~BagStorage() = default;
   /// Visits every message, in each file's order (files in bag order).
   virtual void Scan(const std::function<void(const BagMessage&)>& visit) = 0;
+  /// What a whole Scan() goes through (see BagMessage::done).
+  virtual uint64_t Extent() const = 0;
   /// One message's bytes again.
   virtual std::vector<uint8_t> Read(const BagMessageRef& ref) = 0;
   /// "mcap" or "sqlite3", and a line about the files (compression...).

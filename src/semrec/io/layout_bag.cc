@@ -14,6 +14,7 @@
 #include <spdlog/spdlog.h>
 
 #include "semrec/core/error.h"
+#include "semrec/core/progress.h"
 #include "semrec/io/bag_storage.h"
 #include "semrec/io/layouts.h"
 #include "semrec/io/ros_messages.h"
@@ -69,7 +70,16 @@ struct BagScan {
 
 BagScan ScanBag(BagStorage* bag) {
   BagScan scan;
+  // Progress in percent of the bag (bytes of MCAP, messages of SQLite): a
+  // long recording takes a while to index.
+  const uint64_t extent = std::max<uint64_t>(1, bag->Extent());
+  Progress progress("indexing bag", 100);
+  size_t percent = 0;
   bag->Scan([&](const BagMessage& m) {
+    const auto now = static_cast<size_t>(std::min<uint64_t>(
+        100, static_cast<uint64_t>(100.0 * static_cast<double>(m.done) /
+                                   static_cast<double>(extent))));
+    if (now > percent) progress.Tick(now - percent), percent = now;
     TopicData& t = scan.topics[*m.topic];
     if (t.count == 0) {
       t.type = *m.type;
@@ -104,6 +114,7 @@ BagScan ScanBag(BagStorage* bag) {
       }
     }
   });
+  if (percent < 100) progress.Tick(100 - percent);
   return scan;
 }
 
