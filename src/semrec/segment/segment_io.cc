@@ -1,6 +1,7 @@
 #include "semrec/segment/segment_io.h"
 
 #include <algorithm>
+#include <cctype>
 #include <map>
 
 #include <nlohmann/json.hpp>
@@ -22,13 +23,27 @@ bool IsImageFile(const fs::path& p) {
   return ext == ".png" || ext == ".jpg" || ext == ".jpeg" || ext == ".ppm";
 }
 
+// Files that are sequences of their own: bags, ScanNet .sens, manifests.
+bool IsSequenceFile(const fs::path& path) {
+  std::string ext = path.extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(),
+                 [](unsigned char c) { return std::tolower(c); });
+  return ext == ".mcap" || ext == ".db3" || ext == ".sens" || ext == ".yaml" ||
+         ext == ".yml" || ext == ".json";
+}
+
 }  // namespace
 
 std::vector<SegmentInput> ListSegmentInputs(const fs::path& path, int stride,
                                             size_t max_frames) {
   CheckArgument(stride >= 1, "segment: stride must be >= 1");
   std::vector<SegmentInput> inputs;
-  if (fs::is_regular_file(path) && IsImageFile(path)) {
+  if (fs::is_regular_file(path) && !IsSequenceFile(path)) {
+    if (!IsImageFile(path)) {
+      throw FormatError(path,
+                        "not an image (.png, .jpg, .jpeg) nor an RGB-D "
+                        "sequence file (.mcap, .db3, .sens, sequence.yaml)");
+    }
     inputs.push_back({path.stem().string() + ".png", path, nullptr, 0});
     return inputs;
   }
@@ -49,9 +64,7 @@ std::vector<SegmentInput> ListSegmentInputs(const fs::path& path, int stride,
     return inputs;
   }
   if (fs::is_regular_file(path)) {
-    throw FormatError(path,
-                      "not an image (.png, .jpg, .jpeg) nor an RGB-D "
-                      "sequence file (.mcap, .db3, .sens)");
+    throw FormatError(path, "not an RGB-D sequence semrec reads");
   }
   RequireDirectory(path, "input");
   std::vector<fs::path> images;
