@@ -209,8 +209,16 @@ std::unique_ptr<BagStorage> FromMetadata(const fs::path& folder) {
   } catch (const YAML::Exception& e) {
     throw FormatError(yaml, std::string("not valid YAML: ") + e.what());
   }
-  if (!info) {
-    throw FormatError(yaml, "no rosbag2_bagfile_information");
+  if (!info) return nullptr;  // another tool's metadata.yaml: not a bag
+  const std::string compression = info["compression_mode"].as<std::string>("");
+  if (!compression.empty()) {
+    throw FormatError(
+        yaml, fmt::format("a compressed rosbag2 bag "
+                          "(compression_mode: {}, {}) is not "
+                          "read: decompress it first (ros2 bag "
+                          "decompress, or ros2 bag convert)",
+                          compression,
+                          info["compression_format"].as<std::string>("")));
   }
   const std::string storage = info["storage_identifier"].as<std::string>("");
   std::vector<fs::path> files;
@@ -244,7 +252,9 @@ std::unique_ptr<BagStorage> OpenBag(const fs::path& path) {
     return nullptr;
   }
   if (!fs::is_directory(path, ec)) return nullptr;
-  if (fs::exists(path / "metadata.yaml")) return FromMetadata(path);
+  if (fs::exists(path / "metadata.yaml")) {
+    if (auto bag = FromMetadata(path)) return bag;
+  }
   std::vector<fs::path> files = ListFiles(path, {".mcap"});
   if (!files.empty()) return std::make_unique<McapStorage>(files);
   files = ListFiles(path, {".db3"});

@@ -13,6 +13,7 @@
 #include "semrec/io/ros_messages.h"
 #include "semrec/io/sequence_reader.h"
 #include "semrec/io/test_bags.h"
+#include "semrec/io/test_sequences.h"
 #include "semrec/io/tf_tree.h"
 #include "semrec/testing/test_util.h"
 
@@ -127,6 +128,10 @@ TEST(Cdr, CompressedDepthOfFloatDepthIsDequantised) {
   EXPECT_NEAR(d(2, 0), 0.5f, 1e-5);
   m.format = "16UC1; compressedDepth png";  // the same PNG as millimetres
   EXPECT_NEAR(RosDepth(m)(1, 0), 0.51f, 1e-6);
+  m.format = "16UC1; compressedDepth";  // older image_transport: PNG
+  EXPECT_NEAR(RosDepth(m)(1, 0), 0.51f, 1e-6);
+  m.format = "16UC1; compressedDepth rvl";
+  EXPECT_THROW(RosDepth(m), CdrError);
 }
 
 TEST(Cdr, BrokenMessagesAreClearErrors) {
@@ -457,6 +462,41 @@ TEST(BagLayout, PosesFromAnOdometryTopicChainedToTheCameraByTf) {
   ExpectSameFrames(r, frames, false);
   ro.bag.pose_source = "/tf";  // not a pose topic
   EXPECT_THROW(SequenceReader::Open(dir.path() / "bag", ro), FormatError);
+}
+
+TEST(BagLayout, ReviewedEdgeCases) {
+  TempDir dir;
+  CameraIntrinsics k;
+  const auto frames = Frames(&k);
+  // A namespaced robot: /robot1/tf_static holds at every time.
+  testing::TestBagOptions ns;
+  ns.tf_namespace = "/robot1";
+  testing::WriteTestBag(dir.path() / "ns", frames, k, ns);
+  ExpectSameFrames(SequenceReader::Open(dir.path() / "ns"), frames, false);
+  // A 3x3 K file for a bag: the image size comes from the bag.
+  std::ofstream(dir.path() / "K.txt") << "31 0 15.5\n0 31 11.5\n0 0 1\n";
+  SequenceReaderOptions with_k;
+  with_k.intrinsics_path = dir.path() / "K.txt";
+  const SequenceReader r = SequenceReader::Open(dir.path() / "ns", with_k);
+  EXPECT_EQ(r.intrinsics().fx, 31);
+  EXPECT_EQ(r.intrinsics().width, 32);
+  // Another tool's metadata.yaml does not make a folder a bag.
+  fs::create_directories(dir.path() / "tum");
+  io::testing::WriteTum(dir.path() / "tum", 3);
+  std::ofstream(dir.path() / "tum" / "metadata.yaml") << "camera: kinect\n";
+  EXPECT_EQ(SequenceReader::Open(dir.path() / "tum").layout(), "tum");
+  // A compressed rosbag2 bag is named as such.
+  testing::WriteTestBag(dir.path() / "zipped", frames, k, {});
+  std::ofstream(dir.path() / "zipped" / "metadata.yaml", std::ios::app)
+      << "  compression_mode: FILE\n  compression_format: zstd\n";
+  try {
+    SequenceReader::Open(dir.path() / "zipped");
+    FAIL() << "no error";
+  } catch (const FormatError& e) {
+    EXPECT_NE(std::string(e.what()).find("compressed rosbag2 bag"),
+              std::string::npos)
+        << e.what();
+  }
 }
 
 TEST(BagLayout, BagsWithoutDepthOrPosesAreClearErrors) {

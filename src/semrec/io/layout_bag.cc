@@ -89,7 +89,11 @@ BagScan ScanBag(BagStorage* bag) {
     t.last_ns = m.log_time_ns;
     try {
       if (t.type == kTf) {
-        const bool is_static = *m.topic == "/tf_static";
+        // /tf_static, also namespaced (/robot1/tf_static).
+        const std::string& topic = *m.topic;
+        const bool is_static =
+            topic.size() >= 9 &&
+            topic.compare(topic.size() - 9, 9, "tf_static") == 0;
         for (const RosTransform& x : DecodeRosTfMessage(m.data, m.size)) {
           scan.tf.Add(x, is_static);
         }
@@ -201,6 +205,12 @@ struct Registration {
 };
 
 DepthImage Register(const DepthImage& d, const Registration& r) {
+  if (!d.SameSize(r.depth.width, r.depth.height)) {
+    throw CdrError(
+        fmt::format("depth image {}x{} but its CameraInfo says "
+                    "{}x{}: cannot register it",
+                    d.width(), d.height(), r.depth.width, r.depth.height));
+  }
   DepthImage out(r.color.width, r.color.height);
   for (int v = 0; v < d.height(); ++v) {
     for (int u = 0; u < d.width(); ++u) {
@@ -210,11 +220,13 @@ DepthImage Register(const DepthImage& d, const Registration& r) {
                                     (v - r.depth.cy) / r.depth.fy * z, z);
       const Eigen::Vector3d p = r.T_color_depth * p_depth;
       if (p.z() <= 0.0) continue;
-      const long x = std::lround(r.color.fx * p.x() / p.z() + r.color.cx);
-      const long y = std::lround(r.color.fy * p.y() / p.z() + r.color.cy);
-      if (x < 0 || y < 0 || x >= r.color.width || y >= r.color.height) {
-        continue;
+      const double u_c = r.color.fx * p.x() / p.z() + r.color.cx;
+      const double v_c = r.color.fy * p.y() / p.z() + r.color.cy;
+      if (!(u_c > -0.5 && v_c > -0.5 && u_c < r.color.width - 0.5 &&
+            v_c < r.color.height - 0.5)) {
+        continue;  // outside the colour image (or not finite)
       }
+      const long x = std::lround(u_c), y = std::lround(v_c);
       float& dst = out(static_cast<int>(x), static_cast<int>(y));
       const auto zc = static_cast<float>(p.z());
       if (dst == 0.0f || zc < dst) dst = zc;
@@ -265,7 +277,14 @@ class BagFrames : public FrameSource {
                     [](auto&& m) { return RosColor(m); });
     *depth = Decode(p.depth, i, "depth", depth_compressed_,
                     [](auto&& m) { return RosDepth(m); });
-    if (registration_) *depth = Register(*depth, *registration_);
+    if (registration_) {
+      try {
+        *depth = Register(*depth, *registration_);
+      } catch (const CdrError& e) {
+        throw FormatError(bag_->File(p.depth),
+                          fmt::format("frame {} depth: {}", i, e.what()));
+      }
+    }
   }
 
  private:
@@ -339,14 +358,43 @@ Choice ChooseTopics(const BagScan& scan, const fs::path& path,
 }
 
 // Intrinsics: an explicit file, else the colour camera's CameraInfo.
+// The size of the first colour image (a 3x3 K file has none).
+std::pair<int, int> FirstColorSize(BagStorage* bag, const TopicData& color,
+                                   const fs::path& path) {
+  if (color.messages.empty()) return {0, 0};
+  const std::vector<uint8_t> b = bag->Read(color.messages.front().ref);
+  try {
+    if (color.type == kImage) {
+      const RosImage m = DecodeRosImage(b.data(), b.size());
+      return {static_cast<int>(m.width), static_cast<int>(m.height)};
+    }
+    const ColorImage img =
+        RosColor(DecodeRosCompressedImage(b.data(), b.size()));
+    return {img.width(), img.height()};
+  } catch (const CdrError& e) {
+    throw FormatError(path, std::string("the first colour image: ") + e.what());
+  }
+}
+
 void SetIntrinsics(const BagScan& scan, const Choice& c, const fs::path& path,
-                   const SequenceReaderOptions& options, SequenceIndex* index) {
+                   const SequenceReaderOptions& options, BagStorage* bag,
+                   SequenceIndex* index) {
+  const auto it = scan.topics.find(c.info_topic);
   if (!options.intrinsics_path.empty()) {
-    index->intrinsics = ReadIntrinsicsFile(options.intrinsics_path, 0, 0);
+    // A 3x3 K file has no image size: the CameraInfo's, else the first
+    // colour image's.
+    std::pair<int, int> size{0, 0};
+    if (it != scan.topics.end() && !it->second.info.empty()) {
+      size = {static_cast<int>(it->second.info[0].width),
+              static_cast<int>(it->second.info[0].height)};
+    } else {
+      size = FirstColorSize(bag, scan.topics.at(c.color_topic), path);
+    }
+    index->intrinsics =
+        ReadIntrinsicsFile(options.intrinsics_path, size.first, size.second);
     index->intrinsics_source = options.intrinsics_path.filename().string();
     return;
   }
-  const auto it = scan.topics.find(c.info_topic);
   if (c.info_topic.empty() || it == scan.topics.end() ||
       it->second.info.empty()) {
     throw FormatError(path, fmt::format("no CameraInfo for the colour topic "
@@ -390,8 +438,15 @@ void ChooseRegistration(const BagScan& scan, const fs::path& path,
                           "registered: {}",
                           c->depth_topic, depth.frame_id, color.frame_id, why));
   }
-  c->registration =
-      Registration{FromInfo(scan.topics.at(depth_info).info[0]), color_k, *T};
+  const CameraIntrinsics depth_k = FromInfo(scan.topics.at(depth_info).info[0]);
+  try {
+    depth_k.Check();
+  } catch (const InvalidArgument& e) {
+    throw FormatError(path, fmt::format("the depth camera's CameraInfo ({}) "
+                                        "cannot register depth: {}",
+                                        depth_info, e.what()));
+  }
+  c->registration = Registration{depth_k, color_k, *T};
   c->depth_note = fmt::format(
       "depth registered into the colour camera (depth frame '{}', intrinsics "
       "{}, extrinsic from TF)",
@@ -529,7 +584,7 @@ std::optional<SequenceIndex> IndexBag(const fs::path& path,
   index.details.push_back("storage: " + bag->Describe());
 
   Choice choice = ChooseTopics(scan, path, options.bag);
-  SetIntrinsics(scan, choice, path, options, &index);
+  SetIntrinsics(scan, choice, path, options, bag.get(), &index);
   ChooseRegistration(scan, path, index.intrinsics, &choice);
   const PoseLookup poses(scan, options.bag, choice.camera, path);
   index.pose_source = poses.source();

@@ -28,6 +28,8 @@ constexpr uint8_t kHeader = 0x01, kFooter = 0x02, kSchema = 0x03,
 constexpr uint64_t kMessageHead = 2 + 4 + 8 + 8;
 // A chunk larger than this decompressed is refused (rosbag2 writes ~1 MB).
 constexpr uint64_t kMaxChunkBytes = uint64_t{1} << 30;
+// A summary larger than this is not trusted (a damaged footer): scan instead.
+constexpr uint64_t kMaxSummaryBytes = uint64_t{256} << 20;
 
 // Bounds-checked little-endian reads of one record's body.
 class Cursor {
@@ -197,7 +199,8 @@ void McapReader::ReadExact(uint64_t offset, uint8_t* out, size_t size) {
 }
 
 void McapReader::VisitChunk(uint64_t offset, const Visitor& visit) {
-  const std::vector<uint8_t>& records = Chunk(offset);
+  // Our own copy: a visitor may Read() another chunk, which refills the cache.
+  const std::vector<uint8_t> records = Chunk(offset);
   uint64_t at = 0;
   while (at < records.size()) {
     if (records.size() - at < 9) {
@@ -217,6 +220,31 @@ void McapReader::VisitChunk(uint64_t offset, const Visitor& visit) {
   }
 }
 
+bool McapReader::TopLevelRecords(uint64_t data_end) {
+  // Record headers only, seeking past chunks: the schemas, channels and
+  // metadata outside chunks; a message outside chunks (which no chunk index
+  // lists) means the file needs the linear scan.
+  uint64_t pos = 8;
+  std::array<uint8_t, 9> head{};
+  std::vector<uint8_t> body;
+  while (pos < data_end && data_end - pos >= 9) {
+    ReadExact(pos, head.data(), head.size());
+    uint64_t len = 0;
+    std::memcpy(&len, head.data() + 1, 8);
+    if (len > data_end - pos - 9) return false;
+    const uint8_t opcode = head[0];
+    if (opcode == kMessage) return false;
+    if (opcode == kDataEnd) break;
+    if (opcode == kSchema || opcode == kChannel || opcode == kMetadata) {
+      body.resize(len);
+      ReadExact(pos + 9, body.data(), body.size());
+      Record(opcode, body.data(), len, McapMessageRef::kNoChunk, pos + 9, {});
+    }
+    pos += 9 + len;
+  }
+  return true;
+}
+
 std::vector<uint64_t> McapReader::IndexedChunks() {
   // Footer: opcode, length, summary start, summary offset start, CRC; then
   // the closing magic.
@@ -231,28 +259,34 @@ std::vector<uint64_t> McapReader::IndexedChunks() {
       summary_start >= footer_at) {
     return {};
   }
+  if (footer_at - summary_start > kMaxSummaryBytes) return {};  // scan instead
   std::vector<uint8_t> summary(footer_at - summary_start);
   ReadExact(summary_start, summary.data(), summary.size());
   std::vector<std::pair<uint64_t, uint64_t>> chunks;  // (start time, offset)
   uint64_t at = 0;
-  while (summary.size() - at >= 9) {
-    uint64_t n = 0;
-    std::memcpy(&n, summary.data() + at + 1, 8);
-    if (n > summary.size() - at - 9) return {};  // damaged: scan instead
-    const uint8_t opcode = summary[at];
-    Cursor c(summary.data() + at + 9, n, path_, summary_start + at);
-    if (opcode == kChunkIndex) {
-      const uint64_t start_time = c.Get<uint64_t>();
-      c.Skip(8);  // end time
-      const uint64_t offset = c.Get<uint64_t>();
-      if (offset < 8 || offset >= summary_start) return {};
-      chunks.emplace_back(start_time, offset);
-    } else if (opcode == kSchema || opcode == kChannel) {
-      Record(opcode, summary.data() + at + 9, n, McapMessageRef::kNoChunk,
-             summary_start + at + 9, {});
+  try {
+    while (summary.size() - at >= 9) {
+      uint64_t n = 0;
+      std::memcpy(&n, summary.data() + at + 1, 8);
+      if (n > summary.size() - at - 9) return {};  // damaged: scan instead
+      const uint8_t opcode = summary[at];
+      Cursor c(summary.data() + at + 9, n, path_, summary_start + at);
+      if (opcode == kChunkIndex) {
+        const uint64_t start_time = c.Get<uint64_t>();
+        c.Skip(8);  // end time
+        const uint64_t offset = c.Get<uint64_t>();
+        if (offset < 8 || offset >= summary_start) return {};
+        chunks.emplace_back(start_time, offset);
+      } else if (opcode == kSchema || opcode == kChannel) {
+        Record(opcode, summary.data() + at + 9, n, McapMessageRef::kNoChunk,
+               summary_start + at + 9, {});
+      }
+      at += 9 + n;
     }
-    at += 9 + n;
+  } catch (const FormatError&) {
+    return {};  // a damaged summary: the linear scan reads the data itself
   }
+  if (chunks.empty() || !TopLevelRecords(summary_start)) return {};
   std::sort(chunks.begin(), chunks.end());
   std::vector<uint64_t> offsets;
   for (const auto& [time, offset] : chunks) offsets.push_back(offset);

@@ -7,10 +7,11 @@
 //
 // Reading goes chunk by chunk in log-time order by the summary's chunk index
 // when the file has one, else by a linear scan of the data section (one chunk
-// decompressed at a time): Scan() visits every message with its location, Read() fetches one
-// message's bytes again by that location (the chunk it lies in is decompressed
-// and kept until another chunk is asked for). Memory does not grow with the
-// file, only with what the caller keeps (a location is 32 bytes).
+// decompressed at a time): Scan() visits every message with its location,
+// Read() fetches one message's bytes again by that location (the chunk it lies
+// in is decompressed and kept until another chunk is asked for). Memory does
+// not grow with the file, only with what the caller keeps (a location is 32
+// bytes).
 #pragma once
 
 #include <cstdint>
@@ -102,6 +103,9 @@ class McapReader {
   // The chunks' offsets in log-time order from the summary's ChunkIndex
   // records (empty when the file has no summary or no chunk index).
   std::vector<uint64_t> IndexedChunks();
+  // Schemas, channels and metadata outside chunks, up to `data_end`; false
+  // when a message lies outside chunks (the chunk index does not list it).
+  bool TopLevelRecords(uint64_t data_end);
   // The records of the chunk at `offset`, visited.
   void VisitChunk(uint64_t offset, const Visitor& visit);
   // One record of the data section (top level or inside a chunk).

@@ -4,6 +4,7 @@
 #include <zlib.h>
 #include <zstd.h>
 
+#include <algorithm>
 #include <cstring>
 #include <fstream>
 
@@ -101,6 +102,7 @@ void McapWriter::AddMetadata(const std::string& name,
 
 void McapWriter::Write(uint16_t channel_id, uint64_t log_time_ns,
                        const std::vector<uint8_t>& data) {
+  CheckArgument(!closed_, "MCAP writer: Write() after Close()");
   std::vector<uint8_t> body;
   Put<uint16_t>(&body, channel_id);
   Put<uint32_t>(&body, sequence_[channel_id]++);
@@ -111,7 +113,11 @@ void McapWriter::Write(uint16_t channel_id, uint64_t log_time_ns,
     PutRecord(&out_, 0x05, body);
     return;
   }
-  if (chunk_.empty()) chunk_start_ = log_time_ns;
+  if (chunk_.empty()) {
+    chunk_start_ = log_time_ns;
+  } else {
+    chunk_start_ = std::min(chunk_start_, log_time_ns);
+  }
   chunk_end_ = std::max(chunk_end_, log_time_ns);
   PutRecord(&chunk_, 0x05, body);
   if (chunk_.size() >= options_.chunk_bytes) FlushChunk();

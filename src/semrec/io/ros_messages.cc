@@ -343,8 +343,9 @@ DepthImage RosDepth(const RosCompressedImage& m) {
   const std::string what = "CompressedImage (" + m.format + ")";
   const bool depth_transport =
       m.format.find("compressedDepth") != std::string::npos;
-  if (depth_transport && m.format.find("png") == std::string::npos) {
-    throw CdrError(what + ": only PNG compressedDepth is read");
+  // Older image_transport names no codec: PNG then; RVL is not read.
+  if (depth_transport && m.format.find("rvl") != std::string::npos) {
+    throw CdrError(what + ": RVL compressedDepth is not read (PNG is)");
   }
   // image_transport's compressedDepth: int32 format + two float32
   // quantisation parameters before the PNG (used for 32FC1 only).

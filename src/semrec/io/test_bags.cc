@@ -149,7 +149,7 @@ std::vector<Message> Messages(const std::vector<BagFrame>& frames,
   auto ns = [&](double s) { return t0 + std::llround(s * 1e9); };
   if (o.tf) {
     out.push_back(
-        {"/tf_static", t0,
+        {o.tf_namespace + "/tf_static", t0,
          EncodeRosTfMessage(
              {Tf(t0, "base_link", "camera_link", BaseCamera()),
               Tf(t0, "camera_link", kCameraFrame, LinkOptical()),
@@ -161,7 +161,7 @@ std::vector<Message> Messages(const std::vector<BagFrame>& frames,
     for (double t = frames.empty() ? 0.0 : frames.front().timestamp_s - 0.1;
          t <= end; t += 0.04) {
       out.push_back(
-          {"/tf", ns(t),
+          {o.tf_namespace + "/tf", ns(t),
            EncodeRosTfMessage({Tf(ns(t), "map", "odom", MapOdom(t - 0.0))})});
     }
   }
@@ -178,7 +178,7 @@ std::vector<Message> Messages(const std::vector<BagFrame>& frames,
       const Transform T_odom_base = MapOdom(f.timestamp_s).Inverse() *
                                     f.T_world_camera * T_base_camera.Inverse();
       out.push_back(
-          {"/tf", t,
+          {o.tf_namespace + "/tf", t,
            EncodeRosTfMessage({Tf(t, "odom", "base_link", T_odom_base)})});
     }
     if (o.odometry) {
@@ -209,7 +209,10 @@ std::vector<Message> Messages(const std::vector<BagFrame>& frames,
 }
 
 std::string TypeOf(const std::string& topic) {
-  if (topic == "/tf" || topic == "/tf_static") return "tf2_msgs/msg/TFMessage";
+  if (topic.size() >= 3 && (topic.compare(topic.size() - 3, 3, "/tf") == 0 ||
+                            topic.find("tf_static") != std::string::npos)) {
+    return "tf2_msgs/msg/TFMessage";
+  }
   if (topic == "/odom") return "nav_msgs/msg/Odometry";
   if (topic.find("camera_info") != std::string::npos) {
     return "sensor_msgs/msg/CameraInfo";

@@ -51,6 +51,9 @@ struct TestBagOptions {
   /// aligned_depth_to_color). The depth images given are then the depth
   /// camera's (same intrinsics).
   double depth_baseline_m = 0.0;
+  /// Prefix of the TF topics (a namespaced robot: "/robot1" gives
+  /// /robot1/tf and /robot1/tf_static).
+  std::string tf_namespace;
   /// Write rosbag2's metadata.yaml beside the file (the bag is a folder).
   bool metadata_yaml = true;
 };
