@@ -183,7 +183,7 @@ class SensFrames : public FrameSource {
 
  private:
   ColorImage DecodeColor(size_t i, const std::vector<uint8_t>& raw) const {
-    cv::Mat rgb;
+    ColorImage decoded;
     if (header_.color_compression == kColorRaw) {
       if (raw.size() !=
           size_t{header_.color_width} * header_.color_height * 3) {
@@ -191,28 +191,23 @@ class SensFrames : public FrameSource {
             file_.path(),
             fmt::format("frame {}: raw colour of {} bytes", i, raw.size()));
       }
-      rgb = cv::Mat(static_cast<int>(header_.color_height),
-                    static_cast<int>(header_.color_width), CV_8UC3,
-                    const_cast<uint8_t*>(raw.data()))
-                .clone();
+      decoded = ColorImage(static_cast<int>(header_.color_width),
+                           static_cast<int>(header_.color_height), 3);
+      decoded.values() = raw;
     } else {
       const fs::path source =
           file_.path().string() + fmt::format(" (frame {})", i);
-      const ColorImage decoded = DecodeColorImage(raw, source);
-      rgb = cv::Mat(decoded.height(), decoded.width(), CV_8UC3,
-                    const_cast<uint8_t*>(decoded.data()))
-                .clone();
+      decoded = DecodeColorImage(raw, source);
     }
     const int w = static_cast<int>(header_.depth_width);
     const int h = static_cast<int>(header_.depth_height);
-    if (rgb.cols != w || rgb.rows != h) {
-      cv::resize(rgb, rgb, cv::Size(w, h), 0, 0, cv::INTER_AREA);
-    }
+    if (decoded.SameSize(w, h)) return decoded;
+    // Resized straight into the output (OpenCV views of both buffers).
     ColorImage out(w, h, 3);
-    for (int y = 0; y < h; ++y) {
-      std::memcpy(out.data() + size_t{static_cast<size_t>(y)} * w * 3,
-                  rgb.ptr(y), size_t{static_cast<size_t>(w)} * 3);
-    }
+    const cv::Mat src(decoded.height(), decoded.width(), CV_8UC3,
+                      decoded.data());
+    cv::Mat dst(h, w, CV_8UC3, out.data());
+    cv::resize(src, dst, dst.size(), 0, 0, cv::INTER_AREA);
     return out;
   }
 

@@ -43,6 +43,15 @@ RosTransform Tf(int64_t t_ns, const std::string& parent,
   return {Header(t_ns, parent), child, T};
 }
 
+// OpenCV's channel order, for its encoders.
+cv::Mat ToBgr(const ColorImage& rgb) {
+  cv::Mat bgr;
+  cv::cvtColor(cv::Mat(rgb.height(), rgb.width(), CV_8UC3,
+                       const_cast<uint8_t*>(rgb.data())),
+               bgr, cv::COLOR_RGB2BGR);
+  return bgr;
+}
+
 std::vector<uint8_t> Encode(const cv::Mat& img, const char* ext) {
   std::vector<uint8_t> out;
   cv::imencode(ext, img, out);
@@ -53,14 +62,7 @@ std::vector<uint8_t> ColorMessage(const BagFrame& f, int64_t t,
                                   const TestBagOptions& o) {
   const RosHeader h = Header(t, kCameraFrame);
   if (o.compressed_color) {
-    cv::Mat bgr(f.color.height(), f.color.width(), CV_8UC3);
-    for (int y = 0; y < bgr.rows; ++y) {
-      for (int x = 0; x < bgr.cols; ++x) {
-        for (int c = 0; c < 3; ++c) {
-          bgr.at<cv::Vec3b>(y, x)[2 - c] = f.color(x, y, c);
-        }
-      }
-    }
+    cv::Mat bgr = ToBgr(f.color);
     return EncodeRosCompressedImage(
         {h, "rgb8; jpeg compressed bgr8", Encode(bgr, ".jpg")});
   }
@@ -394,14 +396,7 @@ void WriteTestSens(const fs::path& path, const std::vector<BagFrame>& frames,
     put_matrix(pose);
     put_u64(static_cast<uint64_t>(std::llround(f.timestamp_s * 1e6)));
     put_u64(static_cast<uint64_t>(std::llround(f.timestamp_s * 1e6)));
-    cv::Mat bgr(f.color.height(), f.color.width(), CV_8UC3);
-    for (int y = 0; y < bgr.rows; ++y) {
-      for (int x = 0; x < bgr.cols; ++x) {
-        for (int c = 0; c < 3; ++c) {
-          bgr.at<cv::Vec3b>(y, x)[2 - c] = f.color(x, y, c);
-        }
-      }
-    }
+    cv::Mat bgr = ToBgr(f.color);
     if (color_scale != 1) {
       cv::resize(bgr, bgr, cv::Size(), color_scale, color_scale,
                  cv::INTER_NEAREST);

@@ -17,17 +17,21 @@ namespace fs = std::filesystem;
 namespace semrec::segment {
 namespace {
 
-bool IsImageFile(const fs::path& p) {
+std::string LowerExtension(const fs::path& p) {
   std::string ext = p.extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(), ::tolower);
+  std::transform(ext.begin(), ext.end(), ext.begin(),
+                 [](unsigned char c) { return std::tolower(c); });
+  return ext;
+}
+
+bool IsImageFile(const fs::path& p) {
+  const std::string ext = LowerExtension(p);
   return ext == ".png" || ext == ".jpg" || ext == ".jpeg" || ext == ".ppm";
 }
 
 // Files that are sequences of their own: bags, ScanNet .sens, manifests.
 bool IsSequenceFile(const fs::path& path) {
-  std::string ext = path.extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(),
-                 [](unsigned char c) { return std::tolower(c); });
+  const std::string ext = LowerExtension(path);
   return ext == ".mcap" || ext == ".db3" || ext == ".sens" || ext == ".yaml" ||
          ext == ".yml" || ext == ".json";
 }
