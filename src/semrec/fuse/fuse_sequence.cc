@@ -126,7 +126,8 @@ nlohmann::json MapResolutionJson(const SceneFusion& fusion,
           {"merged_by_masks", r->merged_objects},
           {"new_from_unclaimed_voxels", r->new_objects},
           {"fragments_folded", r->fragments_folded},
-          {"fragments_dropped", r->fragments_dropped}};
+          {"fragments_dropped", r->fragments_dropped},
+          {"stranded_voxels_claimed", r->stranded_voxels_claimed}};
 }
 
 FuseSequenceResult FuseSequence(const io::SequenceReader& reader,

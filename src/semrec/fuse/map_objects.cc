@@ -15,6 +15,9 @@ void MapObjectOptions::Check() const {
   planes.Check();
   CheckArgument(min_seen_ratio >= 0.0 && min_seen_ratio <= 1.0,
                 "map objects: min_seen_ratio must be in [0, 1]");
+  CheckArgument(
+      min_stranded_contact_share >= 0.0 && min_stranded_contact_share <= 1.0,
+      "map objects: min_stranded_contact_share must be in [0, 1]");
   CheckArgument(max_one_share >= 0.0 && max_one_share <= 1.0,
                 "map objects: max_one_share must be in [0, 1]");
   CheckArgument(touch_voxels >= 1 && touch_voxels <= 3,
@@ -53,6 +56,7 @@ MapResolution MapResolver::Run() {
   AttachOrphans();
   MergeByMasks();
   JudgeFragments();
+  if (options_.claim_stranded) ClaimStranded();
   return Build();
 }
 
@@ -75,6 +79,9 @@ void MapResolver::GateStructure() {
     }
   }
   const double area = map_.voxel_size_m() * map_.voxel_size_m();
+  Cloud scene;
+  scene.reserve(cells_.size());
+  for (const Cell& c : cells_) scene.push_back(c.p);
   for (uint16_t cls : stuff_classes) {
     const auto g = context_.geometry.find(cls);
     if (g == context_.geometry.end() || g->second == StructureGeometry::kNone) {
@@ -89,6 +96,7 @@ void MapResolver::GateStructure() {
     spdlog::debug("structure class {}: {} voxels, {} planes", cls,
                   points.size(), found.size());
     if (found.empty()) continue;  // too little seen to tell: not gated
+    OrientToInterior(scene, options_.planes.tolerance_m, &found);
     for (StructurePlane& p : found) p.class_id = cls;
     result_.planes.insert(result_.planes.end(), found.begin(), found.end());
     planes[cls] = std::move(found);
@@ -96,8 +104,7 @@ void MapResolver::GateStructure() {
   for (Cell& c : cells_) {
     for (;;) {
       const auto it = planes.find(c.class_id);
-      if (it == planes.end() ||
-          OnAnyPlane(c.p, it->second, options_.planes.tolerance_m)) {
+      if (it == planes.end() || OnStructure(c.p, it->second, options_.planes)) {
         break;
       }
       // With no other class in view, the structure class stays: nothing
@@ -105,7 +112,13 @@ void MapResolver::GateStructure() {
       std::vector<uint16_t> excluded = c.excluded;
       excluded.push_back(c.class_id);
       const uint16_t next = Winner(*c.evidence, excluded);
-      if (!CanTakeOver(*c.evidence, next)) break;
+      if (!CanTakeOver(*c.evidence, next)) {
+        // Stranded only clearly off the planes: a bumpy wall's noise band
+        // (just beyond the tolerance) stays structure.
+        c.stranded = !OnStructure(c.p, it->second, options_.planes,
+                                  1.5 * options_.planes.tolerance_m);
+        break;
+      }
       c.excluded = std::move(excluded);
       c.class_id = next;
     }

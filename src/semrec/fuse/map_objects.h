@@ -9,8 +9,12 @@
 //     that vote for the class; gravity known). Elsewhere that class's
 //     evidence is set aside and the next class wins: a chair against a wall
 //     that some views call wall stays a chair (where no other class has real
-//     evidence, the structure class stays). A class with no plane large
-//     enough is not gated (too little seen to tell).
+//     evidence, the structure class stays here; see 6). A class with no plane
+//     large enough is not gated (too little seen to tell). No wall stands a
+//     hand's width in front of a larger one: a voxel 9-60 cm in front of a
+//     larger wall plane (along a stretch of it seen at some height) is not on a
+//     wall, even where a smaller plane passes through it (furniture some
+//     views call wall can make a plane of its own).
 //  3. Each thing voxel belongs to the fusion object of its class that most
 //     views put it in; structure voxels to their class's structure object.
 //     Thing voxels no object of their class claimed (they were fused into the
@@ -29,6 +33,9 @@
 //     views looked at it). One seen in the only view that covers it is kept.
 //     Fragments fold into the object of their class they touch, or are
 //     dropped.
+//  6. Structure voxels off their planes that no other class can take (every
+//     view called a chair's legs floor, a dark monitor wall) join the thing
+//     they touch, group by group, unless the group is larger than that thing.
 #pragma once
 
 #include <cstddef>
@@ -61,6 +68,12 @@ struct MapObjectOptions {
   /// that class held the voxel in at least one view and has at least this
   /// share of its votes.
   double min_takeover_share = 0.1;
+  /// Structure voxels off their class's planes that no other class can take
+  /// (every view called them wall or floor) join the thing they touch when
+  /// no larger than it (fuse/map_resolver.h: ClaimStranded).
+  bool claim_stranded = true;
+  /// ... when at least this share of the group's voxels touch a thing.
+  double min_stranded_contact_share = 0.25;
   /// A split-off piece with fewer voxels than this joins a touching object of
   /// its class instead of standing alone.
   size_t min_piece_voxels = 20;
@@ -143,6 +156,8 @@ struct MapResolution {
   size_t new_objects = 0;
   size_t fragments_folded = 0;
   size_t fragments_dropped = 0;
+  /// Structure voxels off their planes that joined the thing they touch.
+  size_t stranded_voxels_claimed = 0;
 };
 
 /// Decides the objects. `resolve`: a fusion id's current id (0: dropped).

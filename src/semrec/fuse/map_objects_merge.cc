@@ -134,6 +134,74 @@ void MapResolver::JudgeFragments() {
   }
 }
 
+void MapResolver::ClaimStranded() {
+  std::map<uint32_t, size_t> size;
+  for (const Cell& c : cells_) {
+    if (c.owner != 0 && IsThingCell(c)) ++size[c.owner];
+  }
+  auto stranded = [&](size_t n) {
+    return cells_[n].stranded && IsStuff(cells_[n].class_id);
+  };
+  std::vector<bool> done(cells_.size(), false);
+  size_t claimed = 0;
+  for (size_t i = 0; i < cells_.size(); ++i) {
+    if (done[i] || !stranded(i)) continue;
+    const auto group = Component(i, &done, stranded);
+    // Where the group touches things, and which: each voxel joins the thing
+    // nearest to it (breadth first from the contacts), so a chair's top and
+    // the table beside it each take their own part.
+    std::vector<size_t> frontier;
+    std::map<size_t, uint32_t> owner;
+    size_t largest = 0;
+    for (size_t k : group) {
+      std::map<uint32_t, float> contacts;
+      ForNeighbours(k, [&](size_t n) {
+        if (cells_[n].owner != 0 && IsThingCell(cells_[n])) {
+          contacts[cells_[n].owner] += 1.0f;
+        }
+      });
+      for (const auto& [id, n] : contacts) {
+        largest = std::max(largest, size[id]);
+      }
+      if (const uint32_t id =
+              MostVoted(contacts, [](uint32_t) { return true; });
+          id != 0) {
+        owner[k] = id;
+        frontier.push_back(k);
+      }
+    }
+    spdlog::debug("stranded structure voxels: {} ({} touching things)",
+                  group.size(), frontier.size());
+    // Larger than every thing it touches, or touching them only along a
+    // small part of it: more likely structure no plane was fitted to (a floor
+    // seen twice after drift) than a part of a thing.
+    if (frontier.empty() || group.size() > largest ||
+        static_cast<double>(frontier.size()) <
+            options_.min_stranded_contact_share *
+                static_cast<double>(group.size())) {
+      continue;
+    }
+    for (size_t f = 0; f < frontier.size(); ++f) {
+      const uint32_t id = owner[frontier[f]];
+      ForNeighbours(frontier[f], [&](size_t n) {
+        if (stranded(n) && !owner.count(n)) {
+          owner[n] = id;
+          frontier.push_back(n);
+        }
+      });
+    }
+    for (const auto& [k, id] : owner) {
+      Cell& c = cells_[k];
+      c.excluded.push_back(c.class_id);
+      c.class_id = owner_class_[id];
+      c.owner = id;
+    }
+    claimed += owner.size();
+  }
+  result_.stranded_voxels_claimed = claimed;
+  spdlog::debug("{} stranded structure voxels joined things", claimed);
+}
+
 std::pair<double, uint32_t> MapResolver::Visibility(
     const std::vector<size_t>& cells) const {
   double labelled = 0.0, observed = 0.0;

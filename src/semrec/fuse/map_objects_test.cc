@@ -5,6 +5,7 @@
 #include "semrec/fuse/map_objects.h"
 
 #include <algorithm>
+#include <cmath>
 
 #include <gtest/gtest.h>
 
@@ -146,6 +147,90 @@ TEST(MapObjects, ChairAgainstWallCalledWallInOneViewEndsAChair) {
   EXPECT_LT(went.count(wall->id) ? went.at(wall->id) : 0.0, 0.05);
   EXPECT_EQ(Count(fusion, kChair), 1u);
   // Paper rule: the wall keeps what it swallowed.
+}
+
+// Every view calls a chair's legs floor (a 2D model's classic bleed): off the
+// floor plane nothing else voted there, so the gate alone cannot move them;
+// they join the chair they touch. A raised platform every view calls floor,
+// larger than the box beside it, stays floor; so does a patch of floor seen
+// again 25 cm up (drift) that meets a larger table along one edge only.
+TEST(MapObjects, LegsEveryViewCalledFloorJoinTheChairTheyTouch) {
+  const Cloud legs = Box({1.0f, 1.0f, 0.1f}, {1.45f, 1.45f, 0.3f});
+  const Cloud seat = Box({1.0f, 1.0f, 0.32f}, {1.45f, 1.45f, 0.9f});
+  const Cloud platform = Box({2.5f, 2.5f, 0.4f}, {3.5f, 3.5f, 0.4f});
+  const Cloud box = Box({3.52f, 2.9f, 0.0f}, {3.8f, 3.2f, 0.5f});
+  const Cloud drifted = Box({0.5f, 2.6f, 0.25f}, {1.6f, 3.2f, 0.25f});
+  const Cloud table = Box({1.62f, 2.3f, 0.0f}, {2.4f, 3.5f, 0.75f});
+  std::vector<View> views;
+  for (int i = 0; i < 3; ++i) {
+    View v;
+    v.segments.push_back(Segment(kWall, 1, WallPoints()));
+    Cloud floor = FloorPoints();
+    floor.insert(floor.end(), legs.begin(), legs.end());
+    floor.insert(floor.end(), platform.begin(), platform.end());
+    floor.insert(floor.end(), drifted.begin(), drifted.end());
+    v.segments.push_back(Segment(kFloor, 2, floor));
+    v.segments.push_back(Segment(kChair, 3, seat));
+    v.segments.push_back(Segment(kTable, 4, box));
+    v.segments.push_back(Segment(kTable, 5, table));
+    views.push_back(std::move(v));
+  }
+  FusionOptions without;
+  without.map_objects.claim_stranded = false;
+  for (const bool claim : {true, false}) {
+    const SceneFusion fusion = Fuse(views, claim ? FusionOptions{} : without);
+    const SceneSegment* chair = Largest(fusion, kChair);
+    const SceneSegment* floor = Largest(fusion, kFloor);
+    ASSERT_NE(chair, nullptr);
+    ASSERT_NE(floor, nullptr);
+    const auto legs_went = WhereItWent(fusion, legs);
+    const double in_chair =
+        legs_went.count(chair->id) ? legs_went.at(chair->id) : 0.0;
+    EXPECT_EQ(Count(fusion, kChair), 1u);
+    if (claim) {
+      EXPECT_GT(in_chair, 0.8);
+      EXPECT_GT(fusion.map_resolution()->stranded_voxels_claimed, 20u);
+    } else {
+      EXPECT_LT(in_chair, 0.2);
+    }
+    EXPECT_GT(WhereItWent(fusion, platform).at(floor->id), 0.9)
+        << "claim " << claim;
+    EXPECT_GT(WhereItWent(fusion, drifted).at(floor->id), 0.9)
+        << "claim " << claim;
+  }
+}
+
+// A cabinet's front 15 cm before the wall, tall and wide enough to be a wall
+// plane of its own, called wall in three views of four: no wall stands a
+// hand's width in front of a larger one seen above it, so it is a cabinet.
+TEST(MapObjects, FurnitureJustInFrontOfAWallIsNotWall) {
+  const Cloud front = Box({0.15f, 1.0f, 0.0f}, {0.15f, 2.2f, 1.5f});
+  const Cloud cabinet = Box({0.15f, 1.0f, 0.0f}, {0.55f, 2.2f, 1.5f});
+  std::vector<View> views;
+  for (int i = 0; i < 4; ++i) {
+    View v;
+    v.segments.push_back(Segment(kWall, 1, WallPoints()));
+    v.segments.push_back(Segment(kFloor, 2, FloorPoints()));
+    if (i == 3) {
+      v.segments.push_back(Segment(kTable, 3, cabinet));
+    } else {
+      v.segments[0].points_world.insert(v.segments[0].points_world.end(),
+                                        front.begin(), front.end());
+    }
+    views.push_back(std::move(v));
+  }
+  const SceneFusion fusion = Fuse(views);
+  const SceneSegment* c = Largest(fusion, kTable);
+  ASSERT_NE(c, nullptr);
+  EXPECT_GT(WhereItWent(fusion, front).at(c->id), 0.9);
+  EXPECT_EQ(Count(fusion, kTable), 1u);
+  // Without the rule the front is a wall plane and stays wall.
+  FusionOptions without;
+  without.map_objects.planes.max_front_distance_m = 0.0;
+  const SceneFusion old = Fuse(views, without);
+  const SceneSegment* wall = Largest(old, kWall);
+  ASSERT_NE(wall, nullptr);
+  EXPECT_GT(WhereItWent(old, front).at(wall->id), 0.9);
 }
 
 TEST(MapObjects, WallVotesOffTheWallPlaneDoNotCount) {
@@ -401,6 +486,39 @@ TEST(StructurePlanes, WallsAreLargeVerticalPlanesAndTheFloorTheLowest) {
   EXPECT_EQ(StructureGeometryOf("wall"), StructureGeometry::kVertical);
   EXPECT_EQ(StructureGeometryOf("rug"), StructureGeometry::kFloor);
   EXPECT_EQ(StructureGeometryOf("sky"), StructureGeometry::kNone);
+}
+
+// A plane just in front of a larger wall (furniture) does not hold its
+// points; one behind it (a recess), or in front of a stretch the wall does not
+// cover, does.
+TEST(StructurePlanes, NoWallStandsJustInFrontOfALargerOne) {
+  const auto plane = [](double x, double y0, double y1, size_t support) {
+    StructurePlane p;
+    p.geometry = StructureGeometry::kVertical;
+    p.normal = -Eigen::Vector3d::UnitX();  // oriented below
+    p.offset = -x;
+    p.support = support;
+    p.along = Eigen::Vector3d::UnitY();
+    for (double y = y0; y < y1; y += 0.1) {
+      p.along_bins.push_back(static_cast<int64_t>(std::floor(y / 0.1 + 1e-9)));
+    }
+    return p;
+  };
+  std::vector<StructurePlane> planes = {
+      plane(0.0, 0.0, 4.0, 4000),   // the wall
+      plane(0.15, 1.0, 2.0, 600),   // a cabinet's front
+      plane(-0.3, 2.5, 3.0, 300),   // a recess behind the wall
+      plane(0.15, 5.0, 6.0, 600)};  // beyond the wall's end
+  // The room lies at x > 0.
+  OrientToInterior(Box({0.5f, 0, 0}, {4, 4, 2.5f}, 0.1f), 0.06, &planes);
+  EXPECT_GT(planes[0].normal.x(), 0.9);
+  const StructurePlaneOptions o;
+  EXPECT_TRUE(OnStructure({0.01f, 1.5f, 1}, planes, o));
+  EXPECT_FALSE(OnStructure({0.15f, 1.5f, 1}, planes, o));
+  EXPECT_TRUE(OnAnyPlane({0.15f, 1.5f, 1}, planes, o.tolerance_m));
+  EXPECT_TRUE(OnStructure({-0.3f, 2.7f, 1}, planes, o));
+  EXPECT_TRUE(OnStructure({0.15f, 5.5f, 1}, planes, o));
+  EXPECT_FALSE(OnStructure({1.0f, 1.5f, 1}, planes, o));
 }
 
 }  // namespace

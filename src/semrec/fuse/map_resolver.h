@@ -59,6 +59,9 @@ class MapResolver {
     uint32_t source = 0;
     /// Structure classes set aside here (off their planes).
     std::vector<uint16_t> excluded;
+    /// Off its class's planes with no other class to take over: structure
+    /// where no structure can be (see ClaimStranded).
+    bool stranded = false;
   };
 
   bool IsStuff(uint16_t class_id) const {
@@ -209,6 +212,14 @@ class MapResolver {
   // structure can be (set aside by the gate) did see it: it counts as a
   // sighting.
   void JudgeFragments();
+
+  // Stranded structure voxels (off their class's planes, nothing else voted
+  // there: a chair's legs every view called floor, a dark monitor called
+  // wall) are parts of the things they touch: each voxel of a connected group
+  // joins the thing nearest to it, unless the group is larger than every
+  // thing it touches (then it is more likely structure no plane was fitted
+  // to, e.g. a wall seen twice after drift).
+  void ClaimStranded();
 
   std::pair<double, uint32_t> Visibility(
       const std::vector<size_t>& cells) const;

@@ -40,6 +40,8 @@ void StructurePlaneOptions::Check() const {
                 "structure planes: min_wall_height_m must be >= 0");
   CheckArgument(max_wall_tilt_deg >= 0.0 && max_wall_tilt_deg < 90.0,
                 "structure planes: max_wall_tilt_deg must be in [0, 90)");
+  CheckArgument(max_front_distance_m >= 0.0,
+                "structure planes: max_front_distance_m must be >= 0");
   CheckArgument(max_planes > 0, "structure planes: max_planes must be > 0");
   CheckArgument(ransac_iterations > 0,
                 "structure planes: ransac_iterations must be > 0");
@@ -50,6 +52,64 @@ bool OnAnyPlane(const Eigen::Vector3f& p,
   const Eigen::Vector3d q = p.cast<double>();
   return std::any_of(planes.begin(), planes.end(), [&](const auto& plane) {
     return std::abs(plane.normal.dot(q) - plane.offset) <= tolerance_m;
+  });
+}
+
+namespace {
+
+constexpr double kAlongBinM = 0.1;
+
+int64_t AlongBin(const Eigen::Vector3d& along, const Eigen::Vector3d& p) {
+  return static_cast<int64_t>(std::floor(along.dot(p) / kAlongBinM));
+}
+
+}  // namespace
+
+bool StructurePlane::Covers(const Eigen::Vector3d& p) const {
+  return std::binary_search(along_bins.begin(), along_bins.end(),
+                            AlongBin(along, p));
+}
+
+void OrientToInterior(const Cloud& scene, double tolerance_m,
+                      std::vector<StructurePlane>* planes) {
+  for (StructurePlane& plane : *planes) {
+    if (plane.geometry != StructureGeometry::kVertical) continue;
+    size_t front = 0, back = 0;
+    for (const Eigen::Vector3f& p : scene) {
+      const double d = plane.normal.dot(p.cast<double>()) - plane.offset;
+      if (d > tolerance_m) ++front;
+      if (d < -tolerance_m) ++back;
+    }
+    if (back > front) {
+      plane.normal = -plane.normal;
+      plane.offset = -plane.offset;
+    }
+  }
+}
+
+bool OnStructure(const Eigen::Vector3f& p,
+                 const std::vector<StructurePlane>& planes,
+                 const StructurePlaneOptions& options, double near_m) {
+  if (near_m <= 0.0) near_m = options.tolerance_m;
+  const Eigen::Vector3d q = p.cast<double>();
+  const double parallel =
+      std::cos(options.max_wall_tilt_deg * std::numbers::pi / 180.0);
+  auto in_front_of_larger = [&](const StructurePlane& plane) {
+    return std::any_of(planes.begin(), planes.end(), [&](const auto& wall) {
+      if (wall.geometry != StructureGeometry::kVertical ||
+          wall.support <= plane.support ||
+          std::abs(wall.normal.dot(plane.normal)) < parallel) {
+        return false;
+      }
+      const double d = wall.normal.dot(q) - wall.offset;
+      return d > 1.5 * options.tolerance_m &&
+             d <= options.max_front_distance_m && wall.Covers(q);
+    });
+  };
+  return std::any_of(planes.begin(), planes.end(), [&](const auto& plane) {
+    if (std::abs(plane.normal.dot(q) - plane.offset) > near_m) return false;
+    return plane.geometry != StructureGeometry::kVertical ||
+           !in_front_of_larger(plane);
   });
 }
 
@@ -177,6 +237,14 @@ std::vector<StructurePlane> VerticalPlanes(Cloud points,
       best.offset = best.normal.dot(mean);
     }
     best.geometry = StructureGeometry::kVertical;
+    best.along = up.cross(best.normal).normalized();
+    for (const auto& q : inliers) {
+      best.along_bins.push_back(AlongBin(best.along, q));
+    }
+    std::sort(best.along_bins.begin(), best.along_bins.end());
+    best.along_bins.erase(
+        std::unique(best.along_bins.begin(), best.along_bins.end()),
+        best.along_bins.end());
     std::erase_if(points, [&](const Eigen::Vector3f& p) {
       return std::abs(best.normal.dot(p.cast<double>()) - best.offset) <=
              o.tolerance_m;

@@ -38,6 +38,9 @@ struct StructurePlaneOptions {
   double min_wall_height_m = 0.7;
   /// Vertical planes: normals within this angle of horizontal.
   double max_wall_tilt_deg = 10.0;
+  /// A point more than 1.5 x tolerance_m and at most this far in front of a
+  /// larger wall is furniture, not wall (OnStructure).
+  double max_front_distance_m = 0.6;
   /// At most this many vertical planes per class.
   int max_planes = 16;
   /// RANSAC hypotheses per vertical plane.
@@ -56,6 +59,12 @@ struct StructurePlane {
   double offset = 0.0;
   /// Points (voxels) of the class on it.
   size_t support = 0;
+  /// Vertical planes: the horizontal direction along the plane and the 10 cm
+  /// stretches along it its points cover (at any height), sorted.
+  Eigen::Vector3d along = Eigen::Vector3d::Zero();
+  std::vector<int64_t> along_bins;
+
+  bool Covers(const Eigen::Vector3d& p) const;
 };
 
 /// Planes of `geometry` among `points` (one per voxel of area
@@ -70,5 +79,22 @@ std::vector<StructurePlane> FindStructurePlanes(
 /// True when `p` lies within the tolerance of one of `planes`.
 bool OnAnyPlane(const Eigen::Vector3f& p,
                 const std::vector<StructurePlane>& planes, double tolerance_m);
+
+/// Turns vertical planes' normals towards the room: the side most of `scene`
+/// (every voxel of the map) lies on.
+void OrientToInterior(const Cloud& scene, double tolerance_m,
+                      std::vector<StructurePlane>* planes);
+
+/// Like OnAnyPlane, but a point standing in front of a larger parallel wall
+/// (on the room's side, more than 1.5 x tolerance_m and at most
+/// max_front_distance_m from it, along a stretch of it seen at some height)
+/// is not on a wall, even where a smaller plane passes through it: RANSAC
+/// fits a plane through a chair's back that views called wall and a strip of
+/// the wall beyond it; no wall stands a hand's width in front of another.
+/// Planes must be oriented (OrientToInterior). `near_m` (0: tolerance_m):
+/// how close to a plane counts as on it.
+bool OnStructure(const Eigen::Vector3f& p,
+                 const std::vector<StructurePlane>& planes,
+                 const StructurePlaneOptions& options, double near_m = 0.0);
 
 }  // namespace semrec::fuse

@@ -220,6 +220,29 @@ TEST(Mcap, EveryCompressionReadsBackTheMessagesWritten) {
   }
 }
 
+// A frame's colour and depth in different chunks, read in turn: each chunk is
+// decompressed once, not once per message.
+TEST(Mcap, MessagesReadInTurnFromTwoChunksDecompressEachOnce) {
+  TempDir dir;
+  McapWriterOptions o;
+  o.chunk_bytes = 4096;
+  const fs::path file = dir.path() / "turns.mcap";
+  const auto written = WriteSample(file, o);
+  McapReader r(file);
+  std::vector<McapMessageRef> refs;
+  r.Scan([&](const McapMessageInfo& info, const uint8_t*, size_t) {
+    refs.push_back(info.ref);
+  });
+  const size_t after_scan = r.chunk_compressions().at("zstd");
+  // The first and the last message lie in different chunks.
+  ASSERT_NE(refs.front().chunk_offset, refs.back().chunk_offset);
+  for (int turn = 0; turn < 10; ++turn) {
+    EXPECT_EQ(r.Read(refs.front()), written.front().data);
+    EXPECT_EQ(r.Read(refs.back()), written.back().data);
+  }
+  EXPECT_LE(r.chunk_compressions().at("zstd"), after_scan + 2);
+}
+
 TEST(Mcap, DamagedFilesAreClearErrors) {
   TempDir dir;
   McapWriterOptions o;

@@ -26,6 +26,9 @@ constexpr uint8_t kHeader = 0x01, kFooter = 0x02, kSchema = 0x03,
                   kChunkIndex = 0x08, kMetadata = 0x0C, kDataEnd = 0x0F;
 // Message record: channel id, sequence, log time, publish time, then data.
 constexpr uint64_t kMessageHead = 2 + 4 + 8 + 8;
+// Chunks kept decompressed (count, bytes).
+constexpr size_t kCachedChunks = 4;
+constexpr size_t kCachedBytes = size_t{256} << 20;
 // A chunk larger than this decompressed is refused (rosbag2 writes ~1 MB).
 constexpr uint64_t kMaxChunkBytes = uint64_t{1} << 30;
 // A summary larger than this is not trusted (a damaged footer): scan instead.
@@ -385,7 +388,11 @@ void McapReader::Record(uint8_t opcode, const uint8_t* body, uint64_t size,
 }
 
 const std::vector<uint8_t>& McapReader::Chunk(uint64_t offset) {
-  if (offset == cached_chunk_) return cached_records_;
+  for (auto it = cache_.begin(); it != cache_.end(); ++it) {
+    if (it->first != offset) continue;
+    if (it != cache_.begin()) std::iter_swap(it, cache_.begin());
+    return cache_.front().second;
+  }
   std::array<uint8_t, 9> head{};
   ReadExact(offset, head.data(), head.size());
   uint64_t len = 0;
@@ -443,9 +450,16 @@ const std::vector<uint8_t>& McapReader::Chunk(uint64_t offset) {
     }
   }
   ++compressions_[compression];
-  cached_chunk_ = offset;
-  cached_records_ = std::move(records);
-  return cached_records_;
+  // Evicted by count, and by size so that large chunks are not all held.
+  size_t held = records.size();
+  for (const auto& [unused, r] : cache_) held += r.size();
+  while (!cache_.empty() &&
+         (cache_.size() >= kCachedChunks || held > kCachedBytes)) {
+    held -= cache_.back().second.size();
+    cache_.pop_back();
+  }
+  cache_.emplace_front(offset, std::move(records));
+  return cache_.front().second;
 }
 
 std::vector<uint8_t> McapReader::Read(const McapMessageRef& ref) {

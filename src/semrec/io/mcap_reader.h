@@ -9,17 +9,19 @@
 // when the file has one, else by a linear scan of the data section (one chunk
 // decompressed at a time): Scan() visits every message with its location,
 // Read() fetches one message's bytes again by that location (the chunk it lies
-// in is decompressed and kept until another chunk is asked for). Memory does
-// not grow with the file, only with what the caller keeps (a location is 32
-// bytes).
+// in is decompressed and kept with the three read before it: a frame's colour
+// and depth often lie in different chunks). Memory does not grow with the
+// file, only with what the caller keeps (a location is 32 bytes).
 #pragma once
 
 #include <cstdint>
+#include <deque>
 #include <filesystem>
 #include <fstream>
 #include <functional>
 #include <map>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace semrec::io {
@@ -97,7 +99,8 @@ class McapReader {
   bool used_chunk_index() const { return used_chunk_index_; }
 
  private:
-  // The decompressed records of the chunk at `offset` (cached).
+  // The decompressed records of the chunk at `offset` (cached; valid until
+  // the next call).
   const std::vector<uint8_t>& Chunk(uint64_t offset);
   void ReadExact(uint64_t offset, uint8_t* out, size_t size);
   // The chunks' offsets in log-time order from the summary's ChunkIndex
@@ -122,8 +125,9 @@ class McapReader {
   std::vector<McapMetadata> metadata_;
   std::map<std::string, size_t> compressions_;
   bool used_chunk_index_ = false;
-  uint64_t cached_chunk_ = McapMessageRef::kNoChunk;
-  std::vector<uint8_t> cached_records_;
+  // The last few decompressed chunks, most recent first: a frame's colour
+  // and depth messages often lie in different chunks, read in turn.
+  std::deque<std::pair<uint64_t, std::vector<uint8_t>>> cache_;
 };
 
 /// True when `path` starts with the MCAP magic.

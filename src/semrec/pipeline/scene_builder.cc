@@ -212,10 +212,11 @@ void SceneBuilder::Finish() {
     spdlog::info(
         "objects decided per map voxel: {} objects, {} structure planes, {} "
         "voxels moved off structure, {} split, {} merged by masks, {} new, "
-        "fragments {} folded / {} dropped",
+        "fragments {} folded / {} dropped, {} stranded structure voxels "
+        "joined things",
         r.objects.size(), r.planes.size(), r.gated_voxels, r.split_objects,
         r.merged_objects, r.new_objects, r.fragments_folded,
-        r.fragments_dropped);
+        r.fragments_dropped, r.stranded_voxels_claimed);
   }
 }
 
