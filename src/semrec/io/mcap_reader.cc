@@ -292,6 +292,7 @@ std::vector<uint64_t> McapReader::IndexedChunks() {
   if (chunks.empty() || !TopLevelRecords(summary_start)) return {};
   std::sort(chunks.begin(), chunks.end());
   std::vector<uint64_t> offsets;
+  offsets.reserve(chunks.size());
   for (const auto& [time, offset] : chunks) offsets.push_back(offset);
   return offsets;
 }
