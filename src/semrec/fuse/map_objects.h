@@ -34,8 +34,9 @@
 //     Fragments fold into the object of their class they touch, or are
 //     dropped.
 //  6. Structure voxels off their planes that no other class can take (every
-//     view called a chair's legs floor, a dark monitor wall) join the thing
-//     they touch, group by group, unless the group is larger than that thing.
+//     view called a chair's legs floor, a chair's back by the wall wall) join
+//     the things they touch, each voxel the nearest, unless the group is
+//     larger than every thing it touches or few of its voxels touch one.
 #pragma once
 
 #include <cstddef>

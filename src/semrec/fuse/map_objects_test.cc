@@ -105,6 +105,11 @@ std::map<uint32_t, double> WhereItWent(const SceneFusion& fusion,
   return share;
 }
 
+double ShareIn(const std::map<uint32_t, double>& went, uint32_t id) {
+  const auto it = went.find(id);
+  return it == went.end() ? 0.0 : it->second;
+}
+
 const SceneSegment* Largest(const SceneFusion& fusion, uint16_t cls) {
   const SceneSegment* best = nullptr;
   for (const SceneSegment& s : fusion.segments()) {
@@ -153,7 +158,9 @@ TEST(MapObjects, ChairAgainstWallCalledWallInOneViewEndsAChair) {
 // floor plane nothing else voted there, so the gate alone cannot move them;
 // they join the chair they touch. A raised platform every view calls floor,
 // larger than the box beside it, stays floor; so does a patch of floor seen
-// again 25 cm up (drift) that meets a larger table along one edge only.
+// again 25 cm up (drift) that meets a larger table along one edge only, and a
+// raised strip under a thin board, touching it along half its width but
+// larger than the board.
 TEST(MapObjects, LegsEveryViewCalledFloorJoinTheChairTheyTouch) {
   const Cloud legs = Box({1.0f, 1.0f, 0.1f}, {1.45f, 1.45f, 0.3f});
   const Cloud seat = Box({1.0f, 1.0f, 0.32f}, {1.45f, 1.45f, 0.9f});
@@ -161,6 +168,8 @@ TEST(MapObjects, LegsEveryViewCalledFloorJoinTheChairTheyTouch) {
   const Cloud box = Box({3.52f, 2.9f, 0.0f}, {3.8f, 3.2f, 0.5f});
   const Cloud drifted = Box({0.5f, 2.6f, 0.25f}, {1.6f, 3.2f, 0.25f});
   const Cloud table = Box({1.62f, 2.3f, 0.0f}, {2.4f, 3.5f, 0.75f});
+  const Cloud board = Box({2.0f, 0.5f, 0.3f}, {2.0f, 2.0f, 0.6f});
+  const Cloud strip = Box({1.75f, 0.5f, 0.2f}, {2.25f, 2.0f, 0.2f});
   std::vector<View> views;
   for (int i = 0; i < 3; ++i) {
     View v;
@@ -169,10 +178,12 @@ TEST(MapObjects, LegsEveryViewCalledFloorJoinTheChairTheyTouch) {
     floor.insert(floor.end(), legs.begin(), legs.end());
     floor.insert(floor.end(), platform.begin(), platform.end());
     floor.insert(floor.end(), drifted.begin(), drifted.end());
+    floor.insert(floor.end(), strip.begin(), strip.end());
     v.segments.push_back(Segment(kFloor, 2, floor));
     v.segments.push_back(Segment(kChair, 3, seat));
     v.segments.push_back(Segment(kTable, 4, box));
     v.segments.push_back(Segment(kTable, 5, table));
+    v.segments.push_back(Segment(kLamp, 6, board));
     views.push_back(std::move(v));
   }
   FusionOptions without;
@@ -183,9 +194,7 @@ TEST(MapObjects, LegsEveryViewCalledFloorJoinTheChairTheyTouch) {
     const SceneSegment* floor = Largest(fusion, kFloor);
     ASSERT_NE(chair, nullptr);
     ASSERT_NE(floor, nullptr);
-    const auto legs_went = WhereItWent(fusion, legs);
-    const double in_chair =
-        legs_went.count(chair->id) ? legs_went.at(chair->id) : 0.0;
+    const double in_chair = ShareIn(WhereItWent(fusion, legs), chair->id);
     EXPECT_EQ(Count(fusion, kChair), 1u);
     if (claim) {
       EXPECT_GT(in_chair, 0.8);
@@ -193,9 +202,11 @@ TEST(MapObjects, LegsEveryViewCalledFloorJoinTheChairTheyTouch) {
     } else {
       EXPECT_LT(in_chair, 0.2);
     }
-    EXPECT_GT(WhereItWent(fusion, platform).at(floor->id), 0.9)
+    EXPECT_GT(ShareIn(WhereItWent(fusion, platform), floor->id), 0.9)
         << "claim " << claim;
-    EXPECT_GT(WhereItWent(fusion, drifted).at(floor->id), 0.9)
+    EXPECT_GT(ShareIn(WhereItWent(fusion, drifted), floor->id), 0.9)
+        << "claim " << claim;
+    EXPECT_GT(ShareIn(WhereItWent(fusion, strip), floor->id), 0.9)
         << "claim " << claim;
   }
 }

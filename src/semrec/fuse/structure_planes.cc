@@ -72,11 +72,16 @@ bool StructurePlane::Covers(const Eigen::Vector3d& p) const {
 
 void OrientToInterior(const Cloud& scene, double tolerance_m,
                       std::vector<StructurePlane>* planes) {
+  // Only what lies along the wall and near it: in an L-shaped room or a
+  // scan of two rooms most of the scene may lie behind a wall's plane.
+  constexpr double kNearM = 3.0;
   for (StructurePlane& plane : *planes) {
     if (plane.geometry != StructureGeometry::kVertical) continue;
     size_t front = 0, back = 0;
     for (const Eigen::Vector3f& p : scene) {
-      const double d = plane.normal.dot(p.cast<double>()) - plane.offset;
+      const Eigen::Vector3d q = p.cast<double>();
+      const double d = plane.normal.dot(q) - plane.offset;
+      if (std::abs(d) > kNearM || !plane.Covers(q)) continue;
       if (d > tolerance_m) ++front;
       if (d < -tolerance_m) ++back;
     }

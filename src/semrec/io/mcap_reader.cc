@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <array>
 #include <cstring>
+#include <iterator>
 #include <memory>
 
 #include <fmt/format.h>
@@ -391,7 +392,7 @@ void McapReader::Record(uint8_t opcode, const uint8_t* body, uint64_t size,
 const std::vector<uint8_t>& McapReader::Chunk(uint64_t offset) {
   for (auto it = cache_.begin(); it != cache_.end(); ++it) {
     if (it->first != offset) continue;
-    if (it != cache_.begin()) std::iter_swap(it, cache_.begin());
+    std::rotate(cache_.begin(), it, std::next(it));  // most recent first
     return cache_.front().second;
   }
   std::array<uint8_t, 9> head{};
