@@ -2,7 +2,9 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
+#include <cctype>
 #include <cstdlib>
 #include <fstream>
 #include <iterator>
@@ -95,6 +97,13 @@ void RequireEmptyOrOverwrite(const fs::path& dir, bool overwrite) {
         dir,
         "output folder is not empty (use --overwrite to replace its files)");
   }
+}
+
+std::string LowerExtension(const std::filesystem::path& path) {
+  std::string ext = path.extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(),
+                 [](unsigned char c) { return std::tolower(c); });
+  return ext;
 }
 
 std::filesystem::path ProjectDataDir() {

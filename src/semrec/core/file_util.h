@@ -38,6 +38,9 @@ void RequireDirectory(const std::filesystem::path& path,
 /// rule every command that writes an output folder follows.
 void RequireEmptyOrOverwrite(const std::filesystem::path& dir, bool overwrite);
 
+/// `path`'s extension, lower-cased (".PNG" -> ".png"; "" when none).
+std::string LowerExtension(const std::filesystem::path& path);
+
 /// The folder of the project's data files (label sets, model registry):
 /// $SEMREC_DATA_DIR when set, else the `data/` folder of the source tree this
 /// library was built from.

@@ -51,5 +51,12 @@ TEST(RequireFile, NamesTheFile) {
   }
 }
 
+TEST(LowerExtension, LowerCasesOnlyTheLastExtension) {
+  EXPECT_EQ(LowerExtension("a/B.PNG"), ".png");
+  EXPECT_EQ(LowerExtension("frame.Color.JPG"), ".jpg");
+  EXPECT_EQ(LowerExtension("run.Mcap"), ".mcap");
+  EXPECT_EQ(LowerExtension("README"), "");
+}
+
 }  // namespace
 }  // namespace semrec

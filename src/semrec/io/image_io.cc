@@ -3,7 +3,6 @@
 #include <png.h>
 
 #include <algorithm>
-#include <cctype>
 #include <csetjmp>
 #include <cstdio>
 #include <cstring>
@@ -24,12 +23,7 @@ namespace fs = std::filesystem;
 namespace semrec::io {
 namespace {
 
-bool IsPng(const fs::path& path) {
-  std::string ext = path.extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(),
-                 [](unsigned char c) { return std::tolower(c); });
-  return ext == ".png";
-}
+bool IsPng(const fs::path& path) { return LowerExtension(path) == ".png"; }
 
 // Decoded PNG, channels interleaved, 16-bit samples in host order.
 struct PngData {

@@ -1,7 +1,6 @@
 #include "semrec/segment/segment_io.h"
 
 #include <algorithm>
-#include <cctype>
 #include <map>
 
 #include <nlohmann/json.hpp>
@@ -16,13 +15,6 @@ namespace fs = std::filesystem;
 
 namespace semrec::segment {
 namespace {
-
-std::string LowerExtension(const fs::path& p) {
-  std::string ext = p.extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(),
-                 [](unsigned char c) { return std::tolower(c); });
-  return ext;
-}
 
 bool IsImageFile(const fs::path& p) {
   const std::string ext = LowerExtension(p);
