@@ -102,7 +102,9 @@ void RegisterSynth(CLI::App& app) {
       "semantic, instance and person maps, exact object surfaces (meshes, "
       "dense points), people "
       "tracks (MOTChallenge gt.txt). See README.md, 'Synthetic scenes'.");
-  cmd->add_option("--preset", args->preset, "six-objects, people or office")
+  cmd->add_option("--preset", args->preset,
+                  "six-objects, people, office or flat (three rooms in a row "
+                  "joined by doorways)")
       ->capture_default_str();
   cmd->add_option("--out,-o", args->out,
                   "Output folder (must be empty unless --overwrite)")

@@ -20,6 +20,8 @@ void MapObjectOptions::Check() const {
       "map objects: min_stranded_contact_share must be in [0, 1]");
   CheckArgument(max_one_share >= 0.0 && max_one_share <= 1.0,
                 "map objects: max_one_share must be in [0, 1]");
+  CheckArgument(min_flush_share > 0.0 && min_flush_share <= 1.0,
+                "map objects: min_flush_share must be in (0, 1]");
   CheckArgument(touch_voxels >= 1 && touch_voxels <= 3,
                 "map objects: touch_voxels must be 1, 2 or 3");
 }
@@ -50,6 +52,9 @@ uint16_t Winner(const VoxelEvidence& v, const std::vector<uint16_t>& excluded) {
 MapResolution MapResolver::Run() {
   CollectCells();
   if (options_.structure_planes) GateStructure();
+  if (options_.structure_planes && options_.min_flush_share < 1.0) {
+    ReleaseFlushParts();
+  }
   AssignOwners();
   SplitByMasks();
   SplitDisconnected();
@@ -88,11 +93,14 @@ void MapResolver::GateStructure() {
       continue;
     }
     Cloud points;
+    std::vector<Eigen::Vector3f> towards_camera;
     for (const Cell& c : cells_) {
-      if (c.class_id == cls) points.push_back(c.p);
+      if (c.class_id != cls) continue;
+      points.push_back(c.p);
+      towards_camera.push_back(c.evidence->towards_camera_sum);
     }
     auto found = FindStructurePlanes(points, g->second, context_.up_world, area,
-                                     options_.planes);
+                                     options_.planes, towards_camera);
     spdlog::debug("structure class {}: {} voxels, {} planes", cls,
                   points.size(), found.size());
     if (found.empty()) continue;  // too little seen to tell: not gated
@@ -115,8 +123,7 @@ void MapResolver::GateStructure() {
       if (!CanTakeOver(*c.evidence, next)) {
         // Stranded only clearly off the planes: a bumpy wall's noise band
         // (just beyond the tolerance) stays structure.
-        c.stranded = !OnStructure(c.p, it->second, options_.planes,
-                                  1.5 * options_.planes.tolerance_m);
+        c.stranded = !OnStructure(c.p, it->second, options_.planes, 1.5);
         break;
       }
       c.excluded = std::move(excluded);
@@ -124,6 +131,55 @@ void MapResolver::GateStructure() {
     }
     if (!c.excluded.empty()) ++result_.gated_voxels;
   }
+}
+
+void MapResolver::ReleaseFlushParts() {
+  // Candidates: structure voxels whose best thing class holds a large share.
+  std::vector<uint16_t> thing(cells_.size(), kNoClass);
+  for (size_t i = 0; i < cells_.size(); ++i) {
+    const Cell& c = cells_[i];
+    if (c.class_id == kNoClass || !IsStuff(c.class_id) || c.stranded) continue;
+    float total = 0.0f, best = 0.0f;
+    uint16_t best_class = kNoClass;
+    for (const ClassEvidence& e : c.evidence->classes) {
+      total += e.weight;
+      if (!IsStuff(e.class_id) && e.weight > best) {
+        best = e.weight, best_class = e.class_id;
+      }
+    }
+    if (best_class != kNoClass && best >= options_.min_flush_share * total) {
+      thing[i] = best_class;
+    }
+  }
+  // Grown from the things' voxels, one ring at a time.
+  std::vector<size_t> front;
+  for (size_t i = 0; i < cells_.size(); ++i) {
+    if (cells_[i].class_id != kNoClass && !IsStuff(cells_[i].class_id)) {
+      front.push_back(i);
+    }
+  }
+  size_t released = 0;
+  while (!front.empty()) {
+    std::vector<size_t> next;
+    for (size_t i : front) {
+      const uint16_t cls = cells_[i].class_id;
+      ForNeighbours(
+          i,
+          [&](size_t n) {
+            if (thing[n] != cls) return;
+            cells_[n].excluded.push_back(cells_[n].class_id);
+            cells_[n].class_id = cls;
+            thing[n] = kNoClass;
+            next.push_back(n);
+            ++released;
+          },
+          1);
+    }
+    front = std::move(next);
+  }
+  spdlog::debug("{} structure voxels released to things flush with them",
+                released);
+  result_.gated_voxels += released;
 }
 
 bool MapResolver::CanTakeOver(const VoxelEvidence& v, uint16_t class_id) const {

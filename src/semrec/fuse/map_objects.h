@@ -94,6 +94,12 @@ struct MapObjectOptions {
   /// different masks and at most this share of those views held them in one
   /// mask.
   double max_one_share = 0.25;
+  /// Structure voxels on their plane join a touching thing of a class given
+  /// at least this share of their votes (1: never): a headboard or a shelf's
+  /// back flush with the wall, 2-6 cm in front of it, that most views near
+  /// the wall called wall. A wall's own voxels get no thing votes beyond a
+  /// mask's ragged edge (a few pixels of a voxel's ~10 at 3 m).
+  double min_flush_share = 0.15;
   /// Touching objects of different classes merge when views held both in
   /// one mask and one's votes give the other's class at least this share.
   double confusion_share = 0.25;

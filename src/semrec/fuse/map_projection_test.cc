@@ -225,7 +225,7 @@ TEST(MapProjection, NearerObjectsHideFartherOnesAndBadInputIsRefused) {
   EXPECT_DOUBLE_EQ(empty.UnexplainedShare(), 1.0);
   for (uint8_t state : empty.state.values()) {
     ASSERT_EQ(state, ProjectedMap::kNoDepth);
-}
+  }
   for (uint32_t id : empty.object_id.values()) ASSERT_EQ(id, 0u);
 
   EXPECT_THROW(ProjectMap({}, Camera(), {}, DepthImage(10, 10)),

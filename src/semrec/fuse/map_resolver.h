@@ -77,6 +77,11 @@ class MapResolver {
 
   // Structure evidence off its planes is set aside; the next class wins.
   void GateStructure();
+  // Structure voxels on their plane that many views gave a thing's class,
+  // connected to voxels of that class: the thing's part flush with the wall
+  // or the floor (a headboard, a shelf's back) that views near the wall
+  // called wall.
+  void ReleaseFlushParts();
 
   // The next class takes a voxel off structure only on real evidence: a view
   // where it held most of the voxel's pixels and a share of its votes (not

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <map>
 #include <numbers>
+#include <numeric>
 #include <random>
 
 #include <Eigen/Eigenvalues>
@@ -36,6 +37,11 @@ StructureGeometry StructureGeometryOf(const std::string& class_name) {
 void StructurePlaneOptions::Check() const {
   CheckArgument(tolerance_m > 0.0, "structure planes: tolerance_m must be > 0");
   CheckArgument(min_area_m2 > 0.0, "structure planes: min_area_m2 must be > 0");
+  CheckArgument(tolerance_sigmas > 0.0,
+                "structure planes: tolerance_sigmas must be > 0");
+  CheckArgument(
+      min_tolerance_m > 0.0 && min_tolerance_m <= tolerance_m,
+      "structure planes: min_tolerance_m must be in (0, tolerance_m]");
   CheckArgument(min_wall_height_m >= 0.0,
                 "structure planes: min_wall_height_m must be >= 0");
   CheckArgument(max_wall_tilt_deg >= 0.0 && max_wall_tilt_deg < 90.0,
@@ -76,7 +82,9 @@ void OrientToInterior(const Cloud& scene, double tolerance_m,
   // scan of two rooms most of the scene may lie behind a wall's plane.
   constexpr double kNearM = 3.0;
   for (StructurePlane& plane : *planes) {
-    if (plane.geometry != StructureGeometry::kVertical) continue;
+    if (plane.geometry != StructureGeometry::kVertical || plane.oriented) {
+      continue;
+    }
     size_t front = 0, back = 0;
     for (const Eigen::Vector3f& p : scene) {
       const Eigen::Vector3d q = p.cast<double>();
@@ -94,8 +102,7 @@ void OrientToInterior(const Cloud& scene, double tolerance_m,
 
 bool OnStructure(const Eigen::Vector3f& p,
                  const std::vector<StructurePlane>& planes,
-                 const StructurePlaneOptions& options, double near_m) {
-  if (near_m <= 0.0) near_m = options.tolerance_m;
+                 const StructurePlaneOptions& options, double near_scale) {
   const Eigen::Vector3d q = p.cast<double>();
   const double parallel =
       std::cos(options.max_wall_tilt_deg * std::numbers::pi / 180.0);
@@ -112,6 +119,9 @@ bool OnStructure(const Eigen::Vector3f& p,
     });
   };
   return std::any_of(planes.begin(), planes.end(), [&](const auto& plane) {
+    const double near_m =
+        near_scale *
+        (plane.tolerance_m > 0.0 ? plane.tolerance_m : options.tolerance_m);
     if (std::abs(plane.normal.dot(q) - plane.offset) > near_m) return false;
     return plane.geometry != StructureGeometry::kVertical ||
            !in_front_of_larger(plane);
@@ -164,16 +174,45 @@ std::vector<StructurePlane> HorizontalPlane(const Cloud& points, bool lowest,
     plane.normal = up;
     plane.offset = sum / static_cast<double>(n);
     plane.support = n;
+    // Its own tolerance from the spread of the heights near it.
+    std::vector<double> r;
+    for (const Eigen::Vector3f& p : points) {
+      const double d = up.dot(p.cast<double>()) - plane.offset;
+      if (std::abs(d) <= o.tolerance_m) r.push_back(d);
+    }
+    const auto mid = r.begin() + static_cast<std::ptrdiff_t>(r.size() / 2);
+    std::nth_element(r.begin(), mid, r.end());
+    const double median = *mid;
+    for (double& d : r) d = std::abs(d - median);
+    std::nth_element(r.begin(), mid, r.end());
+    plane.tolerance_m = std::clamp(o.tolerance_sigmas * 1.4826 * *mid,
+                                   o.min_tolerance_m, o.tolerance_m);
+    spdlog::debug("{} at {:.3f} m: {} points, tolerance {:.3f} m",
+                  lowest ? "floor" : "ceiling", plane.offset, n,
+                  plane.tolerance_m);
     return {plane};
   }
   return {};
 }
 
-// Sequential RANSAC over planes containing `up`: two points fix one.
-std::vector<StructurePlane> VerticalPlanes(Cloud points,
-                                           const Eigen::Vector3d& up,
-                                           size_t min_support,
-                                           const StructurePlaneOptions& o) {
+// Whether a point seen from `towards_camera` (zero: unknown) can lie on the
+// face of (n, side): a wall's two faces are seen from opposite sides.
+bool FacesSide(const Eigen::Vector3d& n, int side,
+               const Eigen::Vector3f& towards_camera) {
+  return side * n.dot(towards_camera.cast<double>()) >= 0.0;
+}
+
+// Sequential RANSAC over planes containing `up`: two points fix one. With
+// `towards_camera` (parallel to points, or empty), a plane holds only the
+// points seen from one side of it: the two faces of an interior wall 10 cm
+// thick are two planes, not one plane tilted through both.
+std::vector<StructurePlane> VerticalPlanes(
+    Cloud points, std::vector<Eigen::Vector3f> towards_camera,
+    const Eigen::Vector3d& up, size_t min_support,
+    const StructurePlaneOptions& o) {
+  if (towards_camera.size() != points.size()) {
+    towards_camera.assign(points.size(), Eigen::Vector3f::Zero());
+  }
   std::vector<StructurePlane> planes;
   std::mt19937_64 rng(o.seed);
   const double max_dot =
@@ -187,12 +226,15 @@ std::vector<StructurePlane> VerticalPlanes(Cloud points,
     // Hypotheses are scored on a sample (the winner on every point below):
     // rooms have tens of thousands of wall voxels.
     constexpr size_t kSample = 4000;
-    Cloud sample;
+    std::vector<size_t> scored;
     if (points.size() > kSample) {
-      for (size_t i = 0; i < kSample; ++i) sample.push_back(points[pick(rng)]);
+      for (size_t i = 0; i < kSample; ++i) scored.push_back(pick(rng));
+    } else {
+      scored.resize(points.size());
+      std::iota(scored.begin(), scored.end(), size_t{0});
     }
-    const Cloud& scored = points.size() > kSample ? sample : points;
     StructurePlane best;
+    int best_side = 1;
     for (int it = 0; it < o.ransac_iterations; ++it) {
       const Eigen::Vector3d a = points[pick(rng)].cast<double>();
       const Eigen::Vector3d b = points[pick(rng)].cast<double>();
@@ -200,60 +242,86 @@ std::vector<StructurePlane> VerticalPlanes(Cloud points,
       if (n.norm() < 0.1) continue;  // too close, or one above the other
       n.normalize();
       const double offset = n.dot(a);
-      size_t support = 0;
-      for (const Eigen::Vector3f& p : scored) {
-        if (std::abs(n.dot(p.cast<double>()) - offset) <= o.tolerance_m) {
-          ++support;
+      size_t front = 0, back = 0;
+      for (size_t i : scored) {
+        if (std::abs(n.dot(points[i].cast<double>()) - offset) >
+            o.tolerance_m) {
+          continue;
         }
+        front += FacesSide(n, 1, towards_camera[i]);
+        back += FacesSide(n, -1, towards_camera[i]);
       }
-      if (support > best.support) {
-        best.normal = n, best.offset = offset, best.support = support;
+      if (std::max(front, back) > best.support) {
+        best.normal = n, best.offset = offset;
+        best.support = std::max(front, back);
+        best_side = front >= back ? 1 : -1;
       }
     }
-    best.support = static_cast<size_t>(std::count_if(
-        points.begin(), points.end(), [&](const Eigen::Vector3f& p) {
-          return std::abs(best.normal.dot(p.cast<double>()) - best.offset) <=
-                 o.tolerance_m;
-        }));
+    auto inlier = [&](size_t i) {
+      return std::abs(best.normal.dot(points[i].cast<double>()) -
+                      best.offset) <= o.tolerance_m &&
+             FacesSide(best.normal, best_side, towards_camera[i]);
+    };
+    std::vector<size_t> inliers;
+    for (size_t i = 0; i < points.size(); ++i) {
+      if (inlier(i)) inliers.push_back(i);
+    }
+    best.support = inliers.size();
     if (best.support < min_support) break;
     // Least squares over the inliers (normal kept horizontal within the tilt
     // allowed): centroid and the smallest principal direction.
     Eigen::Vector3d mean = Eigen::Vector3d::Zero();
-    std::vector<Eigen::Vector3d> inliers;
     std::vector<double> heights;
-    for (const Eigen::Vector3f& p : points) {
-      const Eigen::Vector3d q = p.cast<double>();
-      if (std::abs(best.normal.dot(q) - best.offset) <= o.tolerance_m) {
-        inliers.push_back(q);
-        heights.push_back(up.dot(q));
-        mean += q;
-      }
+    bool sided = false;
+    for (size_t i : inliers) {
+      const Eigen::Vector3d q = points[i].cast<double>();
+      heights.push_back(up.dot(q));
+      mean += q;
+      sided = sided || !towards_camera[i].isZero();
     }
     std::sort(heights.begin(), heights.end());
     const double height =
         heights[heights.size() * 95 / 100] - heights[heights.size() * 5 / 100];
     mean /= static_cast<double>(inliers.size());
     Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
-    for (const auto& q : inliers) cov += (q - mean) * (q - mean).transpose();
+    for (size_t i : inliers) {
+      const Eigen::Vector3d d = points[i].cast<double>() - mean;
+      cov += d * d.transpose();
+    }
     Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(cov);
     Eigen::Vector3d n = eig.eigenvectors().col(0);
+    const Eigen::Vector3d seen_from = best_side * best.normal;
     if (std::abs(n.dot(up)) <= max_dot) {
       best.normal = n.normalized();
       best.offset = best.normal.dot(mean);
     }
+    if (sided) {  // towards the cameras that saw it: the room's side
+      if (best.normal.dot(seen_from) < 0.0) {
+        best.normal = -best.normal, best.offset = -best.offset;
+      }
+      best.oriented = true;
+    }
     best.geometry = StructureGeometry::kVertical;
     best.along = up.cross(best.normal).normalized();
-    for (const auto& q : inliers) {
-      best.along_bins.push_back(AlongBin(best.along, q));
+    for (size_t i : inliers) {
+      best.along_bins.push_back(AlongBin(best.along, points[i].cast<double>()));
     }
     std::sort(best.along_bins.begin(), best.along_bins.end());
     best.along_bins.erase(
         std::unique(best.along_bins.begin(), best.along_bins.end()),
         best.along_bins.end());
-    std::erase_if(points, [&](const Eigen::Vector3f& p) {
-      return std::abs(best.normal.dot(p.cast<double>()) - best.offset) <=
-             o.tolerance_m;
-    });
+    // The inliers leave (the other face's points stay for the next plane).
+    std::vector<bool> gone(points.size(), false);
+    for (size_t i : inliers) gone[i] = true;
+    size_t kept = 0;
+    for (size_t i = 0; i < points.size(); ++i) {
+      if (gone[i]) continue;
+      points[kept] = points[i];
+      towards_camera[kept] = towards_camera[i];
+      ++kept;
+    }
+    points.resize(kept);
+    towards_camera.resize(kept);
     spdlog::debug(
         "vertical plane candidate: {} points, {:.2f} m tall ({:.2f} "
         "to {:.2f} along up){}",
@@ -270,7 +338,8 @@ std::vector<StructurePlane> VerticalPlanes(Cloud points,
 std::vector<StructurePlane> FindStructurePlanes(
     const Cloud& points, StructureGeometry geometry,
     const Eigen::Vector3d& up_world, double voxel_area_m2,
-    const StructurePlaneOptions& options) {
+    const StructurePlaneOptions& options,
+    const std::vector<Eigen::Vector3f>& towards_camera) {
   options.Check();
   CheckArgument(voxel_area_m2 > 0.0,
                 "structure planes: voxel area must be > 0");
@@ -279,7 +348,7 @@ std::vector<StructurePlane> FindStructurePlanes(
       static_cast<size_t>(std::ceil(options.min_area_m2 / voxel_area_m2));
   switch (geometry) {
     case StructureGeometry::kVertical:
-      return VerticalPlanes(points, up, min_support, options);
+      return VerticalPlanes(points, towards_camera, up, min_support, options);
     case StructureGeometry::kFloor:
       return HorizontalPlane(points, true, up, min_support, options);
     case StructureGeometry::kCeiling:

@@ -28,6 +28,14 @@ struct StructurePlaneOptions {
   /// Points within this distance of a plane lie on it (a voxel and some depth
   /// noise).
   double tolerance_m = 0.06;
+  /// The floor's and the ceiling's own tolerance: tolerance_sigmas x the
+  /// robust spread (1.4826 x MAD) of their points' heights, between
+  /// min_tolerance_m and tolerance_m. A floor is flat and seen edge-on by
+  /// nothing, so its voxels lie within a centimetre of it where depth is good;
+  /// a voxel 3-6 cm up holds the foot of a sofa or a cabinet that views called
+  /// floor at the contact.
+  double tolerance_sigmas = 4.0;
+  double min_tolerance_m = 0.025;
   /// A plane must hold at least this much of its class's surface (points x
   /// voxel area).
   double min_area_m2 = 1.0;
@@ -59,6 +67,11 @@ struct StructurePlane {
   double offset = 0.0;
   /// Points (voxels) of the class on it.
   size_t support = 0;
+  /// How close to it counts as on it (0: the options' tolerance_m).
+  double tolerance_m = 0.0;
+  /// Vertical planes: the normal faces the cameras that saw it (set by
+  /// FindStructurePlanes from the views; OrientToInterior leaves it).
+  bool oriented = false;
   /// Vertical planes: the horizontal direction along the plane and the 10 cm
   /// stretches along it its points cover (at any height), sorted.
   Eigen::Vector3d along = Eigen::Vector3d::Zero();
@@ -71,16 +84,21 @@ struct StructurePlane {
 /// `voxel_area_m2`, all voting for the class): vertical planes by sequential
 /// RANSAC with the plane containing `up`, floor/ceiling as the lowest/highest
 /// height (along `up`) holding enough points. Empty when none is large enough.
+/// `towards_camera` (parallel to `points`, or empty; zero: unknown): the
+/// direction the points were seen from; a vertical plane then holds the
+/// points seen from one side only and faces them (`oriented`).
 std::vector<StructurePlane> FindStructurePlanes(
     const Cloud& points, StructureGeometry geometry,
     const Eigen::Vector3d& up_world, double voxel_area_m2,
-    const StructurePlaneOptions& options);
+    const StructurePlaneOptions& options,
+    const std::vector<Eigen::Vector3f>& towards_camera = {});
 
 /// True when `p` lies within the tolerance of one of `planes`.
 bool OnAnyPlane(const Eigen::Vector3f& p,
                 const std::vector<StructurePlane>& planes, double tolerance_m);
 
-/// Turns vertical planes' normals towards the room: the side most of `scene`
+/// Turns vertical planes' normals towards the room (those not `oriented`
+/// by their views): the side most of `scene`
 /// (every voxel of the map) lies on, counting only points within 3 m of the
 /// plane along stretches it covers.
 void OrientToInterior(const Cloud& scene, double tolerance_m,
@@ -94,10 +112,10 @@ void OrientToInterior(const Cloud& scene, double tolerance_m,
 /// the wall beyond it; no wall stands a hand's width in front of another. A
 /// pilaster or a wall that steps out by 9-60 cm is set aside too: its voxels
 /// stay wall where no other class has evidence and no thing claims them.
-/// Planes must be oriented (OrientToInterior). `near_m` (0: tolerance_m):
-/// how close to a plane counts as on it.
+/// Planes must be oriented (OrientToInterior). Within `near_scale` x a
+/// plane's tolerance (its own, else the options') counts as on it.
 bool OnStructure(const Eigen::Vector3f& p,
                  const std::vector<StructurePlane>& planes,
-                 const StructurePlaneOptions& options, double near_m = 0.0);
+                 const StructurePlaneOptions& options, double near_scale = 1.0);
 
 }  // namespace semrec::fuse

@@ -134,9 +134,11 @@ void VoxelEvidenceMap::AddFrame(const std::vector<FrameSegment>& segments,
     v.points += static_cast<uint32_t>(end - i);
     float weight = 1.0f;
     if (observation != nullptr) {
-      const float d = ((sum / n).cast<float>() - eye).norm();
+      const Eigen::Vector3f to_eye = eye - (sum / n).cast<float>();
+      const float d = to_eye.norm();
       const auto full = static_cast<float>(options_.full_weight_distance_m);
       if (d > full) weight = full / d;
+      if (d > 0.0f) v.towards_camera_sum += to_eye / d;
     }
     for (size_t k = i; k < end;) {  // per class
       size_t class_end = k;

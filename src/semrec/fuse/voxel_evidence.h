@@ -68,6 +68,10 @@ struct VoxelEvidence {
   /// Frames that observed the voxel (a pixel with depth in it, labelled or
   /// not).
   uint32_t views = 0;
+  /// Sum over the views that labelled it of the unit vector from it towards
+  /// the camera (zero without camera positions): the side a surface was seen
+  /// from; an interior wall's two faces, 10 cm apart, face opposite ways.
+  Eigen::Vector3f towards_camera_sum = Eigen::Vector3f::Zero();
   std::vector<ClassEvidence> classes;
   std::vector<ObjectVote> objects;
   /// Per view that put object pixels here, the object mask (MaskId) holding

@@ -106,7 +106,7 @@ CameraIntrinsics SynthOptions::Intrinsics() const {
 }
 
 std::vector<std::string> SynthOptions::PresetNames() {
-  return {"six-objects", "people", "office"};
+  return {"six-objects", "people", "office", "flat"};
 }
 
 SynthOptions SynthOptions::Preset(const std::string& name) {
@@ -142,10 +142,26 @@ SynthOptions SynthOptions::Preset(const std::string& name) {
     o.trajectory.kind = TrajectoryOptions::Kind::kWalkthrough;
     o.trajectory.height_m = 2.2;
     o.frames = 300;
+  } else if (name == "flat") {
+    // Three rooms in a row (living room, dining room, bedroom) joined by
+    // doorways: furniture against interior walls seen from both sides, as in
+    // a house walk-through.
+    o.scene.room_width_m = 12.0;
+    o.scene.room_depth_m = 5.0;
+    o.scene.room_height_m = 2.6;
+    o.scene.partitions_x_m = {4.0, 8.0};
+    o.scene.object_classes = {"sofa",    "table",   "chair", "chair",
+                              "cabinet", "shelf",   "table", "chair",
+                              "chair",   "cabinet", "bed",   "cabinet",
+                              "plant",   "lamp",    "box",   "sofa"};
+    o.scene.touching_probability = 0.5;
+    o.trajectory.kind = TrajectoryOptions::Kind::kWalkthrough;
+    o.trajectory.height_m = 1.6;
+    o.frames = 300;
   } else {
     throw InvalidArgument(
-        fmt::format("synth: unknown preset '{}' (choose six-objects, people or "
-                    "office)",
+        fmt::format("synth: unknown preset '{}' (choose six-objects, people, "
+                    "office or flat)",
                     name));
   }
   return o;

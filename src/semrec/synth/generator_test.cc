@@ -10,8 +10,10 @@
 
 #include "semrec/core/error.h"
 #include "semrec/core/file_util.h"
+#include "semrec/core/transform.h"
 #include "semrec/io/image_io.h"
 #include "semrec/io/sequence_reader.h"
+#include "semrec/synth/render.h"
 #include "semrec/testing/test_util.h"
 
 namespace fs = std::filesystem;
@@ -56,6 +58,50 @@ TEST(Synth, OfficeMonitorsStandOnTablesOfTheirOwn) {
             << "seed " << seed << ": monitors " << i << " and " << j;
       }
     }
+  }
+}
+
+// The flat: interior walls are drawn (structure, not room faces), furniture
+// never stands in them or in a doorway, and a camera in a doorway sees the
+// wall beside the door and the next room through it.
+TEST(Synth, FlatHasInteriorWallsWithFreeDoorways) {
+  for (const uint64_t seed : {1u, 2u, 3u}) {
+    SCOPED_TRACE(seed);
+    SynthOptions o = SynthOptions::Preset("flat");
+    o.scene.seed = seed;
+    const Scene scene = GenerateScene(o.scene);
+    std::vector<const SceneObject*> walls;
+    for (const SceneObject& s : scene.objects) {
+      if (s.structure && !s.room_face) walls.push_back(&s);
+    }
+    ASSERT_EQ(walls.size(), o.scene.partitions_x_m.size());
+    const double d = o.scene.room_depth_m, door = o.scene.door_width_m;
+    for (const SceneObject& s : scene.objects) {
+      if (s.structure) continue;
+      const Eigen::AlignedBox3d b = s.Bounds();
+      for (const double x : o.scene.partitions_x_m) {
+        const bool in_wall = b.min().x() < x + 0.049 && b.max().x() > x - 0.049;
+        EXPECT_FALSE(in_wall) << s.name;
+        const bool in_doorway =
+            b.min().x() < x + 0.6 && b.max().x() > x - 0.6 &&
+            b.min().y() < d / 2 + door / 2 && b.max().y() > d / 2 - door / 2;
+        EXPECT_FALSE(in_doorway) << s.name;
+      }
+    }
+    // In the first doorway's clearance, 0.6 m before the wall, beside the
+    // door's edge, looking through it.
+    const double x = o.scene.partitions_x_m[0];
+    const Eigen::Vector3d eye(x - 0.6, d / 2 - door / 2 + 0.1, 1.6);
+    const Transform pose = LookAt(eye, eye + Eigen::Vector3d::UnitX());
+    const CameraIntrinsics k{160, 120, 131.25, 131.25, 79.5, 59.5};
+    const RenderedFrame f = Render(scene, 0.0, pose, k);
+    size_t wall = 0, beyond = 0;
+    for (size_t p = 0; p < f.instance.NumPixels(); ++p) {
+      wall += f.instance.data()[p] == walls[0]->instance_id;
+      beyond += f.depth.data()[p] > 1.0f;
+    }
+    EXPECT_GT(wall, f.instance.NumPixels() / 10);
+    EXPECT_GT(beyond, f.instance.NumPixels() / 10);
   }
 }
 

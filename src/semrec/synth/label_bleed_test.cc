@@ -3,6 +3,7 @@
 #include <cmath>
 #include <map>
 #include <set>
+#include <string>
 #include <tuple>
 
 #include <gtest/gtest.h>
@@ -23,8 +24,8 @@ struct Views {
 
 // `n` sparse views of the six-objects room (robot height: floor contact in
 // view; the small room makes them overlap), at quarter resolution.
-Views SparseViews(int n) {
-  SynthOptions o = SynthOptions::Preset("six-objects");
+Views SparseViews(int n, const std::string& preset = "six-objects") {
+  SynthOptions o = SynthOptions::Preset(preset);
   o.trajectory.kind = TrajectoryOptions::Kind::kSparse;
   Views v;
   v.scene = GenerateScene(o.scene);
@@ -210,6 +211,50 @@ TEST(LabelBleed, IsCorrelatedAcrossViews) {
   EXPECT_GT(rate, 0.1);
   EXPECT_GT(again, 0.6) << "overall rate " << rate;
   EXPECT_GT(again, 2 * rate);
+}
+
+// In the flat, object pixels near an interior wall (and near no room face)
+// take that wall's mask: the interior walls bleed like the room's.
+TEST(LabelBleed, InteriorWallsBleedIntoTheirOwnMask) {
+  const Views v = SparseViews(12, "flat");
+  const LabelNoiseOptions o = BleedOnly(1.0);
+  std::vector<const SceneObject*> interior;
+  for (const SceneObject& s : v.scene.objects) {
+    if (s.structure && !s.room_face) interior.push_back(&s);
+  }
+  ASSERT_EQ(interior.size(), 2u);
+  size_t candidates = 0, bled = 0;
+  for (size_t i = 0; i < v.frames.size(); ++i) {
+    const RenderedFrame& f = v.frames[i];
+    const NoisyLabels n =
+        ApplyLabelNoise(f, v.scene, v.poses[i], v.k, o, 7 + i, 1);
+    std::map<uint16_t, std::set<uint16_t>> masks;  // wall -> its masks
+    for (size_t p = 0; p < f.instance.NumPixels(); ++p) {
+      masks[f.instance.data()[p]].insert(n.instance.data()[p]);
+    }
+    for (int w = 0; w < v.k.height; ++w) {
+      for (int u = 0; u < v.k.width; ++u) {
+        if (!IsObjectInstance(f.instance(u, w), v.scene)) continue;
+        const Eigen::Vector3d p =
+            v.poses[i] * v.k.BackProject(u, w, f.depth(u, w));
+        const Eigen::Vector3d& room = v.scene.room_size;
+        const double to_room =
+            std::min({p.x(), p.y(), room.x() - p.x(), room.y() - p.y(), p.z()});
+        for (const SceneObject* wall : interior) {
+          if (to_room <= o.bleed_contact_m + 0.02 ||
+              wall->DistanceToSurface(p) > o.bleed_contact_m - 0.02 ||
+              masks.count(wall->instance_id) == 0) {
+            continue;
+          }
+          ++candidates;
+          bled += n.semantic(u, w) == kClassWall &&
+                  masks[wall->instance_id].count(n.instance(u, w)) != 0;
+        }
+      }
+    }
+  }
+  ASSERT_GT(candidates, 50u);
+  EXPECT_EQ(bled, candidates);
 }
 
 TEST(LabelBleed, IsDeterministicAndBadSharesAreRejected) {

@@ -44,18 +44,35 @@ void ApplyStructureBleed(
     const LabelNoiseOptions& options,
     const std::map<std::pair<uint32_t, int>, uint16_t>& mask_id,
     uint64_t view_seed, uint64_t scene_seed, NoisyLabels* out) {
-  // Floor and walls in view (the ceiling touches nothing) and their masks.
-  std::map<uint16_t, int> face_of;
-  std::array<uint16_t, 6> face_mask{}, face_class{};
+  // Floor and walls in view (the ceiling touches nothing) and their masks:
+  // the room's faces keep their index (it seeds the draws), interior walls
+  // follow from 6 on.
+  struct Side {
+    int face;                 // room face, or 6 + index of an interior wall
+    const SceneObject* wall;  // interior walls only
+    uint16_t mask, class_id;
+  };
+  std::map<uint16_t, int> face_of;  // in instance order: ties go the same way
   for (int f = 0; f < 5; ++f) {
     const uint16_t instance = scene.room_faces[f];
-    const auto it = mask_id.find({instance, 0});
-    if (instance == 0 || it == mask_id.end()) continue;
-    face_of[instance] = f;
-    face_mask[f] = it->second;
-    face_class[f] = scene.FindObject(instance)->class_id;
+    if (instance != 0 && mask_id.count({instance, 0}) != 0) {
+      face_of[instance] = f;
+    }
   }
-  if (face_of.empty()) return;
+  std::vector<Side> sides;
+  for (const auto& [instance, f] : face_of) {
+    sides.push_back({f, nullptr, mask_id.at({instance, 0}),
+                     scene.FindObject(instance)->class_id});
+  }
+  int interior = 0;
+  for (const SceneObject& o : scene.objects) {
+    if (!o.structure || o.room_face) continue;
+    const int face = 6 + interior++;
+    const auto it = mask_id.find({o.instance_id, 0});
+    if (it == mask_id.end()) continue;
+    sides.push_back({face, &o, it->second, o.class_id});
+  }
+  if (sides.empty()) return;
   const double view_rate = std::max(options.bleed_share, kBleedViewRate);
   // (object, face) -> whether that side of the object bleeds in this view.
   std::map<std::pair<uint16_t, int>, bool> side_bleeds;
@@ -66,17 +83,19 @@ void ApplyStructureBleed(
       const Eigen::Vector3d p =
           T_world_camera *
           k.BackProject(u, v, static_cast<double>(frame.depth(u, v)));
-      int nearest = -1;
+      const Side* nearest = nullptr;
       double nearest_m = std::numeric_limits<double>::infinity();
-      for (const auto& [unused, f] : face_of) {
-        const double d = FaceDistance(scene.room_size, f, p);
-        if (d < nearest_m) nearest = f, nearest_m = d;
+      for (const Side& side : sides) {
+        const double d = side.wall != nullptr
+                             ? side.wall->DistanceToSurface(p)
+                             : FaceDistance(scene.room_size, side.face, p);
+        if (d < nearest_m) nearest = &side, nearest_m = d;
       }
       if (nearest_m > options.bleed_contact_m &&
           Luma(frame.color, u, v) >= options.bleed_dark_luma) {
         continue;
       }
-      const int face = nearest;
+      const int face = nearest->face;
       const auto [it, added] = side_bleeds.try_emplace({instance, face}, false);
       if (added) {
         const uint64_t side = MixSeed(MixSeed(scene_seed, instance), face);
@@ -84,8 +103,8 @@ void ApplyStructureBleed(
                      UnitFromHash(MixSeed(view_seed, side)) < view_rate;
       }
       if (!it->second) continue;
-      out->instance(u, v) = face_mask[face];
-      out->semantic(u, v) = face_class[face];
+      out->instance(u, v) = nearest->mask;
+      out->semantic(u, v) = nearest->class_id;
     }
   }
 }

@@ -61,13 +61,13 @@ double Texture(const Eigen::Vector3d& p) {
   return static_cast<double>(h & 0xFFFF) / 32767.5 - 1.0;
 }
 
-// Objects and people; structure is handled by the room test
-// (Scene::room_faces).
+// Objects, interior walls and people; the room's faces are handled by the
+// room test (Scene::room_faces).
 std::vector<Drawable> CollectDrawables(const Scene& scene,
                                        const std::vector<PersonBody>& bodies) {
   std::vector<Drawable> out;
   for (const SceneObject& o : scene.objects) {
-    if (o.structure) continue;
+    if (o.room_face) continue;
     for (size_t j = 0; j < o.parts.size(); ++j) {
       out.push_back({&o.parts[j], o.instance_id, o.class_id, 0, o.color,
                      static_cast<uint16_t>(j + 1)});

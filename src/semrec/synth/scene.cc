@@ -1,8 +1,10 @@
 #include "semrec/synth/scene.h"
 
+#include <algorithm>
 #include <cmath>
 #include <map>
 #include <set>
+#include <utility>
 
 #include <fmt/format.h>
 
@@ -240,6 +242,17 @@ void SceneOptions::Check() const {
   CheckArgument(num_people >= 0 && num_people <= 8,
                 "synth: num_people must be in [0, 8]");
   CheckArgument(object_classes.size() <= 900, "synth: at most 900 objects");
+  CheckArgument(door_width_m >= 0.6 && door_width_m <= room_depth_m - 1.0,
+                "synth: door_width_m must be in [0.6, room depth - 1 m]");
+  CheckArgument(door_height_m >= 1.8 && door_height_m < room_height_m,
+                "synth: door_height_m must be in [1.8, room height)");
+  std::vector<double> xs = partitions_x_m;
+  std::sort(xs.begin(), xs.end());
+  for (size_t i = 0; i < xs.size(); ++i) {
+    const double before = i == 0 ? 0.0 : xs[i - 1];
+    CheckArgument(xs[i] - before >= 1.5 && room_width_m - xs[i] >= 1.5,
+                  "synth: interior walls must leave rooms at least 1.5 m wide");
+  }
   for (const std::string& cls : object_classes) {
     const auto id = SynthClasses().FindByName(cls);
     CheckArgument(id.has_value() && *id != kClassFloor && *id != kClassWall &&
@@ -269,6 +282,7 @@ Scene GenerateScene(const SceneOptions& options) {
     o.parts.push_back(box);
     o.color = classes.Get(cls).color;
     o.structure = true;
+    o.room_face = true;
     scene.objects.push_back(std::move(o));
     return scene.objects.back().instance_id;
   };
@@ -298,6 +312,46 @@ Scene GenerateScene(const SceneOptions& options) {
   std::vector<Footprint> footprints;
   std::vector<size_t> footprint_object;
   std::set<size_t> tables_with_monitor;  // footprint indices
+  // Walls objects may stand against: a point on the face, the normal into the
+  // room and the free stretch along it (the outer walls first, in the order
+  // the draws have always had).
+  struct WallFace {
+    Eigen::Vector2d origin, normal, along;
+    double length;
+  };
+  std::vector<WallFace> faces = {
+      {{lo.x(), lo.y()}, {1, 0}, {0, 1}, hi.y() - lo.y()},
+      {{hi.x(), lo.y()}, {-1, 0}, {0, 1}, hi.y() - lo.y()},
+      {{lo.x(), lo.y()}, {0, 1}, {1, 0}, hi.x() - lo.x()},
+      {{lo.x(), hi.y()}, {0, -1}, {1, 0}, hi.x() - lo.x()}};
+  // Interior walls: anchors that objects may touch, never overlap; doorways
+  // (and a walking space either side) stay free.
+  std::vector<bool> footprint_is_wall;
+  std::vector<Footprint> doorways;
+  for (const double x : options.partitions_x_m) {
+    SceneObject wall;
+    wall.instance_id = next_id++;
+    wall.class_id = kClassWall;
+    wall.name = fmt::format("wall_{}", wall.instance_id);
+    wall.color = classes.Get(kClassWall).color;
+    wall.structure = true;
+    const double door = options.door_width_m, ht = 0.05;
+    const double y0 = D / 2 - door / 2, y1 = D / 2 + door / 2;
+    for (const auto& [a, b] : {std::pair{0.0, y0}, std::pair{y1, D}}) {
+      wall.parts.push_back(
+          MakeBox(x, (a + b) / 2, H / 2, ht, (b - a) / 2, H / 2));
+      footprints.push_back({{x, (a + b) / 2}, 0.0, ht, (b - a) / 2});
+      footprint_object.push_back(scene.objects.size());
+      footprint_is_wall.push_back(true);
+      faces.push_back({{x - ht, a}, {-1, 0}, {0, 1}, b - a});
+      faces.push_back({{x + ht, a}, {1, 0}, {0, 1}, b - a});
+    }
+    const double lintel = H - options.door_height_m;
+    wall.parts.push_back(
+        MakeBox(x, D / 2, H - lintel / 2, ht, door / 2, lintel / 2));
+    doorways.push_back({{x, D / 2}, 0.0, ht + 0.6, door / 2});
+    scene.objects.push_back(std::move(wall));
+  }
   for (const std::string& cls : options.object_classes) {
     Blueprint bp = Build(cls, rng);
     const uint16_t class_id = *classes.FindByName(cls);
@@ -349,27 +403,13 @@ Scene GenerateScene(const SceneOptions& options) {
         const Eigen::Vector2d along = side < 2 ? ay : ax;
         fp.center = a.center + reach * dir + slide * along;
       } else if (bp.against_wall && rng.Uniform() < 0.8) {
-        const int wall = static_cast<int>(rng.UniformInt(0, 3));
+        const WallFace& f = faces[static_cast<size_t>(
+            rng.UniformInt(0, static_cast<int64_t>(faces.size()) - 1))];
         const double gap = 0.01;
-        if (wall == 0) {
-          fp.yaw = 0, fp.center = {lo.x() + bp.hx + gap,
-                                   lo.y() + rng.Uniform() * (hi.y() - lo.y())};
-        }
-        if (wall == 1) {
-          fp.yaw = M_PI,
-          fp.center = {hi.x() - bp.hx - gap,
-                       lo.y() + rng.Uniform() * (hi.y() - lo.y())};
-        }
-        if (wall == 2) {
-          fp.yaw = M_PI / 2,
-          fp.center = {lo.x() + rng.Uniform() * (hi.x() - lo.x()),
-                       lo.y() + bp.hx + gap};
-        }
-        if (wall == 3) {
-          fp.yaw = -M_PI / 2,
-          fp.center = {lo.x() + rng.Uniform() * (hi.x() - lo.x()),
-                       hi.y() - bp.hx - gap};
-        }
+        // The object's +x (its front) faces into the room.
+        fp.yaw = std::atan2(f.normal.y(), f.normal.x());
+        fp.center = f.origin + (bp.hx + gap) * f.normal +
+                    rng.Uniform() * f.length * f.along;
       } else {
         fp.yaw = rng.Uniform() * 2 * M_PI;
         fp.center = {lo.x() + rng.Uniform() * (hi.x() - lo.x()),
@@ -378,9 +418,14 @@ Scene GenerateScene(const SceneOptions& options) {
       if (!InsideRoom(fp, lo, hi)) continue;
       bool free = true;
       for (size_t k = 0; k < footprints.size() && free; ++k) {
-        // Touching the anchor is intended: only forbid actual overlap with it.
-        const double margin = (touch && k == anchor) ? -0.0005 : 0.05;
+        // Touching the anchor or a wall is intended: only forbid actual
+        // overlap with them.
+        const double margin =
+            ((touch && k == anchor) || footprint_is_wall[k]) ? -0.0005 : 0.05;
         free = !Overlap(fp, footprints[k], margin);
+      }
+      for (const Footprint& door : doorways) {
+        free = free && !Overlap(fp, door, 0.0);
       }
       placed = free;
     }
@@ -398,6 +443,7 @@ Scene GenerateScene(const SceneOptions& options) {
     if (base_z == 0.0) {
       footprints.push_back(fp);
       footprint_object.push_back(scene.objects.size());
+      footprint_is_wall.push_back(false);
     }
     scene.objects.push_back(std::move(object));
   }

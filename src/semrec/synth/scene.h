@@ -38,6 +38,9 @@ struct SceneObject {
   Rgb color = {128, 128, 128};
   /// Floor, walls and ceiling.
   bool structure = false;
+  /// One of the room box's faces (Scene::room_faces): drawn by the room test,
+  /// not as primitives. Interior walls are structure but not room faces.
+  bool room_face = false;
 
   Eigen::AlignedBox3d Bounds() const;
   /// Unsigned distance from p to the object's surface (min over its parts'
@@ -93,6 +96,12 @@ struct SceneOptions {
   /// structure/person). "monitor" goes on a table when one exists.
   std::vector<std::string> object_classes = {"table", "chair",   "sofa",
                                              "shelf", "cabinet", "plant"};
+  /// Interior walls across the room (perpendicular to x) at these x (m), 10 cm
+  /// thick, each with a door centred in y: a flat of rooms in a row. Objects
+  /// may stand against them; doorways stay free.
+  std::vector<double> partitions_x_m;
+  double door_width_m = 1.0;
+  double door_height_m = 2.1;
   /// Probability that an object is placed touching an earlier one (different
   /// classes touching is the interesting case for label-gated fusion).
   double touching_probability = 0.4;

@@ -34,11 +34,11 @@ double CastRay(const Scene& scene, const Eigen::Vector3d& origin,
   }
   *object = false;
   for (const SceneObject& o : scene.objects) {
-    if (o.structure) continue;
+    if (o.room_face) continue;
     for (const Primitive& part : o.parts) {
       if (const auto hit = Intersect(part, origin, dir, 1e-4, best)) {
         best = hit->t;
-        *object = true;
+        *object = !o.structure;  // an interior wall is no object
       }
     }
   }
@@ -55,9 +55,16 @@ bool IsFree(const Scene& scene, const Eigen::Vector3d& eye, double time_s,
     return false;
   }
   for (const SceneObject& o : scene.objects) {
-    if (!o.structure && o.Bounds().exteriorDistance(eye) < clearance) {
-      return false;
-    }
+    if (o.room_face) continue;
+    // Interior walls part by part: their doorways are free.
+    const bool near =
+        o.structure ? std::any_of(o.parts.begin(), o.parts.end(),
+                                  [&](const Primitive& part) {
+                                    return Bounds(part).exteriorDistance(eye) <
+                                           clearance;
+                                  })
+                    : o.Bounds().exteriorDistance(eye) < clearance;
+    if (near) return false;
   }
   for (const Person& person : scene.people) {
     const Eigen::Vector2d at = PoseAt(person, time_s).position;

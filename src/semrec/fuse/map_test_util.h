@@ -1,0 +1,131 @@
+// Helpers for the tests of objects decided per map voxel: surfaces of boxes,
+// views of labelled segments, a fusion run over them and where a surface's
+// points ended.
+#pragma once
+
+#include <algorithm>
+#include <cstdint>
+#include <map>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "semrec/fuse/fusion.h"
+#include "semrec/fuse/map_objects.h"
+
+namespace semrec::fuse::map_test {
+
+constexpr uint16_t kWall = 1, kFloor = 2, kChair = 3, kTable = 4, kSofa = 5,
+                   kLamp = 6;
+
+// Points on an axis-aligned box's surface (or a rectangle when one extent is
+// zero), on a grid of `step_m`.
+inline Cloud Box(const Eigen::Vector3f& lo, const Eigen::Vector3f& hi,
+                 float step_m = 0.02f) {
+  // Integer steps (a float loop counter drifts).
+  const Eigen::Vector3i n = ((hi - lo) / step_m).array().round().cast<int>();
+  Cloud c;
+  for (int i = 0; i <= n.x(); ++i) {
+    for (int j = 0; j <= n.y(); ++j) {
+      for (int k = 0; k <= n.z(); ++k) {
+        const bool surface = i == 0 || i == n.x() || j == 0 || j == n.y() ||
+                             k == 0 || k == n.z();
+        if (surface) c.push_back(lo + step_m * Eigen::Vector3f(i, j, k));
+      }
+    }
+  }
+  return c;
+}
+
+// The room: a wall at x = 0 and a floor at z = 0, 4 x 4 m.
+inline Cloud WallPoints() { return Box({0, 0, 0.05f}, {0, 4, 2.5f}, 0.03f); }
+inline Cloud FloorPoints() { return Box({0.05f, 0, 0}, {4, 4, 0}, 0.03f); }
+
+inline FrameSegment Segment(uint16_t cls, uint16_t label, Cloud points) {
+  FrameSegment s;
+  s.class_id = cls;
+  s.source_label = label;
+  s.points_world = std::move(points);
+  s.kind =
+      cls == kWall || cls == kFloor ? ClassKind::kStuff : ClassKind::kThing;
+  return s;
+}
+
+inline MapContext Context() {
+  MapContext c;
+  for (uint16_t id : {kWall, kFloor}) c.kinds[id] = ClassKind::kStuff;
+  for (uint16_t id : {kChair, kTable, kSofa, kLamp}) {
+    c.kinds[id] = ClassKind::kThing;
+  }
+  c.geometry[kWall] = StructureGeometry::kVertical;
+  c.geometry[kFloor] = StructureGeometry::kFloor;
+  return c;
+}
+
+struct View {
+  std::vector<FrameSegment> segments;
+  Cloud observed;  // besides the segments' own points
+  Eigen::Vector3f camera{2.0f, 2.0f, 1.2f};
+};
+
+inline SceneFusion Fuse(const std::vector<View>& views,
+                        FusionOptions options = {}) {
+  options.merge = FusionOptions::Merge::kVoxel;
+  SceneFusion fusion(options);
+  for (size_t i = 0; i < views.size(); ++i) {
+    FrameObservation observation;
+    observation.camera_position_world = views[i].camera;
+    observation.observed_world = views[i].observed;
+    for (const FrameSegment& s : views[i].segments) {
+      observation.observed_world.insert(observation.observed_world.end(),
+                                        s.points_world.begin(),
+                                        s.points_world.end());
+    }
+    fusion.Integrate(views[i].segments, i, &observation);
+  }
+  fusion.Finish();
+  fusion.ResolveMap(Context());
+  return fusion;
+}
+
+// Share of `points` lying within 3 cm of the segment's stored points, per
+// object of the scene: where the ground-truth object's surface ended.
+inline std::map<uint32_t, double> WhereItWent(const SceneFusion& fusion,
+                                              const Cloud& points) {
+  std::map<uint32_t, double> share;
+  for (const Eigen::Vector3f& p : points) {
+    uint32_t best = 0;
+    float best_d2 = 0.03f * 0.03f;
+    for (const SceneSegment& s : fusion.segments()) {
+      for (const Eigen::Vector3f& q : s.points) {
+        const float d2 = SquaredDistance(p, q);
+        if (d2 < best_d2) best_d2 = d2, best = s.id;
+      }
+    }
+    share[best] += 1.0 / static_cast<double>(points.size());
+  }
+  return share;
+}
+
+inline double ShareIn(const std::map<uint32_t, double>& went, uint32_t id) {
+  const auto it = went.find(id);
+  return it == went.end() ? 0.0 : it->second;
+}
+
+inline const SceneSegment* Largest(const SceneFusion& fusion, uint16_t cls) {
+  const SceneSegment* best = nullptr;
+  for (const SceneSegment& s : fusion.segments()) {
+    if (s.class_id == cls && (!best || s.points.size() > best->points.size())) {
+      best = &s;
+    }
+  }
+  return best;
+}
+
+inline size_t Count(const SceneFusion& fusion, uint16_t cls) {
+  return static_cast<size_t>(std::count_if(
+      fusion.segments().begin(), fusion.segments().end(),
+      [cls](const SceneSegment& s) { return s.class_id == cls; }));
+}
+
+}  // namespace semrec::fuse::map_test
