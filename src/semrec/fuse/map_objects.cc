@@ -151,11 +151,20 @@ void MapResolver::ReleaseFlushParts() {
       thing[i] = best_class;
     }
   }
-  // Grown from the things' voxels, one ring at a time.
+  // Grown ring by ring from the things' voxels that stand off every
+  // structure plane and not just behind a wall (the bed in front of the wall;
+  // not the top of a partition some views called cabinet, which grew over
+  // the partition's face: 7-Scenes chess), through the thing's own voxels on
+  // the planes and the candidates.
+  std::vector<bool> reached(cells_.size(), false);
   std::vector<size_t> front;
   for (size_t i = 0; i < cells_.size(); ++i) {
-    if (cells_[i].class_id != kNoClass && !IsStuff(cells_[i].class_id)) {
+    const Cell& c = cells_[i];
+    if (c.class_id != kNoClass && !IsStuff(c.class_id) &&
+        !OnStructure(c.p, result_.planes, options_.planes) &&
+        !BehindWall(c.p, result_.planes, options_.planes)) {
       front.push_back(i);
+      reached[i] = true;
     }
   }
   size_t released = 0;
@@ -166,12 +175,16 @@ void MapResolver::ReleaseFlushParts() {
       ForNeighbours(
           i,
           [&](size_t n) {
-            if (thing[n] != cls) return;
-            cells_[n].excluded.push_back(cells_[n].class_id);
-            cells_[n].class_id = cls;
-            thing[n] = kNoClass;
+            if (reached[n]) return;
+            if (thing[n] == cls) {
+              cells_[n].excluded.push_back(cells_[n].class_id);
+              cells_[n].class_id = cls;
+              ++released;
+            } else if (cells_[n].class_id != cls) {
+              return;
+            }
+            reached[n] = true;
             next.push_back(n);
-            ++released;
           },
           1);
     }

@@ -128,6 +128,20 @@ bool OnStructure(const Eigen::Vector3f& p,
   });
 }
 
+bool BehindWall(const Eigen::Vector3f& p,
+                const std::vector<StructurePlane>& planes,
+                const StructurePlaneOptions& options) {
+  const Eigen::Vector3d q = p.cast<double>();
+  return std::any_of(planes.begin(), planes.end(), [&](const auto& wall) {
+    if (wall.geometry != StructureGeometry::kVertical) return false;
+    const double tolerance =
+        wall.tolerance_m > 0.0 ? wall.tolerance_m : options.tolerance_m;
+    const double d = wall.normal.dot(q) - wall.offset;
+    return d < -tolerance && d >= -options.max_front_distance_m &&
+           wall.Covers(q);
+  });
+}
+
 namespace {
 
 // Floor or ceiling: heights along `up` in bins of the tolerance; the lowest

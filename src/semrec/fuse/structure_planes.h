@@ -118,4 +118,11 @@ bool OnStructure(const Eigen::Vector3f& p,
                  const std::vector<StructurePlane>& planes,
                  const StructurePlaneOptions& options, double near_scale = 1.0);
 
+/// True when `p` lies behind an oriented wall (more than its tolerance and
+/// at most max_front_distance_m behind it, along a stretch it covers): the
+/// top of a partition, the wall's other face, the room beyond.
+bool BehindWall(const Eigen::Vector3f& p,
+                const std::vector<StructurePlane>& planes,
+                const StructurePlaneOptions& options);
+
 }  // namespace semrec::fuse

@@ -266,6 +266,39 @@ TEST(MapObjects, TheBackOfASofaFlushWithTheWallJoinsTheSofa) {
   }
 }
 
+// 7-Scenes chess: the top of a partition, behind its face's plane, some views
+// called cabinet, and so did a quarter of the views of the face below it. The
+// face stays wall: flush parts grow only from things in front of the wall.
+TEST(MapObjects, AWallBelowAThingBehindItStaysWall) {
+  const Cloud top = Box({-0.12f, 1.0f, 2.5f}, {-0.02f, 2.0f, 2.5f});
+  auto in_patch = [](const Eigen::Vector3f& p) {
+    return p.y() >= 1.0f && p.y() <= 2.0f && p.z() > 1.9f;
+  };
+  std::vector<View> views;
+  for (int i = 0; i < 4; ++i) {
+    View v;
+    Cloud wall, patch;
+    for (const Eigen::Vector3f& p : WallPoints()) {
+      (i == 3 && in_patch(p) ? patch : wall).push_back(p);
+    }
+    v.segments.push_back(Segment(kWall, 1, wall));
+    v.segments.push_back(Segment(kFloor, 2, FloorPoints()));
+    Cloud cabinet = top;
+    cabinet.insert(cabinet.end(), patch.begin(), patch.end());
+    v.segments.push_back(Segment(kTable, 3, cabinet));
+    views.push_back(std::move(v));
+  }
+  Cloud patch;
+  for (const Eigen::Vector3f& p : WallPoints()) {
+    if (in_patch(p) && p.z() < 2.4f) patch.push_back(p);
+  }
+  const SceneFusion fusion = Fuse(views);
+  const SceneSegment* wall = Largest(fusion, kWall);
+  ASSERT_NE(wall, nullptr);
+  ASSERT_NE(Largest(fusion, kTable), nullptr);
+  EXPECT_GT(ShareIn(WhereItWent(fusion, patch), wall->id), 0.9);
+}
+
 // The floor is flat: its own tolerance follows the spread of its voxels'
 // heights. The foot of a cabinet every view called floor, 5-10 cm up, is off
 // a flat floor (and joins the cabinet it belongs to), but within the fixed
