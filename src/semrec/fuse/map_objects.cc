@@ -20,6 +20,9 @@ void MapObjectOptions::Check() const {
       "map objects: min_stranded_contact_share must be in [0, 1]");
   CheckArgument(max_one_share >= 0.0 && max_one_share <= 1.0,
                 "map objects: max_one_share must be in [0, 1]");
+  CheckArgument(confusion_share >= 0.0 && confusion_share <= 1.0 &&
+                    tie_confusion_share >= 0.0 && tie_confusion_share <= 1.0,
+                "map objects: confusion shares must be in [0, 1]");
   CheckArgument(min_flush_share > 0.0 && min_flush_share <= 1.0,
                 "map objects: min_flush_share must be in (0, 1]");
   CheckArgument(touch_voxels >= 1 && touch_voxels <= 3,
@@ -76,7 +79,6 @@ void MapResolver::CollectCells() {
 }
 
 void MapResolver::GateStructure() {
-  std::map<uint16_t, std::vector<StructurePlane>> planes;
   std::set<uint16_t> stuff_classes;
   for (const Cell& c : cells_) {
     if (c.class_id != kNoClass && IsStuff(c.class_id)) {
@@ -107,12 +109,13 @@ void MapResolver::GateStructure() {
     OrientToInterior(scene, options_.planes.tolerance_m, &found);
     for (StructurePlane& p : found) p.class_id = cls;
     result_.planes.insert(result_.planes.end(), found.begin(), found.end());
-    planes[cls] = std::move(found);
+    planes_[cls] = std::move(found);
   }
   for (Cell& c : cells_) {
     for (;;) {
-      const auto it = planes.find(c.class_id);
-      if (it == planes.end() || OnStructure(c.p, it->second, options_.planes)) {
+      const auto it = planes_.find(c.class_id);
+      if (it == planes_.end() ||
+          OnStructure(c.p, it->second, options_.planes)) {
         break;
       }
       // With no other class in view, the structure class stays: nothing
@@ -139,6 +142,11 @@ void MapResolver::ReleaseFlushParts() {
   for (size_t i = 0; i < cells_.size(); ++i) {
     const Cell& c = cells_[i];
     if (c.class_id == kNoClass || !IsStuff(c.class_id) || c.stranded) continue;
+    // Only on its class's plane (a class with no plane was not gated).
+    const auto on = planes_.find(c.class_id);
+    if (on == planes_.end() || !OnStructure(c.p, on->second, options_.planes)) {
+      continue;
+    }
     float total = 0.0f, best = 0.0f;
     uint16_t best_class = kNoClass;
     for (const ClassEvidence& e : c.evidence->classes) {
@@ -177,9 +185,11 @@ void MapResolver::ReleaseFlushParts() {
           [&](size_t n) {
             if (reached[n]) return;
             if (thing[n] == cls) {
+              // Counted once with the gated ones (a voxel gated wall -> floor
+              // already was).
+              released += cells_[n].excluded.empty() ? 1 : 0;
               cells_[n].excluded.push_back(cells_[n].class_id);
               cells_[n].class_id = cls;
-              ++released;
             } else if (cells_[n].class_id != cls) {
               return;
             }

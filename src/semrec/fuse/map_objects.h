@@ -100,9 +100,13 @@ struct MapObjectOptions {
   /// the wall called wall. A wall's own voxels get no thing votes beyond a
   /// mask's ragged edge (a few pixels of a voxel's ~10 at 3 m).
   double min_flush_share = 0.15;
-  /// Touching objects of different classes merge when views held both in
-  /// one mask and one's votes give the other's class at least this share.
+  /// Touching objects of different classes merge when most views that saw
+  /// both held them in one mask and one's votes give the other's class at
+  /// least this share.
   double confusion_share = 0.25;
+  /// ... or, when as many views held them apart as in one mask, when one's
+  /// votes give the other's class at least this share.
+  double tie_confusion_share = 0.4;
 
   void Check() const;
 };

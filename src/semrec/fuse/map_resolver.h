@@ -198,9 +198,9 @@ class MapResolver {
   // Whether touching objects a and b are one. One class: unless two views or
   // more held them in different masks and the views holding both in one mask
   // are too few (masks cut one object apart far more often than they join
-  // two; sparse views see an object once or twice). Two classes: when views
-  // held both in one mask, none said two more often, and one's votes give the
-  // other's class at least confusion_share (one object, its class confused).
+  // two; sparse views see an object once or twice). Two classes: when most
+  // views that saw both held them in one mask and one's votes give the other's
+  // class at least confusion_share (one object, its class confused).
   bool OneObject(const std::vector<size_t>& a, const std::vector<size_t>& b,
                  uint32_t id_a, uint32_t id_b, const PairViews& views) const;
 
@@ -239,6 +239,8 @@ class MapResolver {
   std::vector<Cell> cells_;
   std::unordered_map<uint64_t, size_t> index_;
   std::map<uint16_t, uint32_t> structure_ids_;
+  // Structure planes per class (GateStructure).
+  std::map<uint16_t, std::vector<StructurePlane>> planes_;
   std::map<uint32_t, uint16_t> owner_class_;
   std::map<uint32_t, std::pair<double, uint32_t>> seen_;
   MapResolution result_;

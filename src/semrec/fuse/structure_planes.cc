@@ -132,13 +132,24 @@ bool BehindWall(const Eigen::Vector3f& p,
                 const std::vector<StructurePlane>& planes,
                 const StructurePlaneOptions& options) {
   const Eigen::Vector3d q = p.cast<double>();
+  const double parallel =
+      std::cos(options.max_wall_tilt_deg * std::numbers::pi / 180.0);
+  auto tolerance = [&](const StructurePlane& wall) {
+    return wall.tolerance_m > 0.0 ? wall.tolerance_m : options.tolerance_m;
+  };
+  auto in_front_of_opposite = [&](const StructurePlane& a) {
+    return std::any_of(planes.begin(), planes.end(), [&](const auto& b) {
+      return b.geometry == StructureGeometry::kVertical &&
+             b.normal.dot(a.normal) < -parallel &&
+             b.normal.dot(q) - b.offset > tolerance(b) && b.Covers(q);
+    });
+  };
   return std::any_of(planes.begin(), planes.end(), [&](const auto& wall) {
     if (wall.geometry != StructureGeometry::kVertical) return false;
-    const double tolerance =
-        wall.tolerance_m > 0.0 ? wall.tolerance_m : options.tolerance_m;
     const double d = wall.normal.dot(q) - wall.offset;
-    return d < -tolerance && d >= -options.max_front_distance_m &&
-           wall.Covers(q);
+    // In front of the other face of the same wall: the next room.
+    return d < -tolerance(wall) && d >= -options.max_front_distance_m &&
+           wall.Covers(q) && !in_front_of_opposite(wall);
   });
 }
 
@@ -194,13 +205,16 @@ std::vector<StructurePlane> HorizontalPlane(const Cloud& points, bool lowest,
       const double d = up.dot(p.cast<double>()) - plane.offset;
       if (std::abs(d) <= o.tolerance_m) r.push_back(d);
     }
-    const auto mid = r.begin() + static_cast<std::ptrdiff_t>(r.size() / 2);
-    std::nth_element(r.begin(), mid, r.end());
-    const double median = *mid;
-    for (double& d : r) d = std::abs(d - median);
-    std::nth_element(r.begin(), mid, r.end());
-    plane.tolerance_m = std::clamp(o.tolerance_sigmas * 1.4826 * *mid,
-                                   o.min_tolerance_m, o.tolerance_m);
+    plane.tolerance_m = o.tolerance_m;
+    if (!r.empty()) {  // (the window's middle bin may be empty)
+      const auto mid = r.begin() + static_cast<std::ptrdiff_t>(r.size() / 2);
+      std::nth_element(r.begin(), mid, r.end());
+      const double median = *mid;
+      for (double& d : r) d = std::abs(d - median);
+      std::nth_element(r.begin(), mid, r.end());
+      plane.tolerance_m = std::clamp(o.tolerance_sigmas * 1.4826 * *mid,
+                                     o.min_tolerance_m, o.tolerance_m);
+    }
     spdlog::debug("{} at {:.3f} m: {} points, tolerance {:.3f} m",
                   lowest ? "floor" : "ceiling", plane.offset, n,
                   plane.tolerance_m);
@@ -224,7 +238,7 @@ std::vector<StructurePlane> VerticalPlanes(
     Cloud points, std::vector<Eigen::Vector3f> towards_camera,
     const Eigen::Vector3d& up, size_t min_support,
     const StructurePlaneOptions& o) {
-  if (towards_camera.size() != points.size()) {
+  if (towards_camera.empty()) {
     towards_camera.assign(points.size(), Eigen::Vector3f::Zero());
   }
   std::vector<StructurePlane> planes;
@@ -357,6 +371,9 @@ std::vector<StructurePlane> FindStructurePlanes(
   options.Check();
   CheckArgument(voxel_area_m2 > 0.0,
                 "structure planes: voxel area must be > 0");
+  CheckArgument(
+      towards_camera.empty() || towards_camera.size() == points.size(),
+      "structure planes: one view direction per point");
   const Eigen::Vector3d up = up_world.normalized();
   const auto min_support =
       static_cast<size_t>(std::ceil(options.min_area_m2 / voxel_area_m2));

@@ -47,7 +47,8 @@ struct StructurePlaneOptions {
   /// Vertical planes: normals within this angle of horizontal.
   double max_wall_tilt_deg = 10.0;
   /// A point more than 1.5 x tolerance_m and at most this far in front of a
-  /// larger wall is furniture, not wall (OnStructure).
+  /// larger wall is furniture, not wall (OnStructure); as far behind one it
+  /// is inside or on top of it (BehindWall). 0 turns both off.
   double max_front_distance_m = 0.6;
   /// At most this many vertical planes per class.
   int max_planes = 16;
@@ -119,8 +120,10 @@ bool OnStructure(const Eigen::Vector3f& p,
                  const StructurePlaneOptions& options, double near_scale = 1.0);
 
 /// True when `p` lies behind an oriented wall (more than its tolerance and
-/// at most max_front_distance_m behind it, along a stretch it covers): the
-/// top of a partition, the wall's other face, the room beyond.
+/// at most max_front_distance_m behind it, along a stretch it covers) and
+/// not in front of a wall facing the other way (the other face of an interior
+/// wall: then it is in the next room): the top of a partition, the inside of
+/// a wall.
 bool BehindWall(const Eigen::Vector3f& p,
                 const std::vector<StructurePlane>& planes,
                 const StructurePlaneOptions& options);

@@ -382,6 +382,30 @@ TEST(StructurePlanes, TheTwoFacesOfAnInteriorWallAreTwoPlanes) {
   EXPECT_GT(blind[0].support, a.size());  // tilted through both faces
 }
 
+// Behind a wall is inside it or on top of it, unless in front of the wall's
+// other face: the next room.
+TEST(StructurePlanes, BehindAWallIsNotTheNextRoom) {
+  const Cloud a = Box({3.95f, 0, 0}, {3.95f, 5, 2.5f}, 0.05f);
+  const Cloud b = Box({4.05f, 0, 0}, {4.05f, 5, 2.5f}, 0.05f);
+  Cloud both = a;
+  both.insert(both.end(), b.begin(), b.end());
+  std::vector<Eigen::Vector3f> towards(a.size(), {-1, 0, 0});
+  towards.resize(both.size(), {1, 0, 0});
+  const StructurePlaneOptions o;
+  const auto two =
+      FindStructurePlanes(both, StructureGeometry::kVertical,
+                          Eigen::Vector3d::UnitZ(), 0.0025, o, towards);
+  const auto one = FindStructurePlanes(a, StructureGeometry::kVertical,
+                                       Eigen::Vector3d::UnitZ(), 0.0025, o,
+                                       {a.size(), {-1, 0, 0}});
+  ASSERT_EQ(two.size(), 2u);
+  ASSERT_EQ(one.size(), 1u);
+  EXPECT_FALSE(BehindWall({4.3f, 2, 1}, two, o));  // the next room
+  EXPECT_TRUE(BehindWall({4.3f, 2, 1}, one, o));   // its far face unseen
+  EXPECT_FALSE(BehindWall({3.5f, 2, 1}, two, o));  // in front
+  EXPECT_FALSE(BehindWall({4.8f, 2, 1}, one, o));  // farther than 60 cm
+}
+
 // Sparse views: of the two views that saw a plant and the chair beside it,
 // one held both in the chair's mask (a third saw the plant alone): a third
 // of the plant's votes say chair. Objects of different classes merge only
@@ -405,6 +429,36 @@ TEST(MapObjects, APlantJoinedToAChairInOneOfTwoViewsStaysAPlant) {
   ASSERT_NE(p, nullptr);
   EXPECT_GT(ShareIn(WhereItWent(fusion, plant), p->id), 0.8);
   EXPECT_EQ(Count(fusion, kChair), 1u);
+}
+
+// The other side of the same rule: a sofa seen whole in one view and cut in
+// the other, its end called plant there. One view says one, one says two, and
+// nearly half the end's votes say sofa: one sofa.
+TEST(MapObjects, ASofaWholeInOneViewAndCutInTheOtherStaysOneSofa) {
+  const Cloud body = Box({1.0f, 1.0f, 0.0f}, {1.9f, 2.4f, 0.8f});
+  const Cloud end = Box({1.0f, 2.46f, 0.0f}, {1.9f, 3.0f, 0.8f});
+  std::vector<View> views;
+  for (int i = 0; i < 2; ++i) {
+    View v;
+    v.segments.push_back(Segment(kWall, 1, WallPoints()));
+    v.segments.push_back(Segment(kFloor, 2, FloorPoints()));
+    Cloud sofa = body;
+    if (i == 0) sofa.insert(sofa.end(), end.begin(), end.end());
+    v.segments.push_back(Segment(kSofa, 3, sofa));
+    if (i == 1) v.segments.push_back(Segment(kLamp, 4, end));
+    // The whole view from farther away: its votes weigh less (44% sofa).
+    if (i == 0) v.camera = {3.5f, 4.0f, 1.2f};
+    views.push_back(std::move(v));
+  }
+  const SceneFusion fusion = Fuse(views);
+  const SceneSegment* sofa = Largest(fusion, kSofa);
+  ASSERT_NE(sofa, nullptr);
+  EXPECT_GT(ShareIn(WhereItWent(fusion, end), sofa->id), 0.8);
+  EXPECT_EQ(Count(fusion, kLamp), 0u);
+  // A majority of views alone would leave the end a lamp.
+  FusionOptions majority;
+  majority.map_objects.tie_confusion_share = 1.0;
+  EXPECT_EQ(Count(Fuse(views, majority), kLamp), 1u);
 }
 
 }  // namespace

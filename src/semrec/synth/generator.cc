@@ -322,9 +322,11 @@ SynthSummary WriteSyntheticSequence(const SynthOptions& options_in,
     std::vector<Eigen::Vector3d> samples;
     const double spacing = o.structure ? options.gt_structure_spacing_m
                                        : options.gt_object_spacing_m;
-    for (const Primitive& p : o.parts) {
-      AppendMesh(p, 24, &mesh);
-      AppendSurfaceSamples(p, spacing, &samples);
+    std::vector<size_t> sample_part;
+    for (size_t j = 0; j < o.parts.size(); ++j) {
+      AppendMesh(o.parts[j], 24, &mesh);
+      AppendSurfaceSamples(o.parts[j], spacing, &samples);
+      sample_part.resize(samples.size(), j);
     }
     io::PlyData mesh_ply;
     for (const auto& v : mesh.vertices) {
@@ -335,7 +337,13 @@ SynthSummary WriteSyntheticSequence(const SynthOptions& options_in,
     const Eigen::Vector3d lo = -Eigen::Vector3d::Constant(1e-6);
     const Eigen::Vector3d hi =
         scene.room_size + Eigen::Vector3d::Constant(1e-6);
-    for (const Eigen::Vector3d& s : samples) {
+    // An interior wall's faces where its parts meet, and those on the room's
+    // bounds (floor, ceiling, outer walls), no camera can see.
+    const bool interior_wall = o.structure && !o.room_face;
+    const Eigen::Vector3d in_lo = lo.array() + 2e-6;
+    const Eigen::Vector3d in_hi = hi.array() - 2e-6;
+    for (size_t i = 0; i < samples.size(); ++i) {
+      const Eigen::Vector3d& s = samples[i];
       // Keep the visible union surface: not inside another part, not outside
       // the room.
       if ((s.array() < lo.array()).any() || (s.array() > hi.array()).any()) {
@@ -345,6 +353,14 @@ SynthSummary WriteSyntheticSequence(const SynthOptions& options_in,
           o.parts.begin(), o.parts.end(),
           [&](const Primitive& p) { return SignedDistance(p, s) < -1e-6; });
       if (inside) continue;
+      if (interior_wall) {
+        bool hidden = (s.array() < in_lo.array()).any() ||
+                      (s.array() > in_hi.array()).any();
+        for (size_t j = 0; j < o.parts.size() && !hidden; ++j) {
+          hidden = j != sample_part[i] && SignedDistance(o.parts[j], s) < 1e-6;
+        }
+        if (hidden) continue;
+      }
       surface.points.push_back(s.cast<float>());
       surface.colors.push_back(o.color);
       surface.labels.push_back(o.instance_id);

@@ -22,8 +22,8 @@ struct Views {
   std::vector<RenderedFrame> frames;
 };
 
-// `n` sparse views of the six-objects room (robot height: floor contact in
-// view; the small room makes them overlap), at quarter resolution.
+// `n` sparse views of a preset's scene (six-objects: robot height, floor
+// contact in view; the small room makes them overlap), at quarter resolution.
 Views SparseViews(int n, const std::string& preset = "six-objects") {
   SynthOptions o = SynthOptions::Preset(preset);
   o.trajectory.kind = TrajectoryOptions::Kind::kSparse;

@@ -69,8 +69,9 @@ std::vector<Drawable> CollectDrawables(const Scene& scene,
   for (const SceneObject& o : scene.objects) {
     if (o.room_face) continue;
     for (size_t j = 0; j < o.parts.size(); ++j) {
+      // Parts are numbered for objects only (RenderedFrame::part).
       out.push_back({&o.parts[j], o.instance_id, o.class_id, 0, o.color,
-                     static_cast<uint16_t>(j + 1)});
+                     static_cast<uint16_t>(o.structure ? 0 : j + 1)});
     }
   }
   for (size_t i = 0; i < bodies.size(); ++i) {

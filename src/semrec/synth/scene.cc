@@ -242,10 +242,12 @@ void SceneOptions::Check() const {
   CheckArgument(num_people >= 0 && num_people <= 8,
                 "synth: num_people must be in [0, 8]");
   CheckArgument(object_classes.size() <= 900, "synth: at most 900 objects");
-  CheckArgument(door_width_m >= 0.6 && door_width_m <= room_depth_m - 1.0,
-                "synth: door_width_m must be in [0.6, room depth - 1 m]");
-  CheckArgument(door_height_m >= 1.8 && door_height_m < room_height_m,
-                "synth: door_height_m must be in [1.8, room height)");
+  if (!partitions_x_m.empty()) {
+    CheckArgument(door_width_m >= 0.6 && door_width_m <= room_depth_m - 1.0,
+                  "synth: door_width_m must be in [0.6, room depth - 1 m]");
+    CheckArgument(door_height_m >= 1.8 && door_height_m < room_height_m,
+                  "synth: door_height_m must be in [1.8, room height)");
+  }
   std::vector<double> xs = partitions_x_m;
   std::sort(xs.begin(), xs.end());
   for (size_t i = 0; i < xs.size(); ++i) {
@@ -402,13 +404,17 @@ Scene GenerateScene(const SceneOptions& options) {
         const double slide = rng.Uniform(-0.3, 0.3);
         const Eigen::Vector2d along = side < 2 ? ay : ax;
         fp.center = a.center + reach * dir + slide * along;
+        // Against an interior wall its back is to the wall (a sofa, a shelf
+        // facing the room); the footprint is symmetric, so only the yaw turns.
+        if (footprint_is_wall[anchor]) fp.yaw += M_PI;
       } else if (bp.against_wall && rng.Uniform() < 0.8) {
         const WallFace& f = faces[static_cast<size_t>(
             rng.UniformInt(0, static_cast<int64_t>(faces.size()) - 1))];
         const double gap = 0.01;
         // The object's +x (its front) faces into the room.
         fp.yaw = std::atan2(f.normal.y(), f.normal.x());
-        fp.center = f.origin + (bp.hx + gap) * f.normal +
+        // Summed in the order the four-wall code did (identical bytes).
+        fp.center = f.origin + bp.hx * f.normal + gap * f.normal +
                     rng.Uniform() * f.length * f.along;
       } else {
         fp.yaw = rng.Uniform() * 2 * M_PI;
