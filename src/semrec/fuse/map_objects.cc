@@ -142,9 +142,10 @@ void MapResolver::ReleaseFlushParts() {
   for (size_t i = 0; i < cells_.size(); ++i) {
     const Cell& c = cells_[i];
     if (c.class_id == kNoClass || !IsStuff(c.class_id) || c.stranded) continue;
-    // Only on its class's plane (a class with no plane was not gated).
-    const auto on = planes_.find(c.class_id);
-    if (on == planes_.end() || !OnStructure(c.p, on->second, options_.planes)) {
+    // Only structure that lives on planes (wall, floor, ceiling; also where
+    // too little of it was seen to fit one: a small scan's wall).
+    const auto g = context_.geometry.find(c.class_id);
+    if (g == context_.geometry.end() || g->second == StructureGeometry::kNone) {
       continue;
     }
     float total = 0.0f, best = 0.0f;
