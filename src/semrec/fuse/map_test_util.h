@@ -68,6 +68,14 @@ struct View {
   Eigen::Vector3f camera{2.0f, 2.0f, 1.2f};
 };
 
+// A view of the room's wall and floor, each one mask.
+inline View RoomView() {
+  View v;
+  v.segments.push_back(Segment(kWall, 1, WallPoints()));
+  v.segments.push_back(Segment(kFloor, 2, FloorPoints()));
+  return v;
+}
+
 inline SceneFusion Fuse(const std::vector<View>& views,
                         FusionOptions options = {}) {
   options.merge = FusionOptions::Merge::kVoxel;

@@ -21,9 +21,7 @@ TEST(MapObjects, ChairAgainstWallCalledWallInOneViewEndsAChair) {
   const Cloud chair = Box({0.08f, 1.0f, 0.1f}, {0.55f, 1.5f, 0.9f});
   std::vector<View> views;
   for (int i = 0; i < 4; ++i) {
-    View v;
-    v.segments.push_back(Segment(kWall, 1, WallPoints()));
-    v.segments.push_back(Segment(kFloor, 2, FloorPoints()));
+    View v = RoomView();
     // View 0 paints the whole chair as wall (a joined wall mask).
     if (i == 0) {
       v.segments[0].points_world.insert(v.segments[0].points_world.end(),
@@ -110,9 +108,7 @@ TEST(MapObjects, FurnitureJustInFrontOfAWallIsNotWall) {
   const Cloud cabinet = Box({0.15f, 1.0f, 0.0f}, {0.55f, 2.2f, 1.5f});
   std::vector<View> views;
   for (int i = 0; i < 4; ++i) {
-    View v;
-    v.segments.push_back(Segment(kWall, 1, WallPoints()));
-    v.segments.push_back(Segment(kFloor, 2, FloorPoints()));
+    View v = RoomView();
     if (i == 3) {
       v.segments.push_back(Segment(kTable, 3, cabinet));
     } else {
@@ -143,9 +139,7 @@ TEST(MapObjects, WallVotesOffTheWallPlaneDoNotCount) {
   const Cloud table = Box({0.3f, 2.0f, 0.1f}, {1.1f, 2.8f, 0.75f});
   std::vector<View> views;
   for (int i = 0; i < 4; ++i) {
-    View v;
-    v.segments.push_back(Segment(kWall, 1, WallPoints()));
-    v.segments.push_back(Segment(kFloor, 2, FloorPoints()));
+    View v = RoomView();
     v.segments.push_back(Segment(i == 3 ? kTable : kWall, 3, table));
     views.push_back(std::move(v));
   }
@@ -415,9 +409,7 @@ TEST(MapObjects, APlantJoinedToAChairInOneOfTwoViewsStaysAPlant) {
   const Cloud plant = Box({1.52f, 1.0f, 0.0f}, {1.95f, 1.4f, 0.8f});
   std::vector<View> views;
   for (int i = 0; i < 3; ++i) {
-    View v;
-    v.segments.push_back(Segment(kWall, 1, WallPoints()));
-    v.segments.push_back(Segment(kFloor, 2, FloorPoints()));
+    View v = RoomView();
     Cloud c = chair;
     if (i == 0) c.insert(c.end(), plant.begin(), plant.end());
     if (i < 2) v.segments.push_back(Segment(kChair, 3, c));
@@ -439,9 +431,7 @@ TEST(MapObjects, ASofaWholeInOneViewAndCutInTheOtherStaysOneSofa) {
   const Cloud end = Box({1.0f, 2.46f, 0.0f}, {1.9f, 3.0f, 0.8f});
   std::vector<View> views;
   for (int i = 0; i < 2; ++i) {
-    View v;
-    v.segments.push_back(Segment(kWall, 1, WallPoints()));
-    v.segments.push_back(Segment(kFloor, 2, FloorPoints()));
+    View v = RoomView();
     Cloud sofa = body;
     if (i == 0) sofa.insert(sofa.end(), end.begin(), end.end());
     v.segments.push_back(Segment(kSofa, 3, sofa));
