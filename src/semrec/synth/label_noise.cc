@@ -60,6 +60,7 @@ void ApplyStructureBleed(
     }
   }
   std::vector<Side> sides;
+  sides.reserve(face_of.size() + scene.objects.size());
   for (const auto& [instance, f] : face_of) {
     sides.push_back({f, nullptr, mask_id.at({instance, 0}),
                      scene.FindObject(instance)->class_id});
