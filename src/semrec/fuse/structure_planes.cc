@@ -69,6 +69,11 @@ int64_t AlongBin(const Eigen::Vector3d& along, const Eigen::Vector3d& p) {
   return static_cast<int64_t>(std::floor(along.dot(p) / kAlongBinM));
 }
 
+// Cosine of the largest angle at which two walls still count as parallel.
+double ParallelCos(const StructurePlaneOptions& options) {
+  return std::cos(options.max_wall_tilt_deg * std::numbers::pi / 180.0);
+}
+
 }  // namespace
 
 bool StructurePlane::Covers(const Eigen::Vector3d& p) const {
@@ -104,8 +109,7 @@ bool OnStructure(const Eigen::Vector3f& p,
                  const std::vector<StructurePlane>& planes,
                  const StructurePlaneOptions& options, double near_scale) {
   const Eigen::Vector3d q = p.cast<double>();
-  const double parallel =
-      std::cos(options.max_wall_tilt_deg * std::numbers::pi / 180.0);
+  const double parallel = ParallelCos(options);
   auto in_front_of_larger = [&](const StructurePlane& plane) {
     return std::any_of(planes.begin(), planes.end(), [&](const auto& wall) {
       if (wall.geometry != StructureGeometry::kVertical ||
@@ -119,9 +123,7 @@ bool OnStructure(const Eigen::Vector3f& p,
     });
   };
   return std::any_of(planes.begin(), planes.end(), [&](const auto& plane) {
-    const double near_m =
-        near_scale *
-        (plane.tolerance_m > 0.0 ? plane.tolerance_m : options.tolerance_m);
+    const double near_m = near_scale * plane.Tolerance(options);
     if (std::abs(plane.normal.dot(q) - plane.offset) > near_m) return false;
     return plane.geometry != StructureGeometry::kVertical ||
            !in_front_of_larger(plane);
@@ -132,23 +134,19 @@ bool BehindWall(const Eigen::Vector3f& p,
                 const std::vector<StructurePlane>& planes,
                 const StructurePlaneOptions& options) {
   const Eigen::Vector3d q = p.cast<double>();
-  const double parallel =
-      std::cos(options.max_wall_tilt_deg * std::numbers::pi / 180.0);
-  auto tolerance = [&](const StructurePlane& wall) {
-    return wall.tolerance_m > 0.0 ? wall.tolerance_m : options.tolerance_m;
-  };
+  const double parallel = ParallelCos(options);
   auto in_front_of_opposite = [&](const StructurePlane& a) {
     return std::any_of(planes.begin(), planes.end(), [&](const auto& b) {
       return b.geometry == StructureGeometry::kVertical &&
              b.normal.dot(a.normal) < -parallel &&
-             b.normal.dot(q) - b.offset > tolerance(b) && b.Covers(q);
+             b.normal.dot(q) - b.offset > b.Tolerance(options) && b.Covers(q);
     });
   };
   return std::any_of(planes.begin(), planes.end(), [&](const auto& wall) {
     if (wall.geometry != StructureGeometry::kVertical) return false;
     const double d = wall.normal.dot(q) - wall.offset;
     // In front of the other face of the same wall: the next room.
-    return d < -tolerance(wall) && d >= -options.max_front_distance_m &&
+    return d < -wall.Tolerance(options) && d >= -options.max_front_distance_m &&
            wall.Covers(q) && !in_front_of_opposite(wall);
   });
 }

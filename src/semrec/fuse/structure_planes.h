@@ -79,6 +79,10 @@ struct StructurePlane {
   std::vector<int64_t> along_bins;
 
   bool Covers(const Eigen::Vector3d& p) const;
+  /// Its own tolerance_m, else the options'.
+  double Tolerance(const StructurePlaneOptions& options) const {
+    return tolerance_m > 0.0 ? tolerance_m : options.tolerance_m;
+  }
 };
 
 /// Planes of `geometry` among `points` (one per voxel of area
