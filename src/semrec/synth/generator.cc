@@ -93,6 +93,8 @@ void SynthOptions::Check() const {
   label_noise.Check();
   CheckArgument(gt_object_spacing_m >= 0.001 && gt_structure_spacing_m >= 0.001,
                 "synth: ground-truth sample spacing must be >= 1 mm");
+  CheckArgument(gt_hidden_contact_m >= 0.0 && gt_hidden_contact_m <= 0.05,
+                "synth: gt_hidden_contact_m must be in [0, 0.05]");
   CheckArgument(trajectory.kind != TrajectoryOptions::Kind::kOrbit ||
                     trajectory.height_m < scene.room_height_m - 0.1,
                 "synth: the camera must be below the ceiling");
@@ -303,7 +305,26 @@ SynthSummary WriteSyntheticSequence(const SynthOptions& options_in,
   nlohmann::json objects = nlohmann::json::array();
   io::PlyData surface;
   std::vector<int32_t> semantic, instance;
+  // Solids of every object, widened by the contact distance, for the test
+  // of samples hidden at contacts.
+  const double contact = options.gt_hidden_contact_m;
+  std::vector<Eigen::AlignedBox3d> near_bounds;
   for (const SceneObject& o : scene.objects) {
+    const Eigen::AlignedBox3d b = o.Bounds();
+    const Eigen::Vector3d pad = Eigen::Vector3d::Constant(contact);
+    near_bounds.emplace_back(b.min() - pad, b.max() + pad);
+  }
+  auto touches_another = [&](size_t self, const Eigen::Vector3d& s) {
+    for (size_t k = 0; k < scene.objects.size(); ++k) {
+      if (k == self || !near_bounds[k].contains(s)) continue;
+      for (const Primitive& p : scene.objects[k].parts) {
+        if (SignedDistance(p, s) < contact) return true;
+      }
+    }
+    return false;
+  };
+  for (size_t oi = 0; oi < scene.objects.size(); ++oi) {
+    const SceneObject& o = scene.objects[oi];
     const Eigen::AlignedBox3d b = o.Bounds();
     nlohmann::json parts = nlohmann::json::array();
     for (const Primitive& p : o.parts) parts.push_back(PrimitiveJson(p));
@@ -361,6 +382,7 @@ SynthSummary WriteSyntheticSequence(const SynthOptions& options_in,
         }
         if (hidden) continue;
       }
+      if (contact > 0.0 && touches_another(oi, s)) continue;
       surface.points.push_back(s.cast<float>());
       surface.colors.push_back(o.color);
       surface.labels.push_back(o.instance_id);
@@ -414,6 +436,7 @@ SynthSummary WriteSyntheticSequence(const SynthOptions& options_in,
       {"depth_scale", kDepthScale},
       {"gt_object_spacing_m", options.gt_object_spacing_m},
       {"gt_structure_spacing_m", options.gt_structure_spacing_m},
+      {"gt_hidden_contact_m", options.gt_hidden_contact_m},
       {"objects", scene.objects.size()},
       {"people", scene.people.size()},
       {"surface_points", surface.points.size()}};

@@ -36,6 +36,12 @@ struct SynthOptions {
   /// structure.
   double gt_object_spacing_m = 0.005;
   double gt_structure_spacing_m = 0.02;
+  /// Samples within this distance of another object's solid are left out of
+  /// the ground truth: a bed's underside on the floor, a headboard's back
+  /// against the wall, the wall behind it. No camera sees them, yet at the
+  /// contact line they lie within the depth tolerance of `eval scene
+  /// --observed-in` and would be scored as seen.
+  double gt_hidden_contact_m = 0.01;
   /// Also write segmenter-like labels (synth/label_noise.h) to
   /// labels_noisy/{instance,semantic}/ with labels_noisy/classes.json, a
   /// folder `semrec fuse|mesh --labels` reads.
