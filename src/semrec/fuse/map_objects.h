@@ -25,8 +25,8 @@
 //     into objects unless the views that saw both mostly put them in one mask
 //     (MaskClustering-style consensus); touching objects of one class are
 //     merged unless several views held them in different masks and few in
-//     one; touching objects of confused classes that views held in one mask
-//     are merged too. A small piece joins the object of its class it touches.
+//     one (1 : 1 merges when they touch directly); touching objects of
+//     confused classes that views held in one mask are merged too. A small piece joins the object of its class it touches.
 //  5. Fragments are judged by visibility: an object is a fragment when the
 //     views that labelled its voxels as its class are few compared with the
 //     views that observed those voxels at all (a part seen once where five
@@ -89,6 +89,11 @@ struct MapObjectOptions {
   /// smaller part).
   size_t min_one_views = 2;
   double two_weight = 0.5;
+  /// Touching objects of one class that as many views held in one mask as
+  /// apart (1 : 1) are one when at least this many of the smaller one's
+  /// voxels touch the other directly (26-neighbours), not just within
+  /// touch_voxels.
+  size_t min_tie_contact_voxels = 3;
   double min_hold_share = 0.2;
   /// Parts of one fusion object are cut apart when views held them in
   /// different masks and at most this share of those views held them in one

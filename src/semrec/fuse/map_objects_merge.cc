@@ -13,10 +13,16 @@ namespace semrec::fuse::internal {
 
 bool MapResolver::OneObject(const std::vector<size_t>& a,
                             const std::vector<size_t>& b, uint32_t id_a,
-                            uint32_t id_b, const PairViews& views) const {
+                            uint32_t id_b, const PairViews& views,
+                            size_t contact_voxels) const {
   const uint16_t ca = owner_class_.at(id_a), cb = owner_class_.at(id_b);
   if (ca == cb) {
-    return views.two == 0 || SaysOne(views, options_.min_one_views);
+    if (views.two == 0 || SaysOne(views, options_.min_one_views)) return true;
+    // Sparse views see a place once or twice: as many views held the two in
+    // one mask as apart (1 : 1), touching directly, is one object (mask
+    // generators cut objects far more often than they join two).
+    return views.one >= 1 && views.one >= views.two &&
+           contact_voxels >= options_.min_tie_contact_voxels;
   }
   // Different classes need more: most views that saw both held them in one
   // mask (sparse views: one view that joined a plant to the chair beside it
@@ -48,16 +54,41 @@ void MapResolver::MergeByMasks() {
       });
     }
   }
+  // Cells of each object in direct contact (26-neighbours) with another.
+  std::map<std::pair<uint32_t, uint32_t>, size_t> contact;
+  for (const auto& entry : members) {
+    const uint32_t id = entry.first;
+    for (size_t i : entry.second) {
+      std::set<uint32_t> seen;
+      ForNeighbours(
+          i,
+          [&](size_t n) {
+            const uint32_t other = cells_[n].owner;
+            if (other != id && other != 0 && IsThingCell(cells_[n]) &&
+                seen.insert(other).second) {
+              ++contact[{id, other}];
+            }
+          },
+          1);
+    }
+  }
   // Judged on the objects as they were: a chain of merges does not change
   // the evidence of a pair.
   std::vector<std::pair<uint32_t, uint32_t>> one;
   for (const auto& [a, b] : pairs) {
     const PairViews v = CoViews(holders[a], holders[b]);
-    if (OneObject(members[a], members[b], a, b, v)) {
+    // The smaller one's cells in direct contact with the other.
+    const size_t contact_voxels = members[a].size() <= members[b].size()
+                                      ? contact[{a, b}]
+                                      : contact[{b, a}];
+    if (OneObject(members[a], members[b], a, b, v, contact_voxels)) {
       one.emplace_back(a, b);
     }
-    spdlog::debug("objects {} and {} ({} and {} voxels): {} views one, {} two",
-                  a, b, members[a].size(), members[b].size(), v.one, v.two);
+    spdlog::debug(
+        "objects {} and {} (classes {} and {}, {} and {} voxels): {} views "
+        "one, {} two, {} voxels in contact",
+        a, b, owner_class_[a], owner_class_[b], members[a].size(),
+        members[b].size(), v.one, v.two, contact_voxels);
   }
   std::map<uint32_t, uint32_t> into;
   auto find = [&](uint32_t id) {

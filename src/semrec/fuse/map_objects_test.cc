@@ -142,6 +142,44 @@ TEST(MapObjects, AChairCutByOneOfTwoViewsStaysOneChair) {
   }
 }
 
+// A box cut in two by the plane z = cut_z (or x = cut_x): the two parts'
+// surfaces, without the cut face (inside the object).
+std::pair<Cloud, Cloud> CutBox(const Eigen::Vector3f& lo,
+                               const Eigen::Vector3f& hi, int axis,
+                               float cut) {
+  std::pair<Cloud, Cloud> parts;
+  for (const Eigen::Vector3f& p : Box(lo, hi)) {
+    if (std::abs(p[axis] - cut) < 0.005f) continue;
+    (p[axis] < cut ? parts.first : parts.second).push_back(p);
+  }
+  return parts;
+}
+
+// One view held a sofa's two halves apart; another, close up, saw a strip
+// across the middle in one mask, most of it on the right half (fusion joined
+// that strip to the right half only). One view against one, touching: one
+// sofa. Without the tie rule: two.
+TEST(MapObjects, ASofaHeldWholeByOneViewAndCutByAnotherIsOneSofa) {
+  const auto [left, right] =
+      CutBox({1.0f, 1.0f, 0.0f}, {3.0f, 1.8f, 0.8f}, 0, 2.0f);
+  Cloud strip;
+  for (const Cloud* c : {&left, &right}) {
+    for (const Eigen::Vector3f& p : *c) {
+      if (p.x() > 1.85f && p.x() < 2.45f) strip.push_back(p);
+    }
+  }
+  for (const bool tie_rule : {true, false}) {
+    std::vector<View> views(2, RoomView());
+    views[0].segments.push_back(Segment(kSofa, 3, left));
+    views[0].segments.push_back(Segment(kSofa, 4, right));
+    views[1].segments.push_back(Segment(kSofa, 3, strip));
+    FusionOptions options;
+    if (!tie_rule) options.map_objects.min_tie_contact_voxels = 100000;
+    const SceneFusion fusion = Fuse(views, options);
+    EXPECT_EQ(Count(fusion, kSofa), tie_rule ? 1u : 2u) << tie_rule;
+  }
+}
+
 // One view calls the whole chair table (its upper part is seen only there);
 // three views show the lower part as chair. The parts are one object (held
 // in one mask), and the class with more votes over both wins, not the class

@@ -195,14 +195,18 @@ class MapResolver {
   // Share of `cells`' class evidence that goes to `class_id`.
   double VoteShare(const std::vector<size_t>& cells, uint16_t class_id) const;
 
-  // Whether touching objects a and b are one. One class: unless two views or
-  // more held them in different masks and the views holding both in one mask
-  // are too few (masks cut one object apart far more often than they join
-  // two; sparse views see an object once or twice). Two classes: when most
+  // Whether touching objects a and b are one. One class: when no view held
+  // them in different masks, when enough views held them in one mask
+  // (SaysOne), or when as many held them in one mask as apart and they touch
+  // directly, `contact_voxels` (the smaller one's voxels with a 26-neighbour
+  // in the other) >= min_tie_contact_voxels: masks cut one object far more
+  // often than they join two, and sparse views see an object once or twice,
+  // so 1 : 1 is the common split of one object. Two classes: when most
   // views that saw both held them in one mask and one's votes give the other's
   // class at least confusion_share (one object, its class confused).
   bool OneObject(const std::vector<size_t>& a, const std::vector<size_t>& b,
-                 uint32_t id_a, uint32_t id_b, const PairViews& views) const;
+                 uint32_t id_a, uint32_t id_b, const PairViews& views,
+                 size_t contact_voxels) const;
 
   // Touching objects that are one (OneObject) become one; the larger keeps
   // its id.
