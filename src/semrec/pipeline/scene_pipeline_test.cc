@@ -256,19 +256,16 @@ TEST(SceneBuilder, TrackedPeopleStayOutOfTheStaticMap) {
   }
   ASSERT_GT(person_points.size(), 100u);
   const auto chair_points_near_people = [&](const SceneBuilder& b) {
-    size_t near = 0;
+    std::vector<Eigen::Vector3f> chair_points;
     for (const auto& s : b.fusion().segments()) {
       if (s.class_id != chair) continue;
-      for (const auto& p : s.points) {
-        for (const auto& q : person_points) {
-          if ((p - q).norm() < 0.05f) {
-            ++near;
-            break;
-          }
-        }
-      }
+      chair_points.insert(chair_points.end(), s.points.begin(), s.points.end());
     }
-    return near;
+    if (chair_points.empty()) return size_t{0};
+    const std::vector<double> d =
+        eval::CloudToCloudDistances(chair_points, person_points);
+    return static_cast<size_t>(
+        std::count_if(d.begin(), d.end(), [](double x) { return x < 0.05; }));
   };
   EXPECT_EQ(chair_points_near_people(with), 0u);
   EXPECT_GT(chair_points_near_people(without), 50u);
