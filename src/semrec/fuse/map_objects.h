@@ -26,7 +26,8 @@
 //     (MaskClustering-style consensus); touching objects of one class are
 //     merged unless several views held them in different masks and few in
 //     one (1 : 1 merges when they touch directly); touching objects of
-//     confused classes that views held in one mask are merged too. A small piece joins the object of its class it touches.
+//     confused classes that views held in one mask are merged too. A small
+//     piece joins the object of its class it touches.
 //  5. Fragments are judged by visibility: an object is a fragment when the
 //     views that labelled its voxels as its class are few compared with the
 //     views that observed those voxels at all (a part seen once where five

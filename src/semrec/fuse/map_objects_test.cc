@@ -142,11 +142,10 @@ TEST(MapObjects, AChairCutByOneOfTwoViewsStaysOneChair) {
   }
 }
 
-// A box cut in two by the plane z = cut_z (or x = cut_x): the two parts'
+// A box cut in two where coordinate `axis` equals `cut`: the two parts'
 // surfaces, without the cut face (inside the object).
 std::pair<Cloud, Cloud> CutBox(const Eigen::Vector3f& lo,
-                               const Eigen::Vector3f& hi, int axis,
-                               float cut) {
+                               const Eigen::Vector3f& hi, int axis, float cut) {
   std::pair<Cloud, Cloud> parts;
   for (const Eigen::Vector3f& p : Box(lo, hi)) {
     if (std::abs(p[axis] - cut) < 0.005f) continue;

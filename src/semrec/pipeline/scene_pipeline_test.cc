@@ -292,9 +292,8 @@ TEST(RunSequence, TimingAccountsForTheRunsWallTime) {
   EXPECT_NEAR(run, r.seconds, 1e-9);
   const nlohmann::json& main = t.at("main_thread");
   double parts = 0.0;
-  for (const char* part :
-       {"setup", "waiting_for_frames", "segment_and_track",
-        "waiting_for_integration", "finish_and_write"}) {
+  for (const char* part : {"setup", "waiting_for_frames", "segment_and_track",
+                           "waiting_for_integration", "finish_and_write"}) {
     const double seconds = main.at(part).get<double>();
     EXPECT_GE(seconds, 0.0) << part;
     parts += seconds;
@@ -313,8 +312,7 @@ TEST(RunSequence, TimingAccountsForTheRunsWallTime) {
                 stages.at("volumes").at("wall").get<double>() +
                 stages.at("overlay").at("wall").get<double>());
   EXPECT_GT(stages.at("volumes").at("wall").get<double>(), 0.0);
-  EXPECT_GE(t.at("process_cpu").get<double>(),
-            main.at("cpu").get<double>());
+  EXPECT_GE(t.at("process_cpu").get<double>(), main.at("cpu").get<double>());
 }
 
 TEST(RunSequence, CorruptFramesAreSkippedAndCounted) {
