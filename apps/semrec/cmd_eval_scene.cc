@@ -86,8 +86,9 @@ void RunScene(const SceneArgs& args) {
   if (args.objects) {
     text += fmt::format(
         "\nwhere each ground-truth object's points went (predicted objects "
-        "with >= 5%):\n{:>5}  {:<16} {:>7} {:>7} {:>9}  {}\n",
-        "id", "class", "points", "IoU", "uncovered",
+        "with >= 5%; views: the most frames that saw one of its points, with "
+        "--observed-in):\n{:>5}  {:<16} {:>7} {:>5} {:>7} {:>9}  {}\n",
+        "id", "class", "points", "views", "IoU", "uncovered",
         "predicted id:class share");
     for (const auto& o : m.objects) {
       std::string shares;
@@ -95,9 +96,10 @@ void RunScene(const SceneArgs& args) {
         shares += fmt::format(" {}:{} {:.0f}%", s.predicted_id,
                               name(s.class_id), 100 * s.share);
       }
-      text += fmt::format("{:>5}  {:<16} {:>7} {:>7.2f} {:>8.0f}% {}\n", o.id,
-                          name(o.class_id), o.points, 100 * o.best_iou,
-                          100 * o.uncovered, shares);
+      text += fmt::format("{:>5}  {:<16} {:>7} {:>5} {:>7.2f} {:>8.0f}% {}\n",
+                          o.id, name(o.class_id), o.points,
+                          o.views > 0 ? std::to_string(o.views) : "-",
+                          100 * o.best_iou, 100 * o.uncovered, shares);
     }
   }
   std::printf("%s", text.c_str());

@@ -35,6 +35,13 @@ ok &= nvap >= gvap - 0.25 and nvm >= gvm - 0.1               # ... and close to 
 sys.exit(0 if ok else 1)
 PY
   fail "voxel rule does not hold up on sparse views with bleeding labels"
+python3 - "$tmp/gt_voxel.json" <<'PY' ||
+import json, sys
+views = [o["views"] for o in json.load(open(sys.argv[1]))["objects"]]
+# --observed-in: each scored object was seen by 1-16 frames; sparse views see some once or twice.
+sys.exit(0 if views and all(1 <= v <= 16 for v in views) and min(views) <= 2 else 1)
+PY
+  fail "eval scene --observed-in does not count the views of each ground-truth object"
 grep -q "objects decided per map voxel" "$tmp/gt_voxel.log" || fail "no per-voxel decision logged"
 grep -q '"merge": "voxel"\|merge voxel' "$tmp/gt_voxel/summary.json" "$tmp/gt_voxel/static.usda" ||
   fail "the result does not name the voxel rule"

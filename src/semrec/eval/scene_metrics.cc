@@ -123,20 +123,18 @@ SceneGroundTruth ReadSceneGroundTruth(const std::filesystem::path& path) {
   return gt;
 }
 
-std::vector<bool> ObservedPoints(const std::vector<Eigen::Vector3f>& points,
-                                 const io::SequenceReader& reader,
-                                 double tolerance_m,
-                                 const ProgressOptions& progress_options) {
+std::vector<uint16_t> ObservedViews(const std::vector<Eigen::Vector3f>& points,
+                                    const io::SequenceReader& reader,
+                                    double tolerance_m,
+                                    const ProgressOptions& progress_options) {
   Progress progress("checking what the frames saw", reader.size(),
                     progress_options);
-  // Bytes, not vector<bool>: tasks write neighbouring elements concurrently.
-  std::vector<uint8_t> seen(points.size(), 0);
+  std::vector<uint16_t> views(points.size(), 0);
   for (size_t f = 0; f < reader.size(); ++f) {
     const Frame frame = reader.Read(f);
     const Transform T_camera_world = frame.T_world_camera.Inverse();
     const CameraIntrinsics& k = frame.intrinsics;
     tbb::parallel_for(size_t{0}, points.size(), [&](size_t i) {
-      if (seen[i] != 0) return;
       const Eigen::Vector3d p = T_camera_world * points[i].cast<double>();
       if (p.z() <= 0.0) return;
       const Eigen::Vector2d uv = k.Project(p);
@@ -146,11 +144,25 @@ std::vector<bool> ObservedPoints(const std::vector<Eigen::Vector3f>& points,
         return;
       }
       const float z = frame.depth(static_cast<int>(u), static_cast<int>(v));
-      if (z > 0.0f && std::abs(z - p.z()) <= tolerance_m) seen[i] = 1;
+      if (z > 0.0f && std::abs(z - p.z()) <= tolerance_m &&
+          views[i] < std::numeric_limits<uint16_t>::max()) {
+        ++views[i];
+      }
     });
     progress.Tick();
   }
-  return {seen.begin(), seen.end()};
+  return views;
+}
+
+std::vector<bool> ObservedPoints(const std::vector<Eigen::Vector3f>& points,
+                                 const io::SequenceReader& reader,
+                                 double tolerance_m,
+                                 const ProgressOptions& progress_options) {
+  const std::vector<uint16_t> views =
+      ObservedViews(points, reader, tolerance_m, progress_options);
+  std::vector<bool> seen(points.size());
+  for (size_t i = 0; i < views.size(); ++i) seen[i] = views[i] > 0;
+  return seen;
 }
 
 SceneGroundTruth Subset(const SceneGroundTruth& gt,
@@ -163,6 +175,7 @@ SceneGroundTruth Subset(const SceneGroundTruth& gt,
     out.points.push_back(gt.points[i]);
     out.semantic.push_back(gt.semantic[i]);
     out.instance.push_back(gt.instance[i]);
+    if (!gt.views.empty()) out.views.push_back(gt.views[i]);
   }
   return out;
 }
@@ -370,6 +383,14 @@ SceneMetrics EvaluateScene(const SceneGroundTruth& gt,
       }
       m.pieces_per_gt_object[g] = pieces;
       m.objects.push_back(ReportObject(g, cls, predicted, overlaps));
+      if (!gt.views.empty()) {
+        for (size_t i = 0; i < gt.instance.size(); ++i) {
+          if (gt.instance[i] == g) {
+            m.objects.back().views =
+                std::max(m.objects.back().views, gt.views[i]);
+          }
+        }
+      }
     }
   }
   std::sort(m.objects.begin(), m.objects.end(),

@@ -35,6 +35,8 @@ struct SceneGroundTruth {
   std::vector<int32_t> semantic;
   /// 0 = not an object (structure, unlabelled).
   std::vector<int32_t> instance;
+  /// Per point, the frames that saw it (ObservedViews); empty: not known.
+  std::vector<uint16_t> views;
 };
 
 /// Reads a PLY with per-point `semantic` and `instance` properties. Throws
@@ -85,6 +87,9 @@ struct GtObjectReport {
   std::vector<Share> shares;
   /// Share of its points near no predicted surface.
   double uncovered = 0.0;
+  /// The most frames that saw one of its points (0: not known): 1 = an
+  /// object seen in one view.
+  uint16_t views = 0;
 };
 
 struct SceneMetrics {
@@ -117,6 +122,13 @@ std::vector<bool> ObservedPoints(const std::vector<Eigen::Vector3f>& points,
                                  const io::SequenceReader& reader,
                                  double tolerance_m = 0.02,
                                  const ProgressOptions& progress = {});
+
+/// Per point, how many frames of `reader` saw it (as ObservedPoints; counts
+/// stop at 65535).
+std::vector<uint16_t> ObservedViews(const std::vector<Eigen::Vector3f>& points,
+                                    const io::SequenceReader& reader,
+                                    double tolerance_m = 0.02,
+                                    const ProgressOptions& progress = {});
 
 /// The points (and their labels) where `keep` is true.
 SceneGroundTruth Subset(const SceneGroundTruth& gt,

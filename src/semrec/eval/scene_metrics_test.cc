@@ -157,6 +157,19 @@ TEST(SceneMetrics, ReportsWhereEachGroundTruthObjectWent) {
   // The table object holds 120 points, 100 of them the table's.
   EXPECT_NEAR(m.objects[2].best_iou, 100.0 / 120.0, 1e-12);
   EXPECT_DOUBLE_EQ(m.objects[2].uncovered, 0.0);
+  EXPECT_EQ(c1.views, 0) << "not known without per-point views";
+  // Per-point views (ObservedViews): an object reports its most-seen point.
+  SceneGroundTruth gt = f.gt;
+  gt.views.assign(gt.points.size(), 1);
+  for (size_t i = 0; i < gt.points.size(); ++i) {
+    if (gt.instance[i] == 2 && i % 7 == 0) gt.views[i] = 3;
+  }
+  const SceneMetrics with_views =
+      EvaluateScene(gt, predicted, kThings, Tight());
+  ASSERT_EQ(with_views.objects.size(), 3u);
+  EXPECT_EQ(with_views.objects[0].views, 1);
+  EXPECT_EQ(with_views.objects[1].views, 3);
+  EXPECT_EQ(with_views.objects[2].views, 1);
 }
 
 TEST(SceneMetrics, MergedNeighboursMatchNeitherAtHalf) {

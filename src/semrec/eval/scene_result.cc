@@ -188,7 +188,10 @@ SceneResultEvaluation EvaluateSceneResult(const SceneResultOptions& options) {
     reader_options.stride = options.observed_stride;
     const io::SequenceReader reader =
         io::SequenceReader::Open(options.observed_in, reader_options);
-    gt = Subset(gt, ObservedPoints(gt.points, reader));
+    gt.views = ObservedViews(gt.points, reader);
+    std::vector<bool> seen(gt.views.size());
+    for (size_t i = 0; i < seen.size(); ++i) seen[i] = gt.views[i] > 0;
+    gt = Subset(gt, seen);
   }
   for (auto& p : gt.points) {
     p = (T_upright_world * p.cast<double>()).cast<float>();
@@ -249,6 +252,7 @@ nlohmann::json SceneResultEvaluation::ToJson() const {
                        {"points", o.points},
                        {"best_iou", o.best_iou},
                        {"uncovered", o.uncovered},
+                       {"views", o.views},
                        {"shares", shares}});
   }
   nlohmann::json pieces = nlohmann::json::object();
