@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <limits>
+#include <map>
 #include <numeric>
 
 #include <tbb/parallel_for.h>
@@ -154,17 +155,6 @@ std::vector<uint16_t> ObservedViews(const std::vector<Eigen::Vector3f>& points,
   return views;
 }
 
-std::vector<bool> ObservedPoints(const std::vector<Eigen::Vector3f>& points,
-                                 const io::SequenceReader& reader,
-                                 double tolerance_m,
-                                 const ProgressOptions& progress_options) {
-  const std::vector<uint16_t> views =
-      ObservedViews(points, reader, tolerance_m, progress_options);
-  std::vector<bool> seen(points.size());
-  for (size_t i = 0; i < views.size(); ++i) seen[i] = views[i] > 0;
-  return seen;
-}
-
 SceneGroundTruth Subset(const SceneGroundTruth& gt,
                         const std::vector<bool>& keep) {
   CheckArgument(keep.size() == gt.points.size(),
@@ -264,6 +254,8 @@ SceneMetrics EvaluateScene(const SceneGroundTruth& gt,
   const size_t n = gt.points.size();
   CheckArgument(gt.semantic.size() == n && gt.instance.size() == n,
                 "eval scene: one class and instance per ground-truth point");
+  CheckArgument(gt.views.empty() || gt.views.size() == n,
+                "eval scene: views for every ground-truth point or none");
   SceneMetrics m;
   m.gt_points = n;
 
@@ -352,6 +344,12 @@ SceneMetrics EvaluateScene(const SceneGroundTruth& gt,
   }
   double ap25_sum = 0.0, ap50_sum = 0.0;
   size_t classes_with_objects = 0, matched_gt50 = 0, matched_pred50 = 0;
+  // Per object, the most frames that saw one of its points.
+  std::map<int32_t, uint16_t> views_of;
+  for (size_t i = 0; i < gt.views.size(); ++i) {
+    uint16_t& v = views_of[gt.instance[i]];
+    v = std::max(v, gt.views[i]);
+  }
   for (const auto& [cls, objects] : gt_objects_of_class) {
     const auto& preds = predictions_of_class[cls];
     const ClassMatches m25 =
@@ -383,13 +381,8 @@ SceneMetrics EvaluateScene(const SceneGroundTruth& gt,
       }
       m.pieces_per_gt_object[g] = pieces;
       m.objects.push_back(ReportObject(g, cls, predicted, overlaps));
-      if (!gt.views.empty()) {
-        for (size_t i = 0; i < gt.instance.size(); ++i) {
-          if (gt.instance[i] == g) {
-            m.objects.back().views =
-                std::max(m.objects.back().views, gt.views[i]);
-          }
-        }
+      if (const auto it = views_of.find(g); it != views_of.end()) {
+        m.objects.back().views = it->second;
       }
     }
   }

@@ -113,18 +113,12 @@ struct SceneMetrics {
   std::vector<GtObjectReport> objects;
 };
 
-/// Ground-truth points some frame of `reader` saw: in its image, in front of
-/// the camera, with measured depth within `tolerance_m` of the point's depth.
-/// A ground truth sampled from whole objects also holds surfaces no camera
-/// saw (backs, undersides), which no reconstruction can recover.
-/// Reports progress per frame.
-std::vector<bool> ObservedPoints(const std::vector<Eigen::Vector3f>& points,
-                                 const io::SequenceReader& reader,
-                                 double tolerance_m = 0.02,
-                                 const ProgressOptions& progress = {});
-
-/// Per point, how many frames of `reader` saw it (as ObservedPoints; counts
-/// stop at 65535).
+/// Per ground-truth point, how many frames of `reader` saw it: in the image,
+/// in front of the camera, with measured depth within `tolerance_m` of the
+/// point's depth (counts stop at 65535). A ground truth sampled from whole
+/// objects also holds surfaces no camera saw (backs, undersides), which no
+/// reconstruction can recover: `eval scene --observed-in` keeps the points
+/// with a count above 0. Reports progress per frame.
 std::vector<uint16_t> ObservedViews(const std::vector<Eigen::Vector3f>& points,
                                     const io::SequenceReader& reader,
                                     double tolerance_m = 0.02,
