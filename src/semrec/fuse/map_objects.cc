@@ -18,6 +18,8 @@ void MapObjectOptions::Check() const {
   CheckArgument(
       min_stranded_contact_share >= 0.0 && min_stranded_contact_share <= 1.0,
       "map objects: min_stranded_contact_share must be in [0, 1]");
+  CheckArgument(min_front_share >= 0.0 && min_front_share <= 1.0,
+                "map objects: min_front_share must be in [0, 1]");
   CheckArgument(max_one_share >= 0.0 && max_one_share <= 1.0,
                 "map objects: max_one_share must be in [0, 1]");
   CheckArgument(confusion_share >= 0.0 && confusion_share <= 1.0 &&
@@ -64,7 +66,10 @@ MapResolution MapResolver::Run() {
   AttachOrphans();
   MergeByMasks();
   JudgeFragments();
-  if (options_.claim_stranded) ClaimStranded();
+  if (options_.claim_stranded) {
+    ClaimFronts();
+    ClaimStranded();
+  }
   return Build();
 }
 
@@ -101,12 +106,27 @@ void MapResolver::GateStructure() {
       points.push_back(c.p);
       towards_camera.push_back(c.evidence->towards_camera_sum);
     }
+    // Low vertical planes are no walls, but may be the front of furniture
+    // the views called wall (a row of base cabinets): tested too.
+    std::vector<StructurePlane> low;
     auto found = FindStructurePlanes(points, g->second, context_.up_world, area,
-                                     options_.planes, towards_camera);
-    spdlog::debug("structure class {}: {} voxels, {} planes", cls,
-                  points.size(), found.size());
-    if (found.empty()) continue;  // too little seen to tell: not gated
+                                     options_.planes, towards_camera, &low);
     OrientToInterior(scene, options_.planes.tolerance_m, &found);
+    OrientToInterior(scene, options_.planes.tolerance_m, &low);
+    std::vector<StructurePlane> fronts =
+        TakeFurnitureFronts(scene, context_.up_world, options_.planes, &found);
+    for (StructurePlane& p :
+         TakeFurnitureFronts(scene, context_.up_world, options_.planes, &low)) {
+      fronts.push_back(std::move(p));
+    }
+    spdlog::debug(
+        "structure class {}: {} voxels, {} planes, {} furniture fronts", cls,
+        points.size(), found.size(), fronts.size());
+    for (StructurePlane& p : fronts) p.class_id = cls;
+    fronts_.insert(fronts_.end(), fronts.begin(), fronts.end());
+    // Too little seen to tell: not gated; where every plane was a front,
+    // nothing of the class is structure.
+    if (found.empty() && fronts.empty()) continue;
     for (StructurePlane& p : found) p.class_id = cls;
     result_.planes.insert(result_.planes.end(), found.begin(), found.end());
     planes_[cls] = std::move(found);

@@ -14,7 +14,10 @@
 //     hand's width in front of a larger one: a voxel 9-60 cm in front of a
 //     larger wall plane (along a stretch of it seen at some height) is not on a
 //     wall, even where a smaller plane passes through it (furniture some
-//     views call wall can make a plane of its own).
+//     views call wall can make a plane of its own). Nor is a vertical plane
+//     with a surface behind its top edge (a counter top over base cabinets
+//     every view calls wall): it is a furniture front, and a class whose
+//     every plane is a front is gated everywhere.
 //  3. Each thing voxel belongs to the fusion object of its class that most
 //     views put it in; structure voxels to their class's structure object.
 //     Thing voxels no object of their class claimed (they were fused into the
@@ -38,6 +41,9 @@
 //     view called a chair's legs floor, a chair's back by the wall wall) join
 //     the things they touch, each voxel the nearest, unless the group is
 //     larger than every thing it touches or few of its voxels touch one.
+//     Those on a furniture front first join the thing that holds a fair part
+//     of the front and lies mostly on it (a view named part of the row of
+//     cabinets), across the fronts it touches.
 #pragma once
 
 #include <cstddef>
@@ -76,6 +82,10 @@ struct MapObjectOptions {
   bool claim_stranded = true;
   /// ... when at least this share of the group's voxels touch a thing.
   double min_stranded_contact_share = 0.25;
+  /// Stranded voxels on a furniture front (StructurePlaneOptions::
+  /// min_top_surface_share) join the thing holding at least this share of
+  /// the front's voxels (and lying mostly on it).
+  double min_front_share = 0.1;
   /// A split-off piece with fewer voxels than this joins a touching object of
   /// its class instead of standing alone.
   size_t min_piece_voxels = 20;

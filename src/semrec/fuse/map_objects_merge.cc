@@ -172,6 +172,74 @@ void MapResolver::JudgeFragments() {
   }
 }
 
+void MapResolver::ClaimFronts() {
+  if (fronts_.empty()) return;
+  std::map<uint32_t, size_t> size;
+  for (const Cell& c : cells_) {
+    if (c.owner != 0 && IsThingCell(c)) ++size[c.owner];
+  }
+  // Per cell: on a front (any); per front: the thing that takes it.
+  std::vector<bool> on_any(cells_.size(), false);
+  std::vector<size_t> frontier;
+  for (const StructurePlane& front : fronts_) {
+    const double tolerance = front.Tolerance(options_.planes);
+    std::vector<size_t> on;
+    std::map<uint32_t, size_t> held;  // thing -> its voxels on the front
+    for (size_t i = 0; i < cells_.size(); ++i) {
+      const Eigen::Vector3d q = cells_[i].p.cast<double>();
+      if (std::abs(front.normal.dot(q) - front.offset) > tolerance ||
+          !front.Covers(q)) {
+        continue;
+      }
+      on.push_back(i);
+      on_any[i] = true;
+      if (cells_[i].owner != 0 && IsThingCell(cells_[i])) {
+        ++held[cells_[i].owner];
+      }
+    }
+    uint32_t best = 0;
+    size_t best_held = 0;
+    for (const auto& [id, n] : held) {
+      if (n > best_held) best = id, best_held = n;
+    }
+    const bool takes =
+        best != 0 &&
+        static_cast<double>(best_held) >=
+            options_.min_front_share * static_cast<double>(on.size()) &&
+        2 * best_held >= size[best];
+    spdlog::debug(
+        "furniture front (class {}, {} voxels on it): object {} holds {} of "
+        "them ({} in all){}",
+        front.class_id, on.size(), best, best_held, size[best],
+        takes ? ": takes the stranded rest" : "");
+    if (!takes) continue;
+    for (size_t i : on) {
+      if (cells_[i].owner == best && IsThingCell(cells_[i])) {
+        frontier.push_back(i);
+      }
+    }
+  }
+  // Breadth first from the things over stranded voxels on fronts: the
+  // nearest thing takes each, across the corner of an L-shaped counter too.
+  size_t claimed = 0;
+  for (size_t f = 0; f < frontier.size(); ++f) {
+    const uint32_t id = cells_[frontier[f]].owner;
+    ForNeighbours(frontier[f], [&](size_t n) {
+      Cell& c = cells_[n];
+      if (!on_any[n] || !c.stranded || !IsStuff(c.class_id)) return;
+      c.excluded.push_back(c.class_id);
+      c.class_id = owner_class_[id];
+      c.owner = id;
+      c.stranded = false;
+      frontier.push_back(n);
+      ++claimed;
+    });
+  }
+  spdlog::debug("{} stranded voxels on furniture fronts joined things",
+                claimed);
+  result_.stranded_voxels_claimed += claimed;
+}
+
 void MapResolver::ClaimStranded() {
   std::map<uint32_t, size_t> size;
   for (const Cell& c : cells_) {
@@ -236,7 +304,7 @@ void MapResolver::ClaimStranded() {
     }
     claimed += owner.size();
   }
-  result_.stranded_voxels_claimed = claimed;
+  result_.stranded_voxels_claimed += claimed;
   spdlog::debug("{} stranded structure voxels joined things", claimed);
 }
 

@@ -230,6 +230,13 @@ class MapResolver {
   // to, e.g. a wall seen twice after drift).
   void ClaimStranded();
 
+  // A furniture front (a row of cabinets under a counter) is one surface:
+  // where views named part of it (a cabinet) and called the rest wall, the
+  // stranded rest joins that thing, spreading over the front from it. The
+  // thing must lie mostly on the front and hold a fair part of it (a chair
+  // touching the cabinets does not take them).
+  void ClaimFronts();
+
   std::pair<double, uint32_t> Visibility(
       const std::vector<size_t>& cells) const;
 
@@ -245,6 +252,8 @@ class MapResolver {
   std::map<uint16_t, uint32_t> structure_ids_;
   // Structure planes per class (GateStructure).
   std::map<uint16_t, std::vector<StructurePlane>> planes_;
+  // Vertical planes of structure classes that are furniture fronts.
+  std::vector<StructurePlane> fronts_;
   std::map<uint32_t, uint16_t> owner_class_;
   std::map<uint32_t, std::pair<double, uint32_t>> seen_;
   MapResolution result_;

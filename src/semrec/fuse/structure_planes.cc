@@ -6,6 +6,7 @@
 #include <numbers>
 #include <numeric>
 #include <random>
+#include <set>
 
 #include <Eigen/Eigenvalues>
 
@@ -46,6 +47,8 @@ void StructurePlaneOptions::Check() const {
                 "structure planes: min_wall_height_m must be >= 0");
   CheckArgument(max_wall_tilt_deg >= 0.0 && max_wall_tilt_deg < 90.0,
                 "structure planes: max_wall_tilt_deg must be in [0, 90)");
+  CheckArgument(min_top_surface_share >= 0.0,
+                "structure planes: min_top_surface_share must be >= 0");
   CheckArgument(max_front_distance_m >= 0.0,
                 "structure planes: max_front_distance_m must be >= 0");
   CheckArgument(max_planes > 0, "structure planes: max_planes must be > 0");
@@ -103,6 +106,56 @@ void OrientToInterior(const Cloud& scene, double tolerance_m,
       plane.offset = -plane.offset;
     }
   }
+}
+
+std::vector<StructurePlane> TakeFurnitureFronts(
+    const Cloud& scene, const Eigen::Vector3d& up_world,
+    const StructurePlaneOptions& options, std::vector<StructurePlane>* planes) {
+  std::vector<StructurePlane> fronts;
+  if (options.min_top_surface_share <= 0.0 ||
+      options.min_top_surface_share > 1.0) {
+    return fronts;
+  }
+  // The top band: a counter top lies at the front's top edge, within a
+  // voxel or two (the 95th percentile of the front's heights).
+  constexpr double kBelowTopM = 0.1, kAboveTopM = 0.15;
+  constexpr double kDepthBinM = 0.1;
+  // Behind the plane by more than a wall's other face and the tolerance.
+  const double min_behind_m = 2.0 * options.tolerance_m;
+  const double max_behind_m = options.max_front_distance_m + 0.2;
+  std::erase_if(*planes, [&](const StructurePlane& plane) {
+    if (plane.geometry != StructureGeometry::kVertical ||
+        plane.along_bins.empty()) {
+      return false;
+    }
+    std::set<std::pair<int64_t, int64_t>> cells;  // (along bin, depth bin)
+    for (const Eigen::Vector3f& p : scene) {
+      const Eigen::Vector3d q = p.cast<double>();
+      const double behind = plane.offset - plane.normal.dot(q);
+      if (behind < min_behind_m || behind > max_behind_m) continue;
+      const double h = up_world.dot(q) - plane.top_m;
+      if (h < -kBelowTopM || h > kAboveTopM || !plane.Covers(q)) continue;
+      cells.emplace(AlongBin(plane.along, q),
+                    static_cast<int64_t>(std::floor(behind / kDepthBinM)));
+    }
+    // Stretches along the plane with a surface at least two bins deep.
+    std::map<int64_t, int> depth_bins;
+    for (const auto& [along, depth] : cells) ++depth_bins[along];
+    const auto topped =
+        std::count_if(depth_bins.begin(), depth_bins.end(),
+                      [](const auto& kv) { return kv.second >= 2; });
+    const double share = static_cast<double>(topped) /
+                         static_cast<double>(plane.along_bins.size());
+    const bool front = share >= options.min_top_surface_share;
+    spdlog::debug(
+        "vertical plane ({} points, top {:.2f} along up): surface behind its "
+        "top along {:.0f}% of it{}",
+        plane.support, plane.top_m, 100.0 * share,
+        front ? ": the front of furniture, not a wall" : "");
+    if (front) fronts.push_back(plane);
+    return front;
+  });
+  return fronts;
 }
 
 bool OnStructure(const Eigen::Vector3f& p,
@@ -235,7 +288,7 @@ bool FacesSide(const Eigen::Vector3d& n, int side,
 std::vector<StructurePlane> VerticalPlanes(
     Cloud points, std::vector<Eigen::Vector3f> towards_camera,
     const Eigen::Vector3d& up, size_t min_support,
-    const StructurePlaneOptions& o) {
+    const StructurePlaneOptions& o, std::vector<StructurePlane>* low) {
   if (towards_camera.empty()) {
     towards_camera.assign(points.size(), Eigen::Vector3f::Zero());
   }
@@ -328,6 +381,8 @@ std::vector<StructurePlane> VerticalPlanes(
       best.oriented = true;
     }
     best.geometry = StructureGeometry::kVertical;
+    best.bottom_m = heights[heights.size() * 5 / 100];
+    best.top_m = heights[heights.size() * 95 / 100];
     best.along = up.cross(best.normal).normalized();
     for (size_t i : inliers) {
       best.along_bins.push_back(AlongBin(best.along, points[i].cast<double>()));
@@ -354,7 +409,11 @@ std::vector<StructurePlane> VerticalPlanes(
         best.support, height, heights[heights.size() * 5 / 100],
         heights[heights.size() * 95 / 100],
         height >= o.min_wall_height_m ? "" : " (too low for a wall)");
-    if (height >= o.min_wall_height_m) planes.push_back(best);
+    if (height >= o.min_wall_height_m) {
+      planes.push_back(best);
+    } else if (low != nullptr) {
+      low->push_back(best);
+    }
   }
   return planes;
 }
@@ -365,7 +424,8 @@ std::vector<StructurePlane> FindStructurePlanes(
     const Cloud& points, StructureGeometry geometry,
     const Eigen::Vector3d& up_world, double voxel_area_m2,
     const StructurePlaneOptions& options,
-    const std::vector<Eigen::Vector3f>& towards_camera) {
+    const std::vector<Eigen::Vector3f>& towards_camera,
+    std::vector<StructurePlane>* low_planes) {
   options.Check();
   CheckArgument(voxel_area_m2 > 0.0,
                 "structure planes: voxel area must be > 0");
@@ -377,7 +437,8 @@ std::vector<StructurePlane> FindStructurePlanes(
       static_cast<size_t>(std::ceil(options.min_area_m2 / voxel_area_m2));
   switch (geometry) {
     case StructureGeometry::kVertical:
-      return VerticalPlanes(points, towards_camera, up, min_support, options);
+      return VerticalPlanes(points, towards_camera, up, min_support, options,
+                            low_planes);
     case StructureGeometry::kFloor:
       return HorizontalPlane(points, true, up, min_support, options);
     case StructureGeometry::kCeiling:

@@ -41,8 +41,9 @@ struct StructurePlaneOptions {
   double min_area_m2 = 1.0;
   /// A wall's points span at least this height (5th to 95th percentile along
   /// up): the side of a table is vertical and can be large, but low. Walls
-  /// are often seen only below the furniture's top or as low partitions
-  /// (7-Scenes chess: the walls the model names span 0.82 and 0.88 m).
+  /// are sometimes seen only below the furniture's top or as low partitions.
+  /// (7-Scenes chess's "walls", 0.82 and 0.88 m tall, are the fronts of base
+  /// cabinets: min_top_surface_share tells those apart.)
   double min_wall_height_m = 0.7;
   /// Vertical planes: normals within this angle of horizontal.
   double max_wall_tilt_deg = 10.0;
@@ -50,6 +51,13 @@ struct StructurePlaneOptions {
   /// larger wall is furniture, not wall (OnStructure); as far behind one it
   /// is inside or on top of it (BehindWall). 0 turns both off.
   double max_front_distance_m = 0.6;
+  /// A vertical plane with a horizontal surface behind it at its top (within
+  /// max_front_distance_m + 0.2 m behind it, 20 cm deep or more) along at
+  /// least this share of its length is the front of furniture, not a wall:
+  /// no view sees the top of a wall (it meets the ceiling), but it sees a
+  /// counter top over the cabinets a 2D model calls wall (7-Scenes chess:
+  /// the red base cabinets, 0.88 m tall). 0 or more than 1: off.
+  double min_top_surface_share = 0.3;
   /// At most this many vertical planes per class.
   int max_planes = 16;
   /// RANSAC hypotheses per vertical plane.
@@ -77,6 +85,10 @@ struct StructurePlane {
   /// stretches along it its points cover (at any height), sorted.
   Eigen::Vector3d along = Eigen::Vector3d::Zero();
   std::vector<int64_t> along_bins;
+  /// Vertical planes: the heights (along up) below which 5 % and 95 % of its
+  /// points lie.
+  double bottom_m = 0.0;
+  double top_m = 0.0;
 
   bool Covers(const Eigen::Vector3d& p) const;
   /// Its own tolerance_m, else the options'.
@@ -92,11 +104,14 @@ struct StructurePlane {
 /// `towards_camera` (parallel to `points`, or empty; zero: unknown): the
 /// direction the points were seen from; a vertical plane then holds the
 /// points seen from one side only and faces them (`oriented`).
+/// `low_planes` (may be null) receives the vertical planes lower than
+/// min_wall_height_m (candidates for furniture fronts, not walls).
 std::vector<StructurePlane> FindStructurePlanes(
     const Cloud& points, StructureGeometry geometry,
     const Eigen::Vector3d& up_world, double voxel_area_m2,
     const StructurePlaneOptions& options,
-    const std::vector<Eigen::Vector3f>& towards_camera = {});
+    const std::vector<Eigen::Vector3f>& towards_camera = {},
+    std::vector<StructurePlane>* low_planes = nullptr);
 
 /// True when `p` lies within the tolerance of one of `planes`.
 bool OnAnyPlane(const Eigen::Vector3f& p,
@@ -108,6 +123,13 @@ bool OnAnyPlane(const Eigen::Vector3f& p,
 /// plane along stretches it covers.
 void OrientToInterior(const Cloud& scene, double tolerance_m,
                       std::vector<StructurePlane>* planes);
+
+/// Moves out of `planes` the vertical ones that are the front of furniture
+/// (see StructurePlaneOptions::min_top_surface_share; `scene`: every voxel
+/// of the map) and returns them. Planes must be oriented (OrientToInterior).
+std::vector<StructurePlane> TakeFurnitureFronts(
+    const Cloud& scene, const Eigen::Vector3d& up_world,
+    const StructurePlaneOptions& options, std::vector<StructurePlane>* planes);
 
 /// Like OnAnyPlane, but a point standing in front of a larger parallel wall
 /// (on the room's side, more than 1.5 x tolerance_m and at most

@@ -133,6 +133,66 @@ TEST(MapObjects, FurnitureJustInFrontOfAWallIsNotWall) {
   EXPECT_GT(WhereItWent(old, front).at(wall->id), 0.9);
 }
 
+// 7-Scenes chess: an L-shaped row of base cabinets under a counter, 0.9 m
+// tall, that the 2D model calls wall in every view, one view naming part of
+// one row cabinet (kTable stands for it); the wall above the counter is glass
+// it calls window (kLamp). Each row's front is a large vertical plane, tall
+// enough for a wall, but with a counter top behind its top edge: a front of
+// furniture (no view sees the top of a wall). The front the view named ends
+// in the cabinet, and so does the other row through the corner; the chair
+// standing against that row, a fair part of it on the row's plane, stays a
+// chair and does not take the row.
+TEST(MapObjects, ACounterCalledWallIsFurnitureNotWall) {
+  const Cloud named = Box({0.6f, 1.5f, 0.0f}, {0.6f, 2.5f, 0.9f});
+  Cloud front_a = Box({0.6f, 0.6f, 0.0f}, {0.6f, 1.46f, 0.9f});
+  const Cloud rest_a = Box({0.6f, 2.54f, 0.0f}, {0.6f, 3.4f, 0.9f});
+  front_a.insert(front_a.end(), rest_a.begin(), rest_a.end());
+  const Cloud front_b = Box({0.62f, 3.4f, 0.0f}, {3.5f, 3.4f, 0.9f});
+  const Cloud tops = [] {
+    Cloud c = Box({0.05f, 0.6f, 0.92f}, {0.58f, 4.0f, 0.92f});
+    const Cloud b = Box({0.6f, 3.42f, 0.92f}, {3.5f, 4.0f, 0.92f});
+    c.insert(c.end(), b.begin(), b.end());
+    return c;
+  }();
+  const Cloud glass = Box({0.0f, 0.6f, 1.0f}, {0.0f, 4.0f, 1.6f});
+  const Cloud chair = Box({2.0f, 2.9f, 0.02f}, {2.45f, 3.36f, 0.9f});
+  Cloud fronts = named;
+  fronts.insert(fronts.end(), front_a.begin(), front_a.end());
+  fronts.insert(fronts.end(), front_b.begin(), front_b.end());
+  std::vector<View> views;
+  for (int i = 0; i < 4; ++i) {
+    View v;
+    v.segments.push_back(Segment(kFloor, 1, FloorPoints()));
+    Cloud wall = i == 0 ? front_a : fronts;
+    if (i == 0) wall.insert(wall.end(), front_b.begin(), front_b.end());
+    wall.insert(wall.end(), tops.begin(), tops.end());
+    v.segments.push_back(Segment(kWall, 2, wall));
+    v.segments.push_back(Segment(kLamp, 3, glass));
+    v.segments.push_back(Segment(kChair, 4, chair));
+    if (i == 0) v.segments.push_back(Segment(kTable, 5, named));
+    v.camera = {2.5f, 1.5f, 1.5f};
+    views.push_back(std::move(v));
+  }
+  const SceneFusion fusion = Fuse(views);
+  const SceneSegment* cabinet = Largest(fusion, kTable);
+  ASSERT_NE(cabinet, nullptr);
+  const auto went = WhereItWent(fusion, fronts);
+  EXPECT_GT(ShareIn(went, cabinet->id), 0.9);
+  const SceneSegment* wall = Largest(fusion, kWall);
+  EXPECT_LT(wall ? ShareIn(went, wall->id) : 0.0, 0.05);
+  EXPECT_EQ(Count(fusion, kTable), 1u);
+  const SceneSegment* c = Largest(fusion, kChair);
+  ASSERT_NE(c, nullptr);
+  EXPECT_GT(ShareIn(WhereItWent(fusion, chair), c->id), 0.9);
+  // Without the rule the fronts are wall planes and stay wall.
+  FusionOptions without;
+  without.map_objects.planes.min_top_surface_share = 0.0;
+  const SceneFusion old = Fuse(views, without);
+  const SceneSegment* old_wall = Largest(old, kWall);
+  ASSERT_NE(old_wall, nullptr);
+  EXPECT_GT(ShareIn(WhereItWent(old, fronts), old_wall->id), 0.8);
+}
+
 TEST(MapObjects, WallVotesOffTheWallPlaneDoNotCount) {
   // A table 30 cm from the wall: called wall in three of four views, table in
   // one. Off every large vertical plane the wall votes are set aside.
@@ -378,6 +438,45 @@ TEST(StructurePlanes, TheTwoFacesOfAnInteriorWallAreTwoPlanes) {
 
 // Behind a wall is inside it or on top of it, unless in front of the wall's
 // other face: the next room.
+// A wall is not a front: seen to 2.4 m (or only to 1.2 m, the views looking
+// down), with the next room behind it seen through a doorway (its floor, a
+// table 0.75 m high just behind the wall). A counter's front is: 0.9 m
+// tall, its top 60 cm deep behind the top edge.
+TEST(StructurePlanes, OnlyAFrontWithASurfaceBehindItsTopIsFurniture) {
+  const Eigen::Vector3d up = Eigen::Vector3d::UnitZ();
+  const StructurePlaneOptions o;
+  Cloud next_room = Box({-3.0f, 0.0f, 0.0f}, {-0.1f, 4.0f, 0.0f}, 0.05f);
+  const Cloud table = Box({-0.6f, 1.0f, 0.75f}, {-0.1f, 2.0f, 0.75f}, 0.05f);
+  next_room.insert(next_room.end(), table.begin(), table.end());
+  for (const float top : {2.4f, 1.2f, 0.9f}) {
+    const Cloud wall = Box({0.0f, 0.0f, 0.05f}, {0.0f, 4.0f, top}, 0.05f);
+    auto planes = FindStructurePlanes(wall, StructureGeometry::kVertical, up,
+                                      0.0025, o, {wall.size(), {1, 0, 0}});
+    ASSERT_EQ(planes.size(), 1u) << top;
+    Cloud scene = wall;
+    scene.insert(scene.end(), next_room.begin(), next_room.end());
+    EXPECT_TRUE(TakeFurnitureFronts(scene, up, o, &planes).empty()) << top;
+    EXPECT_EQ(planes.size(), 1u) << top;
+  }
+  const Cloud front = Box({0.0f, 0.0f, 0.05f}, {0.0f, 4.0f, 0.9f}, 0.05f);
+  const Cloud counter = Box({-0.6f, 0.0f, 0.92f}, {-0.05f, 4.0f, 0.92f}, 0.05f);
+  auto planes = FindStructurePlanes(front, StructureGeometry::kVertical, up,
+                                    0.0025, o, {front.size(), {1, 0, 0}});
+  ASSERT_EQ(planes.size(), 1u);
+  Cloud scene = front;
+  scene.insert(scene.end(), counter.begin(), counter.end());
+  const auto fronts = TakeFurnitureFronts(scene, up, o, &planes);
+  EXPECT_EQ(fronts.size(), 1u);
+  EXPECT_TRUE(planes.empty());
+  // Low planes are found apart, for the same test.
+  std::vector<StructurePlane> low;
+  const Cloud base = Box({0.0f, 0.0f, 0.05f}, {0.0f, 4.0f, 0.5f}, 0.05f);
+  EXPECT_TRUE(FindStructurePlanes(base, StructureGeometry::kVertical, up,
+                                  0.0025, o, {base.size(), {1, 0, 0}}, &low)
+                  .empty());
+  EXPECT_EQ(low.size(), 1u);
+}
+
 TEST(StructurePlanes, BehindAWallIsNotTheNextRoom) {
   const Cloud a = Box({3.95f, 0, 0}, {3.95f, 5, 2.5f}, 0.05f);
   const Cloud b = Box({4.05f, 0, 0}, {4.05f, 5, 2.5f}, 0.05f);
