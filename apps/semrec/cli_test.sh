@@ -21,8 +21,8 @@ grep -q "info" "$tmp/help" && grep -q "tsdf" "$tmp/help" && grep -q "synth" "$tm
 [ "$rc" -eq 1 ] || fail "missing sequence: exit $rc, expected 1"
 grep -q "error: /nonexistent/seq: sequence path does not exist" "$tmp/err" || fail "message: $(cat "$tmp/err")"
 
-"$SEMREC" synth --preset kitchen --out "$tmp/s" 2>"$tmp/err"; rc=$?
-[ "$rc" -eq 2 ] && grep -q "unknown preset 'kitchen'" "$tmp/err" || fail "bad preset: exit $rc, $(cat "$tmp/err")"
+"$SEMREC" synth --preset garage --out "$tmp/s" 2>"$tmp/err"; rc=$?
+[ "$rc" -eq 2 ] && grep -q "unknown preset 'garage'" "$tmp/err" || fail "bad preset: exit $rc, $(cat "$tmp/err")"
 "$SEMREC" synth --frames 0 --out "$tmp/s" 2>"$tmp/err"; rc=$?
 [ "$rc" -eq 2 ] && grep -q "frames must be > 0" "$tmp/err" || fail "zero frames: exit $rc, $(cat "$tmp/err")"
 "$SEMREC" synth --noise-strength -1 --out "$tmp/s" 2>"$tmp/err"; rc=$?

@@ -103,8 +103,9 @@ void RegisterSynth(CLI::App& app) {
       "dense points), people "
       "tracks (MOTChallenge gt.txt). See README.md, 'Synthetic scenes'.");
   cmd->add_option("--preset", args->preset,
-                  "six-objects, people, office or flat (three rooms in a row "
-                  "joined by doorways)")
+                  "six-objects, people, office, flat (three rooms in a row "
+                  "joined by doorways) or kitchen (rows of base cabinets "
+                  "under a worktop that --label-bleed calls wall)")
       ->capture_default_str();
   cmd->add_option("--out,-o", args->out,
                   "Output folder (must be empty unless --overwrite)")

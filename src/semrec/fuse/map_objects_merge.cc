@@ -178,21 +178,31 @@ void MapResolver::ClaimFronts() {
   for (const Cell& c : cells_) {
     if (c.owner != 0 && IsThingCell(c)) ++size[c.owner];
   }
-  // Per cell: on a front (any); per front: the thing that takes it.
+  // The cells on each front, and per thing its voxels on any front (an
+  // L-shaped counter is one cabinet over two fronts).
+  std::vector<std::vector<size_t>> on(fronts_.size());
   std::vector<bool> on_any(cells_.size(), false);
-  std::vector<size_t> frontier;
-  for (const StructurePlane& front : fronts_) {
-    const double tolerance = front.Tolerance(options_.planes);
-    std::vector<size_t> on;
-    std::map<uint32_t, size_t> held;  // thing -> its voxels on the front
-    for (size_t i = 0; i < cells_.size(); ++i) {
-      const Eigen::Vector3d q = cells_[i].p.cast<double>();
-      if (std::abs(front.normal.dot(q) - front.offset) > tolerance ||
+  std::map<uint32_t, size_t> on_fronts;
+  for (size_t i = 0; i < cells_.size(); ++i) {
+    const Eigen::Vector3d q = cells_[i].p.cast<double>();
+    for (size_t f = 0; f < fronts_.size(); ++f) {
+      const StructurePlane& front = fronts_[f];
+      if (std::abs(front.normal.dot(q) - front.offset) >
+              front.Tolerance(options_.planes) ||
           !front.Covers(q)) {
         continue;
       }
-      on.push_back(i);
+      on[f].push_back(i);
+      if (!on_any[i] && cells_[i].owner != 0 && IsThingCell(cells_[i])) {
+        ++on_fronts[cells_[i].owner];
+      }
       on_any[i] = true;
+    }
+  }
+  std::vector<size_t> frontier;
+  for (size_t f = 0; f < fronts_.size(); ++f) {
+    std::map<uint32_t, size_t> held;  // thing -> its voxels on this front
+    for (size_t i : on[f]) {
       if (cells_[i].owner != 0 && IsThingCell(cells_[i])) {
         ++held[cells_[i].owner];
       }
@@ -205,15 +215,15 @@ void MapResolver::ClaimFronts() {
     const bool takes =
         best != 0 &&
         static_cast<double>(best_held) >=
-            options_.min_front_share * static_cast<double>(on.size()) &&
-        2 * best_held >= size[best];
+            options_.min_front_share * static_cast<double>(on[f].size()) &&
+        2 * on_fronts[best] >= size[best];
     spdlog::debug(
         "furniture front (class {}, {} voxels on it): object {} holds {} of "
-        "them ({} in all){}",
-        front.class_id, on.size(), best, best_held, size[best],
-        takes ? ": takes the stranded rest" : "");
+        "them ({} on fronts, {} in all){}",
+        fronts_[f].class_id, on[f].size(), best, best_held, on_fronts[best],
+        size[best], takes ? ": takes the stranded rest" : "");
     if (!takes) continue;
-    for (size_t i : on) {
+    for (size_t i : on[f]) {
       if (cells_[i].owner == best && IsThingCell(cells_[i])) {
         frontier.push_back(i);
       }

@@ -134,39 +134,37 @@ TEST(MapObjects, FurnitureJustInFrontOfAWallIsNotWall) {
 }
 
 // 7-Scenes chess: an L-shaped row of base cabinets under a counter, 0.9 m
-// tall, that the 2D model calls wall in every view, one view naming part of
-// one row cabinet (kTable stands for it); the wall above the counter is glass
-// it calls window (kLamp). Each row's front is a large vertical plane, tall
-// enough for a wall, but with a counter top behind its top edge: a front of
-// furniture (no view sees the top of a wall). The front the view named ends
-// in the cabinet, and so does the other row through the corner; the chair
-// standing against that row, a fair part of it on the row's plane, stays a
-// chair and does not take the row.
+// tall, that the 2D model calls wall in every view, one view naming the
+// corner cabinet (kTable stands for cabinet: both fronts and the top there);
+// the wall above the counter is glass it calls window (kLamp). Each row's
+// front is a large vertical plane, tall enough for a wall, but with a counter
+// top behind its top edge: a front of furniture (no view sees the top of a
+// wall). Both fronts end in the cabinet, which lies on the two fronts (on
+// neither mostly); the chair standing against one row, a fair part of it on
+// the row's plane, stays a chair and does not take the row.
 TEST(MapObjects, ACounterCalledWallIsFurnitureNotWall) {
-  const Cloud named = Box({0.6f, 1.5f, 0.0f}, {0.6f, 2.5f, 0.9f});
-  Cloud front_a = Box({0.6f, 0.6f, 0.0f}, {0.6f, 1.46f, 0.9f});
-  const Cloud rest_a = Box({0.6f, 2.54f, 0.0f}, {0.6f, 3.4f, 0.9f});
-  front_a.insert(front_a.end(), rest_a.begin(), rest_a.end());
-  const Cloud front_b = Box({0.62f, 3.4f, 0.0f}, {3.5f, 3.4f, 0.9f});
-  const Cloud tops = [] {
-    Cloud c = Box({0.05f, 0.6f, 0.92f}, {0.58f, 4.0f, 0.92f});
-    const Cloud b = Box({0.6f, 3.42f, 0.92f}, {3.5f, 4.0f, 0.92f});
-    c.insert(c.end(), b.begin(), b.end());
+  const auto join = [](std::initializer_list<Cloud> parts) {
+    Cloud c;
+    for (const Cloud& p : parts) c.insert(c.end(), p.begin(), p.end());
     return c;
-  }();
+  };
+  const Cloud named = join({Box({0.6f, 2.6f, 0.0f}, {0.6f, 3.4f, 0.9f}),
+                            Box({0.62f, 3.4f, 0.0f}, {1.5f, 3.4f, 0.9f}),
+                            Box({0.05f, 2.6f, 0.92f}, {0.58f, 4.0f, 0.92f})});
+  const Cloud rest = join({Box({0.6f, 0.6f, 0.0f}, {0.6f, 2.56f, 0.9f}),
+                           Box({1.54f, 3.4f, 0.0f}, {3.5f, 3.4f, 0.9f}),
+                           Box({0.05f, 0.6f, 0.92f}, {0.58f, 2.56f, 0.92f}),
+                           Box({0.6f, 3.42f, 0.92f}, {3.5f, 4.0f, 0.92f})});
+  const Cloud fronts = join({Box({0.6f, 0.6f, 0.0f}, {0.6f, 3.4f, 0.9f}),
+                             Box({0.62f, 3.4f, 0.0f}, {3.5f, 3.4f, 0.9f})});
   const Cloud glass = Box({0.0f, 0.6f, 1.0f}, {0.0f, 4.0f, 1.6f});
   const Cloud chair = Box({2.0f, 2.9f, 0.02f}, {2.45f, 3.36f, 0.9f});
-  Cloud fronts = named;
-  fronts.insert(fronts.end(), front_a.begin(), front_a.end());
-  fronts.insert(fronts.end(), front_b.begin(), front_b.end());
   std::vector<View> views;
   for (int i = 0; i < 4; ++i) {
     View v;
     v.segments.push_back(Segment(kFloor, 1, FloorPoints()));
-    Cloud wall = i == 0 ? front_a : fronts;
-    if (i == 0) wall.insert(wall.end(), front_b.begin(), front_b.end());
-    wall.insert(wall.end(), tops.begin(), tops.end());
-    v.segments.push_back(Segment(kWall, 2, wall));
+    v.segments.push_back(
+        Segment(kWall, 2, i == 0 ? rest : join({rest, named})));
     v.segments.push_back(Segment(kLamp, 3, glass));
     v.segments.push_back(Segment(kChair, 4, chair));
     if (i == 0) v.segments.push_back(Segment(kTable, 5, named));
@@ -190,7 +188,7 @@ TEST(MapObjects, ACounterCalledWallIsFurnitureNotWall) {
   const SceneFusion old = Fuse(views, without);
   const SceneSegment* old_wall = Largest(old, kWall);
   ASSERT_NE(old_wall, nullptr);
-  EXPECT_GT(ShareIn(WhereItWent(old, fronts), old_wall->id), 0.8);
+  EXPECT_GT(ShareIn(WhereItWent(old, fronts), old_wall->id), 0.6);
 }
 
 TEST(MapObjects, WallVotesOffTheWallPlaneDoNotCount) {

@@ -5,6 +5,7 @@
 #include <limits>
 #include <map>
 #include <set>
+#include <string>
 #include <vector>
 
 #include "semrec/core/error.h"
@@ -74,6 +75,15 @@ void ApplyStructureBleed(
     sides.push_back({face, &o, it->second, o.class_id});
   }
   if (sides.empty()) return;
+  std::set<uint16_t> lookalike;  // instances
+  for (const SceneObject& o : scene.objects) {
+    const std::string& name = SynthClasses().Get(o.class_id).name;
+    if (!o.structure && std::find(options.bleed_wall_lookalikes.begin(),
+                                  options.bleed_wall_lookalikes.end(), name) !=
+                            options.bleed_wall_lookalikes.end()) {
+      lookalike.insert(o.instance_id);
+    }
+  }
   const double view_rate = std::max(options.bleed_share, kBleedViewRate);
   // (object, face) -> whether that side of the object bleeds in this view.
   std::map<std::pair<uint16_t, int>, bool> side_bleeds;
@@ -84,24 +94,30 @@ void ApplyStructureBleed(
       const Eigen::Vector3d p =
           T_world_camera *
           k.BackProject(u, v, static_cast<double>(frame.depth(u, v)));
+      // A wall lookalike bleeds whole, into the nearest wall.
+      const bool whole = lookalike.count(instance) != 0;
       const Side* nearest = nullptr;
       double nearest_m = std::numeric_limits<double>::infinity();
       for (const Side& side : sides) {
+        if (whole && side.class_id != kClassWall) continue;
         const double d = side.wall != nullptr
                              ? side.wall->DistanceToSurface(p)
                              : FaceDistance(scene.room_size, side.face, p);
         if (d < nearest_m) nearest = &side, nearest_m = d;
       }
-      if (nearest_m > options.bleed_contact_m &&
-          Luma(frame.color, u, v) >= options.bleed_dark_luma) {
+      if (nearest == nullptr ||
+          (!whole && nearest_m > options.bleed_contact_m &&
+           Luma(frame.color, u, v) >= options.bleed_dark_luma)) {
         continue;
       }
       const int face = nearest->face;
       const auto [it, added] = side_bleeds.try_emplace({instance, face}, false);
       if (added) {
         const uint64_t side = MixSeed(MixSeed(scene_seed, instance), face);
-        it->second = UnitFromHash(side) < options.bleed_share / view_rate &&
-                     UnitFromHash(MixSeed(view_seed, side)) < view_rate;
+        it->second =
+            (whole || UnitFromHash(side) < options.bleed_share / view_rate) &&
+            UnitFromHash(MixSeed(view_seed, side)) <
+                (whole ? kBleedViewRate : view_rate);
       }
       if (!it->second) continue;
       out->instance(u, v) = nearest->mask;

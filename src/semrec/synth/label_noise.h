@@ -10,6 +10,8 @@
 #pragma once
 
 #include <cstdint>
+#include <string>
+#include <vector>
 
 #include "semrec/core/camera.h"
 #include "semrec/core/label_map.h"
@@ -51,6 +53,12 @@ struct LabelNoiseOptions {
   double bleed_contact_m = 0.2;
   /// Rec. 601 luma (0-255) below which an object pixel is a candidate.
   double bleed_dark_luma = 40.0;
+  /// Objects of these classes look like the wall to a 2D model (a row of
+  /// base cabinets; 7-Scenes chess's are called wall in nearly every view):
+  /// with bleed on, all their pixels take the class and mask of the wall
+  /// nearest to them, every side in 80 % of the views (the bleed share does
+  /// not apply).
+  std::vector<std::string> bleed_wall_lookalikes = {"counter"};
 
   /// Throws InvalidArgument for probabilities or shares outside [0, 1] or
   /// negative sizes.
