@@ -381,7 +381,6 @@ std::vector<StructurePlane> VerticalPlanes(
       best.oriented = true;
     }
     best.geometry = StructureGeometry::kVertical;
-    best.bottom_m = heights[heights.size() * 5 / 100];
     best.top_m = heights[heights.size() * 95 / 100];
     best.along = up.cross(best.normal).normalized();
     for (size_t i : inliers) {

@@ -85,9 +85,8 @@ struct StructurePlane {
   /// stretches along it its points cover (at any height), sorted.
   Eigen::Vector3d along = Eigen::Vector3d::Zero();
   std::vector<int64_t> along_bins;
-  /// Vertical planes: the heights (along up) below which 5 % and 95 % of its
-  /// points lie.
-  double bottom_m = 0.0;
+  /// Vertical planes: the height (along up) below which 95 % of its points
+  /// lie.
   double top_m = 0.0;
 
   bool Covers(const Eigen::Vector3d& p) const;
