@@ -92,8 +92,13 @@ void MapResolver::GateStructure() {
   }
   const double area = map_.voxel_size_m() * map_.voxel_size_m();
   Cloud scene;
+  std::vector<Eigen::Vector3f> scene_seen_from;
   scene.reserve(cells_.size());
-  for (const Cell& c : cells_) scene.push_back(c.p);
+  scene_seen_from.reserve(cells_.size());
+  for (const Cell& c : cells_) {
+    scene.push_back(c.p);
+    scene_seen_from.push_back(c.evidence->towards_camera_sum);
+  }
   for (uint16_t cls : stuff_classes) {
     const auto g = context_.geometry.find(cls);
     if (g == context_.geometry.end() || g->second == StructureGeometry::kNone) {
@@ -113,10 +118,11 @@ void MapResolver::GateStructure() {
                                      options_.planes, towards_camera, &low);
     OrientToInterior(scene, options_.planes.tolerance_m, &found);
     OrientToInterior(scene, options_.planes.tolerance_m, &low);
-    std::vector<StructurePlane> fronts =
-        TakeFurnitureFronts(scene, context_.up_world, options_.planes, &found);
+    std::vector<StructurePlane> fronts = TakeFurnitureFronts(
+        scene, context_.up_world, options_.planes, &found, scene_seen_from);
     for (StructurePlane& p :
-         TakeFurnitureFronts(scene, context_.up_world, options_.planes, &low)) {
+         TakeFurnitureFronts(scene, context_.up_world, options_.planes, &low,
+                             scene_seen_from)) {
       fronts.push_back(std::move(p));
     }
     spdlog::debug(

@@ -110,7 +110,10 @@ void OrientToInterior(const Cloud& scene, double tolerance_m,
 
 std::vector<StructurePlane> TakeFurnitureFronts(
     const Cloud& scene, const Eigen::Vector3d& up_world,
-    const StructurePlaneOptions& options, std::vector<StructurePlane>* planes) {
+    const StructurePlaneOptions& options, std::vector<StructurePlane>* planes,
+    const std::vector<Eigen::Vector3f>& towards_camera) {
+  CheckArgument(towards_camera.empty() || towards_camera.size() == scene.size(),
+                "TakeFurnitureFronts: one view direction per scene point");
   std::vector<StructurePlane> fronts;
   if (options.min_top_surface_share <= 0.0 ||
       options.min_top_surface_share > 1.0) {
@@ -120,6 +123,7 @@ std::vector<StructurePlane> TakeFurnitureFronts(
   // voxel or two (the 95th percentile of the front's heights).
   constexpr double kBelowTopM = 0.1, kAboveTopM = 0.15;
   constexpr double kDepthBinM = 0.1;
+  constexpr double kMinFromAboveCos = 0.0;
   // Behind the plane by more than a wall's other face and the tolerance.
   const double min_behind_m = 2.0 * options.tolerance_m;
   const double max_behind_m = options.max_front_distance_m + 0.2;
@@ -129,28 +133,49 @@ std::vector<StructurePlane> TakeFurnitureFronts(
       return false;
     }
     std::set<std::pair<int64_t, int64_t>> cells;  // (along bin, depth bin)
-    for (const Eigen::Vector3f& p : scene) {
-      const Eigen::Vector3d q = p.cast<double>();
+    for (size_t i = 0; i < scene.size(); ++i) {
+      const Eigen::Vector3d q = scene[i].cast<double>();
       const double behind = plane.offset - plane.normal.dot(q);
       if (behind < min_behind_m || behind > max_behind_m) continue;
       const double h = up_world.dot(q) - plane.top_m;
       if (h < -kBelowTopM || h > kAboveTopM || !plane.Covers(q)) continue;
+      // Seen from above, over the top edge (a worktop), not through a
+      // doorway (the top of a shelf in the next room, level with the
+      // wall's highest seen part).
+      if (!towards_camera.empty() && !towards_camera[i].isZero() &&
+          up_world.dot(towards_camera[i].cast<double>().normalized()) <
+              kMinFromAboveCos) {
+        continue;
+      }
       cells.emplace(AlongBin(plane.along, q),
                     static_cast<int64_t>(std::floor(behind / kDepthBinM)));
     }
-    // Stretches along the plane with a surface at least two bins deep.
-    std::map<int64_t, int> depth_bins;
-    for (const auto& [along, depth] : cells) ++depth_bins[along];
-    const auto topped =
-        std::count_if(depth_bins.begin(), depth_bins.end(),
-                      [](const auto& kv) { return kv.second >= 2; });
-    const double share = static_cast<double>(topped) /
-                         static_cast<double>(plane.along_bins.size());
-    const bool front = share >= options.min_top_surface_share;
+    // Stretches along the plane with a surface at least two bins deep, and
+    // some reaching 35 cm or more behind it: a worktop is 60 cm deep (seen
+    // in part from a walk-through); a deep window sill (25 cm, in a wall
+    // under a window reaching the ceiling, so that the wall's top is the
+    // sill) is not.
+    constexpr int64_t kDeepBin = 3;  // 35 cm at the voxel centres
+    std::map<int64_t, std::pair<int, int64_t>> stretch;  // bins, deepest
+    for (const auto& [along, depth] : cells) {
+      auto& [bins, deepest] = stretch[along];
+      ++bins;
+      deepest = std::max(deepest, depth);
+    }
+    size_t topped = 0, deep = 0;
+    for (const auto& [along, s] : stretch) {
+      if (s.first < 2) continue;
+      ++topped;
+      deep += s.second >= kDeepBin ? 1 : 0;
+    }
+    const auto stretches = static_cast<double>(plane.along_bins.size());
+    const double share = static_cast<double>(topped) / stretches;
+    const bool front = share >= options.min_top_surface_share &&
+                       static_cast<double>(deep) >= 0.5 * topped;
     spdlog::debug(
         "vertical plane ({} points, top {:.2f} along up): surface behind its "
-        "top along {:.0f}% of it{}",
-        plane.support, plane.top_m, 100.0 * share,
+        "top along {:.0f}% of it ({} of {} stretches 35 cm deep){}",
+        plane.support, plane.top_m, 100.0 * share, deep, topped,
         front ? ": the front of furniture, not a wall" : "");
     if (front) fronts.push_back(plane);
     return front;

@@ -52,12 +52,12 @@ struct StructurePlaneOptions {
   /// is inside or on top of it (BehindWall). 0 turns both off.
   double max_front_distance_m = 0.6;
   /// A vertical plane with a horizontal surface behind it at its top (within
-  /// max_front_distance_m + 0.2 m behind it, 20 cm deep or more) along at
+  /// max_front_distance_m + 0.2 m behind it, 30 cm deep or more) along at
   /// least this share of its length is the front of furniture, not a wall:
   /// no view sees the top of a wall (it meets the ceiling), but it sees a
   /// counter top over the cabinets a 2D model calls wall (7-Scenes chess:
   /// the red base cabinets, 0.88 m tall). 0 or more than 1: off.
-  double min_top_surface_share = 0.3;
+  double min_top_surface_share = 0.2;
   /// At most this many vertical planes per class.
   int max_planes = 16;
   /// RANSAC hypotheses per vertical plane.
@@ -126,9 +126,14 @@ void OrientToInterior(const Cloud& scene, double tolerance_m,
 /// Moves out of `planes` the vertical ones that are the front of furniture
 /// (see StructurePlaneOptions::min_top_surface_share; `scene`: every voxel
 /// of the map) and returns them. Planes must be oriented (OrientToInterior).
+/// `towards_camera` (parallel to `scene`, or empty: not checked): the
+/// direction each point was seen from; only surfaces seen from above count
+/// (a worktop seen over the front's top edge, not the top of a shelf in the
+/// next room seen through a doorway).
 std::vector<StructurePlane> TakeFurnitureFronts(
     const Cloud& scene, const Eigen::Vector3d& up_world,
-    const StructurePlaneOptions& options, std::vector<StructurePlane>* planes);
+    const StructurePlaneOptions& options, std::vector<StructurePlane>* planes,
+    const std::vector<Eigen::Vector3f>& towards_camera = {});
 
 /// Like OnAnyPlane, but a point standing in front of a larger parallel wall
 /// (on the room's side, more than 1.5 x tolerance_m and at most

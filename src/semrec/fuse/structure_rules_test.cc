@@ -438,8 +438,9 @@ TEST(StructurePlanes, TheTwoFacesOfAnInteriorWallAreTwoPlanes) {
 // other face: the next room.
 // A wall is not a front: seen to 2.4 m (or only to 1.2 m, the views looking
 // down), with the next room behind it seen through a doorway (its floor, a
-// table 0.75 m high just behind the wall). A counter's front is: 0.9 m
-// tall, its top 60 cm deep behind the top edge.
+// table 0.75 m high just behind the wall), or seen to a deep window sill, or
+// to the height of a shelf's top behind it seen through a doorway. A
+// counter's front is: 0.9 m tall, its top 60 cm deep behind the top edge.
 TEST(StructurePlanes, OnlyAFrontWithASurfaceBehindItsTopIsFurniture) {
   const Eigen::Vector3d up = Eigen::Vector3d::UnitZ();
   const StructurePlaneOptions o;
@@ -458,14 +459,39 @@ TEST(StructurePlanes, OnlyAFrontWithASurfaceBehindItsTopIsFurniture) {
   }
   const Cloud front = Box({0.0f, 0.0f, 0.05f}, {0.0f, 4.0f, 0.9f}, 0.05f);
   const Cloud counter = Box({-0.6f, 0.0f, 0.92f}, {-0.05f, 4.0f, 0.92f}, 0.05f);
-  auto planes = FindStructurePlanes(front, StructureGeometry::kVertical, up,
-                                    0.0025, o, {front.size(), {1, 0, 0}});
-  ASSERT_EQ(planes.size(), 1u);
-  Cloud scene = front;
-  scene.insert(scene.end(), counter.begin(), counter.end());
-  const auto fronts = TakeFurnitureFronts(scene, up, o, &planes);
-  EXPECT_EQ(fronts.size(), 1u);
-  EXPECT_TRUE(planes.empty());
+  // A wall seen only below windows that reach the ceiling, its 25 cm deep
+  // sill behind its top: a wall.
+  const Cloud sill = Box({-0.25f, 0.0f, 0.92f}, {-0.05f, 4.0f, 0.92f}, 0.05f);
+  for (const bool is_counter : {true, false}) {
+    auto planes = FindStructurePlanes(front, StructureGeometry::kVertical, up,
+                                      0.0025, o, {front.size(), {1, 0, 0}});
+    ASSERT_EQ(planes.size(), 1u);
+    Cloud scene = front;
+    const Cloud& top = is_counter ? counter : sill;
+    scene.insert(scene.end(), top.begin(), top.end());
+    const auto fronts = TakeFurnitureFronts(scene, up, o, &planes);
+    EXPECT_EQ(fronts.size(), is_counter ? 1u : 0u);
+    EXPECT_EQ(planes.size(), is_counter ? 0u : 1u);
+  }
+  // A wall seen to 1.8 m, the top of a shelf in the next room level with
+  // that and 40 cm deep behind it, seen through a doorway from below (flat
+  // preset, seed 2): taken as a front only when the view directions are
+  // unknown.
+  const Cloud wall = Box({0.0f, 0.0f, 0.05f}, {0.0f, 4.0f, 1.8f}, 0.05f);
+  const Cloud shelf = Box({-0.5f, 1.5f, 1.8f}, {-0.1f, 2.5f, 1.8f}, 0.05f);
+  Cloud scene = wall;
+  scene.insert(scene.end(), shelf.begin(), shelf.end());
+  std::vector<Eigen::Vector3f> seen_from(wall.size(), {1, 0, 0});
+  seen_from.resize(scene.size(), Eigen::Vector3f(1, 0, -0.4f).normalized());
+  for (const bool directions : {true, false}) {
+    auto planes = FindStructurePlanes(wall, StructureGeometry::kVertical, up,
+                                      0.0025, o, {wall.size(), {1, 0, 0}});
+    ASSERT_EQ(planes.size(), 1u);
+    const auto fronts = TakeFurnitureFronts(
+        scene, up, o, &planes,
+        directions ? seen_from : std::vector<Eigen::Vector3f>{});
+    EXPECT_EQ(fronts.size(), directions ? 0u : 1u);
+  }
   // Low planes are found apart, for the same test.
   std::vector<StructurePlane> low;
   const Cloud base = Box({0.0f, 0.0f, 0.05f}, {0.0f, 4.0f, 0.5f}, 0.05f);
