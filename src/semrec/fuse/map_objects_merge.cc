@@ -172,12 +172,17 @@ void MapResolver::JudgeFragments() {
   }
 }
 
-void MapResolver::ClaimFronts() {
-  if (fronts_.empty()) return;
+std::map<uint32_t, size_t> MapResolver::ThingSizes() const {
   std::map<uint32_t, size_t> size;
   for (const Cell& c : cells_) {
     if (c.owner != 0 && IsThingCell(c)) ++size[c.owner];
   }
+  return size;
+}
+
+void MapResolver::ClaimFronts() {
+  if (fronts_.empty()) return;
+  std::map<uint32_t, size_t> size = ThingSizes();
   // The cells on each front, and per thing its voxels on any front (an
   // L-shaped counter is one cabinet over two fronts).
   std::vector<std::vector<size_t>> on(fronts_.size());
@@ -251,10 +256,7 @@ void MapResolver::ClaimFronts() {
 }
 
 void MapResolver::ClaimStranded() {
-  std::map<uint32_t, size_t> size;
-  for (const Cell& c : cells_) {
-    if (c.owner != 0 && IsThingCell(c)) ++size[c.owner];
-  }
+  std::map<uint32_t, size_t> size = ThingSizes();
   auto stranded = [&](size_t n) {
     return cells_[n].stranded && IsStuff(cells_[n].class_id);
   };

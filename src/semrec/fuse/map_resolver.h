@@ -232,10 +232,14 @@ class MapResolver {
 
   // A furniture front (a row of cabinets under a counter) is one surface:
   // where views named part of it (a cabinet) and called the rest wall, the
-  // stranded rest joins that thing, spreading over the front from it. The
-  // thing must lie mostly on the front and hold a fair part of it (a chair
-  // touching the cabinets does not take them).
+  // stranded rest joins that thing, spreading over the fronts from it. The
+  // thing must hold a fair part of a front and lie mostly on fronts (a chair
+  // touching the cabinets does not take them; an L-shaped counter's cabinet
+  // lies on two).
   void ClaimFronts();
+
+  // Voxels per thing object (owner), over the thing cells.
+  std::map<uint32_t, size_t> ThingSizes() const;
 
   std::pair<double, uint32_t> Visibility(
       const std::vector<size_t>& cells) const;
