@@ -105,6 +105,9 @@ struct MapObjectOptions {
   /// voxels touch the other directly (26-neighbours), not just within
   /// touch_voxels.
   size_t min_tie_contact_voxels = 3;
+  /// Objects that at least this many views held in different masks (and few
+  /// in one) are never joined through a chain of merges of other objects.
+  size_t min_apart_views = 2;
   double min_hold_share = 0.2;
   /// Parts of one fusion object are cut apart when views held them in
   /// different masks and at most this share of those views held them in one

@@ -74,7 +74,12 @@ void MapResolver::MergeByMasks() {
   }
   // Judged on the objects as they were: a chain of merges does not change
   // the evidence of a pair.
-  std::vector<std::pair<uint32_t, uint32_t>> one;
+  struct Link {
+    uint32_t a, b;
+    PairViews views;
+    size_t contact;
+  };
+  std::vector<Link> one;
   for (const auto& [a, b] : pairs) {
     const PairViews v = CoViews(holders[a], holders[b]);
     // The smaller one's cells in direct contact with the other.
@@ -82,7 +87,7 @@ void MapResolver::MergeByMasks() {
                                       ? contact[{a, b}]
                                       : contact[{b, a}];
     if (OneObject(members[a], members[b], a, b, v, contact_voxels)) {
-      one.emplace_back(a, b);
+      one.push_back({a, b, v, contact_voxels});
     }
     spdlog::debug(
         "objects {} and {} (classes {} and {}, {} and {} voxels): {} views "
@@ -90,19 +95,48 @@ void MapResolver::MergeByMasks() {
         a, b, owner_class_[a], owner_class_[b], members[a].size(),
         members[b].size(), v.one, v.two, contact_voxels);
   }
+  // Surest links first: the most views holding the pair in one mask, the
+  // fewest apart, the widest contact.
+  std::stable_sort(one.begin(), one.end(), [](const Link& x, const Link& y) {
+    if (x.views.one != y.views.one) return x.views.one > y.views.one;
+    if (x.views.two != y.views.two) return x.views.two < y.views.two;
+    return x.contact > y.contact;
+  });
   std::map<uint32_t, uint32_t> into;
   auto find = [&](uint32_t id) {
     while (into.count(id)) id = into[id];
     return id;
   };
-  for (const auto& [a, b] : one) {
-    const uint32_t x = find(a), y = find(b);
+  // The objects each group holds, as they were before merging.
+  std::map<uint32_t, std::vector<uint32_t>> parts;
+  for (const auto& entry : members) parts[entry.first] = {entry.first};
+  // No chain of links joins two objects the views held apart (chairs round a
+  // table, each touching a small piece that touches the next: six views
+  // showed two of them in different masks, none in one).
+  const auto held_apart = [&](uint32_t x, uint32_t y) {
+    for (uint32_t p : parts[x]) {
+      for (uint32_t q : parts[y]) {
+        const PairViews v = CoViews(holders[p], holders[q]);
+        if (v.two >= options_.min_apart_views && SaysApart(v)) return true;
+      }
+    }
+    return false;
+  };
+  for (const Link& link : one) {
+    const uint32_t x = find(link.a), y = find(link.b);
     if (x == y) continue;
+    if (held_apart(x, y)) {
+      spdlog::debug("objects {} and {}: not joined, held apart", link.a,
+                    link.b);
+      continue;
+    }
     const bool x_keeps = members[x].size() >= members[y].size();
     const uint32_t keep = x_keeps ? x : y, gone = x_keeps ? y : x;
     into[gone] = keep;
     members[keep].insert(members[keep].end(), members[gone].begin(),
                          members[gone].end());
+    parts[keep].insert(parts[keep].end(), parts[gone].begin(),
+                       parts[gone].end());
     // Confused classes: the one with more votes over both takes the whole
     // (not the larger part's: sparse views tie voxel by voxel).
     const uint16_t ck = owner_class_[keep], cg = owner_class_[gone];

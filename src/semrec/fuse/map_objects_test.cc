@@ -87,6 +87,46 @@ TEST(MapObjects, TwoChairsJoinedInOneViewAndApartInThreeEndAsTwo) {
   EXPECT_NE(top(in_a)->first, top(in_b)->first);
 }
 
+// Two chairs that three views held in separate masks, and between them a
+// small piece of chair class (a bag on the floor, a coat) that only a fourth
+// view saw, touching both: the piece may join either chair, but no chain of
+// merges through it joins the chairs. Without that rule: one chair.
+TEST(MapObjects, NoChainOfMergesJoinsTwoChairsTheViewsHeldApart) {
+  const Cloud a = Box({1.0f, 1.0f, 0.1f}, {1.45f, 1.45f, 0.9f});
+  const Cloud b = Box({1.75f, 1.0f, 0.1f}, {2.2f, 1.45f, 0.9f});
+  const Cloud piece = Box({1.49f, 1.1f, 0.1f}, {1.71f, 1.35f, 0.3f});
+  for (const size_t min_apart_views : {size_t{2}, size_t{1000}}) {
+    std::vector<View> views;
+    for (int i = 0; i < 4; ++i) {
+      View v;
+      v.segments.push_back(Segment(kFloor, 1, FloorPoints()));
+      if (i == 3) {
+        v.segments.push_back(Segment(kChair, 2, piece));
+      } else {
+        v.segments.push_back(Segment(kChair, 2, a));
+        v.segments.push_back(Segment(kChair, 3, b));
+      }
+      views.push_back(std::move(v));
+    }
+    FusionOptions options;
+    options.map_objects.min_apart_views = min_apart_views;
+    const SceneFusion fusion = Fuse(views, options);
+    const auto top = [](const std::map<uint32_t, double>& m) {
+      return std::max_element(m.begin(), m.end(), [](auto x, auto y) {
+               return x.second < y.second;
+             })->first;
+    };
+    const uint32_t in_a = top(WhereItWent(fusion, a));
+    const uint32_t in_b = top(WhereItWent(fusion, b));
+    if (min_apart_views == 2) {
+      EXPECT_EQ(Count(fusion, kChair), 2u);
+      EXPECT_NE(in_a, in_b);
+    } else {
+      EXPECT_EQ(in_a, in_b) << "the chain joins them without the rule";
+    }
+  }
+}
+
 // Two cabinets side by side, shown in separate masks by every view: the
 // overlap rule fuses them (made eager here, as touching objects of one class
 // often are), the views' masks cut them apart again.
