@@ -20,6 +20,11 @@ void MapObjectOptions::Check() const {
       "map objects: min_stranded_contact_share must be in [0, 1]");
   CheckArgument(min_front_share >= 0.0 && min_front_share <= 1.0,
                 "map objects: min_front_share must be in [0, 1]");
+  CheckArgument(min_attached_contact_share > 0.0 &&
+                    min_attached_contact_share <= 1.0 &&
+                    max_attached_size_ratio >= 0.0 &&
+                    max_attached_size_ratio <= 1.0,
+                "map objects: attached-piece shares must be in (0, 1]");
   CheckArgument(min_apart_views >= 1,
                 "map objects: min_apart_views must be >= 1");
   CheckArgument(max_one_share >= 0.0 && max_one_share <= 1.0,

@@ -105,6 +105,14 @@ struct MapObjectOptions {
   /// voxels touch the other directly (26-neighbours), not just within
   /// touch_voxels.
   size_t min_tie_contact_voxels = 3;
+  /// A piece of one class at most max_attached_size_ratio the size of an
+  /// object it touches, with at least min_attached_contact_share of its
+  /// voxels in direct contact (26-neighbours) with it, is part of it whatever
+  /// the masks said (7-Scenes chess: a chair's 29-voxel piece, 26 of them
+  /// touching the chair, held apart by 14 of 20 views; a mask generator cuts
+  /// the same part off in every view). max_attached_size_ratio 0: never.
+  double min_attached_contact_share = 0.5;
+  double max_attached_size_ratio = 0.25;
   /// Objects that at least this many views held in different masks (and few
   /// in one) are never joined through a chain of merges of other objects.
   size_t min_apart_views = 2;

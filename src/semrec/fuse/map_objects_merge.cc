@@ -21,8 +21,9 @@ bool MapResolver::OneObject(const std::vector<size_t>& a,
     // Sparse views see a place once or twice: as many views held the two in
     // one mask as apart (1 : 1), touching directly, is one object (mask
     // generators cut objects far more often than they join two).
-    return views.one >= 1 && views.one >= views.two &&
-           contact_voxels >= options_.min_tie_contact_voxels;
+    return (views.one >= 1 && views.one >= views.two &&
+            contact_voxels >= options_.min_tie_contact_voxels) ||
+           Attached(a.size(), b.size(), contact_voxels);
   }
   // Different classes need more: most views that saw both held them in one
   // mask (sparse views: one view that joined a plant to the chair beside it
@@ -33,6 +34,15 @@ bool MapResolver::OneObject(const std::vector<size_t>& a,
   if (views.one > views.two) return share >= options_.confusion_share;
   return views.one >= 1 && views.one == views.two &&
          share >= options_.tie_confusion_share;
+}
+
+bool MapResolver::Attached(size_t size_a, size_t size_b,
+                           size_t contact_voxels) const {
+  const auto smaller = static_cast<double>(std::min(size_a, size_b));
+  const auto larger = static_cast<double>(std::max(size_a, size_b));
+  return static_cast<double>(contact_voxels) >=
+             options_.min_attached_contact_share * smaller &&
+         smaller <= options_.max_attached_size_ratio * larger;
 }
 
 void MapResolver::MergeByMasks() {
@@ -78,6 +88,7 @@ void MapResolver::MergeByMasks() {
     uint32_t a, b;
     PairViews views;
     size_t contact;
+    bool attached;
   };
   std::vector<Link> one;
   for (const auto& [a, b] : pairs) {
@@ -87,7 +98,10 @@ void MapResolver::MergeByMasks() {
                                       ? contact[{a, b}]
                                       : contact[{b, a}];
     if (OneObject(members[a], members[b], a, b, v, contact_voxels)) {
-      one.push_back({a, b, v, contact_voxels});
+      one.push_back({a, b, v, contact_voxels,
+                     owner_class_[a] == owner_class_[b] &&
+                         Attached(members[a].size(), members[b].size(),
+                                  contact_voxels)});
     }
     spdlog::debug(
         "objects {} and {} (classes {} and {}, {} and {} voxels): {} views "
@@ -113,9 +127,14 @@ void MapResolver::MergeByMasks() {
   // No chain of links joins two objects the views held apart (chairs round a
   // table, each touching a small piece that touches the next: six views
   // showed two of them in different masks, none in one).
-  const auto held_apart = [&](uint32_t x, uint32_t y) {
+  const auto held_apart = [&](uint32_t x, uint32_t y, const Link& link) {
     for (uint32_t p : parts[x]) {
       for (uint32_t q : parts[y]) {
+        // An attached piece joins whatever its own masks said.
+        if (link.attached && ((p == link.a && q == link.b) ||
+                              (p == link.b && q == link.a))) {
+          continue;
+        }
         const PairViews v = CoViews(holders[p], holders[q]);
         if (v.two >= options_.min_apart_views && SaysApart(v)) return true;
       }
@@ -125,7 +144,7 @@ void MapResolver::MergeByMasks() {
   for (const Link& link : one) {
     const uint32_t x = find(link.a), y = find(link.b);
     if (x == y) continue;
-    if (held_apart(x, y)) {
+    if (held_apart(x, y, link)) {
       spdlog::debug("objects {} and {}: not joined, held apart", link.a,
                     link.b);
       continue;

@@ -127,6 +127,43 @@ TEST(MapObjects, NoChainOfMergesJoinsTwoChairsTheViewsHeldApart) {
   }
 }
 
+// A mask generator that cuts the same part off a chair in every view (the
+// front rail under the seat, 5 cm in front of it): the small piece, nearly all
+// of it touching the chair, is the chair's whatever the masks said. A box of
+// the same class beside it, as large as the chair, stays its own object.
+TEST(MapObjects, ASmallPieceEveryViewCutOffStaysWithTheObjectItTouches) {
+  const Cloud chair = Box({1.0f, 1.0f, 0.1f}, {1.5f, 1.5f, 0.9f});
+  const Cloud rail = Box({0.96f, 1.0f, 0.3f}, {0.96f, 1.5f, 0.45f});
+  const Cloud other = Box({1.0f, 1.55f, 0.1f}, {1.5f, 2.05f, 0.9f});
+  for (const double ratio : {0.25, 0.0}) {
+    std::vector<View> views;
+    for (int i = 0; i < 4; ++i) {
+      View v;
+      v.segments.push_back(Segment(kFloor, 1, FloorPoints()));
+      v.segments.push_back(Segment(kChair, 2, chair));
+      v.segments.push_back(Segment(kChair, 3, rail));
+      v.segments.push_back(Segment(kChair, 4, other));
+      views.push_back(std::move(v));
+    }
+    FusionOptions options;
+    options.map_objects.max_attached_size_ratio = ratio;
+    const SceneFusion fusion = Fuse(views, options);
+    const auto top = [](const std::map<uint32_t, double>& m) {
+      return std::max_element(m.begin(), m.end(), [](auto x, auto y) {
+               return x.second < y.second;
+             })->first;
+    };
+    const uint32_t in_chair = top(WhereItWent(fusion, chair));
+    EXPECT_NE(in_chair, top(WhereItWent(fusion, other))) << ratio;
+    if (ratio > 0.0) {
+      EXPECT_EQ(Count(fusion, kChair), 2u);
+      EXPECT_EQ(top(WhereItWent(fusion, rail)), in_chair);
+    } else {
+      EXPECT_EQ(Count(fusion, kChair), 3u) << "the rule is what joins it";
+    }
+  }
+}
+
 // Two cabinets side by side, shown in separate masks by every view: the
 // overlap rule fuses them (made eager here, as touching objects of one class
 // often are), the views' masks cut them apart again.

@@ -195,15 +195,22 @@ class MapResolver {
   // Share of `cells`' class evidence that goes to `class_id`.
   double VoteShare(const std::vector<size_t>& cells, uint16_t class_id) const;
 
+  // A piece of one class much smaller than the object it touches, most of
+  // its voxels in direct contact with it (a chair's rail, a seat's edge that
+  // the mask generator cuts off in every view): part of it, whatever the
+  // masks said.
+  bool Attached(size_t size_a, size_t size_b, size_t contact_voxels) const;
+
   // Whether touching objects a and b are one. One class: when no view held
   // them in different masks, when enough views held them in one mask
   // (SaysOne), or when as many held them in one mask as apart and they touch
   // directly, `contact_voxels` (the smaller one's voxels with a 26-neighbour
   // in the other) >= min_tie_contact_voxels: masks cut one object far more
   // often than they join two, and sparse views see an object once or twice,
-  // so 1 : 1 is the common split of one object. Two classes: when most
-  // views that saw both held them in one mask and one's votes give the other's
-  // class at least confusion_share (one object, its class confused).
+  // so 1 : 1 is the common split of one object; or when one is attached to
+  // the other (Attached). Two classes: when most views that saw both held them
+  // in one mask and one's votes give the other's class at least
+  // confusion_share (one object, its class confused).
   bool OneObject(const std::vector<size_t>& a, const std::vector<size_t>& b,
                  uint32_t id_a, uint32_t id_b, const PairViews& views,
                  size_t contact_voxels) const;
