@@ -159,6 +159,13 @@ void RegisterSynth(CLI::App& app) {
                 "Label noise: object pixels within 20 cm of the floor or a "
                 "wall, or dark, take that structure's class and mask; the "
                 "same object parts in most views");
+  cmd->add_option("--label-consistent-cuts",
+                  args->label_noise_options.consistent_cut_share,
+                  "Label noise: share of the objects with parts (chairs, "
+                  "tables, sofas, beds, shelves, lamps) cut along the same "
+                  "parts in 80% of the views, as a mask generator cuts a "
+                  "chair's back off its seat in every view (0 = none)")
+      ->check(CLI::Range(0.0, 1.0));
   cmd->add_option("--label-bleed-share", args->label_noise_options.bleed_share,
                   "Label noise: expected share of those pixels that bleed")
       ->capture_default_str();

@@ -20,11 +20,12 @@ void MapObjectOptions::Check() const {
       "map objects: min_stranded_contact_share must be in [0, 1]");
   CheckArgument(min_front_share >= 0.0 && min_front_share <= 1.0,
                 "map objects: min_front_share must be in [0, 1]");
-  CheckArgument(min_attached_contact_share > 0.0 &&
-                    min_attached_contact_share <= 1.0 &&
-                    max_attached_size_ratio >= 0.0 &&
-                    max_attached_size_ratio <= 1.0,
-                "map objects: attached-piece shares must be in (0, 1]");
+  CheckArgument(
+      min_attached_contact_share > 0.0 && min_attached_contact_share <= 1.0 &&
+          max_attached_size_ratio >= 0.0 && max_attached_size_ratio <= 1.0,
+      "map objects: attached-piece shares must be in (0, 1]");
+  CheckArgument(min_part_contact_share > 0.0 && min_part_contact_share <= 1.0,
+                "map objects: min_part_contact_share must be in (0, 1]");
   CheckArgument(min_apart_views >= 1,
                 "map objects: min_apart_views must be >= 1");
   CheckArgument(max_one_share >= 0.0 && max_one_share <= 1.0,
@@ -403,6 +404,11 @@ MapContext MakeMapContext(const LabelSet& classes,
   context.up_world = up_world;
   for (const LabelClass& c : classes.Classes()) {
     context.kinds[c.id] = c.kind;
+    if (c.kind == ClassKind::kThing) {
+      if (const double m = MaxObjectLengthM(c.name); m > 0.0) {
+        context.max_length_m[c.id] = m;
+      }
+    }
     context.geometry[c.id] = c.kind == ClassKind::kStuff
                                  ? StructureGeometryOf(c.name)
                                  : StructureGeometry::kNone;

@@ -113,6 +113,13 @@ struct MapObjectOptions {
   /// the same part off in every view). max_attached_size_ratio 0: never.
   double min_attached_contact_share = 0.5;
   double max_attached_size_ratio = 0.25;
+  /// Touching pieces of one class that the views held apart (a mask
+  /// generator cuts a sofa's back off its seat in every view) are one when at
+  /// least this share of the smaller one's voxels touch the other directly
+  /// and together they are no longer than one object of the class can be
+  /// (MapContext::max_length_m: two chairs side by side are too long for one
+  /// chair). 1: never.
+  double min_part_contact_share = 0.05;
   /// Objects that at least this many views held in different masks (and few
   /// in one) are never joined through a chain of merges of other objects.
   size_t min_apart_views = 2;
@@ -145,6 +152,9 @@ struct MapContext {
   /// Per class id: kind (thing/stuff) and where structure lives.
   std::map<uint16_t, ClassKind> kinds;
   std::map<uint16_t, StructureGeometry> geometry;
+  /// Per thing class id: the longest horizontal extent of one object (m;
+  /// absent or 0: unknown; MaxObjectLengthM).
+  std::map<uint16_t, double> max_length_m;
   /// The fusion objects' current class and kind, by (current) id.
   struct Object {
     uint16_t class_id = 0;

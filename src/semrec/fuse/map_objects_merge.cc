@@ -6,6 +6,7 @@
 #include <vector>
 
 #include <spdlog/spdlog.h>
+#include <Eigen/Eigenvalues>
 
 #include "semrec/fuse/map_resolver.h"
 
@@ -43,6 +44,50 @@ bool MapResolver::Attached(size_t size_a, size_t size_b,
   return static_cast<double>(contact_voxels) >=
              options_.min_attached_contact_share * smaller &&
          smaller <= options_.max_attached_size_ratio * larger;
+}
+
+double MapResolver::HorizontalLength(const std::vector<size_t>& cells) const {
+  if (cells.empty()) return 0.0;
+  const Eigen::Vector3d up = context_.up_world.normalized();
+  const Eigen::Vector3d e1 = up.unitOrthogonal(), e2 = up.cross(e1);
+  Eigen::Vector2d mean = Eigen::Vector2d::Zero();
+  std::vector<Eigen::Vector2d> q;
+  q.reserve(cells.size());
+  for (size_t i : cells) {
+    const Eigen::Vector3d p = cells_[i].p.cast<double>();
+    q.emplace_back(p.dot(e1), p.dot(e2));
+    mean += q.back();
+  }
+  mean /= static_cast<double>(q.size());
+  Eigen::Matrix2d cov = Eigen::Matrix2d::Zero();
+  for (const Eigen::Vector2d& x : q) cov += (x - mean) * (x - mean).transpose();
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(cov);
+  const Eigen::Vector2d axis = eig.eigenvectors().col(1);  // largest
+  double lo = 0.0, hi = 0.0;
+  for (const Eigen::Vector2d& x : q) {
+    const double t = (x - mean).dot(axis);
+    lo = std::min(lo, t), hi = std::max(hi, t);
+  }
+  return hi - lo + map_.voxel_size_m();
+}
+
+bool MapResolver::PartsOfOne(const std::vector<size_t>& a,
+                             const std::vector<size_t>& b, uint16_t class_id,
+                             size_t contact_voxels) const {
+  const auto it = context_.max_length_m.find(class_id);
+  if (it == context_.max_length_m.end() || it->second <= 0.0 ||
+      options_.min_part_contact_share >= 1.0) {
+    return false;
+  }
+  const auto smaller = static_cast<double>(std::min(a.size(), b.size()));
+  if (contact_voxels < options_.min_tie_contact_voxels ||
+      static_cast<double>(contact_voxels) <
+          options_.min_part_contact_share * smaller) {
+    return false;
+  }
+  std::vector<size_t> both = a;
+  both.insert(both.end(), b.begin(), b.end());
+  return HorizontalLength(both) <= it->second;
 }
 
 void MapResolver::MergeByMasks() {
@@ -88,7 +133,10 @@ void MapResolver::MergeByMasks() {
     uint32_t a, b;
     PairViews views;
     size_t contact;
+    // Joined whatever the pair's own masks said (Attached, PartsOfOne).
     bool attached;
+    // PartsOfOne: the groups it joins must still fit one object.
+    bool parts;
   };
   std::vector<Link> one;
   for (const auto& [a, b] : pairs) {
@@ -97,11 +145,15 @@ void MapResolver::MergeByMasks() {
     const size_t contact_voxels = members[a].size() <= members[b].size()
                                       ? contact[{a, b}]
                                       : contact[{b, a}];
+    const bool same = owner_class_[a] == owner_class_[b];
     if (OneObject(members[a], members[b], a, b, v, contact_voxels)) {
       one.push_back({a, b, v, contact_voxels,
-                     owner_class_[a] == owner_class_[b] &&
-                         Attached(members[a].size(), members[b].size(),
-                                  contact_voxels)});
+                     same && Attached(members[a].size(), members[b].size(),
+                                      contact_voxels),
+                     false});
+    } else if (same && PartsOfOne(members[a], members[b], owner_class_[a],
+                                  contact_voxels)) {
+      one.push_back({a, b, v, contact_voxels, true, true});
     }
     spdlog::debug(
         "objects {} and {} (classes {} and {}, {} and {} voxels): {} views "
@@ -128,11 +180,22 @@ void MapResolver::MergeByMasks() {
   // table, each touching a small piece that touches the next: six views
   // showed two of them in different masks, none in one).
   const auto held_apart = [&](uint32_t x, uint32_t y, const Link& link) {
+    // Where one object of the class has a known size, fitting it decides: a
+    // mask generator that cuts a sofa's back off its seat in every view holds
+    // every piece of the back apart from every piece of the seat.
+    if (owner_class_[x] == owner_class_[y]) {
+      if (const auto it = context_.max_length_m.find(owner_class_[x]);
+          it != context_.max_length_m.end() && it->second > 0.0) {
+        std::vector<size_t> both = members[x];
+        both.insert(both.end(), members[y].begin(), members[y].end());
+        if (HorizontalLength(both) <= it->second) return false;
+      }
+    }
     for (uint32_t p : parts[x]) {
       for (uint32_t q : parts[y]) {
         // An attached piece joins whatever its own masks said.
-        if (link.attached && ((p == link.a && q == link.b) ||
-                              (p == link.b && q == link.a))) {
+        if (link.attached &&
+            ((p == link.a && q == link.b) || (p == link.b && q == link.a))) {
           continue;
         }
         const PairViews v = CoViews(holders[p], holders[q]);
@@ -144,6 +207,16 @@ void MapResolver::MergeByMasks() {
   for (const Link& link : one) {
     const uint32_t x = find(link.a), y = find(link.b);
     if (x == y) continue;
+    if (link.parts) {
+      std::vector<size_t> both = members[x];
+      both.insert(both.end(), members[y].begin(), members[y].end());
+      const auto it = context_.max_length_m.find(owner_class_[x]);
+      if (owner_class_[x] != owner_class_[y] ||
+          it == context_.max_length_m.end() ||
+          HorizontalLength(both) > it->second) {
+        continue;
+      }
+    }
     if (held_apart(x, y, link)) {
       spdlog::debug("objects {} and {}: not joined, held apart", link.a,
                     link.b);

@@ -112,9 +112,10 @@ TEST(MapObjects, NoChainOfMergesJoinsTwoChairsTheViewsHeldApart) {
     options.map_objects.min_apart_views = min_apart_views;
     const SceneFusion fusion = Fuse(views, options);
     const auto top = [](const std::map<uint32_t, double>& m) {
-      return std::max_element(m.begin(), m.end(), [](auto x, auto y) {
-               return x.second < y.second;
-             })->first;
+      return std::max_element(
+                 m.begin(), m.end(),
+                 [](auto x, auto y) { return x.second < y.second; })
+          ->first;
     };
     const uint32_t in_a = top(WhereItWent(fusion, a));
     const uint32_t in_b = top(WhereItWent(fusion, b));
@@ -147,11 +148,14 @@ TEST(MapObjects, ASmallPieceEveryViewCutOffStaysWithTheObjectItTouches) {
     }
     FusionOptions options;
     options.map_objects.max_attached_size_ratio = ratio;
+    // (Chair and rail together also fit one chair: that rule off here.)
+    options.map_objects.min_part_contact_share = 1.0;
     const SceneFusion fusion = Fuse(views, options);
     const auto top = [](const std::map<uint32_t, double>& m) {
-      return std::max_element(m.begin(), m.end(), [](auto x, auto y) {
-               return x.second < y.second;
-             })->first;
+      return std::max_element(
+                 m.begin(), m.end(),
+                 [](auto x, auto y) { return x.second < y.second; })
+          ->first;
     };
     const uint32_t in_chair = top(WhereItWent(fusion, chair));
     EXPECT_NE(in_chair, top(WhereItWent(fusion, other))) << ratio;
@@ -161,6 +165,34 @@ TEST(MapObjects, ASmallPieceEveryViewCutOffStaysWithTheObjectItTouches) {
     } else {
       EXPECT_EQ(Count(fusion, kChair), 3u) << "the rule is what joins it";
     }
+  }
+}
+
+// A mask generator that cuts a sofa's back off its seat in every view: the
+// two pieces, joined along a seam and together no longer than a sofa, are
+// one sofa. Two chairs side by side, touching, that every view held apart
+// stay two: together they are too long for one chair.
+TEST(MapObjects, PartsEveryViewCutApartAreOneObjectIfTogetherTheyFitOne) {
+  const Cloud seat = Box({1.0f, 1.0f, 0.0f}, {1.9f, 3.0f, 0.42f});
+  const Cloud back = Box({1.0f, 1.0f, 0.44f}, {1.2f, 3.0f, 0.82f});
+  const Cloud chair_a = Box({2.5f, 1.0f, 0.0f}, {2.95f, 1.45f, 0.9f});
+  const Cloud chair_b = Box({2.98f, 1.0f, 0.0f}, {3.43f, 1.45f, 0.9f});
+  for (const double share : {0.05, 1.0}) {
+    std::vector<View> views;
+    for (int i = 0; i < 4; ++i) {
+      View v;
+      v.segments.push_back(Segment(kFloor, 1, FloorPoints()));
+      v.segments.push_back(Segment(kSofa, 2, seat));
+      v.segments.push_back(Segment(kSofa, 3, back));
+      v.segments.push_back(Segment(kChair, 4, chair_a));
+      v.segments.push_back(Segment(kChair, 5, chair_b));
+      views.push_back(std::move(v));
+    }
+    FusionOptions options;
+    options.map_objects.min_part_contact_share = share;
+    const SceneFusion fusion = Fuse(views, options);
+    EXPECT_EQ(Count(fusion, kSofa), share < 1.0 ? 1u : 2u) << share;
+    EXPECT_EQ(Count(fusion, kChair), 2u) << share;
   }
 }
 

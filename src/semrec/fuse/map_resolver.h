@@ -201,6 +201,15 @@ class MapResolver {
   // masks said.
   bool Attached(size_t size_a, size_t size_b, size_t contact_voxels) const;
 
+  // The horizontal extent of `cells` along their main direction (m).
+  double HorizontalLength(const std::vector<size_t>& cells) const;
+  // Touching pieces of one class that views held apart, joined along a seam
+  // (min_part_contact_share of the smaller one) and together no longer than
+  // one object of the class: a mask generator's consistent cut (a sofa's
+  // back off its seat), not two objects.
+  bool PartsOfOne(const std::vector<size_t>& a, const std::vector<size_t>& b,
+                  uint16_t class_id, size_t contact_voxels) const;
+
   // Whether touching objects a and b are one. One class: when no view held
   // them in different masks, when enough views held them in one mask
   // (SaysOne), or when as many held them in one mask as apart and they touch

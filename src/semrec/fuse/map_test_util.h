@@ -57,6 +57,8 @@ inline MapContext Context() {
   for (uint16_t id : {kChair, kTable, kSofa, kLamp}) {
     c.kinds[id] = ClassKind::kThing;
   }
+  c.max_length_m[kChair] = 0.75;
+  c.max_length_m[kSofa] = 3.0;
   c.geometry[kWall] = StructureGeometry::kVertical;
   c.geometry[kFloor] = StructureGeometry::kFloor;
   return c;

@@ -35,6 +35,20 @@ StructureGeometry StructureGeometryOf(const std::string& class_name) {
   return it == kByName.end() ? StructureGeometry::kNone : it->second;
 }
 
+double MaxObjectLengthM(const std::string& class_name) {
+  static const std::map<std::string, double> kByName = {
+      {"chair", 0.75},     {"swivel chair", 0.8}, {"armchair", 1.1},
+      {"stool", 0.6},      {"sofa", 3.0},         {"couch", 3.0},
+      {"bed", 2.4},        {"table", 2.6},        {"coffee table", 1.5},
+      {"desk", 2.0},       {"bench", 2.2},        {"lamp", 0.7},
+      {"cushion", 0.8},    {"pillow", 0.9},       {"monitor", 1.0},
+      {"television", 1.8}, {"plant", 1.2},        {"toilet", 0.9},
+      {"bathtub", 2.0},    {"sink", 1.0},         {"refrigerator", 1.0},
+  };
+  const auto it = kByName.find(class_name);
+  return it == kByName.end() ? 0.0 : it->second;
+}
+
 void StructurePlaneOptions::Check() const {
   CheckArgument(tolerance_m > 0.0, "structure planes: tolerance_m must be > 0");
   CheckArgument(min_area_m2 > 0.0, "structure planes: min_area_m2 must be > 0");

@@ -24,6 +24,12 @@ enum class StructureGeometry { kNone, kVertical, kFloor, kCeiling };
 /// ceiling; anything else -> none (not gated).
 StructureGeometry StructureGeometryOf(const std::string& class_name);
 
+/// The longest horizontal extent one object of a furniture class has (m,
+/// generous: an armchair, a three-seat sofa, a king-size bed); 0 when the
+/// class's objects vary too much to say (a cabinet, a shelf, a box) or the
+/// name is not known. Used to tell a chair's two parts from two chairs.
+double MaxObjectLengthM(const std::string& class_name);
+
 struct StructurePlaneOptions {
   /// Points within this distance of a plane lie on it (a voxel and some depth
   /// noise).

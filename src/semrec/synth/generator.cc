@@ -444,6 +444,9 @@ SynthSummary WriteSyntheticSequence(const SynthOptions& options_in,
        options.write_noisy_labels && options.label_noise.bleed
            ? options.label_noise.bleed_share
            : 0.0},
+      {"label_consistent_cuts", options.write_noisy_labels
+                                    ? options.label_noise.consistent_cut_share
+                                    : 0.0},
       {"noise_strength", options.noise.strength},
       {"max_depth_m", options.noise.max_depth_m},
       {"depth_scale", kDepthScale},

@@ -24,6 +24,8 @@ bool IsObject(uint16_t instance, const Scene& scene) {
 
 // Share of the views in which a bleeding part bleeds (LabelNoiseOptions).
 constexpr double kBleedViewRate = 0.8;
+// Views in which an object cut the same way in every view is cut so.
+constexpr double kConsistentCutViewRate = 0.8;
 
 // Distance from p to room face `face` (Scene::room_faces order).
 double FaceDistance(const Eigen::Vector3d& room, int face,
@@ -129,8 +131,8 @@ void ApplyStructureBleed(
 }  // namespace
 
 void LabelNoiseOptions::Check() const {
-  for (double p :
-       {split_probability, merge_probability, class_flip_probability}) {
+  for (double p : {split_probability, merge_probability, class_flip_probability,
+                   consistent_cut_share}) {
     CheckArgument(p >= 0.0 && p <= 1.0,
                   "label noise: probabilities must be in [0, 1]");
   }
@@ -214,8 +216,26 @@ NoisyLabels ApplyLabelNoise(const RenderedFrame& frame, const Scene& scene,
   };
   std::map<uint16_t, Cut> cuts;
   for (size_t i = 0; i < visible.size(); ++i) {
-    if (was_joined[i] || rng.Uniform() >= options.split_probability) continue;
+    if (was_joined[i]) continue;
     const SceneObject& o = *scene.FindObject(visible[i]);
+    if (options.consistent_cut_share > 0.0 && o.parts.size() >= 2) {
+      const uint64_t object = MixSeed(scene_seed, 0xc07c07ULL + visible[i]);
+      if (UnitFromHash(object) < options.consistent_cut_share &&
+          UnitFromHash(MixSeed(seed, object)) < kConsistentCutViewRate) {
+        // The first two primitives apart, the others with one of them: the
+        // same pieces in every view.
+        Cut cut;
+        cut.by_parts = true;
+        for (size_t p = 0; p < o.parts.size(); ++p) {
+          cut.part_piece.push_back(
+              p < 2 ? static_cast<int>(p)
+                    : static_cast<int>(MixSeed(object, p) % 2));
+        }
+        cuts[visible[i]] = std::move(cut);
+        continue;
+      }
+    }
+    if (rng.Uniform() >= options.split_probability) continue;
     Cut cut;
     const int pieces = static_cast<int>(rng.UniformInt(2, 3));
     if (o.parts.size() >= 2 && rng.Uniform() < 0.5) {

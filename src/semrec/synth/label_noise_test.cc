@@ -97,6 +97,52 @@ TEST(LabelNoise, SplitsCutObjectsIntoSeveralMasksOfTheirClass) {
   EXPECT_GE(split, objects * 2 / 3) << split << " of " << objects;
 }
 
+// A mask generator cuts some objects along the same parts in every view:
+// with the share at 1 every object with parts is cut in most views, always
+// into the same groups of parts; at 0 none is (random splits off here).
+TEST(LabelNoise, ConsistentCutsSplitObjectsAlongTheSamePartsInEveryView) {
+  const View v = SixObjectsView();
+  for (const double share : {1.0, 0.0}) {
+    LabelNoiseOptions o = Clean();
+    o.consistent_cut_share = share;
+    size_t cut = 0, seen = 0;
+    // Per object: the part groupings (part -> piece, as sets of parts
+    // sharing a mask) seen over the views that cut it.
+    std::map<uint16_t, std::set<std::set<std::set<uint16_t>>>> groupings;
+    for (uint64_t seed = 1; seed <= 10; ++seed) {
+      const NoisyLabels n = Noisy(v, o, seed);
+      EXPECT_EQ(n.semantic, v.frame.semantic);
+      std::map<uint16_t, std::map<uint16_t, std::set<uint16_t>>> mask_parts;
+      for (size_t i = 0; i < n.instance.NumPixels(); ++i) {
+        const uint16_t gt = v.frame.instance.data()[i];
+        const uint16_t part = v.frame.part.data()[i];
+        if (!IsObjectInstance(gt, v.scene) || part == 0 ||
+            v.scene.FindObject(gt)->parts.size() < 2) {
+          continue;
+        }
+        mask_parts[gt][n.instance.data()[i]].insert(part);
+      }
+      for (const auto& [gt, masks] : mask_parts) {
+        ++seen;
+        if (masks.size() < 2) continue;
+        ++cut;
+        std::set<std::set<uint16_t>> grouping;
+        for (const auto& [mask, parts] : masks) grouping.insert(parts);
+        groupings[gt].insert(grouping);
+      }
+    }
+    ASSERT_GE(seen, 10u) << "the view shows objects with parts";
+    if (share > 0.0) {
+      EXPECT_GE(cut, seen * 6 / 10) << cut << " of " << seen;
+      for (const auto& [gt, distinct] : groupings) {
+        EXPECT_EQ(distinct.size(), 1u) << "object " << gt << " cut differently";
+      }
+    } else {
+      EXPECT_EQ(cut, 0u);
+    }
+  }
+}
+
 TEST(LabelNoise, MergesJoinTouchingNeighboursAndFlipsChangeClasses) {
   const View v = SixObjectsView();
   LabelNoiseOptions o = Clean();
