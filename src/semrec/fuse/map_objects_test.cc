@@ -111,14 +111,8 @@ TEST(MapObjects, NoChainOfMergesJoinsTwoChairsTheViewsHeldApart) {
     FusionOptions options;
     options.map_objects.min_apart_views = min_apart_views;
     const SceneFusion fusion = Fuse(views, options);
-    const auto top = [](const std::map<uint32_t, double>& m) {
-      return std::max_element(
-                 m.begin(), m.end(),
-                 [](auto x, auto y) { return x.second < y.second; })
-          ->first;
-    };
-    const uint32_t in_a = top(WhereItWent(fusion, a));
-    const uint32_t in_b = top(WhereItWent(fusion, b));
+    const uint32_t in_a = TopObject(WhereItWent(fusion, a));
+    const uint32_t in_b = TopObject(WhereItWent(fusion, b));
     if (min_apart_views == 2) {
       EXPECT_EQ(Count(fusion, kChair), 2u);
       EXPECT_NE(in_a, in_b);
@@ -137,31 +131,19 @@ TEST(MapObjects, ASmallPieceEveryViewCutOffStaysWithTheObjectItTouches) {
   const Cloud rail = Box({0.96f, 1.0f, 0.3f}, {0.96f, 1.5f, 0.45f});
   const Cloud other = Box({1.0f, 1.55f, 0.1f}, {1.5f, 2.05f, 0.9f});
   for (const double ratio : {0.25, 0.0}) {
-    std::vector<View> views;
-    for (int i = 0; i < 4; ++i) {
-      View v;
-      v.segments.push_back(Segment(kFloor, 1, FloorPoints()));
-      v.segments.push_back(Segment(kChair, 2, chair));
-      v.segments.push_back(Segment(kChair, 3, rail));
-      v.segments.push_back(Segment(kChair, 4, other));
-      views.push_back(std::move(v));
-    }
     FusionOptions options;
     options.map_objects.max_attached_size_ratio = ratio;
     // (Chair and rail together also fit one chair: that rule off here.)
     options.map_objects.min_part_contact_share = 1.0;
-    const SceneFusion fusion = Fuse(views, options);
-    const auto top = [](const std::map<uint32_t, double>& m) {
-      return std::max_element(
-                 m.begin(), m.end(),
-                 [](auto x, auto y) { return x.second < y.second; })
-          ->first;
-    };
-    const uint32_t in_chair = top(WhereItWent(fusion, chair));
-    EXPECT_NE(in_chair, top(WhereItWent(fusion, other))) << ratio;
+    const SceneFusion fusion =
+        Fuse(ViewsOf(4, {Segment(kChair, 2, chair), Segment(kChair, 3, rail),
+                         Segment(kChair, 4, other)}),
+             options);
+    const uint32_t in_chair = TopObject(WhereItWent(fusion, chair));
+    EXPECT_NE(in_chair, TopObject(WhereItWent(fusion, other))) << ratio;
     if (ratio > 0.0) {
       EXPECT_EQ(Count(fusion, kChair), 2u);
-      EXPECT_EQ(top(WhereItWent(fusion, rail)), in_chair);
+      EXPECT_EQ(TopObject(WhereItWent(fusion, rail)), in_chair);
     } else {
       EXPECT_EQ(Count(fusion, kChair), 3u) << "the rule is what joins it";
     }
@@ -178,19 +160,12 @@ TEST(MapObjects, PartsEveryViewCutApartAreOneObjectIfTogetherTheyFitOne) {
   const Cloud chair_a = Box({2.5f, 1.0f, 0.0f}, {2.95f, 1.45f, 0.9f});
   const Cloud chair_b = Box({2.98f, 1.0f, 0.0f}, {3.43f, 1.45f, 0.9f});
   for (const double share : {0.05, 1.0}) {
-    std::vector<View> views;
-    for (int i = 0; i < 4; ++i) {
-      View v;
-      v.segments.push_back(Segment(kFloor, 1, FloorPoints()));
-      v.segments.push_back(Segment(kSofa, 2, seat));
-      v.segments.push_back(Segment(kSofa, 3, back));
-      v.segments.push_back(Segment(kChair, 4, chair_a));
-      v.segments.push_back(Segment(kChair, 5, chair_b));
-      views.push_back(std::move(v));
-    }
     FusionOptions options;
     options.map_objects.min_part_contact_share = share;
-    const SceneFusion fusion = Fuse(views, options);
+    const SceneFusion fusion = Fuse(
+        ViewsOf(4, {Segment(kSofa, 2, seat), Segment(kSofa, 3, back),
+                    Segment(kChair, 4, chair_a), Segment(kChair, 5, chair_b)}),
+        options);
     EXPECT_EQ(Count(fusion, kSofa), share < 1.0 ? 1u : 2u) << share;
     EXPECT_EQ(Count(fusion, kChair), 2u) << share;
   }

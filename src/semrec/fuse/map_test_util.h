@@ -117,6 +117,25 @@ inline std::map<uint32_t, double> WhereItWent(const SceneFusion& fusion,
   return share;
 }
 
+// The object holding the largest share of a surface (from WhereItWent).
+inline uint32_t TopObject(const std::map<uint32_t, double>& went) {
+  return std::max_element(
+             went.begin(), went.end(),
+             [](const auto& x, const auto& y) { return x.second < y.second; })
+      ->first;
+}
+
+// `n` views, each showing the floor and `segments`.
+inline std::vector<View> ViewsOf(int n,
+                                 const std::vector<FrameSegment>& segments) {
+  std::vector<View> views(static_cast<size_t>(n));
+  for (View& v : views) {
+    v.segments.push_back(Segment(kFloor, 1, FloorPoints()));
+    v.segments.insert(v.segments.end(), segments.begin(), segments.end());
+  }
+  return views;
+}
+
 inline double ShareIn(const std::map<uint32_t, double>& went, uint32_t id) {
   const auto it = went.find(id);
   return it == went.end() ? 0.0 : it->second;
