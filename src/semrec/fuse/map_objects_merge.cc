@@ -71,38 +71,32 @@ double MapResolver::HorizontalLength(const std::vector<size_t>& cells) const {
   return hi - lo + map_.voxel_size_m();
 }
 
-bool MapResolver::PartsOfOne(const std::vector<size_t>& a,
-                             const std::vector<size_t>& b, uint16_t class_id,
-                             size_t contact_voxels) const {
+bool MapResolver::FitsOne(const std::vector<size_t>& a,
+                          const std::vector<size_t>& b,
+                          uint16_t class_id) const {
   const auto it = context_.max_length_m.find(class_id);
-  if (it == context_.max_length_m.end() || it->second <= 0.0 ||
-      options_.min_part_contact_share >= 1.0) {
-    return false;
-  }
-  const auto smaller = static_cast<double>(std::min(a.size(), b.size()));
-  if (contact_voxels < options_.min_tie_contact_voxels ||
-      static_cast<double>(contact_voxels) <
-          options_.min_part_contact_share * smaller) {
-    return false;
-  }
+  if (it == context_.max_length_m.end() || it->second <= 0.0) return false;
   std::vector<size_t> both = a;
   both.insert(both.end(), b.begin(), b.end());
   return HorizontalLength(both) <= it->second;
 }
 
-void MapResolver::MergeByMasks() {
-  std::map<uint32_t, std::vector<size_t>> members;
-  for (size_t i = 0; i < cells_.size(); ++i) {
-    if (cells_[i].owner != 0 && IsThingCell(cells_[i])) {
-      members[cells_[i].owner].push_back(i);
-    }
-  }
-  std::map<uint32_t, std::map<size_t, std::set<uint64_t>>> holders;
-  for (const auto& [id, cells] : members) holders[id] = Holders(cells);
+bool MapResolver::PartsOfOne(const std::vector<size_t>& a,
+                             const std::vector<size_t>& b, uint16_t class_id,
+                             size_t contact_voxels) const {
+  const auto smaller = static_cast<double>(std::min(a.size(), b.size()));
+  return options_.min_part_contact_share < 1.0 &&
+         contact_voxels >= options_.min_tie_contact_voxels &&
+         static_cast<double>(contact_voxels) >=
+             options_.min_part_contact_share * smaller &&
+         FitsOne(a, b, class_id);
+}
+
+std::vector<MapResolver::MergeLink> MapResolver::MergeLinks(
+    const Members& members, const MaskHolders& holders) const {
   std::set<std::pair<uint32_t, uint32_t>> pairs;
-  for (const auto& entry : members) {
-    const uint32_t id = entry.first;
-    for (size_t i : entry.second) {
+  for (const auto& [id, cells] : members) {
+    for (size_t i : cells) {
       ForNeighbours(i, [&](size_t n) {
         const uint32_t other = cells_[n].owner;
         if (other > id && IsThingCell(cells_[n])) pairs.emplace(id, other);
@@ -111,9 +105,8 @@ void MapResolver::MergeByMasks() {
   }
   // Cells of each object in direct contact (26-neighbours) with another.
   std::map<std::pair<uint32_t, uint32_t>, size_t> contact;
-  for (const auto& entry : members) {
-    const uint32_t id = entry.first;
-    for (size_t i : entry.second) {
+  for (const auto& [id, cells] : members) {
+    for (size_t i : cells) {
       std::set<uint32_t> seen;
       ForNeighbours(
           i,
@@ -129,45 +122,80 @@ void MapResolver::MergeByMasks() {
   }
   // Judged on the objects as they were: a chain of merges does not change
   // the evidence of a pair.
-  struct Link {
-    uint32_t a, b;
-    PairViews views;
-    size_t contact;
-    // Joined whatever the pair's own masks said (Attached, PartsOfOne).
-    bool attached;
-    // PartsOfOne: the groups it joins must still fit one object.
-    bool parts;
-  };
-  std::vector<Link> one;
+  std::vector<MergeLink> links;
   for (const auto& [a, b] : pairs) {
-    const PairViews v = CoViews(holders[a], holders[b]);
+    const std::vector<size_t>& ca = members.at(a);
+    const std::vector<size_t>& cb = members.at(b);
+    const PairViews v = CoViews(holders.at(a), holders.at(b));
     // The smaller one's cells in direct contact with the other.
-    const size_t contact_voxels = members[a].size() <= members[b].size()
-                                      ? contact[{a, b}]
-                                      : contact[{b, a}];
-    const bool same = owner_class_[a] == owner_class_[b];
-    if (OneObject(members[a], members[b], a, b, v, contact_voxels)) {
-      one.push_back({a, b, v, contact_voxels,
-                     same && Attached(members[a].size(), members[b].size(),
-                                      contact_voxels),
-                     false});
-    } else if (same && PartsOfOne(members[a], members[b], owner_class_[a],
-                                  contact_voxels)) {
-      one.push_back({a, b, v, contact_voxels, true, true});
+    const auto it = contact.find(ca.size() <= cb.size() ? std::pair{a, b}
+                                                        : std::pair{b, a});
+    const size_t contact_voxels = it == contact.end() ? 0 : it->second;
+    const uint16_t class_a = owner_class_.at(a);
+    const bool same = class_a == owner_class_.at(b);
+    if (OneObject(ca, cb, a, b, v, contact_voxels)) {
+      links.push_back({a, b, v, contact_voxels,
+                       same && Attached(ca.size(), cb.size(), contact_voxels),
+                       false});
+    } else if (same && PartsOfOne(ca, cb, class_a, contact_voxels)) {
+      links.push_back({a, b, v, contact_voxels, true, true});
     }
     spdlog::debug(
         "objects {} and {} (classes {} and {}, {} and {} voxels): {} views "
         "one, {} two, {} voxels in contact",
-        a, b, owner_class_[a], owner_class_[b], members[a].size(),
-        members[b].size(), v.one, v.two, contact_voxels);
+        a, b, class_a, owner_class_.at(b), ca.size(), cb.size(), v.one, v.two,
+        contact_voxels);
   }
   // Surest links first: the most views holding the pair in one mask, the
   // fewest apart, the widest contact.
-  std::stable_sort(one.begin(), one.end(), [](const Link& x, const Link& y) {
-    if (x.views.one != y.views.one) return x.views.one > y.views.one;
-    if (x.views.two != y.views.two) return x.views.two < y.views.two;
-    return x.contact > y.contact;
-  });
+  std::stable_sort(links.begin(), links.end(),
+                   [](const MergeLink& x, const MergeLink& y) {
+                     if (x.views.one != y.views.one) {
+                       return x.views.one > y.views.one;
+                     }
+                     if (x.views.two != y.views.two) {
+                       return x.views.two < y.views.two;
+                     }
+                     return x.contact > y.contact;
+                   });
+  return links;
+}
+
+bool MapResolver::HeldApart(const std::vector<size_t>& x_cells,
+                            const std::vector<size_t>& y_cells,
+                            uint16_t x_class, uint16_t y_class,
+                            const std::vector<uint32_t>& x_parts,
+                            const std::vector<uint32_t>& y_parts,
+                            const MaskHolders& holders,
+                            const MergeLink& link) const {
+  // Where one object of the class has a known size, fitting it decides: a
+  // mask generator that cuts a sofa's back off its seat in every view holds
+  // every piece of the back apart from every piece of the seat.
+  if (x_class == y_class && FitsOne(x_cells, y_cells, x_class)) return false;
+  for (uint32_t p : x_parts) {
+    for (uint32_t q : y_parts) {
+      // An attached piece joins whatever its own masks said.
+      if (link.attached &&
+          ((p == link.a && q == link.b) || (p == link.b && q == link.a))) {
+        continue;
+      }
+      const PairViews v = CoViews(holders.at(p), holders.at(q));
+      if (v.two >= options_.min_apart_views && SaysApart(v)) return true;
+    }
+  }
+  return false;
+}
+
+void MapResolver::MergeByMasks() {
+  Members members;
+  for (size_t i = 0; i < cells_.size(); ++i) {
+    if (cells_[i].owner != 0 && IsThingCell(cells_[i])) {
+      members[cells_[i].owner].push_back(i);
+    }
+  }
+  MaskHolders holders;
+  for (const auto& [id, cells] : members) holders[id] = Holders(cells);
+  const std::vector<MergeLink> links = MergeLinks(members, holders);
   std::map<uint32_t, uint32_t> into;
   auto find = [&](uint32_t id) {
     while (into.count(id)) id = into[id];
@@ -176,48 +204,19 @@ void MapResolver::MergeByMasks() {
   // The objects each group holds, as they were before merging.
   std::map<uint32_t, std::vector<uint32_t>> parts;
   for (const auto& entry : members) parts[entry.first] = {entry.first};
-  // No chain of links joins two objects the views held apart (chairs round a
-  // table, each touching a small piece that touches the next: six views
-  // showed two of them in different masks, none in one).
-  const auto held_apart = [&](uint32_t x, uint32_t y, const Link& link) {
-    // Where one object of the class has a known size, fitting it decides: a
-    // mask generator that cuts a sofa's back off its seat in every view holds
-    // every piece of the back apart from every piece of the seat.
-    if (owner_class_[x] == owner_class_[y]) {
-      if (const auto it = context_.max_length_m.find(owner_class_[x]);
-          it != context_.max_length_m.end() && it->second > 0.0) {
-        std::vector<size_t> both = members[x];
-        both.insert(both.end(), members[y].begin(), members[y].end());
-        if (HorizontalLength(both) <= it->second) return false;
-      }
-    }
-    for (uint32_t p : parts[x]) {
-      for (uint32_t q : parts[y]) {
-        // An attached piece joins whatever its own masks said.
-        if (link.attached &&
-            ((p == link.a && q == link.b) || (p == link.b && q == link.a))) {
-          continue;
-        }
-        const PairViews v = CoViews(holders[p], holders[q]);
-        if (v.two >= options_.min_apart_views && SaysApart(v)) return true;
-      }
-    }
-    return false;
-  };
-  for (const Link& link : one) {
+  for (const MergeLink& link : links) {
     const uint32_t x = find(link.a), y = find(link.b);
     if (x == y) continue;
-    if (link.parts) {
-      std::vector<size_t> both = members[x];
-      both.insert(both.end(), members[y].begin(), members[y].end());
-      const auto it = context_.max_length_m.find(owner_class_[x]);
-      if (owner_class_[x] != owner_class_[y] ||
-          it == context_.max_length_m.end() ||
-          HorizontalLength(both) > it->second) {
-        continue;
-      }
+    // Parts of one object must still fit one object together.
+    if (link.parts && (owner_class_[x] != owner_class_[y] ||
+                       !FitsOne(members[x], members[y], owner_class_[x]))) {
+      continue;
     }
-    if (held_apart(x, y, link)) {
+    // No chain of links joins two objects the views held apart (chairs round
+    // a table, each touching a small piece that touches the next: six views
+    // showed two of them in different masks, none in one).
+    if (HeldApart(members[x], members[y], owner_class_[x], owner_class_[y],
+                  parts[x], parts[y], holders, link)) {
       spdlog::debug("objects {} and {}: not joined, held apart", link.a,
                     link.b);
       continue;

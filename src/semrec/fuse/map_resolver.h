@@ -203,6 +203,10 @@ class MapResolver {
 
   // The horizontal extent of `cells` along their main direction (m).
   double HorizontalLength(const std::vector<size_t>& cells) const;
+  // Whether `a` and `b` together are no longer than one object of the class
+  // can be (false for classes of no known size).
+  bool FitsOne(const std::vector<size_t>& a, const std::vector<size_t>& b,
+               uint16_t class_id) const;
   // Touching pieces of one class that views held apart, joined along a seam
   // (min_part_contact_share of the smaller one) and together no longer than
   // one object of the class: a mask generator's consistent cut (a sofa's
@@ -224,8 +228,34 @@ class MapResolver {
                  uint32_t id_a, uint32_t id_b, const PairViews& views,
                  size_t contact_voxels) const;
 
-  // Touching objects that are one (OneObject) become one; the larger keeps
-  // its id.
+  using Members = std::map<uint32_t, std::vector<size_t>>;
+  using MaskHolders = std::map<uint32_t, std::map<size_t, std::set<uint64_t>>>;
+  // A pair of touching objects that are one.
+  struct MergeLink {
+    uint32_t a = 0, b = 0;
+    PairViews views;
+    size_t contact = 0;
+    // Joined whatever the pair's own masks said (Attached, PartsOfOne).
+    bool attached = false;
+    // PartsOfOne: the groups it joins must still fit one object.
+    bool parts = false;
+  };
+  // Touching pairs that are one (OneObject, or PartsOfOne), judged on the
+  // objects as they were, surest first: the most views holding the pair in
+  // one mask, the fewest apart, the widest contact.
+  std::vector<MergeLink> MergeLinks(const Members& members,
+                                    const MaskHolders& holders) const;
+  // Whether joining groups x and y (cells, classes, the objects they hold)
+  // would join two objects >= min_apart_views views held apart (SaysApart);
+  // for classes of known size, only when together they do not fit one object.
+  bool HeldApart(const std::vector<size_t>& x_cells,
+                 const std::vector<size_t>& y_cells, uint16_t x_class,
+                 uint16_t y_class, const std::vector<uint32_t>& x_parts,
+                 const std::vector<uint32_t>& y_parts,
+                 const MaskHolders& holders, const MergeLink& link) const;
+
+  // Touching objects that are one (MergeLinks) become one, unless that joins
+  // objects held apart (HeldApart); the larger keeps its id.
   void MergeByMasks();
 
   // Thing voxels no object of their class claimed: each connected group joins
