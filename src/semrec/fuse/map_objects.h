@@ -30,7 +30,11 @@
 //     merged unless several views held them in different masks and few in
 //     one (1 : 1 merges when they touch directly); touching objects of
 //     confused classes that views held in one mask are merged too. A small
-//     piece joins the object of its class it touches.
+//     piece joins the object of its class it touches, and so does one mostly
+//     in contact with a much larger one, or joined to it along a seam when
+//     together they are no longer than one object of the class (mask
+//     generators cut the same parts off in every view). Merges run surest
+//     first, and no chain of them joins objects the views held apart.
 //  5. Fragments are judged by visibility: an object is a fragment when the
 //     views that labelled its voxels as its class are few compared with the
 //     views that observed those voxels at all (a part seen once where five
