@@ -33,6 +33,8 @@ grep -q "error: /nonexistent/seq: sequence path does not exist" "$tmp/err" || fa
 [ "$rc" -eq 2 ] && grep -q "use it with --label-noise" "$tmp/err" || fail "bleed without noise: exit $rc, $(cat "$tmp/err")"
 "$SEMREC" synth --label-noise --label-bleed --label-bleed-share 1.5 --out "$tmp/s" 2>"$tmp/err"; rc=$?
 [ "$rc" -eq 2 ] && grep -q "bleed share must be in \[0, 1\]" "$tmp/err" || fail "bleed share: exit $rc, $(cat "$tmp/err")"
+"$SEMREC" synth --label-noise --label-consistent-cuts 1.5 --out "$tmp/s" 2>"$tmp/err"; rc=$?
+[ "$rc" -ne 0 ] && grep -q "label-consistent-cuts" "$tmp/err" || fail "consistent cuts: exit $rc, $(cat "$tmp/err")"
 "$SEMREC" synth --preset office --views sparse --frames 2 --width 160 --height 120 --gt-spacing-m 0.05 \
   --label-noise --label-bleed --out "$tmp/sparse" >"$tmp/sparse.out" 2>"$tmp/err" ||
   fail "synth sparse failed: $(cat "$tmp/err")"

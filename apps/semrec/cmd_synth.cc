@@ -165,6 +165,7 @@ void RegisterSynth(CLI::App& app) {
                   "tables, sofas, beds, shelves, lamps) cut along the same "
                   "parts in 80% of the views, as a mask generator cuts a "
                   "chair's back off its seat in every view (0 = none)")
+      ->capture_default_str()
       ->check(CLI::Range(0.0, 1.0));
   cmd->add_option("--label-bleed-share", args->label_noise_options.bleed_share,
                   "Label noise: expected share of those pixels that bleed")

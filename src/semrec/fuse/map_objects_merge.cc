@@ -22,9 +22,8 @@ bool MapResolver::OneObject(const std::vector<size_t>& a,
     // Sparse views see a place once or twice: as many views held the two in
     // one mask as apart (1 : 1), touching directly, is one object (mask
     // generators cut objects far more often than they join two).
-    return (views.one >= 1 && views.one >= views.two &&
-            contact_voxels >= options_.min_tie_contact_voxels) ||
-           Attached(a.size(), b.size(), contact_voxels);
+    return views.one >= 1 && views.one >= views.two &&
+           contact_voxels >= options_.min_tie_contact_voxels;
   }
   // Different classes need more: most views that saw both held them in one
   // mask (sparse views: one view that joined a plant to the chair beside it
@@ -133,10 +132,10 @@ std::vector<MapResolver::MergeLink> MapResolver::MergeLinks(
     const size_t contact_voxels = it == contact.end() ? 0 : it->second;
     const uint16_t class_a = owner_class_.at(a);
     const bool same = class_a == owner_class_.at(b);
-    if (OneObject(ca, cb, a, b, v, contact_voxels)) {
-      links.push_back({a, b, v, contact_voxels,
-                       same && Attached(ca.size(), cb.size(), contact_voxels),
-                       false});
+    const bool attached =
+        same && Attached(ca.size(), cb.size(), contact_voxels);
+    if (attached || OneObject(ca, cb, a, b, v, contact_voxels)) {
+      links.push_back({a, b, v, contact_voxels, attached, false});
     } else if (same && PartsOfOne(ca, cb, class_a, contact_voxels)) {
       links.push_back({a, b, v, contact_voxels, true, true});
     }
@@ -161,17 +160,10 @@ std::vector<MapResolver::MergeLink> MapResolver::MergeLinks(
   return links;
 }
 
-bool MapResolver::HeldApart(const std::vector<size_t>& x_cells,
-                            const std::vector<size_t>& y_cells,
-                            uint16_t x_class, uint16_t y_class,
-                            const std::vector<uint32_t>& x_parts,
+bool MapResolver::HeldApart(const std::vector<uint32_t>& x_parts,
                             const std::vector<uint32_t>& y_parts,
                             const MaskHolders& holders,
                             const MergeLink& link) const {
-  // Where one object of the class has a known size, fitting it decides: a
-  // mask generator that cuts a sofa's back off its seat in every view holds
-  // every piece of the back apart from every piece of the seat.
-  if (x_class == y_class && FitsOne(x_cells, y_cells, x_class)) return false;
   for (uint32_t p : x_parts) {
     for (uint32_t q : y_parts) {
       // An attached piece joins whatever its own masks said.
@@ -207,16 +199,17 @@ void MapResolver::MergeByMasks() {
   for (const MergeLink& link : links) {
     const uint32_t x = find(link.a), y = find(link.b);
     if (x == y) continue;
+    const bool fits = owner_class_[x] == owner_class_[y] &&
+                      FitsOne(members[x], members[y], owner_class_[x]);
     // Parts of one object must still fit one object together.
-    if (link.parts && (owner_class_[x] != owner_class_[y] ||
-                       !FitsOne(members[x], members[y], owner_class_[x]))) {
-      continue;
-    }
+    if (link.parts && !fits) continue;
     // No chain of links joins two objects the views held apart (chairs round
     // a table, each touching a small piece that touches the next: six views
-    // showed two of them in different masks, none in one).
-    if (HeldApart(members[x], members[y], owner_class_[x], owner_class_[y],
-                  parts[x], parts[y], holders, link)) {
+    // showed two of them in different masks, none in one). Where one object
+    // of the class has a known size, fitting it decides instead: a mask
+    // generator that cuts a sofa's back off its seat in every view holds
+    // every piece of the back apart from every piece of the seat.
+    if (!fits && HeldApart(parts[x], parts[y], holders, link)) {
       spdlog::debug("objects {} and {}: not joined, held apart", link.a,
                     link.b);
       continue;

@@ -58,33 +58,26 @@ TEST(MapObjects, PartSeenOnceWhereFiveViewsLookedIsAFragment) {
   EXPECT_EQ(fusion.map_resolution()->fragments_dropped, 1u);
 }
 
+// Surfaces `a` and `b` each ended mostly (> 90%) in one object, not the same.
+void ExpectTwoWholeObjects(const SceneFusion& fusion, const Cloud& a,
+                           const Cloud& b) {
+  const auto in_a = WhereItWent(fusion, a), in_b = WhereItWent(fusion, b);
+  EXPECT_GT(ShareIn(in_a, TopObject(in_a)), 0.9);
+  EXPECT_GT(ShareIn(in_b, TopObject(in_b)), 0.9);
+  EXPECT_NE(TopObject(in_a), TopObject(in_b));
+}
+
 TEST(MapObjects, TwoChairsJoinedInOneViewAndApartInThreeEndAsTwo) {
   const Cloud a = Box({1.0f, 1.0f, 0.1f}, {1.45f, 1.45f, 0.9f});
   const Cloud b = Box({1.7f, 1.0f, 0.1f}, {2.15f, 1.45f, 0.9f});
   Cloud both = a;
   both.insert(both.end(), b.begin(), b.end());
-  std::vector<View> views;
-  for (int i = 0; i < 4; ++i) {
-    View v;
-    v.segments.push_back(Segment(kFloor, 1, FloorPoints()));
-    if (i == 1) {
-      v.segments.push_back(Segment(kChair, 2, both));
-    } else {
-      v.segments.push_back(Segment(kChair, 2, a));
-      v.segments.push_back(Segment(kChair, 3, b));
-    }
-    views.push_back(std::move(v));
-  }
+  std::vector<View> views =
+      ViewsOf(4, {Segment(kChair, 2, a), Segment(kChair, 3, b)});
+  views[1] = ViewsOf(1, {Segment(kChair, 2, both)})[0];
   const SceneFusion fusion = Fuse(views);
   ASSERT_EQ(Count(fusion, kChair), 2u);
-  const auto in_a = WhereItWent(fusion, a), in_b = WhereItWent(fusion, b);
-  const auto top = [](const std::map<uint32_t, double>& m) {
-    return std::max_element(m.begin(), m.end(),
-                            [](auto x, auto y) { return x.second < y.second; });
-  };
-  EXPECT_GT(top(in_a)->second, 0.9);
-  EXPECT_GT(top(in_b)->second, 0.9);
-  EXPECT_NE(top(in_a)->first, top(in_b)->first);
+  ExpectTwoWholeObjects(fusion, a, b);
 }
 
 // Two chairs that three views held in separate masks, and between them a
@@ -96,18 +89,9 @@ TEST(MapObjects, NoChainOfMergesJoinsTwoChairsTheViewsHeldApart) {
   const Cloud b = Box({1.75f, 1.0f, 0.1f}, {2.2f, 1.45f, 0.9f});
   const Cloud piece = Box({1.49f, 1.1f, 0.1f}, {1.71f, 1.35f, 0.3f});
   for (const size_t min_apart_views : {size_t{2}, size_t{1000}}) {
-    std::vector<View> views;
-    for (int i = 0; i < 4; ++i) {
-      View v;
-      v.segments.push_back(Segment(kFloor, 1, FloorPoints()));
-      if (i == 3) {
-        v.segments.push_back(Segment(kChair, 2, piece));
-      } else {
-        v.segments.push_back(Segment(kChair, 2, a));
-        v.segments.push_back(Segment(kChair, 3, b));
-      }
-      views.push_back(std::move(v));
-    }
+    std::vector<View> views =
+        ViewsOf(3, {Segment(kChair, 2, a), Segment(kChair, 3, b)});
+    views.push_back(ViewsOf(1, {Segment(kChair, 2, piece)})[0]);
     FusionOptions options;
     options.map_objects.min_apart_views = min_apart_views;
     const SceneFusion fusion = Fuse(views, options);
@@ -177,27 +161,13 @@ TEST(MapObjects, PartsEveryViewCutApartAreOneObjectIfTogetherTheyFitOne) {
 TEST(MapObjects, NeighboursFusedByOverlapAreCutWhereTheViewsHeldThemApart) {
   const Cloud a = Box({1.0f, 1.0f, 0.0f}, {1.5f, 1.6f, 0.9f});
   const Cloud b = Box({1.56f, 1.0f, 0.0f}, {2.06f, 1.6f, 0.9f});
-  std::vector<View> views;
-  for (int i = 0; i < 3; ++i) {
-    View v;
-    v.segments.push_back(Segment(kFloor, 1, FloorPoints()));
-    v.segments.push_back(Segment(kTable, 2, a));
-    v.segments.push_back(Segment(kTable, 3, b));
-    views.push_back(std::move(v));
-  }
   FusionOptions eager;
   eager.alpha = 0.02;
-  const SceneFusion fusion = Fuse(views, eager);
+  const SceneFusion fusion =
+      Fuse(ViewsOf(3, {Segment(kTable, 2, a), Segment(kTable, 3, b)}), eager);
   ASSERT_EQ(Count(fusion, kTable), 2u);
   EXPECT_GE(fusion.map_resolution()->split_objects, 1u);
-  const auto in_a = WhereItWent(fusion, a), in_b = WhereItWent(fusion, b);
-  const auto top = [](const std::map<uint32_t, double>& m) {
-    return *std::max_element(
-        m.begin(), m.end(), [](auto x, auto y) { return x.second < y.second; });
-  };
-  EXPECT_GT(top(in_a).second, 0.9);
-  EXPECT_GT(top(in_b).second, 0.9);
-  EXPECT_NE(top(in_a).first, top(in_b).first);
+  ExpectTwoWholeObjects(fusion, a, b);
 }
 
 // A mask generator cuts one object far more often than it joins two: a

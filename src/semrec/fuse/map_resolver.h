@@ -220,8 +220,8 @@ class MapResolver {
   // directly, `contact_voxels` (the smaller one's voxels with a 26-neighbour
   // in the other) >= min_tie_contact_voxels: masks cut one object far more
   // often than they join two, and sparse views see an object once or twice,
-  // so 1 : 1 is the common split of one object; or when one is attached to
-  // the other (Attached). Two classes: when most views that saw both held them
+  // so 1 : 1 is the common split of one object (attached pieces, Attached,
+  // are linked besides). Two classes: when most views that saw both held them
   // in one mask and one's votes give the other's class at least
   // confusion_share (one object, its class confused).
   bool OneObject(const std::vector<size_t>& a, const std::vector<size_t>& b,
@@ -240,22 +240,21 @@ class MapResolver {
     // PartsOfOne: the groups it joins must still fit one object.
     bool parts = false;
   };
-  // Touching pairs that are one (OneObject, or PartsOfOne), judged on the
-  // objects as they were, surest first: the most views holding the pair in
+  // Touching pairs that are one (OneObject, Attached or PartsOfOne), judged on
+  // the objects as they were, surest first: the most views holding the pair in
   // one mask, the fewest apart, the widest contact.
   std::vector<MergeLink> MergeLinks(const Members& members,
                                     const MaskHolders& holders) const;
-  // Whether joining groups x and y (cells, classes, the objects they hold)
-  // would join two objects >= min_apart_views views held apart (SaysApart);
-  // for classes of known size, only when together they do not fit one object.
-  bool HeldApart(const std::vector<size_t>& x_cells,
-                 const std::vector<size_t>& y_cells, uint16_t x_class,
-                 uint16_t y_class, const std::vector<uint32_t>& x_parts,
+  // Whether joining groups that hold objects x_parts and y_parts would join
+  // two objects >= min_apart_views views held apart (SaysApart); a link's
+  // own pair does not count when it is attached.
+  bool HeldApart(const std::vector<uint32_t>& x_parts,
                  const std::vector<uint32_t>& y_parts,
                  const MaskHolders& holders, const MergeLink& link) const;
 
   // Touching objects that are one (MergeLinks) become one, unless that joins
-  // objects held apart (HeldApart); the larger keeps its id.
+  // objects held apart (HeldApart) that together do not fit one object of
+  // their class (FitsOne); the larger keeps its id.
   void MergeByMasks();
 
   // Thing voxels no object of their class claimed: each connected group joins
