@@ -87,9 +87,8 @@ int Run(int argc, char** argv) {
          o->masks.dense_stride = 2;
          o->masks.covered_similarity = 0.8f;
        }},
-      {"stride 4, covered 0.8", [](auto* o) {
-         o->masks.covered_similarity = 0.8f;
-       }},
+      {"stride 4, covered 0.8",
+       [](auto* o) { o->masks.covered_similarity = 0.8f; }},
       {"stride 4, covered 0.6 (default)", [](auto*) {}},
       {"default, stride 8", [](auto* o) { o->masks.dense_stride = 8; }},
       {"default + rejected sim. 0.6",

@@ -26,6 +26,8 @@ void MapObjectOptions::Check() const {
       "map objects: attached-piece shares must be in (0, 1]");
   CheckArgument(min_part_contact_share > 0.0 && min_part_contact_share <= 1.0,
                 "map objects: min_part_contact_share must be in (0, 1]");
+  CheckArgument(min_nested_share >= 0.0 && min_nested_share <= 1.0,
+                "map objects: min_nested_share must be in [0, 1]");
   CheckArgument(min_apart_views >= 1,
                 "map objects: min_apart_views must be >= 1");
   CheckArgument(max_one_share >= 0.0 && max_one_share <= 1.0,

@@ -124,6 +124,11 @@ struct MapObjectOptions {
   /// (MapContext::max_length_m: two chairs side by side are too long for one
   /// chair). 1: never.
   double min_part_contact_share = 0.05;
+  /// Touching pieces of a class of no known size (min_tie_contact_voxels in
+  /// direct contact) are one when at least this share of one lies inside the
+  /// other's upright box: objects do not interpenetrate (a bookcase's boards
+  /// inside its frame). 0: never.
+  double min_nested_share = 0.8;
   /// Objects that at least this many views held in different masks (and few
   /// in one) are never joined through a chain of merges of other objects.
   size_t min_apart_views = 2;

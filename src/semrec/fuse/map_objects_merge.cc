@@ -1,6 +1,8 @@
 // Orphan voxels, merges by masks and fragments judged by visibility (see
 // map_resolver.h).
 #include <algorithm>
+#include <cmath>
+#include <limits>
 #include <map>
 #include <set>
 #include <vector>
@@ -45,6 +47,80 @@ bool MapResolver::Attached(size_t size_a, size_t size_b,
          smaller <= options_.max_attached_size_ratio * larger;
 }
 
+std::vector<size_t> MapResolver::WithoutSpecks(
+    const std::vector<size_t>& cells) const {
+  std::vector<bool> member(cells_.size(), false), done(cells_.size(), false);
+  for (size_t i : cells) member[i] = true;
+  std::vector<std::vector<size_t>> parts;
+  size_t largest = 0;
+  for (size_t i : cells) {
+    if (done[i]) continue;
+    parts.push_back(Component(i, &done, [&](size_t n) { return member[n]; }));
+    largest = std::max(largest, parts.back().size());
+  }
+  std::vector<size_t> kept;
+  kept.reserve(cells.size());
+  for (const std::vector<size_t>& part : parts) {
+    if (part.size() == largest ||
+        static_cast<double>(part.size()) >=
+            kSpeckShare * static_cast<double>(cells.size())) {
+      kept.insert(kept.end(), part.begin(), part.end());
+    }
+  }
+  return kept;
+}
+
+namespace {
+
+// A box around voxel centres: upright, turned about the vertical to the
+// smallest footprint (main axes of a near-square footprint, a chair's, point
+// anywhere: a box on them can be twice the chair's area).
+struct UprightBox {
+  Eigen::Vector3d up, axis1, axis2;  // axis1: the footprint's longer side
+  Eigen::Vector3d lo, hi;            // along axis1, axis2, up
+  Eigen::Vector3d Coordinates(const Eigen::Vector3d& p) const {
+    return {p.dot(axis1), p.dot(axis2), p.dot(up)};
+  }
+  double Volume() const { return (hi - lo).prod(); }
+};
+
+UprightBox BoxOf(const std::vector<Eigen::Vector3d>& points,
+                 const Eigen::Vector3d& up_world, double voxel_size_m) {
+  UprightBox box;
+  box.up = up_world.normalized();
+  const Eigen::Vector3d e1 = box.up.unitOrthogonal(), e2 = box.up.cross(e1);
+  constexpr int kTurns = 45;  // 2 degree steps over a quarter turn
+  double best_area = std::numeric_limits<double>::max();
+  for (int k = 0; k < kTurns; ++k) {
+    const double angle = M_PI / 2 * k / kTurns;
+    const Eigen::Vector3d u = std::cos(angle) * e1 + std::sin(angle) * e2;
+    const Eigen::Vector3d v = box.up.cross(u);
+    Eigen::Vector2d lo = Eigen::Vector2d::Constant(best_area), hi = -lo;
+    for (const Eigen::Vector3d& p : points) {
+      const Eigen::Vector2d c(p.dot(u), p.dot(v));
+      lo = lo.cwiseMin(c), hi = hi.cwiseMax(c);
+    }
+    const Eigen::Vector2d size = hi - lo;
+    if (size.prod() < best_area) {
+      best_area = size.prod();
+      const bool u_longer = size.x() >= size.y();
+      box.axis1 = u_longer ? u : v;
+      box.axis2 = u_longer ? v : -u;
+    }
+  }
+  box.lo = Eigen::Vector3d::Constant(std::numeric_limits<double>::max());
+  box.hi = -box.lo;
+  for (const Eigen::Vector3d& p : points) {
+    const Eigen::Vector3d c = box.Coordinates(p);
+    box.lo = box.lo.cwiseMin(c), box.hi = box.hi.cwiseMax(c);
+  }
+  // Voxel centres: the surfaces reach half a voxel further.
+  box.lo.array() -= voxel_size_m / 2, box.hi.array() += voxel_size_m / 2;
+  return box;
+}
+
+}  // namespace
+
 double MapResolver::HorizontalLength(const std::vector<size_t>& cells) const {
   if (cells.empty()) return 0.0;
   const Eigen::Vector3d up = context_.up_world.normalized();
@@ -70,6 +146,37 @@ double MapResolver::HorizontalLength(const std::vector<size_t>& cells) const {
   return hi - lo + map_.voxel_size_m();
 }
 
+double MapResolver::ShareInside(const std::vector<size_t>& a,
+                                const std::vector<size_t>& b) const {
+  if (a.empty() || b.empty()) return 0.0;
+  const auto points = [&](const std::vector<size_t>& cells) {
+    std::vector<Eigen::Vector3d> out;
+    for (size_t i : WithoutSpecks(cells)) {
+      out.push_back(cells_[i].p.cast<double>());
+    }
+    return out;
+  };
+  const std::vector<Eigen::Vector3d> pa = points(a), pb = points(b);
+  const UprightBox ba = BoxOf(pa, context_.up_world, map_.voxel_size_m());
+  const UprightBox bb = BoxOf(pb, context_.up_world, map_.voxel_size_m());
+  const bool a_holds = ba.Volume() >= bb.Volume();
+  const UprightBox& outer = a_holds ? ba : bb;
+  const std::vector<Eigen::Vector3d>& inner = a_holds ? pb : pa;
+  size_t inside = 0;
+  for (const Eigen::Vector3d& p : inner) {
+    const Eigen::Vector3d c = outer.Coordinates(p);
+    inside += (c.array() >= outer.lo.array()).all() &&
+              (c.array() <= outer.hi.array()).all();
+  }
+  return static_cast<double>(inside) / static_cast<double>(inner.size());
+}
+
+bool MapResolver::Nested(const std::vector<size_t>& a,
+                         const std::vector<size_t>& b) const {
+  return options_.min_nested_share > 0.0 &&
+         ShareInside(a, b) >= options_.min_nested_share;
+}
+
 bool MapResolver::FitsOne(const std::vector<size_t>& a,
                           const std::vector<size_t>& b,
                           uint16_t class_id) const {
@@ -77,7 +184,11 @@ bool MapResolver::FitsOne(const std::vector<size_t>& a,
   if (it == context_.max_length_m.end() || it->second <= 0.0) return false;
   std::vector<size_t> both = a;
   both.insert(both.end(), b.begin(), b.end());
-  return HorizontalLength(both) <= it->second;
+  const double length_m = HorizontalLength(both);
+  spdlog::debug(
+      "  {} and {} voxels of class {}: {:.2f} m long together ({:.2f} fit one)",
+      a.size(), b.size(), class_id, length_m, it->second);
+  return length_m <= it->second;
 }
 
 bool MapResolver::PartsOfOne(const std::vector<size_t>& a,
@@ -135,9 +246,13 @@ std::vector<MapResolver::MergeLink> MapResolver::MergeLinks(
     const bool attached =
         same && Attached(ca.size(), cb.size(), contact_voxels);
     if (attached || OneObject(ca, cb, a, b, v, contact_voxels)) {
-      links.push_back({a, b, v, contact_voxels, attached, false});
+      links.push_back({a, b, v, contact_voxels, attached, false, false});
     } else if (same && PartsOfOne(ca, cb, class_a, contact_voxels)) {
-      links.push_back({a, b, v, contact_voxels, true, true});
+      links.push_back({a, b, v, contact_voxels, true, true, false});
+    } else if (same && !context_.max_length_m.count(class_a) &&
+               contact_voxels >= options_.min_tie_contact_voxels &&
+               Nested(ca, cb)) {
+      links.push_back({a, b, v, contact_voxels, true, false, true});
     }
     spdlog::debug(
         "objects {} and {} (classes {} and {}, {} and {} voxels): {} views "
@@ -199,17 +314,20 @@ void MapResolver::MergeByMasks() {
   for (const MergeLink& link : links) {
     const uint32_t x = find(link.a), y = find(link.b);
     if (x == y) continue;
-    const bool fits = owner_class_[x] == owner_class_[y] &&
-                      FitsOne(members[x], members[y], owner_class_[x]);
-    // Parts of one object must still fit one object together.
+    const bool same = owner_class_[x] == owner_class_[y];
+    const bool fits = same && FitsOne(members[x], members[y], owner_class_[x]);
+    // Parts of one object must still fit one object together, or still be
+    // nested.
     if (link.parts && !fits) continue;
+    const bool nested = link.nested && Nested(members[x], members[y]);
+    if (link.nested && !nested) continue;
     // No chain of links joins two objects the views held apart (chairs round
     // a table, each touching a small piece that touches the next: six views
     // showed two of them in different masks, none in one). Where one object
     // of the class has a known size, fitting it decides instead: a mask
     // generator that cuts a sofa's back off its seat in every view holds
     // every piece of the back apart from every piece of the seat.
-    if (!fits && HeldApart(parts[x], parts[y], holders, link)) {
+    if (!fits && !nested && HeldApart(parts[x], parts[y], holders, link)) {
       spdlog::debug("objects {} and {}: not joined, held apart", link.a,
                     link.b);
       continue;

@@ -155,6 +155,38 @@ TEST(MapObjects, PartsEveryViewCutApartAreOneObjectIfTogetherTheyFitOne) {
   }
 }
 
+// A mask generator that cuts a bookcase's boards off its frame in every view:
+// the boards lie inside the frame's box, and objects do not interpenetrate,
+// so they are one bookcase (a class of no known size: the fit rule cannot
+// tell). A second bookcase beside it, touching, stays its own.
+TEST(MapObjects, PiecesInsideEachOthersBoxAreOneObjectWhateverTheViewsSaid) {
+  Cloud frame = Box({1.0f, 1.0f, 0.0f}, {1.36f, 1.03f, 1.8f});
+  const Cloud right = Box({1.0f, 1.87f, 0.0f}, {1.36f, 1.9f, 1.8f});
+  frame.insert(frame.end(), right.begin(), right.end());
+  Cloud boards;
+  for (const float z : {0.4f, 0.8f, 1.2f}) {
+    const Cloud board = Box({1.0f, 1.05f, z}, {1.36f, 1.85f, z});
+    boards.insert(boards.end(), board.begin(), board.end());
+  }
+  const Cloud other = Box({1.0f, 1.92f, 0.0f}, {1.36f, 2.82f, 1.8f});
+  for (const double share : {0.5, 0.0}) {
+    FusionOptions options;
+    options.map_objects.min_nested_share = share;
+    const SceneFusion fusion =
+        Fuse(ViewsOf(4, {Segment(kShelf, 2, frame), Segment(kShelf, 3, boards),
+                         Segment(kShelf, 4, other)}),
+             options);
+    const uint32_t in_frame = TopObject(WhereItWent(fusion, frame));
+    EXPECT_NE(in_frame, TopObject(WhereItWent(fusion, other))) << share;
+    if (share > 0.0) {
+      EXPECT_EQ(Count(fusion, kShelf), 2u);
+      EXPECT_EQ(TopObject(WhereItWent(fusion, boards)), in_frame);
+    } else {
+      EXPECT_EQ(Count(fusion, kShelf), 3u) << "the rule is what joins them";
+    }
+  }
+}
+
 // Two cabinets side by side, shown in separate masks by every view: the
 // overlap rule fuses them (made eager here, as touching objects of one class
 // often are), the views' masks cut them apart again.

@@ -16,7 +16,7 @@
 namespace semrec::fuse::map_test {
 
 constexpr uint16_t kWall = 1, kFloor = 2, kChair = 3, kTable = 4, kSofa = 5,
-                   kLamp = 6;
+                   kLamp = 6, kShelf = 7;
 
 // Points on an axis-aligned box's surface (or a rectangle when one extent is
 // zero), on a grid of `step_m`.
@@ -54,7 +54,8 @@ inline FrameSegment Segment(uint16_t cls, uint16_t label, Cloud points) {
 inline MapContext Context() {
   MapContext c;
   for (uint16_t id : {kWall, kFloor}) c.kinds[id] = ClassKind::kStuff;
-  for (uint16_t id : {kChair, kTable, kSofa, kLamp}) {
+  // Shelves have no known size (no max_length_m).
+  for (uint16_t id : {kChair, kTable, kSofa, kLamp, kShelf}) {
     c.kinds[id] = ClassKind::kThing;
   }
   c.max_length_m[kChair] = 0.75;
