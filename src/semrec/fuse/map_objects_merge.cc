@@ -95,7 +95,9 @@ UprightBox BoxOf(const std::vector<Eigen::Vector3d>& points,
     const double angle = M_PI / 2 * k / kTurns;
     const Eigen::Vector3d u = std::cos(angle) * e1 + std::sin(angle) * e2;
     const Eigen::Vector3d v = box.up.cross(u);
-    Eigen::Vector2d lo = Eigen::Vector2d::Constant(best_area), hi = -lo;
+    Eigen::Vector2d lo = Eigen::Vector2d::Constant(
+                        std::numeric_limits<double>::max()),
+                    hi = -lo;
     for (const Eigen::Vector3d& p : points) {
       const Eigen::Vector2d c(p.dot(u), p.dot(v));
       lo = lo.cwiseMin(c), hi = hi.cwiseMax(c);
@@ -173,8 +175,11 @@ double MapResolver::ShareInside(const std::vector<size_t>& a,
 
 bool MapResolver::Nested(const std::vector<size_t>& a,
                          const std::vector<size_t>& b) const {
-  return options_.min_nested_share > 0.0 &&
-         ShareInside(a, b) >= options_.min_nested_share;
+  if (options_.min_nested_share <= 0.0) return false;
+  const double share = ShareInside(a, b);
+  spdlog::debug("  {} and {} voxels: {:.2f} of one inside the other's box",
+                a.size(), b.size(), share);
+  return share >= options_.min_nested_share;
 }
 
 bool MapResolver::FitsOne(const std::vector<size_t>& a,
