@@ -410,6 +410,9 @@ MapContext MakeMapContext(const LabelSet& classes,
       if (const double m = MaxObjectLengthM(c.name); m > 0.0) {
         context.max_length_m[c.id] = m;
       }
+      if (const double m = MaxObjectWidthM(c.name); m > 0.0) {
+        context.max_width_m[c.id] = m;
+      }
     }
     context.geometry[c.id] = c.kind == ClassKind::kStuff
                                  ? StructureGeometryOf(c.name)

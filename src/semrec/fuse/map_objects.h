@@ -164,6 +164,9 @@ struct MapContext {
   /// Per thing class id: the longest horizontal extent of one object (m;
   /// absent or 0: unknown; MaxObjectLengthM).
   std::map<uint16_t, double> max_length_m;
+  /// Per thing class id: the shortest side of one object's footprint at most
+  /// (m; absent or 0: unknown; MaxObjectWidthM).
+  std::map<uint16_t, double> max_width_m;
   /// The fusion objects' current class and kind, by (current) id.
   struct Object {
     uint16_t class_id = 0;

@@ -8,7 +8,6 @@
 #include <vector>
 
 #include <spdlog/spdlog.h>
-#include <Eigen/Eigenvalues>
 
 #include "semrec/fuse/map_resolver.h"
 
@@ -123,29 +122,15 @@ UprightBox BoxOf(const std::vector<Eigen::Vector3d>& points,
 
 }  // namespace
 
-double MapResolver::HorizontalLength(const std::vector<size_t>& cells) const {
-  if (cells.empty()) return 0.0;
-  const Eigen::Vector3d up = context_.up_world.normalized();
-  const Eigen::Vector3d e1 = up.unitOrthogonal(), e2 = up.cross(e1);
-  Eigen::Vector2d mean = Eigen::Vector2d::Zero();
-  std::vector<Eigen::Vector2d> q;
-  q.reserve(cells.size());
-  for (size_t i : cells) {
-    const Eigen::Vector3d p = cells_[i].p.cast<double>();
-    q.emplace_back(p.dot(e1), p.dot(e2));
-    mean += q.back();
+Eigen::Vector2d MapResolver::FootprintSize(
+    const std::vector<size_t>& cells) const {
+  std::vector<Eigen::Vector3d> points;
+  for (size_t i : WithoutSpecks(cells)) {
+    points.push_back(cells_[i].p.cast<double>());
   }
-  mean /= static_cast<double>(q.size());
-  Eigen::Matrix2d cov = Eigen::Matrix2d::Zero();
-  for (const Eigen::Vector2d& x : q) cov += (x - mean) * (x - mean).transpose();
-  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(cov);
-  const Eigen::Vector2d axis = eig.eigenvectors().col(1);  // largest
-  double lo = 0.0, hi = 0.0;
-  for (const Eigen::Vector2d& x : q) {
-    const double t = (x - mean).dot(axis);
-    lo = std::min(lo, t), hi = std::max(hi, t);
-  }
-  return hi - lo + map_.voxel_size_m();
+  if (points.empty()) return Eigen::Vector2d::Zero();
+  const UprightBox box = BoxOf(points, context_.up_world, map_.voxel_size_m());
+  return (box.hi - box.lo).head<2>();
 }
 
 double MapResolver::ShareInside(const std::vector<size_t>& a,
@@ -185,15 +170,22 @@ bool MapResolver::Nested(const std::vector<size_t>& a,
 bool MapResolver::FitsOne(const std::vector<size_t>& a,
                           const std::vector<size_t>& b,
                           uint16_t class_id) const {
-  const auto it = context_.max_length_m.find(class_id);
-  if (it == context_.max_length_m.end() || it->second <= 0.0) return false;
+  const auto length = context_.max_length_m.find(class_id);
+  if (length == context_.max_length_m.end() || length->second <= 0.0) {
+    return false;
+  }
+  const auto width = context_.max_width_m.find(class_id);
   std::vector<size_t> both = a;
   both.insert(both.end(), b.begin(), b.end());
-  const double length_m = HorizontalLength(both);
+  const Eigen::Vector2d size_m = FootprintSize(both);
   spdlog::debug(
-      "  {} and {} voxels of class {}: {:.2f} m long together ({:.2f} fit one)",
-      a.size(), b.size(), class_id, length_m, it->second);
-  return length_m <= it->second;
+      "  {} and {} voxels of class {}: {:.2f} x {:.2f} m together ({:.2f} x "
+      "{:.2f} fit one)",
+      a.size(), b.size(), class_id, size_m.x(), size_m.y(), length->second,
+      width == context_.max_width_m.end() ? 0.0 : width->second);
+  return size_m.x() <= length->second &&
+         (width == context_.max_width_m.end() || width->second <= 0.0 ||
+          size_m.y() <= width->second);
 }
 
 bool MapResolver::PartsOfOne(const std::vector<size_t>& a,

@@ -135,23 +135,28 @@ TEST(MapObjects, ASmallPieceEveryViewCutOffStaysWithTheObjectItTouches) {
 }
 
 // A mask generator that cuts a sofa's back off its seat in every view: the
-// two pieces, joined along a seam and together no longer than a sofa, are
+// two pieces, joined along a seam and together no larger than a sofa, are
 // one sofa. Two chairs side by side, touching, that every view held apart
-// stay two: together they are too long for one chair.
+// stay two: together they are too long for one chair. Two tables side by
+// side are no longer than one long table, but too wide for one.
 TEST(MapObjects, PartsEveryViewCutApartAreOneObjectIfTogetherTheyFitOne) {
   const Cloud seat = Box({1.0f, 1.0f, 0.0f}, {1.9f, 3.0f, 0.42f});
   const Cloud back = Box({1.0f, 1.0f, 0.44f}, {1.2f, 3.0f, 0.82f});
   const Cloud chair_a = Box({2.5f, 1.0f, 0.0f}, {2.95f, 1.45f, 0.9f});
   const Cloud chair_b = Box({2.98f, 1.0f, 0.0f}, {3.43f, 1.45f, 0.9f});
+  const Cloud table_a = Box({2.4f, 2.0f, 0.0f}, {3.3f, 3.4f, 0.74f});
+  const Cloud table_b = Box({3.32f, 2.0f, 0.0f}, {4.22f, 3.4f, 0.74f});
   for (const double share : {0.05, 1.0}) {
     FusionOptions options;
     options.map_objects.min_part_contact_share = share;
     const SceneFusion fusion = Fuse(
         ViewsOf(4, {Segment(kSofa, 2, seat), Segment(kSofa, 3, back),
-                    Segment(kChair, 4, chair_a), Segment(kChair, 5, chair_b)}),
+                    Segment(kChair, 4, chair_a), Segment(kChair, 5, chair_b),
+                    Segment(kTable, 6, table_a), Segment(kTable, 7, table_b)}),
         options);
     EXPECT_EQ(Count(fusion, kSofa), share < 1.0 ? 1u : 2u) << share;
     EXPECT_EQ(Count(fusion, kChair), 2u) << share;
+    EXPECT_EQ(Count(fusion, kTable), 2u) << share;
   }
 }
 
@@ -187,17 +192,18 @@ TEST(MapObjects, PiecesInsideEachOthersBoxAreOneObjectWhateverTheViewsSaid) {
   }
 }
 
-// Two cabinets side by side, shown in separate masks by every view: the
-// overlap rule fuses them (made eager here, as touching objects of one class
-// often are), the views' masks cut them apart again.
+// Two cabinets side by side (a class of no known size, so no size rule joins
+// them), shown in separate masks by every view: the overlap rule fuses them
+// (made eager here, as touching objects of one class often are), the views'
+// masks cut them apart again.
 TEST(MapObjects, NeighboursFusedByOverlapAreCutWhereTheViewsHeldThemApart) {
   const Cloud a = Box({1.0f, 1.0f, 0.0f}, {1.5f, 1.6f, 0.9f});
   const Cloud b = Box({1.56f, 1.0f, 0.0f}, {2.06f, 1.6f, 0.9f});
   FusionOptions eager;
   eager.alpha = 0.02;
   const SceneFusion fusion =
-      Fuse(ViewsOf(3, {Segment(kTable, 2, a), Segment(kTable, 3, b)}), eager);
-  ASSERT_EQ(Count(fusion, kTable), 2u);
+      Fuse(ViewsOf(3, {Segment(kShelf, 2, a), Segment(kShelf, 3, b)}), eager);
+  ASSERT_EQ(Count(fusion, kShelf), 2u);
   EXPECT_GE(fusion.map_resolution()->split_objects, 1u);
   ExpectTwoWholeObjects(fusion, a, b);
 }

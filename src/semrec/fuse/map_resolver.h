@@ -207,10 +207,12 @@ class MapResolver {
   // (on flat seed 1 a 1.8 m sofa's voxels spanned 3.1 m).
   static constexpr double kSpeckShare = 0.05;
   std::vector<size_t> WithoutSpecks(const std::vector<size_t>& cells) const;
-  // The horizontal extent of `cells` along their main direction (m).
-  double HorizontalLength(const std::vector<size_t>& cells) const;
-  // Whether `a` and `b` together are no longer than one object of the class
-  // can be (false for classes of no known size).
+  // The sides of `cells`' footprint (without specks), longer first: the
+  // smallest box around it, turned about the vertical (m).
+  Eigen::Vector2d FootprintSize(const std::vector<size_t>& cells) const;
+  // Whether `a` and `b` together (without specks) are no longer and no wider
+  // than one object of the class can be (false for classes of no known
+  // size).
   bool FitsOne(const std::vector<size_t>& a, const std::vector<size_t>& b,
                uint16_t class_id) const;
   // Touching pieces of one class that views held apart, joined along a seam

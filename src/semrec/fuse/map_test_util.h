@@ -59,7 +59,11 @@ inline MapContext Context() {
     c.kinds[id] = ClassKind::kThing;
   }
   c.max_length_m[kChair] = 0.75;
+  c.max_width_m[kChair] = 0.75;
   c.max_length_m[kSofa] = 3.0;
+  c.max_width_m[kSofa] = 1.2;
+  c.max_length_m[kTable] = 2.6;
+  c.max_width_m[kTable] = 1.3;
   c.geometry[kWall] = StructureGeometry::kVertical;
   c.geometry[kFloor] = StructureGeometry::kFloor;
   return c;

@@ -29,6 +29,10 @@ StructureGeometry StructureGeometryOf(const std::string& class_name);
 /// class's objects vary too much to say (a cabinet, a shelf, a box) or the
 /// name is not known. Used to tell a chair's two parts from two chairs.
 double MaxObjectLengthM(const std::string& class_name);
+/// The shortest side of such an object's footprint at most (m, generous: a
+/// dining table 1.3, a sofa 1.2); 0 when unknown. Two tables side by side
+/// can be as long as one long table, but are wider.
+double MaxObjectWidthM(const std::string& class_name);
 
 struct StructurePlaneOptions {
   /// Points within this distance of a plane lie on it (a voxel and some depth
