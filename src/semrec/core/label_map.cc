@@ -25,6 +25,29 @@ std::optional<ClassKind> ParseClassKind(const std::string& text) {
   return std::nullopt;
 }
 
+const char* StructureGeometryName(StructureGeometry geometry) {
+  switch (geometry) {
+    case StructureGeometry::kVertical:
+      return "vertical";
+    case StructureGeometry::kFloor:
+      return "floor";
+    case StructureGeometry::kCeiling:
+      return "ceiling";
+    case StructureGeometry::kNone:
+      break;
+  }
+  return "none";
+}
+
+std::optional<StructureGeometry> ParseStructureGeometry(
+    const std::string& text) {
+  if (text == "none") return StructureGeometry::kNone;
+  if (text == "vertical") return StructureGeometry::kVertical;
+  if (text == "floor") return StructureGeometry::kFloor;
+  if (text == "ceiling") return StructureGeometry::kCeiling;
+  return std::nullopt;
+}
+
 void LabelSet::Add(const LabelClass& label_class) {
   CheckArgument(!label_class.name.empty(),
                 fmt::format("label set '{}': class {} has an empty name", name_,
@@ -35,6 +58,19 @@ void LabelSet::Add(const LabelClass& label_class) {
   CheckArgument(by_name_.count(label_class.name) == 0,
                 fmt::format("label set '{}': duplicate class name '{}'", name_,
                             label_class.name));
+  const LabelClass& c = label_class;
+  CheckArgument(
+      c.geometry == StructureGeometry::kNone || c.kind == ClassKind::kStuff,
+      fmt::format("label set '{}': class '{}' has a structure plane ({}) but "
+                  "is not stuff",
+                  name_, c.name, StructureGeometryName(c.geometry)));
+  const bool no_footprint = c.max_length_m == 0.0 && c.max_width_m == 0.0;
+  CheckArgument(
+      no_footprint || (c.kind == ClassKind::kThing && c.max_width_m > 0.0 &&
+                       c.max_length_m >= c.max_width_m),
+      fmt::format("label set '{}': class '{}': a footprint needs a thing and "
+                  "length >= width > 0 (got {} x {} m)",
+                  name_, c.name, c.max_length_m, c.max_width_m));
   by_id_[label_class.id] = classes_.size();
   by_name_[label_class.name] = label_class.id;
   classes_.push_back(label_class);

@@ -26,12 +26,35 @@ const char* ClassKindName(ClassKind kind);
 /// Inverse of ClassKindName; nullopt for anything else.
 std::optional<ClassKind> ParseClassKind(const std::string& text);
 
+/// Which of the room's large planes a structure class lives on: fusion
+/// counts a wall vote only on a large vertical plane, a floor vote only on the
+/// floor, a ceiling vote only on the top plane (fuse/structure_planes.h).
+/// kNone: not gated (sky, fence, ...), and every thing.
+enum class StructureGeometry { kNone, kVertical, kFloor, kCeiling };
+
+/// "none", "vertical", "floor", "ceiling".
+const char* StructureGeometryName(StructureGeometry geometry);
+/// Inverse of StructureGeometryName; nullopt for anything else.
+std::optional<StructureGeometry> ParseStructureGeometry(
+    const std::string& text);
+
 /// One class of a label set.
 struct LabelClass {
   uint16_t id = 0;
   std::string name;
   std::array<uint8_t, 3> color = {0, 0, 0};
   ClassKind kind = ClassKind::kThing;
+  /// Structure classes only: the plane they lie on (label files:
+  /// "structure": "vertical" | "floor" | "ceiling").
+  StructureGeometry geometry = StructureGeometry::kNone;
+  /// Things only: the footprint one object of the class has at most, its
+  /// longest and shortest side (m, generous: a three-seat sofa 3.0 x 1.2, a
+  /// king-size bed 2.4 x 2.2; label files: "footprint_m": [length, width]).
+  /// Fusion joins pieces the views cut apart when together they fit one
+  /// object, and keeps two touching chairs two. 0 = unknown (classes whose
+  /// objects vary too much: a cabinet, a shelf, a box).
+  double max_length_m = 0.0;
+  double max_width_m = 0.0;
 };
 
 /// Name of the objects made from a set's catch-all class.

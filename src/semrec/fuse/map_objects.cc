@@ -406,17 +406,12 @@ MapContext MakeMapContext(const LabelSet& classes,
   context.up_world = up_world;
   for (const LabelClass& c : classes.Classes()) {
     context.kinds[c.id] = c.kind;
-    if (c.kind == ClassKind::kThing) {
-      if (const double m = MaxObjectLengthM(c.name); m > 0.0) {
-        context.max_length_m[c.id] = m;
-      }
-      if (const double m = MaxObjectWidthM(c.name); m > 0.0) {
-        context.max_width_m[c.id] = m;
-      }
+    if (c.kind == ClassKind::kThing && c.max_length_m > 0.0) {
+      context.max_length_m[c.id] = c.max_length_m;
+      context.max_width_m[c.id] = c.max_width_m;
     }
-    context.geometry[c.id] = c.kind == ClassKind::kStuff
-                                 ? StructureGeometryOf(c.name)
-                                 : StructureGeometry::kNone;
+    context.geometry[c.id] =
+        c.kind == ClassKind::kStuff ? c.geometry : StructureGeometry::kNone;
   }
   return context;
 }

@@ -162,10 +162,10 @@ struct MapContext {
   std::map<uint16_t, ClassKind> kinds;
   std::map<uint16_t, StructureGeometry> geometry;
   /// Per thing class id: the longest horizontal extent of one object (m;
-  /// absent or 0: unknown; MaxObjectLengthM).
+  /// absent or 0: unknown; LabelClass::max_length_m).
   std::map<uint16_t, double> max_length_m;
   /// Per thing class id: the shortest side of one object's footprint at most
-  /// (m; absent or 0: unknown; MaxObjectWidthM).
+  /// (m; absent or 0: unknown; LabelClass::max_width_m).
   std::map<uint16_t, double> max_width_m;
   /// The fusion objects' current class and kind, by (current) id.
   struct Object {
@@ -175,7 +175,7 @@ struct MapContext {
   std::map<uint32_t, Object> objects;
 };
 
-/// Kinds and structure geometry of every class in `classes`.
+/// Kinds, structure geometry and footprints of every class in `classes`.
 MapContext MakeMapContext(const LabelSet& classes,
                           const Eigen::Vector3d& up_world);
 

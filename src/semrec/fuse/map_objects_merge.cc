@@ -46,7 +46,7 @@ bool MapResolver::Attached(size_t size_a, size_t size_b,
          smaller <= options_.max_attached_size_ratio * larger;
 }
 
-std::vector<size_t> MapResolver::WithoutSpecks(
+std::vector<Eigen::Vector3d> MapResolver::SpecklessPoints(
     const std::vector<size_t>& cells) const {
   std::vector<bool> member(cells_.size(), false), done(cells_.size(), false);
   for (size_t i : cells) member[i] = true;
@@ -57,16 +57,16 @@ std::vector<size_t> MapResolver::WithoutSpecks(
     parts.push_back(Component(i, &done, [&](size_t n) { return member[n]; }));
     largest = std::max(largest, parts.back().size());
   }
-  std::vector<size_t> kept;
-  kept.reserve(cells.size());
+  std::vector<Eigen::Vector3d> points;
+  points.reserve(cells.size());
   for (const std::vector<size_t>& part : parts) {
     if (part.size() == largest ||
         static_cast<double>(part.size()) >=
             kSpeckShare * static_cast<double>(cells.size())) {
-      kept.insert(kept.end(), part.begin(), part.end());
+      for (size_t i : part) points.push_back(cells_[i].p.cast<double>());
     }
   }
-  return kept;
+  return points;
 }
 
 namespace {
@@ -124,10 +124,7 @@ UprightBox BoxOf(const std::vector<Eigen::Vector3d>& points,
 
 Eigen::Vector2d MapResolver::FootprintSize(
     const std::vector<size_t>& cells) const {
-  std::vector<Eigen::Vector3d> points;
-  for (size_t i : WithoutSpecks(cells)) {
-    points.push_back(cells_[i].p.cast<double>());
-  }
+  const std::vector<Eigen::Vector3d> points = SpecklessPoints(cells);
   if (points.empty()) return Eigen::Vector2d::Zero();
   const UprightBox box = BoxOf(points, context_.up_world, map_.voxel_size_m());
   return (box.hi - box.lo).head<2>();
@@ -136,14 +133,8 @@ Eigen::Vector2d MapResolver::FootprintSize(
 double MapResolver::ShareInside(const std::vector<size_t>& a,
                                 const std::vector<size_t>& b) const {
   if (a.empty() || b.empty()) return 0.0;
-  const auto points = [&](const std::vector<size_t>& cells) {
-    std::vector<Eigen::Vector3d> out;
-    for (size_t i : WithoutSpecks(cells)) {
-      out.push_back(cells_[i].p.cast<double>());
-    }
-    return out;
-  };
-  const std::vector<Eigen::Vector3d> pa = points(a), pb = points(b);
+  const std::vector<Eigen::Vector3d> pa = SpecklessPoints(a),
+                                     pb = SpecklessPoints(b);
   const UprightBox ba = BoxOf(pa, context_.up_world, map_.voxel_size_m());
   const UprightBox bb = BoxOf(pb, context_.up_world, map_.voxel_size_m());
   const bool a_holds = ba.Volume() >= bb.Volume();

@@ -201,12 +201,14 @@ class MapResolver {
   // masks said.
   bool Attached(size_t size_a, size_t size_b, size_t contact_voxels) const;
 
-  // `cells` without specks: connected parts (touch_voxels apart) under
-  // kSpeckShare of the cells, unless the largest: a few voxels a metre away
-  // (mixed depth at an edge, labelled with the object) would blow up a box
-  // (on flat seed 1 a 1.8 m sofa's voxels spanned 3.1 m).
+  // The voxel centres of `cells` without specks: connected parts
+  // (touch_voxels apart) under kSpeckShare of the cells, unless the largest:
+  // a few voxels a metre away (mixed depth at an edge, labelled with the
+  // object) would blow up a box (on flat seed 1 a 1.8 m sofa's voxels spanned
+  // 3.1 m).
   static constexpr double kSpeckShare = 0.05;
-  std::vector<size_t> WithoutSpecks(const std::vector<size_t>& cells) const;
+  std::vector<Eigen::Vector3d> SpecklessPoints(
+      const std::vector<size_t>& cells) const;
   // The sides of `cells`' footprint (without specks), longer first: the
   // smallest box around it, turned about the vertical (m).
   Eigen::Vector2d FootprintSize(const std::vector<size_t>& cells) const;

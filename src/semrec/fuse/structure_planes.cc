@@ -16,62 +16,6 @@
 
 namespace semrec::fuse {
 
-StructureGeometry StructureGeometryOf(const std::string& class_name) {
-  static const std::map<std::string, StructureGeometry> kByName = {
-      {"wall", StructureGeometry::kVertical},
-      {"building", StructureGeometry::kVertical},
-      {"house", StructureGeometry::kVertical},
-      {"floor", StructureGeometry::kFloor},
-      {"rug", StructureGeometry::kFloor},
-      {"floor mat", StructureGeometry::kFloor},
-      {"road", StructureGeometry::kFloor},
-      {"sidewalk", StructureGeometry::kFloor},
-      {"grass", StructureGeometry::kFloor},
-      {"earth", StructureGeometry::kFloor},
-      {"field", StructureGeometry::kFloor},
-      {"ceiling", StructureGeometry::kCeiling},
-  };
-  const auto it = kByName.find(class_name);
-  return it == kByName.end() ? StructureGeometry::kNone : it->second;
-}
-
-namespace {
-
-// Longest and shortest side of one object's footprint (m, generous).
-struct FootprintLimit {
-  double length_m, width_m;
-};
-
-const FootprintLimit* LimitOf(const std::string& class_name) {
-  static const std::map<std::string, FootprintLimit> kByName = {
-      {"chair", {0.75, 0.75}},      {"swivel chair", {0.8, 0.8}},
-      {"armchair", {1.1, 1.1}},     {"stool", {0.6, 0.6}},
-      {"sofa", {3.0, 1.2}},         {"couch", {3.0, 1.2}},
-      {"bed", {2.4, 2.2}},          {"table", {2.6, 1.3}},
-      {"coffee table", {1.5, 1.2}}, {"desk", {2.0, 1.0}},
-      {"bench", {2.2, 0.8}},        {"lamp", {0.7, 0.7}},
-      {"cushion", {0.8, 0.8}},      {"pillow", {0.9, 0.6}},
-      {"monitor", {1.0, 0.5}},      {"television", {1.8, 0.6}},
-      {"plant", {1.2, 1.2}},        {"toilet", {0.9, 0.8}},
-      {"bathtub", {2.0, 1.0}},      {"sink", {1.0, 0.7}},
-      {"refrigerator", {1.0, 1.0}},
-  };
-  const auto it = kByName.find(class_name);
-  return it == kByName.end() ? nullptr : &it->second;
-}
-
-}  // namespace
-
-double MaxObjectLengthM(const std::string& class_name) {
-  const FootprintLimit* limit = LimitOf(class_name);
-  return limit == nullptr ? 0.0 : limit->length_m;
-}
-
-double MaxObjectWidthM(const std::string& class_name) {
-  const FootprintLimit* limit = LimitOf(class_name);
-  return limit == nullptr ? 0.0 : limit->width_m;
-}
-
 void StructurePlaneOptions::Check() const {
   CheckArgument(tolerance_m > 0.0, "structure planes: tolerance_m must be > 0");
   CheckArgument(min_area_m2 > 0.0, "structure planes: min_area_m2 must be > 0");

@@ -12,27 +12,14 @@
 
 #include <Eigen/Core>
 
+#include "semrec/core/label_map.h"
 #include "semrec/fuse/voxel.h"
 
 namespace semrec::fuse {
 
-/// Which plane a structure class lives on.
-enum class StructureGeometry { kNone, kVertical, kFloor, kCeiling };
-
-/// By name: wall/building/house -> vertical; floor, rug, floor mat and ground
-/// classes (road, sidewalk, grass, earth, field) -> floor; ceiling ->
-/// ceiling; anything else -> none (not gated).
-StructureGeometry StructureGeometryOf(const std::string& class_name);
-
-/// The longest horizontal extent one object of a furniture class has (m,
-/// generous: an armchair, a three-seat sofa, a king-size bed); 0 when the
-/// class's objects vary too much to say (a cabinet, a shelf, a box) or the
-/// name is not known. Used to tell a chair's two parts from two chairs.
-double MaxObjectLengthM(const std::string& class_name);
-/// The shortest side of such an object's footprint at most (m, generous: a
-/// dining table 1.3, a sofa 1.2); 0 when unknown. Two tables side by side
-/// can be as long as one long table, but are wider.
-double MaxObjectWidthM(const std::string& class_name);
+// StructureGeometry (which plane a structure class lives on) and the
+// footprint of one object of a class are label-set data (core/label_map.h,
+// data/labels).
 
 struct StructurePlaneOptions {
   /// Points within this distance of a plane lie on it (a voxel and some depth

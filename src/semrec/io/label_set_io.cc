@@ -1,6 +1,7 @@
 #include "semrec/io/label_set_io.h"
 
 #include <map>
+#include <vector>
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
@@ -11,10 +12,55 @@
 
 namespace semrec::io {
 
-LabelSet ReadLabelSetJson(const std::filesystem::path& path) {
+namespace {
+
+// The label sets in ProjectDataDir()/labels.
+constexpr const char* kShippedFiles[] = {
+    "ade20k150.json", "ade20k_top31.json", "cityscapes19.json",
+    "coco80.json",    "nyu40.json",        "voc21.json"};
+
+LabelSet ParseLabelSet(const std::filesystem::path& path,
+                       bool fill_from_shipped);
+
+// Structure planes and footprints by class name, as the shipped sets give
+// them.
+const std::map<std::string, LabelClass>& ShippedClassData() {
+  static const std::map<std::string, LabelClass> data = [] {
+    std::map<std::string, LabelClass> by_name;
+    for (const char* file : kShippedFiles) {
+      const LabelSet set =
+          ParseLabelSet(ProjectDataDir() / "labels" / file, false);
+      for (const LabelClass& c : set.Classes()) {
+        if (c.geometry != StructureGeometry::kNone || c.max_length_m > 0.0) {
+          by_name.emplace(c.name, c);
+        }
+      }
+    }
+    return by_name;
+  }();
+  return data;
+}
+
+// A class list that says nothing of structure planes and footprints (written
+// before they were data, or by hand) takes them from the shipped sets by
+// class name, so that a chair is still a chair's size.
+void FillFromShipped(std::vector<LabelClass>* classes) {
+  const auto& shipped = ShippedClassData();
+  for (LabelClass& c : *classes) {
+    const auto it = shipped.find(c.name);
+    if (it == shipped.end() || it->second.kind != c.kind) continue;
+    c.geometry = it->second.geometry;
+    c.max_length_m = it->second.max_length_m;
+    c.max_width_m = it->second.max_width_m;
+  }
+}
+
+LabelSet ParseLabelSet(const std::filesystem::path& path,
+                       bool fill_from_shipped) {
   const nlohmann::json j = ReadJsonFile(path);
   if (!j.is_array()) throw FormatError(path, "expected a JSON list of classes");
-  LabelSet labels(path.stem().string());
+  std::vector<LabelClass> classes;
+  bool has_class_data = false;
   for (size_t i = 0; i < j.size(); ++i) {
     try {
       LabelClass c;
@@ -40,14 +86,43 @@ LabelSet ReadLabelSetJson(const std::filesystem::path& path) {
                               c.id, c.name, j[i]["kind"].get<std::string>()));
       }
       c.kind = *kind;
-      labels.Add(c);
+      if (j[i].contains("structure")) {
+        const auto text = j[i]["structure"].get<std::string>();
+        const auto geometry = ParseStructureGeometry(text);
+        if (!geometry) {
+          throw FormatError(
+              path, fmt::format("class {} ('{}'): structure '{}' is not "
+                                "vertical, floor, ceiling or none",
+                                c.id, c.name, text));
+        }
+        c.geometry = *geometry;
+      }
+      if (j[i].contains("footprint_m")) {
+        const auto size = j[i]["footprint_m"].get<std::array<double, 2>>();
+        c.max_length_m = size[0];
+        c.max_width_m = size[1];
+      }
+      has_class_data |=
+          j[i].contains("structure") || j[i].contains("footprint_m");
+      classes.push_back(c);
     } catch (const nlohmann::json::exception& e) {
       throw FormatError(path, "class " + std::to_string(i) + ": " + e.what());
-    } catch (const InvalidArgument& e) {
-      throw FormatError(path, e.what());
     }
   }
+  if (fill_from_shipped && !has_class_data) FillFromShipped(&classes);
+  LabelSet labels(path.stem().string());
+  try {
+    for (const LabelClass& c : classes) labels.Add(c);
+  } catch (const InvalidArgument& e) {
+    throw FormatError(path, e.what());
+  }
   return labels;
+}
+
+}  // namespace
+
+LabelSet ReadLabelSetJson(const std::filesystem::path& path) {
+  return ParseLabelSet(path, true);
 }
 
 LabelSet LoadLabelSet(const std::string& name_or_path) {
@@ -80,10 +155,17 @@ void WriteLabelSetJson(const std::filesystem::path& path,
                        const LabelSet& labels) {
   nlohmann::json j = nlohmann::json::array();
   for (const LabelClass& c : labels.Classes()) {
-    j.push_back({{"id", c.id},
-                 {"name", c.name},
-                 {"kind", ClassKindName(c.kind)},
-                 {"color", c.color}});
+    nlohmann::json entry = {{"id", c.id},
+                            {"name", c.name},
+                            {"kind", ClassKindName(c.kind)},
+                            {"color", c.color}};
+    if (c.geometry != StructureGeometry::kNone) {
+      entry["structure"] = StructureGeometryName(c.geometry);
+    }
+    if (c.max_length_m > 0.0) {
+      entry["footprint_m"] = {c.max_length_m, c.max_width_m};
+    }
+    j.push_back(std::move(entry));
   }
   WriteTextFileAtomic(path, j.dump(2) + "\n");
 }

@@ -7,9 +7,13 @@
 
 namespace semrec::io {
 
-/// Reads a JSON list of {"id": int, "name": string, "color": [r, g, b]} (colour
-/// optional). Throws FormatError naming the file for malformed entries or
-/// duplicates.
+/// Reads a JSON list of {"id": int, "name": string, "kind": "thing" | "stuff" |
+/// "other", "color": [r, g, b]} (colour optional), with optional "structure":
+/// "vertical" | "floor" | "ceiling" (stuff) and "footprint_m": [length, width]
+/// (things; LabelClass). A list with neither key anywhere (written before they
+/// were data, or by hand) takes them from the shipped sets (data/labels) by
+/// class name. Throws FormatError naming the file and the class for malformed
+/// entries, duplicates, a structure plane on a thing or a footprint on stuff.
 LabelSet ReadLabelSetJson(const std::filesystem::path& path);
 
 /// A label set by name ("voc"/"voc21", "ade20k"/"ade20k150", "coco"/"coco80",

@@ -34,6 +34,102 @@ TEST(LabelSets, ShippedSetsHaveTheDocumentedClasses) {
   EXPECT_EQ(cs.Get(19).name, "bicycle");
 }
 
+TEST(LabelSets, ShippedSetsSayWhereStructureLiesAndHowLargeFurnitureIs) {
+  // Fusion's structure gate and its fit rule read these (LabelClass); the
+  // same class under another set's name carries the same data.
+  const auto get = [](const LabelSet& set, const std::string& name) {
+    const auto id = set.FindByName(name);
+    EXPECT_TRUE(id.has_value()) << set.name() << ": " << name;
+    return id ? set.Get(*id) : LabelClass{};
+  };
+  for (const char* name : {"ade20k-top31", "ade20k", "nyu40"}) {
+    SCOPED_TRACE(name);
+    const LabelSet set = LoadLabelSet(name);
+    EXPECT_EQ(get(set, "wall").geometry, StructureGeometry::kVertical);
+    EXPECT_EQ(get(set, "floor").geometry, StructureGeometry::kFloor);
+    EXPECT_EQ(get(set, "ceiling").geometry, StructureGeometry::kCeiling);
+    EXPECT_EQ(get(set, "chair").max_length_m, 0.75);
+    EXPECT_EQ(get(set, "sofa").max_length_m, 3.0);
+    EXPECT_EQ(get(set, "sofa").max_width_m, 1.2);
+    EXPECT_EQ(get(set, "table").max_width_m, 1.3);
+    EXPECT_EQ(get(set, "cabinet").max_length_m, 0.0);  // sizes vary
+  }
+  EXPECT_EQ(get(LoadLabelSet("ade20k"), "sky").geometry,
+            StructureGeometry::kNone);
+  EXPECT_EQ(get(LoadLabelSet("ade20k"), "rug").geometry,
+            StructureGeometry::kFloor);
+  // Other names for the same furniture.
+  EXPECT_EQ(get(LoadLabelSet("coco80"), "couch").max_length_m, 3.0);
+  EXPECT_EQ(get(LoadLabelSet("coco80"), "dining table").max_width_m, 1.3);
+  EXPECT_EQ(get(LoadLabelSet("voc21"), "diningtable").max_width_m, 1.3);
+  EXPECT_EQ(get(LoadLabelSet("ade20k"), "coffee").max_length_m, 1.5);
+}
+
+TEST(LabelSets, StructurePlanesAndFootprintsSurviveWritingAndReading) {
+  LabelSet set("mine");
+  LabelClass wall{1, "wall", {200, 200, 200}, ClassKind::kStuff};
+  wall.geometry = StructureGeometry::kVertical;
+  LabelClass bench{2, "bench", {10, 20, 30}, ClassKind::kThing};
+  bench.max_length_m = 2.2;
+  bench.max_width_m = 0.8;
+  set.Add(wall);
+  set.Add(bench);
+  set.Add({3, "box", {1, 2, 3}, ClassKind::kThing});
+  semrec::testing::TempDir dir;
+  WriteLabelSetJson(dir.path() / "classes.json", set);
+  const LabelSet back = ReadLabelSetJson(dir.path() / "classes.json");
+  EXPECT_EQ(back.Get(1).geometry, StructureGeometry::kVertical);
+  EXPECT_EQ(back.Get(2).max_length_m, 2.2);
+  EXPECT_EQ(back.Get(2).max_width_m, 0.8);
+  EXPECT_EQ(back.Get(3).max_length_m, 0.0);
+  EXPECT_EQ(back.Get(3).geometry, StructureGeometry::kNone);
+  // A list that says nothing of either (older outputs, hand-written) takes
+  // them from the shipped sets by name; one that says anything is taken as is.
+  semrec::testing::WriteText(
+      dir.path() / "old.json",
+      "[{\"id\": 1, \"name\": \"wall\", \"kind\": \"stuff\"}, "
+      "{\"id\": 2, \"name\": \"chair\", \"kind\": \"thing\"}]");
+  const LabelSet old = ReadLabelSetJson(dir.path() / "old.json");
+  EXPECT_EQ(old.Get(1).geometry, StructureGeometry::kVertical);
+  EXPECT_EQ(old.Get(2).max_length_m, 0.75);
+  semrec::testing::WriteText(
+      dir.path() / "said.json",
+      "[{\"id\": 1, \"name\": \"wall\", \"kind\": \"stuff\", "
+      "\"structure\": \"none\"}, "
+      "{\"id\": 2, \"name\": \"chair\", \"kind\": \"thing\"}]");
+  const LabelSet said = ReadLabelSetJson(dir.path() / "said.json");
+  EXPECT_EQ(said.Get(1).geometry, StructureGeometry::kNone);
+  EXPECT_EQ(said.Get(2).max_length_m, 0.0);
+  // Data that cannot be meant is refused with the file and the class named.
+  for (const auto& [text, message] :
+       {std::pair{"[{\"id\": 1, \"name\": \"wall\", \"kind\": "
+                  "\"stuff\", \"structure\": \"slanted\"}]",
+                  "structure 'slanted' is not"},
+        std::pair{"[{\"id\": 1, \"name\": \"chair\", \"kind\": "
+                  "\"thing\", \"structure\": \"floor\"}]",
+                  "'chair' has a structure plane"},
+        std::pair{"[{\"id\": 1, \"name\": \"sofa\", \"kind\": "
+                  "\"thing\", \"footprint_m\": [1.2, 3.0]}]",
+                  "length >= width > 0"},
+        std::pair{"[{\"id\": 1, \"name\": \"floor\", \"kind\": "
+                  "\"stuff\", \"footprint_m\": [3.0, 1.2]}]",
+                  "a footprint needs a thing"},
+        std::pair{"[{\"id\": 1, \"name\": \"sofa\", \"kind\": "
+                  "\"thing\", \"footprint_m\": [3.0]}]",
+                  "class 0"}}) {
+    semrec::testing::WriteText(dir.path() / "bad.json", text);
+    try {
+      ReadLabelSetJson(dir.path() / "bad.json");
+      ADD_FAILURE() << text << " accepted";
+    } catch (const FormatError& e) {
+      EXPECT_NE(std::string(e.what()).find("bad.json"), std::string::npos)
+          << e.what();
+      EXPECT_NE(std::string(e.what()).find(message), std::string::npos)
+          << e.what();
+    }
+  }
+}
+
 TEST(LabelSets, AdeNamesMatchTheDatasetsObjectInfo) {
   SEMREC_REQUIRE_SAMPLE_DATA(ade_dir, "ade20k_val_3");
   const std::string csv = ReadTextFile(ade_dir / "objectInfo150.csv");

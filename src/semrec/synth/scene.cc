@@ -18,18 +18,27 @@ struct ClassSpec {
   uint16_t id;
   const char* name;
   Rgb color;
+  StructureGeometry geometry = StructureGeometry::kNone;
+  double max_length_m = 0.0, max_width_m = 0.0;  // LabelClass
 };
 
 // Colours are the flat albedo of each class (people get their own clothing
-// colours).
+// colours). Footprints as the shipped label sets give them (data/labels).
 constexpr ClassSpec kClasses[] = {
-    {1, "floor", {150, 120, 90}},     {2, "wall", {210, 205, 195}},
-    {3, "ceiling", {235, 235, 235}},  {4, "table", {140, 90, 50}},
-    {5, "chair", {60, 110, 160}},     {6, "sofa", {120, 60, 120}},
-    {7, "shelf", {170, 140, 100}},    {8, "box", {190, 160, 60}},
-    {9, "lamp", {230, 210, 120}},     {10, "bed", {90, 140, 90}},
-    {11, "cabinet", {110, 110, 120}}, {12, "monitor", {30, 30, 35}},
-    {13, "plant", {50, 150, 60}},     {14, "person", {200, 40, 40}},
+    {1, "floor", {150, 120, 90}, StructureGeometry::kFloor},
+    {2, "wall", {210, 205, 195}, StructureGeometry::kVertical},
+    {3, "ceiling", {235, 235, 235}, StructureGeometry::kCeiling},
+    {4, "table", {140, 90, 50}, StructureGeometry::kNone, 2.6, 1.3},
+    {5, "chair", {60, 110, 160}, StructureGeometry::kNone, 0.75, 0.75},
+    {6, "sofa", {120, 60, 120}, StructureGeometry::kNone, 3.0, 1.2},
+    {7, "shelf", {170, 140, 100}},
+    {8, "box", {190, 160, 60}},
+    {9, "lamp", {230, 210, 120}, StructureGeometry::kNone, 0.7, 0.7},
+    {10, "bed", {90, 140, 90}, StructureGeometry::kNone, 2.4, 2.2},
+    {11, "cabinet", {110, 110, 120}},
+    {12, "monitor", {30, 30, 35}, StructureGeometry::kNone, 1.0, 0.5},
+    {13, "plant", {50, 150, 60}, StructureGeometry::kNone, 1.2, 1.2},
+    {14, "person", {200, 40, 40}},
     {15, "counter", {150, 45, 50}},
 };
 
@@ -211,8 +220,12 @@ const LabelSet& SynthClasses() {
     for (const ClassSpec& c : kClasses) {
       // The room's shell is structure; everything placed in it is an object.
       const bool shell = c.id == 1 || c.id == 2 || c.id == 3;
-      set.Add({c.id, c.name, c.color,
-               shell ? ClassKind::kStuff : ClassKind::kThing});
+      LabelClass label{c.id, c.name, c.color,
+                       shell ? ClassKind::kStuff : ClassKind::kThing};
+      label.geometry = c.geometry;
+      label.max_length_m = c.max_length_m;
+      label.max_width_m = c.max_width_m;
+      set.Add(label);
     }
     return set;
   }();
