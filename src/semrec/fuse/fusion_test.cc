@@ -338,6 +338,34 @@ TEST(Segments, SemanticZeroIsAClassOnlyWhenTheTableNamesIt) {
   EXPECT_EQ(segments[1].class_id, 1);
 }
 
+TEST(Segments, FramesKeepTheirLabelsWhereTheyHaveNoDepth) {
+  // 32 x 16 px: depth 2 m on the left half, none on the right; every pixel
+  // class 5 (instance 4, confidence 0.6). The far view samples every 8th
+  // pixel: cells 2, 3, 6, 7 (4 x 2 cells) lie on the right half.
+  Frame frame;
+  frame.intrinsics = {32, 16, 20, 20, 15.5, 7.5};
+  frame.depth = DepthImage(32, 16, 1, 0.0f);
+  for (int y = 0; y < 16; ++y) {
+    for (int x = 0; x < 16; ++x) frame.depth(x, y) = 2.0f;
+  }
+  FrameLabels labels{LabelMap(32, 16, 1, 4), LabelMap(32, 16, 1, 5), "labels"};
+  labels.confidence[4] = 0.6f;
+  const FarView far = ObserveFrame(frame, labels, nullptr, 1).far;
+  EXPECT_EQ(far.columns(), 4);
+  EXPECT_EQ(far.rows(), 2);
+  EXPECT_EQ(far.cells, (std::vector<uint32_t>{2, 3, 6, 7}));
+  EXPECT_EQ(far.class_ids, (std::vector<uint16_t>{5, 5, 5, 5}));
+  EXPECT_EQ(far.confidence, (std::vector<float>{0.6f, 0.6f, 0.6f, 0.6f}));
+  EXPECT_FLOAT_EQ(far.max_ranged_depth_m, 2.0f);
+  // Tracked people's pixels (cell 2's sample at (20, 4)) and unlabelled
+  // pixels (cell 7's at (28, 12)) are left out.
+  LabelMap people(32, 16, 1, 0);
+  people(20, 4) = 1;
+  labels.semantic(28, 12) = 0;
+  EXPECT_EQ(ObserveFrame(frame, labels, &people, 1).far.cells,
+            (std::vector<uint32_t>{3, 6}));
+}
+
 TEST(Segments, BadLabelsGiveClearErrors) {
   Frame frame;
   frame.intrinsics = {4, 3, 2, 2, 1.5, 1};

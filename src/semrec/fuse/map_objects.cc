@@ -84,9 +84,30 @@ MapResolution MapResolver::Run() {
 }
 
 void MapResolver::CollectCells() {
+  // The far views' class weights join the voxel's; their views count for
+  // visibility only (Visibility), not as ranged views of a class (which let a
+  // class take over gated structure, CanTakeOver).
+  far_ = map_.FarVotes();
+  for (const auto& [key, votes] : far_) {
+    VoxelEvidence& v = amended_[key] = map_.voxels().at(key);
+    for (const ClassEvidence& far : votes.classes) {
+      auto it = std::find_if(
+          v.classes.begin(), v.classes.end(),
+          [&](const ClassEvidence& c) { return c.class_id == far.class_id; });
+      if (it == v.classes.end()) {
+        v.classes.push_back({far.class_id, 0, far.weight});
+      } else {
+        it->weight += far.weight;
+      }
+    }
+  }
+  spdlog::debug("far views: {}, voxels they voted on: {}",
+                map_.far_view_count(), amended_.size());
   for (const auto& [key, v] : map_.voxels()) {
     if (v.classes.empty() || v.points == 0) continue;
-    cells_.push_back({key, v.Centroid(), &v, Winner(v, {}), 0, 0, {}});
+    const auto amended = amended_.find(key);
+    const VoxelEvidence& e = amended == amended_.end() ? v : amended->second;
+    cells_.push_back({key, v.Centroid(), &e, Winner(e, {}), 0, 0, {}});
   }
   std::sort(cells_.begin(), cells_.end(),
             [](const Cell& a, const Cell& b) { return a.key < b.key; });

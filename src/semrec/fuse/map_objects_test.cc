@@ -317,11 +317,11 @@ TEST(VoxelEvidence, OneVotePerViewSplitOverClassesAndWeightedByDistance) {
   // Voxel (0,0,0): 3 chair pixels and 1 wall pixel in a view 1 m away, then
   // 10 wall pixels in a view 4 m away.
   const Eigen::Vector3f p(0.01f, 0.01f, 0.01f);
-  FrameObservation near{{1.0f, 0.0f, 0.0f}, {}};
+  FrameObservation near{{1.0f, 0.0f, 0.0f}, {}, {}};
   map.AddFrame(
       {Segment(kChair, 1, Cloud(3, p)), Segment(kWall, 2, Cloud(1, p))}, {7, 8},
       &near, 0);
-  FrameObservation far{{4.0f, 0.0f, 0.0f}, {p, {0.5f, 0.5f, 0.5f}}};
+  FrameObservation far{{4.0f, 0.0f, 0.0f}, {p, {0.5f, 0.5f, 0.5f}}, {}};
   map.AddFrame({Segment(kWall, 1, Cloud(10, p))}, {8}, &far, 1);
   const VoxelEvidence& v = map.voxels().at(VoxelKey(p, 20.0f));
   EXPECT_EQ(v.views, 2u);
@@ -339,7 +339,7 @@ TEST(VoxelEvidence, OneVotePerViewSplitOverClassesAndWeightedByDistance) {
 TEST(VoxelEvidence, UnsureMasksCastLessThanAVote) {
   VoxelEvidenceMap map(0.05, {});
   const Eigen::Vector3f p(0.01f, 0.01f, 0.01f);
-  FrameObservation near{{1.0f, 0.0f, 0.0f}, {}};
+  FrameObservation near{{1.0f, 0.0f, 0.0f}, {}, {}};
   // View 0: the chair mask at confidence 0.55 (3 pixels), a wall pixel at 1.
   FrameSegment chair = Segment(kChair, 1, Cloud(3, p));
   chair.confidence = 0.55f;
@@ -354,6 +354,127 @@ TEST(VoxelEvidence, UnsureMasksCastLessThanAVote) {
   // Views count by pixel majority, whatever the confidence.
   EXPECT_EQ(v.Find(kChair)->views, 1u);
   EXPECT_EQ(v.Find(kWall)->views, 1u);
+}
+
+// A 1 x 1 m upright square at x = 0 (y -0.5..0.5, z 0.5..1.5), as one view
+// 1 m away ranged it (class `cls`).
+VoxelEvidenceMap SquareMap(uint16_t cls, const VoxelEvidenceOptions& options,
+                           const Cloud& more = {}) {
+  VoxelEvidenceMap map(0.05, options);
+  FrameObservation near{{1.0f, 0.0f, 1.0f}, {}, {}};
+  std::vector<FrameSegment> segments = {
+      Segment(cls, 1, Box({0, -0.5f, 0.5f}, {0, 0.5f, 1.5f}))};
+  std::vector<uint32_t> ids = {7};
+  if (!more.empty())
+    segments.push_back(Segment(kChair, 2, more)), ids.push_back(8);
+  map.AddFrame(segments, ids, &near, 0);
+  return map;
+}
+
+void AddFarView(VoxelEvidenceMap* map, const FarView& far, size_t frame) {
+  FrameObservation o;
+  o.camera_position_world = far.T_world_camera.translation().cast<float>();
+  o.far = far;
+  map->AddFrame({}, {}, &o, frame);
+}
+
+const std::vector<ClassEvidence>* VotesAt(
+    const std::unordered_map<uint64_t, VoxelEvidenceMap::FarEvidence>& votes,
+    const Eigen::Vector3f& p) {
+  const auto it = votes.find(VoxelKey(p, 20.0f));
+  return it == votes.end() ? nullptr : &it->second.classes;
+}
+
+TEST(VoxelEvidence, FarViewsVoteOnWhatTheirSensorCouldNotRange) {
+  // A view 6 m away whose sensor ranged 4 m sees the square, calls it shelf
+  // and gives no depth there: one full vote on every voxel it shows.
+  const auto all_shelf = [](int, int) { return kShelf; };
+  VoxelEvidenceMap map = SquareMap(kLamp, {});
+  AddFarView(&map, FarViewAlongMinusX({6, 0, 1}, 4.0f, all_shelf), 1);
+  auto votes = map.FarVotes();
+  EXPECT_EQ(votes.size(), map.labelled_voxels());
+  const auto* centre = VotesAt(votes, {0.01f, 0.01f, 1.01f});
+  ASSERT_NE(centre, nullptr);
+  ASSERT_EQ(centre->size(), 1u);
+  EXPECT_EQ((*centre)[0].class_id, kShelf);
+  EXPECT_NEAR((*centre)[0].weight, 1.0f, 1e-5);
+  EXPECT_EQ((*centre)[0].views, 1u);
+
+  // Within the view's reach the missing depth says something (a dark or
+  // shiny surface, an edge): no vote.
+  map = SquareMap(kLamp, {});
+  AddFarView(&map, FarViewAlongMinusX({6, 0, 1}, 7.0f, all_shelf), 1);
+  EXPECT_TRUE(map.FarVotes().empty());
+  VoxelEvidenceOptions off;
+  off.far_views = false;
+  map = SquareMap(kLamp, off);
+  AddFarView(&map, FarViewAlongMinusX({6, 0, 1}, 4.0f, all_shelf), 1);
+  EXPECT_TRUE(map.FarVotes().empty());
+
+  // A nearer surface (a chair at x = 2 before the square's y < 0 half)
+  // takes the votes there; the square behind it gets none.
+  map = SquareMap(kLamp, {}, Box({2, -0.5f, 0.5f}, {2, -0.05f, 1.5f}));
+  AddFarView(&map, FarViewAlongMinusX({6, 0, 1}, 3.5f, all_shelf), 1);
+  votes = map.FarVotes();
+  EXPECT_EQ(VotesAt(votes, {0.01f, -0.29f, 1.01f}), nullptr);
+  EXPECT_NE(VotesAt(votes, {2.01f, -0.29f, 1.01f}), nullptr);
+  EXPECT_NE(VotesAt(votes, {0.01f, 0.31f, 1.01f}), nullptr);
+
+  // Cells on a border between classes (image x 320: world y 0) do not vote;
+  // each side votes its own class.
+  map = SquareMap(kLamp, {});
+  AddFarView(
+      &map,
+      FarViewAlongMinusX({6, 0, 1}, 4.0f,
+                         [](int x, int) { return x < 320 ? kShelf : kTable; }),
+      1);
+  votes = map.FarVotes();
+  const auto* left = VotesAt(votes, {0.01f, -0.29f, 1.01f});
+  const auto* right = VotesAt(votes, {0.01f, 0.31f, 1.01f});
+  ASSERT_NE(left, nullptr);
+  ASSERT_NE(right, nullptr);
+  EXPECT_EQ(left->size(), 1u);
+  EXPECT_EQ(left->front().class_id, kShelf);
+  EXPECT_EQ(right->size(), 1u);
+  EXPECT_EQ(right->front().class_id, kTable);
+  EXPECT_EQ(VotesAt(votes, {0.01f, 0.01f, 1.01f}), nullptr);
+}
+
+TEST(MapObjects,
+     AnObjectFlippedInItsOnlyRangedViewTakesTheClassItsFarViewsShow) {
+  // A shelf's front (x = 0.7, y 1.5..2.5) in a room: the one view close
+  // enough to range it calls it lamp; two views from 5.8 m, whose sensor
+  // stopped at 4 m, see it whole and call it shelf (the floor below it).
+  const Cloud shelf = Box({0.7f, 1.5f, 0.05f}, {0.7f, 2.5f, 1.8f});
+  View ranged;
+  ranged.camera = {2.0f, 2.0f, 1.0f};
+  ranged.segments = {Segment(kFloor, 1, FloorPoints()),
+                     Segment(kLamp, 2, shelf)};
+  std::vector<View> views = {ranged};
+  for (double y : {1.6, 2.4}) {
+    const Eigen::Vector3d eye(6.5, y, 1.0);
+    View far;
+    far.camera = eye.cast<float>();
+    far.far = FarViewAlongMinusX(eye, 4.0f, [&](int px, int py) -> uint16_t {
+      // The ray through the pixel meets the shelf's plane at x = 0.7.
+      const double t = (6.5 - 0.7) / 525.0;
+      const double wy = y + (px - 319.5) * t, wz = 1.0 - (py - 239.5) * t;
+      if (wy >= 1.5 && wy <= 2.5 && wz >= 0.05 && wz <= 1.8) return kShelf;
+      return py > 240 ? kFloor : uint16_t{0};
+    });
+    views.push_back(far);
+  }
+  const SceneFusion fusion = Fuse(views);
+  ASSERT_NE(Largest(fusion, kShelf), nullptr);
+  EXPECT_GT(ShareIn(WhereItWent(fusion, shelf), Largest(fusion, kShelf)->id),
+            0.9);
+  EXPECT_EQ(Count(fusion, kLamp), 0u);
+  // Without the far views the one ranged view decides.
+  FusionOptions off;
+  off.voxel_evidence.far_views = false;
+  const SceneFusion alone = Fuse(views, off);
+  EXPECT_EQ(Count(alone, kShelf), 0u);
+  EXPECT_EQ(Count(alone, kLamp), 1u);
 }
 
 }  // namespace

@@ -310,6 +310,10 @@ class MapResolver {
   // Voxels per thing object (owner), over the thing cells.
   std::map<uint32_t, size_t> ThingSizes() const;
 
+  // Of the views that could see `cells` (ranged, and far ones for a class
+  // only far views gave), the share that gave them their class, and the most
+  // views any cell had of its class: fragments are objects seen in few of
+  // the views that could have seen them.
   std::pair<double, uint32_t> Visibility(
       const std::vector<size_t>& cells) const;
 
@@ -322,6 +326,10 @@ class MapResolver {
   uint32_t* next_id_;
   std::vector<Cell> cells_;
   std::unordered_map<uint64_t, size_t> index_;
+  // Voxels the far views voted on: their evidence with those votes added
+  // (VoxelEvidenceMap::FarVotes); the cells point here instead of the map.
+  std::unordered_map<uint64_t, VoxelEvidence> amended_;
+  std::unordered_map<uint64_t, VoxelEvidenceMap::FarEvidence> far_;
   std::map<uint16_t, uint32_t> structure_ids_;
   // Structure planes per class (GateStructure).
   std::map<uint16_t, std::vector<StructurePlane>> planes_;

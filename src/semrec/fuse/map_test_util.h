@@ -73,7 +73,45 @@ struct View {
   std::vector<FrameSegment> segments;
   Cloud observed;  // besides the segments' own points
   Eigen::Vector3f camera{2.0f, 2.0f, 1.2f};
+  FarView far;  // its labels where it had no depth (FarViewAlongMinusX)
 };
+
+// A 640 x 480 camera (f 525 px) at `eye` looking along -x: image x = world
+// +y, image y = world -z.
+inline Transform LookingAlongMinusX(const Eigen::Vector3d& eye) {
+  Eigen::Matrix3d R;
+  R.col(0) = Eigen::Vector3d(0, 1, 0);
+  R.col(1) = Eigen::Vector3d(0, 0, -1);
+  R.col(2) = Eigen::Vector3d(-1, 0, 0);
+  return Transform(R, eye);
+}
+
+// A view from `eye` along -x without any depth (it ranged up to `reach_m`
+// elsewhere), every grid cell labelled class_of(pixel x, pixel y) (0: none).
+template <typename ClassOf>
+FarView FarViewAlongMinusX(const Eigen::Vector3d& eye, float reach_m,
+                           const ClassOf& class_of) {
+  FarView far;
+  far.T_world_camera = LookingAlongMinusX(eye);
+  far.intrinsics.width = 640;
+  far.intrinsics.height = 480;
+  far.intrinsics.fx = far.intrinsics.fy = 525.0;
+  far.intrinsics.cx = 319.5;
+  far.intrinsics.cy = 239.5;
+  far.max_ranged_depth_m = reach_m;
+  for (int row = 0; row < far.rows(); ++row) {
+    for (int col = 0; col < far.columns(); ++col) {
+      const uint16_t cls =
+          class_of(col * FarView::kStride + FarView::kStride / 2,
+                   row * FarView::kStride + FarView::kStride / 2);
+      if (cls == 0) continue;
+      far.cells.push_back(static_cast<uint32_t>(row * far.columns() + col));
+      far.class_ids.push_back(cls);
+      far.confidence.push_back(1.0f);
+    }
+  }
+  return far;
+}
 
 // A view of the room's wall and floor, each one mask.
 inline View RoomView() {
@@ -91,6 +129,7 @@ inline SceneFusion Fuse(const std::vector<View>& views,
     FrameObservation observation;
     observation.camera_position_world = views[i].camera;
     observation.observed_world = views[i].observed;
+    observation.far = views[i].far;
     for (const FrameSegment& s : views[i].segments) {
       observation.observed_world.insert(observation.observed_world.end(),
                                         s.points_world.begin(),

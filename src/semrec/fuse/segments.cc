@@ -1,5 +1,6 @@
 #include "semrec/fuse/segments.h"
 
+#include <algorithm>
 #include <cstdlib>
 #include <map>
 
@@ -215,6 +216,52 @@ std::vector<FrameSegment> ExtractFrameSegments(
   return out;
 }
 
+namespace {
+
+// FarView of `frame`: its labels at the centres of the grid cells without
+// depth, and its reach.
+void ObserveFar(const Frame& frame, const FrameLabels& labels,
+                const LabelMap* person_ids, FarView* far) {
+  const int w = frame.depth.width(), h = frame.depth.height();
+  far->T_world_camera = frame.T_world_camera;
+  far->intrinsics = frame.intrinsics;
+  if (!labels.semantic.SameSize(w, h) || frame.intrinsics.width != w ||
+      frame.intrinsics.height != h) {
+    return;
+  }
+  const bool check_people = person_ids != nullptr && person_ids->SameSize(w, h);
+  const bool check_map =
+      !labels.map_objects.empty() && labels.instance.SameSize(w, h);
+  std::vector<float> depths;
+  constexpr int kStride = FarView::kStride;
+  for (int row = 0, v = kStride / 2; v < h; ++row, v += kStride) {
+    for (int col = 0, u = kStride / 2; u < w; ++col, u += kStride) {
+      const float z = frame.depth(u, v);
+      if (z > 0.0f) {
+        depths.push_back(z);
+        continue;
+      }
+      const uint16_t cls = labels.semantic(u, v);
+      if (cls == 0 || (check_people && (*person_ids)(u, v) != 0)) continue;
+      const uint16_t instance =
+          labels.instance.SameSize(w, h) ? labels.instance(u, v) : 0;
+      if (check_map && labels.map_objects.count(instance) != 0) continue;
+      const auto sure = labels.confidence.find(instance);
+      far->cells.push_back(static_cast<uint32_t>(row * far->columns() + col));
+      far->class_ids.push_back(cls);
+      far->confidence.push_back(sure == labels.confidence.end() ? 1.0f
+                                                                : sure->second);
+    }
+  }
+  if (depths.empty()) return;
+  const size_t k = depths.size() * 99 / 100;
+  std::nth_element(depths.begin(), depths.begin() + static_cast<ptrdiff_t>(k),
+                   depths.end());
+  far->max_ranged_depth_m = depths[k];
+}
+
+}  // namespace
+
 FrameObservation ObserveFrame(const Frame& frame, const FrameLabels& labels,
                               const LabelMap* person_ids, int pixel_stride) {
   CheckArgument(pixel_stride >= 1, "ObserveFrame: pixel_stride must be >= 1");
@@ -241,6 +288,7 @@ FrameObservation ObserveFrame(const Frame& frame, const FrameLabels& labels,
               .cast<float>());
     }
   }
+  ObserveFar(frame, labels, person_ids, &observation.far);
   return observation;
 }
 

@@ -109,16 +109,38 @@ std::vector<FrameSegment> ExtractFrameSegments(
 /// What one frame shows: where the camera was and every surface point it
 /// measured (world frame), labelled or not. Pixels the map's projection
 /// labelled are left out: the map seeing itself is no view.
+/// What a frame's labels say where its sensor gave no depth: a coarse grid
+/// (every kStride-th pixel) of the labelled pixels there. Depth sensors stop
+/// at 4-5 m, but the colour camera still sees the sofa across the room: such
+/// views vote on the map voxels that other views ranged, when those lie
+/// beyond anything this frame ranged (VoxelEvidenceMap, far views). In a
+/// walk-through most views of a far object are of this kind.
+struct FarView {
+  static constexpr int kStride = 8;
+  Transform T_world_camera;
+  CameraIntrinsics intrinsics;  // of the full frame
+  /// The frame's reach: the 99th percentile of its sampled valid depths (m).
+  float max_ranged_depth_m = 0.0f;
+  /// Grid cells (row-major over ceil(width / kStride) columns) with a label
+  /// and no depth, with the label's class and confidence.
+  std::vector<uint32_t> cells;
+  std::vector<uint16_t> class_ids;
+  std::vector<float> confidence;
+  int columns() const { return (intrinsics.width + kStride - 1) / kStride; }
+  int rows() const { return (intrinsics.height + kStride - 1) / kStride; }
+};
+
 struct FrameObservation {
   Eigen::Vector3f camera_position_world = Eigen::Vector3f::Zero();
   Cloud observed_world;
+  FarView far;
 };
 
 /// What the frame observed, labelled or not (fusion's visibility): the
 /// camera's position and every `pixel_stride`-th pixel with depth,
-/// back-projected into the world frame. Left out: pixels of tracked people
-/// (`person_ids` != 0, may be null) and pixels the map's projection labelled
-/// (labels.map_objects).
+/// back-projected into the world frame, and its labels where it has no depth
+/// (`far`). Left out: pixels of tracked people (`person_ids` != 0, may be
+/// null) and pixels the map's projection labelled (labels.map_objects).
 FrameObservation ObserveFrame(const Frame& frame, const FrameLabels& labels,
                               const LabelMap* person_ids, int pixel_stride);
 

@@ -2,7 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <unordered_set>
+#include <utility>
 
 #include "semrec/core/error.h"
 
@@ -178,11 +180,161 @@ void VoxelEvidenceMap::AddFrame(const std::vector<FrameSegment>& segments,
     i = end;
   }
   if (observation == nullptr) return;
+  if (options_.far_views && !observation->far.cells.empty()) {
+    far_views_.push_back(observation->far);
+  }
   for (const Eigen::Vector3f& p : observation->observed_world) {
     const uint64_t key = VoxelKey(p, inv_voxel_);
     if (!seen_this_frame.insert(key).second) continue;
     ++voxels_[key].views;
   }
+}
+
+namespace {
+
+using VoxelCentres = std::vector<std::pair<uint64_t, Eigen::Vector3d>>;
+using ClassVotes = std::unordered_map<uint64_t, VoxelEvidenceMap::FarEvidence>;
+
+// Per grid cell of `view`: its class (0: none) and whether its 4-neighbours
+// carry the same class (a 2D model's borders blur, the more so far away).
+void LabelGrid(const FarView& view, std::vector<uint16_t>* cell_class,
+               std::vector<float>* cell_confidence,
+               std::vector<uint8_t>* interior) {
+  const int cols = view.columns(), rows = view.rows();
+  const size_t n_cells = static_cast<size_t>(cols) * rows;
+  cell_class->assign(n_cells, 0);
+  cell_confidence->assign(n_cells, 0.0f);
+  for (size_t c = 0; c < view.cells.size(); ++c) {
+    if (view.cells[c] >= n_cells) continue;
+    (*cell_class)[view.cells[c]] = view.class_ids[c];
+    (*cell_confidence)[view.cells[c]] = view.confidence[c];
+  }
+  constexpr std::pair<int, int> kNeighbours[] = {
+      {1, 0}, {-1, 0}, {0, 1}, {0, -1}};
+  interior->assign(n_cells, 0);
+  for (size_t cell = 0; cell < n_cells; ++cell) {
+    const uint16_t cls = (*cell_class)[cell];
+    if (cls == 0) continue;
+    const int col = static_cast<int>(cell % cols);
+    const int row = static_cast<int>(cell / cols);
+    bool alike = true;
+    for (const auto& [dc, dr] : kNeighbours) {
+      const int c2 = col + dc, r2 = row + dr;
+      if (c2 < 0 || r2 < 0 || c2 >= cols || r2 >= rows) continue;
+      alike &= (*cell_class)[static_cast<size_t>(r2) * cols + c2] == cls;
+    }
+    (*interior)[cell] = alike;
+  }
+}
+
+// One far view's votes (VoxelEvidenceMap::FarVotes) added to `out`.
+void VoteFromFarView(const FarView& view, const VoxelCentres& voxels,
+                     double voxel_size_m, double view_class_share,
+                     ClassVotes* out) {
+  constexpr int kStride = FarView::kStride;
+  const int cols = view.columns(), rows = view.rows();
+  std::vector<uint16_t> cell_class;
+  std::vector<float> cell_confidence;
+  std::vector<uint8_t> interior;
+  LabelGrid(view, &cell_class, &cell_confidence, &interior);
+  const Transform T_camera_world = view.T_world_camera.Inverse();
+  const CameraIntrinsics& k = view.intrinsics;
+  // Each voxel covers the cells its square (side: a voxel) spans; `visit`
+  // calls f(cell, depth) for each.
+  const auto visit = [&](size_t i, const auto& f) {
+    const Eigen::Vector3d p = T_camera_world * voxels[i].second;
+    if (p.z() <= voxel_size_m) return;
+    const Eigen::Vector2d uv = k.Project(p);
+    const double r = k.fx * voxel_size_m / 2 / p.z();
+    const auto cell_of = [](double x) {
+      return static_cast<int>(std::floor(x / kStride));
+    };
+    const int c0 = std::max(0, cell_of(uv.x() - r));
+    const int c1 = std::min(cols - 1, cell_of(uv.x() + r));
+    const int r0 = std::max(0, cell_of(uv.y() - r));
+    const int r1 = std::min(rows - 1, cell_of(uv.y() + r));
+    for (int row = r0; row <= r1; ++row) {
+      for (int col = c0; col <= c1; ++col) {
+        f(static_cast<size_t>(row) * cols + col, static_cast<float>(p.z()));
+      }
+    }
+  };
+  std::vector<float> nearest(cell_class.size(),
+                             std::numeric_limits<float>::infinity());
+  for (size_t i = 0; i < voxels.size(); ++i) {
+    visit(i, [&](size_t cell, float z) {
+      nearest[cell] = std::min(nearest[cell], z);
+    });
+  }
+  // The voxels of the nearest surface (within two voxels of it: a surface's
+  // thickness in the map) in each interior labelled cell beyond reach.
+  const auto thickness = static_cast<float>(2 * voxel_size_m);
+  struct CellVote {
+    uint32_t voxel;
+    uint16_t class_id;
+    float confidence;
+  };
+  std::vector<CellVote> votes;
+  for (size_t i = 0; i < voxels.size(); ++i) {
+    visit(i, [&](size_t cell, float z) {
+      if (!interior[cell] || nearest[cell] < view.max_ranged_depth_m ||
+          z > nearest[cell] + thickness) {
+        return;
+      }
+      votes.push_back(
+          {static_cast<uint32_t>(i), cell_class[cell], cell_confidence[cell]});
+    });
+  }
+  std::sort(
+      votes.begin(), votes.end(), [](const CellVote& a, const CellVote& b) {
+        return a.voxel != b.voxel ? a.voxel < b.voxel : a.class_id < b.class_id;
+      });
+  // One vote per voxel, split over its cells' classes.
+  for (size_t i = 0; i < votes.size();) {
+    size_t end = i;
+    while (end < votes.size() && votes[end].voxel == votes[i].voxel) ++end;
+    const auto n = static_cast<float>(end - i);
+    VoxelEvidenceMap::FarEvidence& far = (*out)[voxels[votes[i].voxel].first];
+    ++far.views;
+    std::vector<ClassEvidence>& classes = far.classes;
+    for (size_t q = i; q < end;) {  // per class
+      size_t class_end = q;
+      float sure = 0.0f;
+      for (; class_end < end && votes[class_end].class_id == votes[q].class_id;
+           ++class_end) {
+        sure += votes[class_end].confidence;
+      }
+      ClassEvidence* c =
+          FindOrAdd(&classes, &ClassEvidence::class_id, votes[q].class_id);
+      c->weight += sure / n;
+      if (static_cast<double>(class_end - q) >= view_class_share * n) {
+        ++c->views;
+      }
+      q = class_end;
+    }
+    i = end;
+  }
+}
+
+}  // namespace
+
+std::unordered_map<uint64_t, VoxelEvidenceMap::FarEvidence>
+VoxelEvidenceMap::FarVotes() const {
+  ClassVotes out;
+  if (far_views_.empty()) return out;
+  VoxelCentres voxels;
+  for (const auto& [key, v] : voxels_) {
+    if (v.points > 0 && !v.classes.empty()) {
+      voxels.emplace_back(key, v.Centroid().cast<double>());
+    }
+  }
+  std::sort(voxels.begin(), voxels.end(),
+            [](const auto& a, const auto& b) { return a.first < b.first; });
+  for (const FarView& view : far_views_) {
+    VoteFromFarView(view, voxels, voxel_size_m_, options_.view_class_share,
+                    &out);
+  }
+  return out;
 }
 
 }  // namespace semrec::fuse

@@ -42,6 +42,9 @@ struct VoxelEvidenceOptions {
   /// A view counts as showing class c in a voxel (for visibility, see
   /// map_objects.h) when at least this share of its pixels there carry c.
   double view_class_share = 0.5;
+  /// Keep each frame's labels where it had no depth (FarView) and let them
+  /// vote on the voxels beyond the frame's reach (FarVotes).
+  bool far_views = true;
 
   void Check() const;
 };
@@ -106,11 +109,39 @@ class VoxelEvidenceMap {
   /// Voxels with class evidence.
   size_t labelled_voxels() const;
 
+  /// The far views' class votes, per voxel key. A depth sensor stops at 4-5
+  /// m; a view of a sofa across the room still shows its class, and in a
+  /// walk-through most views of a far object are of this kind. Each far view
+  /// (FarView, kept by AddFrame) votes on the labelled voxels it shows: each
+  /// grid cell with a label and no depth, inside a region of one class (its
+  /// 4-neighbours alike: borders blur), on the voxels of the nearest surface
+  /// along it (the voxels' centroids splatted at their size into the grid;
+  /// those within two voxels of the nearest), when that surface lies beyond
+  /// the view's reach (max_ranged_depth_m: the sensor could not range it, so
+  /// the missing depth says nothing against it). One vote per view and
+  /// voxel, split over its cells' classes and scaled by their confidence but
+  /// not by distance (that damps the blurred borders of ranged views, which
+  /// the interior rule leaves out here). Each far view counts as a view
+  /// that could see the voxel (FarEvidence::views), and as a view of the
+  /// classes holding view_class_share of its cells there (ClassEvidence::
+  /// views; the map resolver uses both only for classes no ranged view gave,
+  /// MapResolver::Visibility). Computed from the voxels as they are now, so a
+  /// far view taken before a voxel was ranged still votes on it.
+  struct FarEvidence {
+    std::vector<ClassEvidence> classes;
+    /// Far views that voted on the voxel (whatever the class): they could
+    /// see it, as `VoxelEvidence::views` counts the ranged ones.
+    uint32_t views = 0;
+  };
+  std::unordered_map<uint64_t, FarEvidence> FarVotes() const;
+  size_t far_view_count() const { return far_views_.size(); }
+
  private:
   double voxel_size_m_;
   float inv_voxel_;
   VoxelEvidenceOptions options_;
   std::unordered_map<uint64_t, VoxelEvidence> voxels_;
+  std::vector<FarView> far_views_;  // those with labelled cells
 };
 
 /// A view's mask: frame index and the mask's label in that frame.
