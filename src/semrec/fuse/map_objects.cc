@@ -15,6 +15,7 @@ void MapObjectOptions::Check() const {
   planes.Check();
   CheckArgument(min_seen_ratio >= 0.0 && min_seen_ratio <= 1.0,
                 "map objects: min_seen_ratio must be in [0, 1]");
+  CheckArgument(min_far_views >= 1, "map objects: min_far_views must be >= 1");
   CheckArgument(
       min_stranded_contact_share >= 0.0 && min_stranded_contact_share <= 1.0,
       "map objects: min_stranded_contact_share must be in [0, 1]");

@@ -564,14 +564,13 @@ std::pair<double, uint32_t> MapResolver::Visibility(
     uint32_t views = counted(c, c.evidence->classes);
     uint32_t could = c.evidence->views;
     // A class only far views gave the voxel (its ranged views said another):
-    // seen by those when at least two agree, out of the ranged and far views
-    // that could see it (a shelf its one ranged view called plant). A class
-    // some ranged view gave is judged by the ranged views alone: counting far
-    // views there kept pieces the ranged views left as fragments (office
-    // seed 3: 1.30 -> 1.57 objects per GT object).
+    // seen by those when min_far_views agree, out of the ranged and far views
+    // that could see it. A class some ranged view gave is judged by the
+    // ranged views alone: counting far views there kept pieces the ranged
+    // views had left as fragments.
     if (const auto far = far_.find(c.key); views == 0 && far != far_.end()) {
       const uint32_t far_views = counted(c, far->second.classes);
-      if (far_views >= 2) {
+      if (far_views >= options_.min_far_views) {
         views = far_views;
         could += far->second.views;
       }

@@ -475,6 +475,14 @@ TEST(MapObjects,
   const SceneFusion alone = Fuse(views, off);
   EXPECT_EQ(Count(alone, kShelf), 0u);
   EXPECT_EQ(Count(alone, kLamp), 1u);
+  // A class only far views gave is seen when min_far_views of them agree;
+  // with fewer the shelf is a fragment.
+  FusionOptions strict;
+  strict.map_objects.min_far_views = 3;
+  EXPECT_EQ(Count(Fuse(views, strict), kShelf), 0u);
+  MapObjectOptions bad;
+  bad.min_far_views = 0;
+  EXPECT_THROW(bad.Check(), InvalidArgument);
 }
 
 }  // namespace
