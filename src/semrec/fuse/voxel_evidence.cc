@@ -239,23 +239,33 @@ void VoteFromFarView(const FarView& view, const VoxelCentres& voxels,
   LabelGrid(view, &cell_class, &cell_confidence, &interior);
   const Transform T_camera_world = view.T_world_camera.Inverse();
   const CameraIntrinsics& k = view.intrinsics;
-  // Each voxel covers the cells its square (side: a voxel) spans; `visit`
-  // calls f(cell, depth) for each.
-  const auto visit = [&](size_t i, const auto& f) {
+  // Each voxel covers the cells its square (side: a voxel) spans, projected
+  // once for both passes below (empty when behind the camera or outside).
+  struct Footprint {
+    int c0 = 0, c1 = -1, r0 = 0, r1 = -1;
+    float z = 0.0f;
+  };
+  std::vector<Footprint> footprints(voxels.size());
+  const auto cell_of = [](double x) {
+    return static_cast<int>(std::floor(x / kStride));
+  };
+  for (size_t i = 0; i < voxels.size(); ++i) {
     const Eigen::Vector3d p = T_camera_world * voxels[i].second;
-    if (p.z() <= voxel_size_m) return;
+    if (p.z() <= voxel_size_m) continue;
     const Eigen::Vector2d uv = k.Project(p);
     const double r = k.fx * voxel_size_m / 2 / p.z();
-    const auto cell_of = [](double x) {
-      return static_cast<int>(std::floor(x / kStride));
-    };
-    const int c0 = std::max(0, cell_of(uv.x() - r));
-    const int c1 = std::min(cols - 1, cell_of(uv.x() + r));
-    const int r0 = std::max(0, cell_of(uv.y() - r));
-    const int r1 = std::min(rows - 1, cell_of(uv.y() + r));
-    for (int row = r0; row <= r1; ++row) {
-      for (int col = c0; col <= c1; ++col) {
-        f(static_cast<size_t>(row) * cols + col, static_cast<float>(p.z()));
+    footprints[i] = {std::max(0, cell_of(uv.x() - r)),
+                     std::min(cols - 1, cell_of(uv.x() + r)),
+                     std::max(0, cell_of(uv.y() - r)),
+                     std::min(rows - 1, cell_of(uv.y() + r)),
+                     static_cast<float>(p.z())};
+  }
+  // Calls f(cell, depth) for each cell voxel i covers.
+  const auto visit = [&](size_t i, const auto& f) {
+    const Footprint& fp = footprints[i];
+    for (int row = fp.r0; row <= fp.r1; ++row) {
+      for (int col = fp.c0; col <= fp.c1; ++col) {
+        f(static_cast<size_t>(row) * cols + col, fp.z);
       }
     }
   };

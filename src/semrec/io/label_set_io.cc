@@ -1,6 +1,7 @@
 #include "semrec/io/label_set_io.h"
 
 #include <map>
+#include <set>
 #include <vector>
 
 #include <fmt/format.h>
@@ -14,10 +15,23 @@ namespace semrec::io {
 
 namespace {
 
-// The label sets in ProjectDataDir()/labels.
-constexpr const char* kShippedFiles[] = {
-    "ade20k150.json", "ade20k_top31.json", "cityscapes19.json",
-    "coco80.json",    "nyu40.json",        "voc21.json"};
+// The label sets in ProjectDataDir()/labels (file stems) by the names
+// LoadLabelSet accepts.
+const std::map<std::string, std::string>& ShippedAliases() {
+  static const std::map<std::string, std::string> aliases = {
+      {"voc", "voc21"},
+      {"voc21", "voc21"},
+      {"ade20k", "ade20k150"},
+      {"ade20k150", "ade20k150"},
+      {"ade20k-top31", "ade20k_top31"},
+      {"ade20k_top31", "ade20k_top31"},
+      {"coco", "coco80"},
+      {"coco80", "coco80"},
+      {"cityscapes", "cityscapes19"},
+      {"cityscapes19", "cityscapes19"},
+      {"nyu40", "nyu40"}};
+  return aliases;
+}
 
 LabelSet ParseLabelSet(const std::filesystem::path& path,
                        bool fill_from_shipped);
@@ -27,9 +41,11 @@ LabelSet ParseLabelSet(const std::filesystem::path& path,
 const std::map<std::string, LabelClass>& ShippedClassData() {
   static const std::map<std::string, LabelClass> data = [] {
     std::map<std::string, LabelClass> by_name;
-    for (const char* file : kShippedFiles) {
+    std::set<std::string> stems;
+    for (const auto& [alias, stem] : ShippedAliases()) stems.insert(stem);
+    for (const std::string& stem : stems) {
       const LabelSet set =
-          ParseLabelSet(ProjectDataDir() / "labels" / file, false);
+          ParseLabelSet(ProjectDataDir() / "labels" / (stem + ".json"), false);
       for (const LabelClass& c : set.Classes()) {
         if (c.geometry != StructureGeometry::kNone || c.max_length_m > 0.0) {
           by_name.emplace(c.name, c);
@@ -126,19 +142,8 @@ LabelSet ReadLabelSetJson(const std::filesystem::path& path) {
 }
 
 LabelSet LoadLabelSet(const std::string& name_or_path) {
-  static const std::map<std::string, std::string> kAliases = {
-      {"voc", "voc21"},
-      {"voc21", "voc21"},
-      {"ade20k", "ade20k150"},
-      {"ade20k150", "ade20k150"},
-      {"ade20k-top31", "ade20k_top31"},
-      {"ade20k_top31", "ade20k_top31"},
-      {"coco", "coco80"},
-      {"coco80", "coco80"},
-      {"cityscapes", "cityscapes19"},
-      {"cityscapes19", "cityscapes19"},
-      {"nyu40", "nyu40"}};
-  if (auto it = kAliases.find(name_or_path); it != kAliases.end()) {
+  const auto& aliases = ShippedAliases();
+  if (auto it = aliases.find(name_or_path); it != aliases.end()) {
     return ReadLabelSetJson(ProjectDataDir() / "labels" /
                             (it->second + ".json"));
   }
