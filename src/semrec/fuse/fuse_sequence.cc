@@ -127,7 +127,8 @@ nlohmann::json MapResolutionJson(const SceneFusion& fusion,
           {"new_from_unclaimed_voxels", r->new_objects},
           {"fragments_folded", r->fragments_folded},
           {"fragments_dropped", r->fragments_dropped},
-          {"stranded_voxels_claimed", r->stranded_voxels_claimed}};
+          {"stranded_voxels_claimed", r->stranded_voxels_claimed},
+          {"reclassed_by_size", r->reclassed_by_size}};
 }
 
 FuseSequenceResult FuseSequence(const io::SequenceReader& reader,

@@ -1,8 +1,12 @@
 #include "semrec/fuse/map_objects.h"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
+#include <map>
 #include <set>
+#include <utility>
+#include <vector>
 
 #include <spdlog/spdlog.h>
 
@@ -38,6 +42,10 @@ void MapObjectOptions::Check() const {
                 "map objects: confusion shares must be in [0, 1]");
   CheckArgument(min_flush_share > 0.0 && min_flush_share <= 1.0,
                 "map objects: min_flush_share must be in (0, 1]");
+  CheckArgument(size_slack == 0.0 || size_slack >= 1.0,
+                "map objects: size_slack must be 0 (off) or >= 1");
+  CheckArgument(min_size_class_share >= 0.0 && min_size_class_share <= 1.0,
+                "map objects: min_size_class_share must be in [0, 1]");
   CheckArgument(touch_voxels >= 1 && touch_voxels <= 3,
                 "map objects: touch_voxels must be 1, 2 or 3");
 }
@@ -76,6 +84,7 @@ MapResolution MapResolver::Run() {
   SplitDisconnected();
   AttachOrphans();
   MergeByMasks();
+  if (options_.size_slack > 0.0) FitClassesToSizes();
   JudgeFragments();
   if (options_.claim_stranded) {
     ClaimFronts();
@@ -88,6 +97,7 @@ void MapResolver::CollectCells() {
   // The far views' class weights join the voxel's; their views count for
   // visibility only (Visibility), not as ranged views of a class (which let a
   // class take over gated structure, CanTakeOver).
+  const auto far_start = std::chrono::steady_clock::now();
   far_ = map_.FarVotes();
   for (const auto& [key, votes] : far_) {
     VoxelEvidence& v = amended_[key] = map_.voxels().at(key);
@@ -102,8 +112,11 @@ void MapResolver::CollectCells() {
       }
     }
   }
-  spdlog::debug("far views: {}, voxels they voted on: {}",
-                map_.far_view_count(), amended_.size());
+  spdlog::debug("far views: {}, voxels they voted on: {} ({:.1f} ms)",
+                map_.far_view_count(), amended_.size(),
+                std::chrono::duration<double, std::milli>(
+                    std::chrono::steady_clock::now() - far_start)
+                    .count());
   for (const auto& [key, v] : map_.voxels()) {
     if (v.classes.empty() || v.points == 0) continue;
     const auto amended = amended_.find(key);

@@ -156,6 +156,16 @@ struct MapObjectOptions {
   /// ... or, when as many views held them apart as in one mask, when one's
   /// votes give the other's class at least this share.
   double tie_confusion_share = 0.4;
+  /// Objects larger than one object of their class can be (MapContext::
+  /// max_length_m / max_width_m times size_slack: a 2.6 m "plant", a counter
+  /// one view called plant) take the class with the most votes among those
+  /// that fit (of no known size, or small enough), given at least
+  /// min_size_class_share of the object's votes; a merge of two confused
+  /// classes keeps the class that fits the whole, given that share. Too
+  /// large with no such class: left as it is (two chairs one merge joined
+  /// are no sofa because a stray view said so). size_slack 0: never.
+  double size_slack = 1.25;
+  double min_size_class_share = 0.25;
 
   void Check() const;
 };
@@ -224,6 +234,8 @@ struct MapResolution {
   size_t fragments_dropped = 0;
   /// Structure voxels off their planes that joined the thing they touch.
   size_t stranded_voxels_claimed = 0;
+  /// Objects too large for their class that took a class that fits.
+  size_t reclassed_by_size = 0;
 };
 
 /// Decides the objects. `resolve`: a fusion id's current id (0: dropped).

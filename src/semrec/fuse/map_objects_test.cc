@@ -485,5 +485,67 @@ TEST(MapObjects,
   EXPECT_THROW(bad.Check(), InvalidArgument);
 }
 
+// A 2.4 m long low unit (a shelf: no known size) that views call chair (at
+// most 0.75 m): one chair is not that long, so the object takes the voted
+// class that fits, when that class has a fair share of its votes.
+TEST(MapObjects, AnObjectTooLargeForItsClassTakesAVotedClassThatFits) {
+  const Cloud unit = Box({1.0f, 1.0f, 0.05f}, {3.4f, 1.5f, 0.8f});
+  // views_chair views call it chair, views_shelf shelf, each whole.
+  auto fuse = [&](int views_chair, int views_shelf, double slack) {
+    std::vector<View> views;
+    for (int i = 0; i < views_chair + views_shelf; ++i) {
+      View v = RoomView();
+      v.segments.push_back(Segment(i < views_chair ? kChair : kShelf, 3, unit));
+      views.push_back(v);
+    }
+    FusionOptions options;
+    options.map_objects.size_slack = slack;
+    return Fuse(views, options);
+  };
+  const SceneFusion fused = fuse(2, 1, 1.25);
+  EXPECT_EQ(Count(fused, kChair), 0u);
+  ASSERT_EQ(Count(fused, kShelf), 1u);
+  EXPECT_GT(WhereItWent(fused, unit).at(Largest(fused, kShelf)->id), 0.9);
+  EXPECT_EQ(fused.map_resolution()->reclassed_by_size, 1u);
+  // Off: the votes' winner.
+  EXPECT_EQ(Count(fuse(2, 1, 0.0), kChair), 1u);
+  // A stray vote (1 of 5 views: under min_size_class_share) does not make it
+  // a shelf: too large with no class that fits, it is left as it is.
+  const SceneFusion stray = fuse(4, 1, 1.25);
+  EXPECT_EQ(Count(stray, kChair), 1u);
+  EXPECT_EQ(Count(stray, kShelf), 0u);
+  MapObjectOptions bad;
+  bad.size_slack = 0.5;
+  EXPECT_THROW(bad.Check(), InvalidArgument);
+}
+
+// One close view calls the whole unit chair; two others see its left third
+// and call it shelf. The parts are one object (one mask held both), and the
+// merged object keeps the class that fits it: chair has more votes over
+// both, but no chair is 2.4 m long.
+TEST(MapObjects, ConfusedPartsJoinUnderAClassThatFitsTheWhole) {
+  const Cloud unit = Box({1.0f, 1.0f, 0.05f}, {3.4f, 1.5f, 0.8f});
+  Cloud left;
+  for (const Eigen::Vector3f& p : unit) {
+    if (p.x() < 1.8f) left.push_back(p);
+  }
+  std::vector<View> views(3, RoomView());
+  views[0].segments.push_back(Segment(kChair, 3, unit));
+  views[1].segments.push_back(Segment(kShelf, 3, left));
+  views[2].segments.push_back(Segment(kShelf, 3, left));
+  for (const double slack : {1.25, 0.0}) {
+    FusionOptions options;
+    options.map_objects.size_slack = slack;
+    const SceneFusion fusion = Fuse(views, options);
+    const uint16_t expected = slack > 0.0 ? kShelf : kChair;
+    ASSERT_NE(Largest(fusion, expected), nullptr) << slack;
+    EXPECT_GT(WhereItWent(fusion, unit).at(Largest(fusion, expected)->id), 0.9)
+        << slack;
+    EXPECT_EQ(Count(fusion, slack > 0.0 ? kChair : kShelf), 0u) << slack;
+    // The merge chose the class, not the later pass over large objects.
+    EXPECT_EQ(fusion.map_resolution()->reclassed_by_size, 0u) << slack;
+  }
+}
+
 }  // namespace
 }  // namespace semrec::fuse

@@ -1,7 +1,9 @@
 // Internal to fuse/map_objects.h: the resolver whose steps decide the map's
 // objects, shared by map_objects.cc (cells, structure gate, owners, the
 // result), map_objects_split.cc (cuts by masks and by connectivity) and
-// map_objects_merge.cc (orphans, merges by masks, fragments). Not installed.
+// map_objects_merge.cc (orphans, merges by masks, fragments) and
+// map_objects_size.cc (footprints, fits, nesting, classes by size). Not
+// installed.
 #pragma once
 
 #include <cstddef>
@@ -217,6 +219,24 @@ class MapResolver {
   // size).
   bool FitsOne(const std::vector<size_t>& a, const std::vector<size_t>& b,
                uint16_t class_id) const;
+  // The sides of `cells`' footprint (without specks) as FootprintSize, less
+  // the trim_share of the points at each end of each side (plus a voxel):
+  // mixed depths at an object's silhouette put a few voxels out of place,
+  // which a box around all of them counts (a 0.4 m lamp measured 0.92 m).
+  Eigen::Vector2d CoreFootprintSize(const std::vector<size_t>& cells,
+                                    double trim_share) const;
+  static constexpr double kSizeTrimShare = 0.05;
+  // Whether `cells` (CoreFootprintSize) are no longer and no wider than one
+  // object of the class can be times `slack` (true for classes of no known
+  // size).
+  bool FitsClass(const std::vector<size_t>& cells, uint16_t class_id,
+                 double slack) const;
+  // Each thing class's share of the thing classes' votes over `cells`.
+  std::map<uint16_t, double> ThingShares(
+      const std::vector<size_t>& cells) const;
+  // Objects too large for their class take the most voted class that fits
+  // (MapObjectOptions::size_slack).
+  void FitClassesToSizes();
   // Touching pieces of one class that views held apart, joined along a seam
   // (min_part_contact_share of the smaller one) and fitting one object of the
   // class together (FitsOne): a mask generator's consistent cut (a sofa's
