@@ -102,14 +102,7 @@ void MapResolver::CollectCells() {
   for (const auto& [key, votes] : far_) {
     VoxelEvidence& v = amended_[key] = map_.voxels().at(key);
     for (const ClassEvidence& far : votes.classes) {
-      auto it = std::find_if(
-          v.classes.begin(), v.classes.end(),
-          [&](const ClassEvidence& c) { return c.class_id == far.class_id; });
-      if (it == v.classes.end()) {
-        v.classes.push_back({far.class_id, 0, far.weight});
-      } else {
-        it->weight += far.weight;
-      }
+      FindOrAddClass(&v.classes, far.class_id)->weight += far.weight;
     }
   }
   spdlog::debug("far views: {}, voxels they voted on: {} ({:.1f} ms)",

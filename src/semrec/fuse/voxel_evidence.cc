@@ -17,6 +17,15 @@ void VoxelEvidenceOptions::Check() const {
                 "voxel evidence: view_class_share must be in (0, 1]");
 }
 
+ClassEvidence* FindOrAddClass(std::vector<ClassEvidence>* classes,
+                              uint16_t class_id) {
+  for (ClassEvidence& c : *classes) {
+    if (c.class_id == class_id) return &c;
+  }
+  classes->push_back({class_id, 0, 0.0f});
+  return &classes->back();
+}
+
 const ClassEvidence* VoxelEvidence::Find(uint16_t class_id) const {
   for (const ClassEvidence& c : classes) {
     if (c.class_id == class_id) return &c;
@@ -51,14 +60,12 @@ struct Vote {
   float confidence;
 };
 
-template <typename T, typename Key>
-T* FindOrAdd(std::vector<T>* items, Key T::*field, Key value) {
-  for (T& item : *items) {
-    if (item.*field == value) return &item;
+ObjectVote* FindOrAddObject(std::vector<ObjectVote>* objects, uint32_t id) {
+  for (ObjectVote& o : *objects) {
+    if (o.id == id) return &o;
   }
-  items->push_back({});
-  items->back().*field = value;
-  return &items->back();
+  objects->push_back({id, 0.0f});
+  return &objects->back();
 }
 
 // The object mask holding most of the pixels in votes[begin, end) (one
@@ -153,8 +160,7 @@ void VoxelEvidenceMap::AddFrame(const std::vector<FrameSegment>& segments,
       // the segmenter was of it: an unsure view casts less than one vote.
       float sure = 0.0f;
       for (size_t q = k; q < class_end; ++q) sure += votes[q].confidence;
-      ClassEvidence* c =
-          FindOrAdd(&v.classes, &ClassEvidence::class_id, votes[k].class_id);
+      ClassEvidence* c = FindOrAddClass(&v.classes, votes[k].class_id);
       c->weight += weight * sure / n;
       if (share >= options_.view_class_share) ++c->views;
       for (size_t o = k; o < class_end;) {  // per object within the class
@@ -164,7 +170,7 @@ void VoxelEvidenceMap::AddFrame(const std::vector<FrameSegment>& segments,
           ++object_end;
         }
         if (votes[o].object != 0) {
-          FindOrAdd(&v.objects, &ObjectVote::id, votes[o].object)->views +=
+          FindOrAddObject(&v.objects, votes[o].object)->views +=
               static_cast<float>(object_end - o) / n;
         }
         o = object_end;
@@ -314,8 +320,7 @@ void VoteFromFarView(const FarView& view, const VoxelCentres& voxels,
            ++class_end) {
         sure += votes[class_end].confidence;
       }
-      ClassEvidence* c =
-          FindOrAdd(&classes, &ClassEvidence::class_id, votes[q].class_id);
+      ClassEvidence* c = FindOrAddClass(&classes, votes[q].class_id);
       c->weight += sure / n;
       if (static_cast<double>(class_end - q) >= view_class_share * n) {
         ++c->views;

@@ -57,6 +57,11 @@ struct ClassEvidence {
   float weight = 0.0f;
 };
 
+/// The entry of `class_id` in `classes`, added (no weight, no views) when
+/// missing.
+ClassEvidence* FindOrAddClass(std::vector<ClassEvidence>* classes,
+                              uint16_t class_id);
+
 struct ObjectVote {
   /// Fusion object id at the time of the view (resolve it through merges).
   uint32_t id = 0;
