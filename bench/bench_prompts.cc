@@ -86,10 +86,20 @@ int Run(int argc, char** argv) {
        [](auto* o) {
          o->masks.dense_stride = 2;
          o->masks.covered_similarity = 0.8f;
+         o->masks.model.mask_margin_logits = 0.0f;
        }},
       {"stride 4, covered 0.8",
-       [](auto* o) { o->masks.covered_similarity = 0.8f; }},
-      {"stride 4, covered 0.6 (default)", [](auto*) {}},
+       [](auto* o) {
+         o->masks.covered_similarity = 0.8f;
+         o->masks.model.mask_margin_logits = 0.0f;
+       }},
+      {"stride 4, covered 0.6",
+       [](auto* o) { o->masks.model.mask_margin_logits = 0.0f; }},
+      {"+ mask margin 8 (default)", [](auto*) {}},
+      {"default, mask margin 4",
+       [](auto* o) { o->masks.model.mask_margin_logits = 4.0f; }},
+      {"default, mask margin 2",
+       [](auto* o) { o->masks.model.mask_margin_logits = 2.0f; }},
       {"default, stride 8", [](auto* o) { o->masks.dense_stride = 8; }},
       {"default + rejected sim. 0.6",
        [](auto* o) { o->masks.rejected_similarity = 0.6f; }},

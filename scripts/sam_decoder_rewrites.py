@@ -385,6 +385,7 @@ UPSCALING = "/semrec_upscaling/"
 SHAPE_OPS = ("Reshape", "Flatten", "Squeeze", "Unsqueeze", "Identity")
 # Prompt part -> mask part tensors, and the prompt part's preview output.
 MASK_PART_INPUTS = ("upscaling_tokens", "mask_hyper")
+MASK_PART_OUTPUT = "block_logits"
 PREVIEW = "mask_preview"
 
 
@@ -398,8 +399,9 @@ def split_mask_part(model):
     low-res cells, computed exactly as the full upscaling would (each output
     cell of the two 2x2/stride-2 transposed convolutions depends on one
     token only): preview[y, x] = low_res_masks[4y + 2, 4x + 2]. The mask part
-    computes the chosen mask's full low-res logits from the prompt part's
-    `upscaling_tokens` and `mask_hyper`, only for prompts worth it. Needs the
+    computes the chosen mask's low-res logits from the prompt part's
+    `upscaling_tokens` (any of them: [1, N, C] -> block_logits [1, N, 16])
+    and `mask_hyper`, only for prompts worth it. Needs the
     structure rewrite_upscaling leaves, and the export's choice to be a Gather
     over the masks' axis (reached by shape-only ops). Returns the mask part and
     changes `model` into the prompt part, or returns None (model unchanged).
@@ -477,8 +479,11 @@ def split_mask_part(model):
     if not accepted:
         return None
 
-    # The mask part: the upscaling nodes, fed by its own inputs.
-    mask_nodes, needed, stop = [], {by_name[UPSCALING + "raster"].output[0]}, {tokens, hyper}
+    # The mask part: the upscaling nodes up to the logits, fed by its own
+    # inputs, for any number of the tokens (the caller picks them: those near
+    # the preview's boundary), each giving its 4 x 4 low-res cells in the
+    # order (ky1, kx1, ky2, kx2): cell (4y + 2 ky1 + ky2, 4x + 2 kx1 + kx2).
+    mask_nodes, needed, stop = [], {by_name[UPSCALING + "logits"].output[0]}, {tokens, hyper}
     for n in reversed(list(g.node)):
         if any(o in needed for o in n.output):
             mask_nodes.append(n)
@@ -488,20 +493,27 @@ def split_mask_part(model):
     for n in mask_nodes:
         for k, i in enumerate(n.input):
             n.input[k] = rename.get(i, i)
-    out_shape = np.array([1, 1, 4 * height, 4 * width], np.int64)
-    mask_nodes.append(helper.make_node("Reshape", [mask_nodes[-1].output[0], "c_low_res_shape"],
-                                       ["low_res_masks"], name=UPSCALING + "low_res"))
+    mask_nodes.append(helper.make_node("Reshape", [mask_nodes[-1].output[0], "c_blocks_shape"],
+                                       [MASK_PART_OUTPUT], name=UPSCALING + "block_logits"))
     used = set(i for n in mask_nodes for i in n.input)
     mask_inits = [numpy_helper.from_array(v, k) for k, v in inits.items() if k in used]
-    mask_inits.append(numpy_helper.from_array(out_shape, "c_low_res_shape"))
+    # Token counts free: the reshapes between the two upscalings take -1.
+    for init in mask_inits:
+        if init.name in (by_name[UPSCALING + "up1_px"].input[1],
+                         by_name[UPSCALING + "features"].input[1]):
+            shape = numpy_helper.to_array(init).copy()
+            shape[1] = -1
+            init.CopyFrom(numpy_helper.from_array(shape, init.name))
+    mask_inits.append(numpy_helper.from_array(np.array([1, -1, 16], np.int64), "c_blocks_shape"))
     tokens_shape = [1, height * width, w1.shape[0]]
     mask_graph = helper.make_graph(
         mask_nodes, "sam_decoder_mask_part",
-        [helper.make_tensor_value_info(MASK_PART_INPUTS[0], onnx.TensorProto.FLOAT, tokens_shape),
+        [helper.make_tensor_value_info(MASK_PART_INPUTS[0], onnx.TensorProto.FLOAT,
+                                       [1, "tokens", w1.shape[0]]),
          helper.make_tensor_value_info(MASK_PART_INPUTS[1], onnx.TensorProto.FLOAT,
                                        [1, 1, channels])],
-        [helper.make_tensor_value_info("low_res_masks", onnx.TensorProto.FLOAT,
-                                       out_shape.tolist())],
+        [helper.make_tensor_value_info(MASK_PART_OUTPUT, onnx.TensorProto.FLOAT,
+                                       [1, "tokens", 16])],
         mask_inits)
     mask_part = helper.make_model(mask_graph, opset_imports=model.opset_import,
                                   producer_name="semrec split_sam_decoder.py")

@@ -1,5 +1,8 @@
 #include "semrec/segment/mask_generator.h"
 
+#include <algorithm>
+#include <vector>
+
 #include <gtest/gtest.h>
 
 #include "semrec/core/error.h"
@@ -61,6 +64,69 @@ TEST(MaskGenerator, PreviewRejectsOnlyMasksClearlyBelowTheFilters) {
   for (int i = 0; i < 300; ++i) padded.logits[50 * 64 + i] = 0.0f;
   EXPECT_TRUE(MaskPreviewMayPass(padded, 0.9f, filter, t));
   EXPECT_FALSE(MaskPreviewMayPass(Preview(100, 300, 40), 0.9f, filter, t));
+}
+
+// mask_margin_logits: the tokens near a mask's edge are upscaled, the others
+// keep their preview logit. A 6 x 6 token grid, logits +10 inside a 2 x 2
+// square (tokens (2..3, 2..3)), -10 outside, and one token at -0.5.
+TEST(MaskGenerator, OnlyTokensNearTheMasksEdgeAreUpscaled) {
+  LowResMask preview;
+  preview.width = preview.height = 6;
+  preview.logits.assign(36, -10.0f);
+  for (int y = 2; y <= 3; ++y) {
+    for (int x = 2; x <= 3; ++x) preview.logits[y * 6 + x] = 10.0f;
+  }
+  // Sign changes: the square and its ring (4 x 4 tokens from (1, 1)).
+  std::vector<int64_t> ring;
+  for (int y = 1; y <= 4; ++y) {
+    for (int x = 1; x <= 4; ++x) ring.push_back(y * 6 + x);
+  }
+  EXPECT_EQ(TokensNearMaskEdge(preview, 4.0f), ring);
+  // A logit under the margin makes its neighbours near the edge too.
+  preview.logits[0] = -0.5f;
+  std::vector<int64_t> with_corner = {0, 1, 6, 7};
+  for (int64_t t : ring) {
+    if (t != 7) with_corner.push_back(t);
+  }
+  std::sort(with_corner.begin(), with_corner.end());
+  EXPECT_EQ(TokensNearMaskEdge(preview, 4.0f), with_corner);
+  EXPECT_EQ(TokensNearMaskEdge(preview, 0.4f), ring);
+  EXPECT_EQ(TokensNearMaskEdge(preview, 20.0f).size(), 36u);
+
+  // Blocks of a 24 x 24 low-res mask, cell value = 100 row + col; token t's
+  // 16 values in the order (ky1, kx1, ky2, kx2).
+  auto block = [](int64_t t) {
+    std::vector<float> b;
+    for (int c = 0; c < 16; ++c) {
+      const int64_t row = 4 * (t / 6) + 2 * ((c >> 3) & 1) + ((c >> 1) & 1);
+      const int64_t col = 4 * (t % 6) + 2 * ((c >> 2) & 1) + (c & 1);
+      b.push_back(static_cast<float>(100 * row + col));
+    }
+    return b;
+  };
+  std::vector<float> blocks;
+  for (int64_t t : ring) {
+    const std::vector<float> b = block(t);
+    blocks.insert(blocks.end(), b.begin(), b.end());
+  }
+  const LowResMask m = ComposeMaskBlocks(preview, ring, blocks);
+  ASSERT_EQ(m.width, 24);
+  ASSERT_EQ(m.height, 24);
+  for (int row = 0; row < 24; ++row) {
+    for (int col = 0; col < 24; ++col) {
+      const int64_t t = (row / 4) * 6 + col / 4;
+      const bool upscaled = std::count(ring.begin(), ring.end(), t) > 0;
+      EXPECT_EQ(m.logits[row * 24 + col],
+                upscaled ? static_cast<float>(100 * row + col)
+                         : preview.logits[static_cast<size_t>(t)])
+          << row << "," << col;
+    }
+  }
+  EXPECT_THROW(ComposeMaskBlocks(preview, ring, {1.0f}), InvalidArgument);
+  EXPECT_THROW(ComposeMaskBlocks(preview, {36}, block(0)), InvalidArgument);
+  PromptableOptions bad;
+  bad.mask_margin_logits = -1.0f;
+  EXPECT_THROW(bad.Check(), InvalidArgument);
 }
 
 TEST(MaskGenerator, BoxNmsKeepsTheBestScoredOfOverlappingMasks) {

@@ -18,6 +18,67 @@ PromptableOptions PromptableOptions::FromRegistry(
   return o;
 }
 
+std::vector<int64_t> TokensNearMaskEdge(const LowResMask& preview,
+                                        float margin) {
+  const int w = preview.width, h = preview.height;
+  CheckArgument(
+      w > 0 && h > 0 && preview.logits.size() == static_cast<size_t>(w) * h,
+      "TokensNearMaskEdge: preview size and logits disagree");
+  auto at = [&](int x, int y) {
+    return preview.logits[static_cast<size_t>(std::clamp(y, 0, h - 1)) * w +
+                          std::clamp(x, 0, w - 1)];
+  };
+  std::vector<int64_t> near;
+  for (int y = 0; y < h; ++y) {
+    for (int x = 0; x < w; ++x) {
+      const bool inside = at(x, y) > 0;
+      bool edge = false;
+      for (int dy = -1; dy <= 1 && !edge; ++dy) {
+        for (int dx = -1; dx <= 1 && !edge; ++dx) {
+          const float v = at(x + dx, y + dy);
+          edge = std::abs(v) < margin || (v > 0) != inside;
+        }
+      }
+      if (edge) near.push_back(static_cast<int64_t>(y) * w + x);
+    }
+  }
+  return near;
+}
+
+LowResMask ComposeMaskBlocks(const LowResMask& preview,
+                             const std::vector<int64_t>& tokens,
+                             const std::vector<float>& block_logits) {
+  const int64_t count = static_cast<int64_t>(preview.logits.size());
+  CheckArgument(
+      preview.width > 0 && count == int64_t{preview.width} * preview.height,
+      "ComposeMaskBlocks: preview size and logits disagree");
+  CheckArgument(block_logits.size() == tokens.size() * 16,
+                "ComposeMaskBlocks: 16 block logits per token are required");
+  LowResMask m;
+  m.width = 4 * preview.width;
+  m.height = 4 * preview.height;
+  m.logits.resize(static_cast<size_t>(m.width) * m.height);
+  for (int y = 0; y < m.height; ++y) {
+    for (int x = 0; x < m.width; ++x) {
+      m.logits[static_cast<size_t>(y) * m.width + x] =
+          preview.logits[static_cast<size_t>(y / 4) * preview.width + x / 4];
+    }
+  }
+  for (size_t k = 0; k < tokens.size(); ++k) {
+    CheckArgument(tokens[k] >= 0 && tokens[k] < count,
+                  "ComposeMaskBlocks: a token outside the preview's grid");
+    const int64_t ty = tokens[k] / preview.width;
+    const int64_t tx = tokens[k] % preview.width;
+    for (size_t c = 0; c < 16; ++c) {
+      const int64_t row = 4 * ty + 2 * ((c >> 3) & 1) + ((c >> 1) & 1);
+      const int64_t col = 4 * tx + 2 * ((c >> 2) & 1) + (c & 1);
+      m.logits[static_cast<size_t>(row * m.width + col)] =
+          block_logits[k * 16 + c];
+    }
+  }
+  return m;
+}
+
 void PromptableOptions::Check() const {
   CheckArgument(
       backend == "sam" || backend == "sam2",
@@ -26,6 +87,8 @@ void PromptableOptions::Check() const {
                 "mask model: encoder and decoder names are required");
   CheckArgument(decoder_threads >= 0,
                 "mask model: decoder_threads must be >= 0");
+  CheckArgument(mask_margin_logits >= 0.0f,
+                "mask model: mask_margin_logits must be >= 0");
   runtime.Check();
 }
 

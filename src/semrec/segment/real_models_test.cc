@@ -219,13 +219,22 @@ TEST(RealModels, PreviewRejectsNoMaskThatPasses) {
       io::ReadColorImage(ade / "images" / "ADE_val_00000002.jpg");
   PromptableOptions options;
   options.runtime.model_dir = semrec::testing::ModelDir();
+  options.mask_margin_logits = 0.0f;  // every token upscaled: exact
   auto model =
       PromptableSegmenter::Create(infer::ModelRegistry::LoadDefault(), options);
+  options.mask_margin_logits = 8.0f;
+  auto sparse =
+      PromptableSegmenter::Create(infer::ModelRegistry::LoadDefault(), options);
   model->SetImage(rgb);
+  sparse->SetImage(rgb);
   // The filters automatic masks use.
   const MaskFilter filter = MaskGeneratorOptions().Filter();
   const int n = 16;
   std::vector<int> rejected(n * n, 0), passes(n * n, 0), same(n * n, 0);
+  // With a margin: the same decisions, the masks alike but for cells near
+  // their edge (the thresholded mask's IoU, the stability score).
+  std::vector<double> sparse_iou(n * n, 1.0), stability_change(n * n, 0.0);
+  std::vector<int> sparse_same_decision(n * n, 0);
   tbb::parallel_for(0, n * n, [&](int k) {
     Prompt p;
     p.points = {{(static_cast<float>(k % n) + 0.5f) * rgb.width() / n,
@@ -239,11 +248,22 @@ TEST(RealModels, PreviewRejectsNoMaskThatPasses) {
     rejected[k] = early.rejected_early;
     same[k] = early.rejected_early ? early.logits.empty()
                                    : early.logits == full.logits;
+    const LowResMask cheap = sparse->DecodeUnlessRejected(p, filter);
+    sparse_same_decision[k] = cheap.rejected_early == early.rejected_early;
+    if (!cheap.rejected_early && !early.rejected_early) {
+      sparse_iou[k] = MaskIoU(model->Upsample(cheap), model->Upsample(full));
+      stability_change[k] =
+          std::abs(model->StabilityScore(cheap, 0.0f, filter.stability_offset) -
+                   model->StabilityScore(full, 0.0f, filter.stability_offset));
+    }
   });
   int n_rejected = 0, n_passes = 0;
   for (int k = 0; k < n * n; ++k) {
     EXPECT_FALSE(rejected[k] && passes[k]) << "prompt " << k;
     EXPECT_TRUE(same[k]) << "prompt " << k;
+    EXPECT_TRUE(sparse_same_decision[k]) << "prompt " << k;
+    EXPECT_GE(sparse_iou[k], 0.99) << "prompt " << k;
+    EXPECT_LE(stability_change[k], 0.01) << "prompt " << k;
     n_rejected += rejected[k];
     n_passes += passes[k];
   }

@@ -3,7 +3,11 @@
 // (image part once per image, prompt part per prompt, mask part only for
 // masks whose preview can pass the caller's filters).
 #include <algorithm>
+#include <cmath>
 #include <filesystem>
+#include <map>
+#include <string>
+#include <vector>
 
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
@@ -101,6 +105,7 @@ class SamSegmenter : public PromptableSegmenter {
                                                   options.runtime);
     infer::OnnxModelOptions dec = options.runtime;
     dec.intra_op_threads = options.decoder_threads;
+    mask_margin_logits_ = options.mask_margin_logits;
     const infer::ModelEntry& entry = registry.Get(options.decoder);
     bool split = options.split_decoder && !entry.split_image.empty();
     if (split && !SplitInstalled(registry, entry, options.runtime)) {
@@ -122,6 +127,7 @@ class SamSegmenter : public PromptableSegmenter {
                 registry.Get(entry.split_masks), options.runtime))) {
           mask_part_ = std::make_unique<infer::OnnxModel>(
               registry.Get(entry.split_masks), dec);
+          mask_part_blocks_ = HasOutput(*mask_part_, "block_logits");
         } else {
           spdlog::warn(
               "mask decoder '{}': its prompt part needs the mask part, which "
@@ -177,30 +183,76 @@ class SamSegmenter : public PromptableSegmenter {
     }
     // The prompt part has chosen the mask; judge its preview before paying
     // for the upscaling.
-    if (filter != nullptr) {
-      const infer::Tensor& p = Output(out, "mask_preview", name);
-      LowResMask preview;
-      if (p.shape.size() != 4 || iou.data.size() != 1) {
-        throw Error(fmt::format(
-            "mask decoder '{}': unexpected preview/IoU shapes", name));
-      }
-      preview.height = static_cast<int>(p.shape[2]);
-      preview.width = static_cast<int>(p.shape[3]);
-      preview.logits = p.data;
-      if (!MaskPreviewMayPass(preview, iou.data[0], *filter, transform_)) {
-        LowResMask rejected;
-        rejected.predicted_iou = iou.data[0];
-        rejected.rejected_early = true;
-        return rejected;
-      }
+    const infer::Tensor& p = Output(out, "mask_preview", name);
+    if (p.shape.size() != 4 || iou.data.size() != 1) {
+      throw Error(fmt::format(
+          "mask decoder '{}': unexpected preview/IoU shapes", name));
     }
+    LowResMask preview;
+    preview.height = static_cast<int>(p.shape[2]);
+    preview.width = static_cast<int>(p.shape[3]);
+    preview.logits = p.data;
+    if (filter != nullptr &&
+        !MaskPreviewMayPass(preview, iou.data[0], *filter, transform_)) {
+      LowResMask rejected;
+      rejected.predicted_iou = iou.data[0];
+      rejected.rejected_early = true;
+      return rejected;
+    }
+    LowResMask mask = Upscale(out, preview, filter != nullptr);
+    mask.predicted_iou = iou.data[0];
+    return mask;
+  }
+
+  // The mask part's low-res mask from the prompt part's outputs `out`:
+  // every token, or (`filtered`, with a margin) those near the mask's edge.
+  LowResMask Upscale(const std::map<std::string, infer::Tensor>& out,
+                     const LowResMask& preview, bool filtered) const {
+    const std::string& name = decoder_->entry().name;
     infer::TensorRefs mask_in;
     for (const infer::TensorInfo& info : mask_part_->session().inputs()) {
       mask_in[info.name] = &Output(out, info.name, name);
     }
     const std::string& mask_name = mask_part_->entry().name;
-    const auto masks = mask_part_->RunRefs(mask_in);
-    return BestOf(Output(masks, "low_res_masks", mask_name), iou, mask_name);
+    if (!mask_part_blocks_) {  // a split made before block_logits
+      const auto masks = mask_part_->RunRefs(mask_in);
+      return BestOf(Output(masks, "low_res_masks", mask_name),
+                    Output(out, "iou_predictions", name), mask_name);
+    }
+    const infer::Tensor& tokens = Output(out, "upscaling_tokens", name);
+    const auto count = static_cast<int64_t>(preview.logits.size());
+    if (tokens.shape.size() != 3 || tokens.shape[1] != count) {
+      throw Error(fmt::format(
+          "mask decoder '{}': upscaling_tokens do not match the preview",
+          name));
+    }
+    std::vector<int64_t> chosen;
+    infer::Tensor picked;
+    if (filtered && mask_margin_logits_ > 0.0f) {
+      chosen = TokensNearMaskEdge(preview, mask_margin_logits_);
+      const auto channels = static_cast<size_t>(tokens.shape[2]);
+      picked.shape = {1, static_cast<int64_t>(chosen.size()), tokens.shape[2]};
+      picked.data.resize(chosen.size() * channels);
+      for (size_t k = 0; k < chosen.size(); ++k) {
+        std::copy_n(tokens.data.begin() + chosen[k] * channels, channels,
+                    picked.data.begin() + k * channels);
+      }
+      mask_in["upscaling_tokens"] = &picked;
+    } else {
+      chosen.resize(static_cast<size_t>(count));
+      for (int64_t t = 0; t < count; ++t) chosen[t] = t;
+    }
+    std::map<std::string, infer::Tensor> masks;
+    if (!chosen.empty()) masks = mask_part_->RunRefs(mask_in);
+    const std::vector<float>& blocks =
+        chosen.empty() ? kNoBlocks
+                       : Output(masks, "block_logits", mask_name).data;
+    if (blocks.size() != chosen.size() * 16) {
+      throw Error(fmt::format(
+          "mask decoder '{}': {} block logits for {} tokens (expected 16 each)",
+          mask_name, blocks.size(), chosen.size()));
+    }
+    return ComposeMaskBlocks(preview, chosen, blocks);
   }
 
   // The inputs of `model` that do not depend on the prompt, by reference:
@@ -233,6 +285,10 @@ class SamSegmenter : public PromptableSegmenter {
   }
 
   std::unique_ptr<infer::OnnxModel> encoder_, image_part_, decoder_, mask_part_;
+  float mask_margin_logits_ = 0.0f;
+  // The mask part takes any tokens (block_logits).
+  bool mask_part_blocks_ = false;
+  static inline const std::vector<float> kNoBlocks{};
   std::map<std::string, infer::Tensor> image_features_;
   const infer::Tensor no_mask_ = infer::Tensor::Zeros({1, 1, 256, 256});
   const infer::Tensor has_no_mask_ = infer::Tensor::Zeros({1});

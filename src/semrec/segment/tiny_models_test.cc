@@ -458,7 +458,32 @@ TEST(TinyModels, MaskPartAndPreviewGiveTheExportsChosenMask) {
     const auto m = masks.Run({{"upscaling_tokens", p.at("upscaling_tokens")},
                               {"mask_hyper", p.at("mask_hyper")}});
     const infer::Tensor& low_res = a.at("low_res_masks");
-    ExpectSameValues(low_res, m.at("low_res_masks"), "low_res_masks");
+    // The mask part gives each token's 4 x 4 cells in the order (ky1, kx1,
+    // ky2, kx2): cell (4y + 2 ky1 + ky2, 4x + 2 kx1 + kx2) of the 16 x 16 mask.
+    const infer::Tensor& blocks = m.at("block_logits");
+    ASSERT_EQ(blocks.shape, (std::vector<int64_t>{1, 16, 16}));
+    infer::Tensor composed = infer::Tensor::Zeros({1, 1, 16, 16});
+    for (size_t t = 0; t < 16; ++t) {
+      for (size_t c = 0; c < 16; ++c) {
+        const size_t row = 4 * (t / 4) + 2 * ((c >> 3) & 1) + ((c >> 1) & 1);
+        const size_t col = 4 * (t % 4) + 2 * ((c >> 2) & 1) + (c & 1);
+        composed.data[row * 16 + col] = blocks.data[t * 16 + c];
+      }
+    }
+    ExpectSameValues(low_res, composed, "low_res_masks");
+    // Any tokens (those near a mask's edge): the same cells for those.
+    const infer::Tensor& all = p.at("upscaling_tokens");
+    infer::Tensor some = infer::Tensor::Zeros({1, 2, 8});
+    std::copy_n(all.data.begin() + 5 * 8, 8, some.data.begin());
+    std::copy_n(all.data.begin() + 10 * 8, 8, some.data.begin() + 8);
+    const auto m2 = masks.Run(
+        {{"upscaling_tokens", some}, {"mask_hyper", p.at("mask_hyper")}});
+    const infer::Tensor& two = m2.at("block_logits");
+    ASSERT_EQ(two.shape, (std::vector<int64_t>{1, 2, 16}));
+    for (size_t c = 0; c < 16; ++c) {
+      EXPECT_NEAR(two.data[c], blocks.data[5 * 16 + c], 1e-5);
+      EXPECT_NEAR(two.data[16 + c], blocks.data[10 * 16 + c], 1e-5);
+    }
     // preview(x, y) = low_res(4x + 2, 4y + 2): the 4 x 4 token grid.
     const infer::Tensor& preview = p.at("mask_preview");
     ASSERT_EQ(preview.shape, (std::vector<int64_t>{1, 1, 4, 4}));
