@@ -234,13 +234,7 @@ void RegisterRun(CLI::App& app) {
                   "default: 1.2x slower full frames; bench/bench_prompts)")
       ->check(PowerOfTwo)
       ->capture_default_str();
-  cmd->add_option("--mask-margin", args->mask_margin,
-                  "Mask generation: upscale a mask only near its edge, where "
-                  "its preview holds a logit under this magnitude (elsewhere "
-                  "the preview decides; 0 = everywhere, exact: 1.16x slower "
-                  "full frames; bench/bench_prompts)")
-      ->check(CLI::NonNegativeNumber)
-      ->capture_default_str();
+  AddMaskMarginArg(cmd, &args->mask_margin);
   cmd->add_option("--covered-similarity",
                   args->run.pipeline.segmenter.masks.covered_similarity,
                   "Mask generation: skip a prompt covered by an accepted mask "

@@ -119,13 +119,7 @@ void RegisterSegment(CLI::App& app) {
                   "loses masks; bench/bench_prompts)")
       ->check(CLI::Range(0.0, 1.0))
       ->capture_default_str();
-  cmd->add_option("--mask-margin", args->mask_margin,
-                  "Upscale a mask only near its edge, where its preview holds "
-                  "a logit under this magnitude (elsewhere the preview "
-                  "decides; 0 = everywhere, exact: 1.16x slower; "
-                  "bench/bench_prompts)")
-      ->check(CLI::NonNegativeNumber)
-      ->capture_default_str();
+  AddMaskMarginArg(cmd, &args->mask_margin);
   cmd->add_option("--dense-stride", args->amg.dense_stride,
                   "Prompts on every n-th grid row and column are always "
                   "decoded, finer ones skipped where covered or between "

@@ -73,6 +73,10 @@ struct ModelArgs {
 };
 void AddModelArgs(CLI::App* cmd, ModelArgs* args);
 
+/// --mask-margin (segment, run): PromptableOptions::mask_margin_logits, set
+/// after the mask model's options come from the registry.
+void AddMaskMarginArg(CLI::App* cmd, float* margin_logits);
+
 /// --object-detector (default yolox_nano) and its tuning options (segment,
 /// run).
 void AddObjectDetectorArgs(CLI::App* cmd,
