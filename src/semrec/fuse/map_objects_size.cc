@@ -201,6 +201,7 @@ std::map<uint16_t, double> MapResolver::ThingShares(
       total += e.weight;
     }
   }
+  if (total <= 0.0) return {};  // only structure votes (claimed voxels)
   for (auto& [c, share] : shares) share /= total;
   return shares;
 }
