@@ -39,7 +39,9 @@ void CheckList(const std::filesystem::path& file, const char* kind,
     if (it == actual.end()) {
       throw FormatError(
           file, fmt::format("the model has no {} named '{}' (its {}s: {}); "
-                            "is this the model the registry describes?",
+                            "is this the model the registry describes? (A "
+                            "model scripts/setup derives, such as the split "
+                            "SAM decoder, is remade by running it again.)",
                             kind, want.name, kind, Describe(actual)));
     }
     bool ok = it->shape.size() == want.shape.size();
