@@ -194,16 +194,19 @@ void MapResolver::MergeByMasks() {
       uint16_t winner = gone_wins ? cg : ck;
       const uint16_t other = gone_wins ? ck : cg;
       const double slack = options_.size_slack;
-      if (slack > 0.0 && !FitsClass(members[keep], winner, slack) &&
-          ThingShares(members[keep])[other] >= options_.min_size_class_share &&
-          FitsClass(members[keep], other, slack)) {
+      if (slack > 0.0 && MaxFootprint(winner).x() > 0.0) {
         const Eigen::Vector2d size_m =
             CoreFootprintSize(members[keep], kSizeTrimShare);
-        spdlog::debug(
-            "objects {} and {} ({:.2f} x {:.2f} m together): class {} does "
-            "not fit, class {} does",
-            keep, gone, size_m.x(), size_m.y(), winner, other);
-        winner = other;
+        if (!FitsSize(size_m, winner, slack) &&
+            ThingShares(members[keep])[other] >=
+                options_.min_size_class_share &&
+            FitsSize(size_m, other, slack)) {
+          spdlog::debug(
+              "objects {} and {} ({:.2f} x {:.2f} m together): class {} does "
+              "not fit, class {} does",
+              keep, gone, size_m.x(), size_m.y(), winner, other);
+          winner = other;
+        }
       }
       owner_class_[keep] = winner;
     }

@@ -148,22 +148,17 @@ bool MapResolver::Nested(const std::vector<size_t>& a,
 bool MapResolver::FitsOne(const std::vector<size_t>& a,
                           const std::vector<size_t>& b,
                           uint16_t class_id) const {
-  const auto length = context_.max_length_m.find(class_id);
-  if (length == context_.max_length_m.end() || length->second <= 0.0) {
-    return false;
-  }
-  const auto width = context_.max_width_m.find(class_id);
+  const Eigen::Vector2d max_m = MaxFootprint(class_id);
+  if (max_m.x() <= 0.0) return false;
   std::vector<size_t> both = a;
   both.insert(both.end(), b.begin(), b.end());
   const Eigen::Vector2d size_m = FootprintSize(both);
   spdlog::debug(
       "  {} and {} voxels of class {}: {:.2f} x {:.2f} m together ({:.2f} x "
       "{:.2f} fit one)",
-      a.size(), b.size(), class_id, size_m.x(), size_m.y(), length->second,
-      width == context_.max_width_m.end() ? 0.0 : width->second);
-  return size_m.x() <= length->second &&
-         (width == context_.max_width_m.end() || width->second <= 0.0 ||
-          size_m.y() <= width->second);
+      a.size(), b.size(), class_id, size_m.x(), size_m.y(), max_m.x(),
+      max_m.y());
+  return FitsSize(size_m, class_id, 1.0);
 }
 
 bool MapResolver::PartsOfOne(const std::vector<size_t>& a,
@@ -177,17 +172,23 @@ bool MapResolver::PartsOfOne(const std::vector<size_t>& a,
          FitsOne(a, b, class_id);
 }
 
-bool MapResolver::FitsClass(const std::vector<size_t>& cells, uint16_t class_id,
-                            double slack) const {
+Eigen::Vector2d MapResolver::MaxFootprint(uint16_t class_id) const {
   const auto length = context_.max_length_m.find(class_id);
   if (length == context_.max_length_m.end() || length->second <= 0.0) {
-    return true;
+    return Eigen::Vector2d::Zero();
   }
   const auto width = context_.max_width_m.find(class_id);
-  const Eigen::Vector2d size_m = CoreFootprintSize(cells, kSizeTrimShare);
-  return size_m.x() <= slack * length->second &&
-         (width == context_.max_width_m.end() || width->second <= 0.0 ||
-          size_m.y() <= slack * width->second);
+  return {length->second, width == context_.max_width_m.end()
+                              ? 0.0
+                              : std::max(0.0, width->second)};
+}
+
+bool MapResolver::FitsSize(const Eigen::Vector2d& size_m, uint16_t class_id,
+                           double slack) const {
+  const Eigen::Vector2d max_m = MaxFootprint(class_id);
+  if (max_m.x() <= 0.0) return true;
+  return size_m.x() <= slack * max_m.x() &&
+         (max_m.y() <= 0.0 || size_m.y() <= slack * max_m.y());
 }
 
 std::map<uint16_t, double> MapResolver::ThingShares(
@@ -216,7 +217,9 @@ void MapResolver::FitClassesToSizes() {
   const double slack = options_.size_slack;
   for (const auto& [id, cells] : members) {
     const uint16_t cls = owner_class_[id];
-    if (FitsClass(cells, cls, slack)) continue;
+    if (MaxFootprint(cls).x() <= 0.0) continue;  // any size
+    const Eigen::Vector2d size_m = CoreFootprintSize(cells, kSizeTrimShare);
+    if (FitsSize(size_m, cls, slack)) continue;
     // The object's other thing classes by votes, most first.
     std::vector<std::pair<double, uint16_t>> ranked;
     for (const auto& [c, share] : ThingShares(cells)) {
@@ -225,8 +228,7 @@ void MapResolver::FitClassesToSizes() {
     std::sort(ranked.begin(), ranked.end(), std::greater<>());
     for (const auto& [share, c] : ranked) {
       if (share < options_.min_size_class_share) break;
-      if (!FitsClass(cells, c, slack)) continue;
-      const Eigen::Vector2d size_m = CoreFootprintSize(cells, kSizeTrimShare);
+      if (!FitsSize(size_m, c, slack)) continue;
       spdlog::debug(
           "object {} ({} voxels, {:.2f} x {:.2f} m): too large for class {}, "
           "takes class {} ({:.0f}% of its thing votes)",

@@ -226,11 +226,15 @@ class MapResolver {
   Eigen::Vector2d CoreFootprintSize(const std::vector<size_t>& cells,
                                     double trim_share) const;
   static constexpr double kSizeTrimShare = 0.05;
-  // Whether `cells` (CoreFootprintSize) are no longer and no wider than one
-  // object of the class can be times `slack` (true for classes of no known
-  // size).
-  bool FitsClass(const std::vector<size_t>& cells, uint16_t class_id,
-                 double slack) const;
+  // The longest and widest footprint one object of the class can have
+  // (label-set data; a width of 0: not limited); zero when the class has no
+  // known size.
+  Eigen::Vector2d MaxFootprint(uint16_t class_id) const;
+  // Whether footprint sides `size_m` (longer first) are no longer and no
+  // wider than one object of the class can be times `slack` (true for
+  // classes of no known size).
+  bool FitsSize(const Eigen::Vector2d& size_m, uint16_t class_id,
+                double slack) const;
   // Each thing class's share of the thing classes' votes over `cells`.
   std::map<uint16_t, double> ThingShares(
       const std::vector<size_t>& cells) const;

@@ -230,8 +230,8 @@ void ObserveFar(const Frame& frame, const FrameLabels& labels,
     return;
   }
   const bool check_people = person_ids != nullptr && person_ids->SameSize(w, h);
-  const bool check_map =
-      !labels.map_objects.empty() && labels.instance.SameSize(w, h);
+  const bool has_instances = labels.instance.SameSize(w, h);
+  const bool check_map = !labels.map_objects.empty() && has_instances;
   std::vector<float> depths;
   constexpr int kStride = FarView::kStride;
   for (int row = 0, v = kStride / 2; v < h; ++row, v += kStride) {
@@ -243,8 +243,7 @@ void ObserveFar(const Frame& frame, const FrameLabels& labels,
       }
       const uint16_t cls = labels.semantic(u, v);
       if (cls == 0 || (check_people && (*person_ids)(u, v) != 0)) continue;
-      const uint16_t instance =
-          labels.instance.SameSize(w, h) ? labels.instance(u, v) : 0;
+      const uint16_t instance = has_instances ? labels.instance(u, v) : 0;
       if (check_map && labels.map_objects.count(instance) != 0) continue;
       const auto sure = labels.confidence.find(instance);
       far->cells.push_back(static_cast<uint32_t>(row * far->columns() + col));

@@ -106,9 +106,6 @@ std::vector<FrameSegment> ExtractFrameSegments(
     const Frame& frame, const FrameLabels& labels, const LabelSet& classes,
     const SegmentExtractionOptions& options);
 
-/// What one frame shows: where the camera was and every surface point it
-/// measured (world frame), labelled or not. Pixels the map's projection
-/// labelled are left out: the map seeing itself is no view.
 /// What a frame's labels say where its sensor gave no depth: a coarse grid
 /// (every kStride-th pixel) of the labelled pixels there. Depth sensors stop
 /// at 4-5 m, but the colour camera still sees the sofa across the room: such
@@ -130,6 +127,10 @@ struct FarView {
   int rows() const { return (intrinsics.height + kStride - 1) / kStride; }
 };
 
+/// What one frame shows: where the camera was and every surface point it
+/// measured (world frame), labelled or not, and its labels where it measured
+/// none. Pixels the map's projection labelled are left out: the map seeing
+/// itself is no view.
 struct FrameObservation {
   Eigen::Vector3f camera_position_world = Eigen::Vector3f::Zero();
   Cloud observed_world;
