@@ -537,7 +537,17 @@ def split_mask_part(model):
     chosen = node("Gather", [node("Flatten", [hyper], "hyper_flat", axis=2), gather.input[1]],
                   "hyper_chosen", axis=0)
     hyper_out = node("Reshape", [chosen, p + "c_hyper_shape"], "hyper", MASK_PART_INPUTS[1])
-    node("Identity", [tokens], "tokens", MASK_PART_INPUTS[0])
+    if any(tokens in n.output for n in g.node):
+        # The tokens' producer writes the output itself: an Identity would
+        # copy 4 MB per prompt.
+        for n in g.node:
+            for io in (n.input, n.output):
+                for k, name in enumerate(io):
+                    if name == tokens:
+                        io[k] = MASK_PART_INPUTS[0]
+        tokens = MASK_PART_INPUTS[0]
+    else:
+        node("Identity", [tokens], "tokens", MASK_PART_INPUTS[0])
     a1 = node("Add", [node("MatMul", [tokens, p + "c_w1"], "mm1"), p + "c_b1"], "up1")
     n1 = node("LayerNormalization", [a1] + list(ln.input[1:]), "ln", axis=-1,
               epsilon=attr(ln, "epsilon"))
