@@ -212,6 +212,18 @@ bool BehindWall(const Eigen::Vector3f& p,
 
 namespace {
 
+// A plane's own tolerance from its points' signed distances to it:
+// tolerance_sigmas x their robust spread (1.4826 x MAD), clamped.
+double OwnTolerance(std::vector<double> r, const StructurePlaneOptions& o) {
+  const auto mid = r.begin() + static_cast<std::ptrdiff_t>(r.size() / 2);
+  std::nth_element(r.begin(), mid, r.end());
+  const double median = *mid;
+  for (double& d : r) d = std::abs(d - median);
+  std::nth_element(r.begin(), mid, r.end());
+  return std::clamp(o.tolerance_sigmas * 1.4826 * *mid, o.min_tolerance_m,
+                    o.tolerance_m);
+}
+
 // Floor or ceiling: heights along `up` in bins of the tolerance; the lowest
 // (highest) run of three bins holding enough points is the plane, at their
 // mean height.
@@ -262,16 +274,8 @@ std::vector<StructurePlane> HorizontalPlane(const Cloud& points, bool lowest,
       const double d = up.dot(p.cast<double>()) - plane.offset;
       if (std::abs(d) <= o.tolerance_m) r.push_back(d);
     }
-    plane.tolerance_m = o.tolerance_m;
-    if (!r.empty()) {  // (the window's middle bin may be empty)
-      const auto mid = r.begin() + static_cast<std::ptrdiff_t>(r.size() / 2);
-      std::nth_element(r.begin(), mid, r.end());
-      const double median = *mid;
-      for (double& d : r) d = std::abs(d - median);
-      std::nth_element(r.begin(), mid, r.end());
-      plane.tolerance_m = std::clamp(o.tolerance_sigmas * 1.4826 * *mid,
-                                     o.min_tolerance_m, o.tolerance_m);
-    }
+    // (the window's middle bin may be empty)
+    plane.tolerance_m = r.empty() ? o.tolerance_m : OwnTolerance(std::move(r), o);
     spdlog::debug("{} at {:.3f} m: {} points, tolerance {:.3f} m",
                   lowest ? "floor" : "ceiling", plane.offset, n,
                   plane.tolerance_m);
@@ -387,6 +391,14 @@ std::vector<StructurePlane> VerticalPlanes(
       best.oriented = true;
     }
     best.geometry = StructureGeometry::kVertical;
+    // Its own tolerance, like the floor's: a flat wall measured well is thin,
+    // and a headboard 5 cm in front of it is not wall.
+    std::vector<double> r;
+    r.reserve(inliers.size());
+    for (size_t i : inliers) {
+      r.push_back(best.normal.dot(points[i].cast<double>()) - best.offset);
+    }
+    best.tolerance_m = OwnTolerance(std::move(r), o);
     best.top_m = heights[heights.size() * 95 / 100];
     best.along = up.cross(best.normal).normalized();
     for (size_t i : inliers) {
@@ -410,9 +422,9 @@ std::vector<StructurePlane> VerticalPlanes(
     towards_camera.resize(kept);
     spdlog::debug(
         "vertical plane candidate: {} points, {:.2f} m tall ({:.2f} "
-        "to {:.2f} along up){}",
+        "to {:.2f} along up), tolerance {:.3f} m{}",
         best.support, height, heights[heights.size() * 5 / 100],
-        heights[heights.size() * 95 / 100],
+        heights[heights.size() * 95 / 100], best.tolerance_m,
         height >= o.min_wall_height_m ? "" : " (too low for a wall)");
     if (height >= o.min_wall_height_m) {
       planes.push_back(best);

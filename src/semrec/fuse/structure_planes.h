@@ -25,12 +25,13 @@ struct StructurePlaneOptions {
   /// Points within this distance of a plane lie on it (a voxel and some depth
   /// noise).
   double tolerance_m = 0.06;
-  /// The floor's and the ceiling's own tolerance: tolerance_sigmas x the
-  /// robust spread (1.4826 x MAD) of their points' heights, between
-  /// min_tolerance_m and tolerance_m. A floor is flat and seen edge-on by
-  /// nothing, so its voxels lie within a centimetre of it where depth is good;
-  /// a voxel 3-6 cm up holds the foot of a sofa or a cabinet that views called
-  /// floor at the contact.
+  /// Each plane's own tolerance: tolerance_sigmas x the robust spread
+  /// (1.4826 x MAD) of its points' distances to it, between min_tolerance_m
+  /// and tolerance_m. A floor is flat and seen edge-on by nothing, so its
+  /// voxels lie within a centimetre of it where depth is good; a voxel 3-6 cm
+  /// up holds the foot of a sofa or a cabinet that views called floor at the
+  /// contact. A wall measured as well is as thin; one seen at a grazing angle
+  /// or after drift keeps the 6 cm.
   double tolerance_sigmas = 4.0;
   double min_tolerance_m = 0.025;
   /// A plane must hold at least this much of its class's surface (points x

@@ -265,8 +265,9 @@ TEST(StructurePlanes, NoWallStandsJustInFrontOfALargerOne) {
   EXPECT_FALSE(OnStructure({1.0f, 1.5f, 1}, planes, o));
 }
 
-// A sofa's back stands flush with the wall, 3-6 cm in front of it: within the
-// wall plane's tolerance, so the plane cannot tell it from the wall. Three
+// A sofa's back stands flush with the wall, 3-6 cm in front of it: within a
+// 6 cm tolerance (a wall measured less well than this one, whose own
+// tolerance is 2.5 cm), so the plane cannot tell it from the wall. Three
 // views near the wall call it wall, one calls it sofa with the rest of the
 // sofa: it joins the sofa it touches. A patch of the wall one view called
 // sofa, touching no sofa, stays wall.
@@ -299,6 +300,7 @@ TEST(MapObjects, TheBackOfASofaFlushWithTheWallJoinsTheSofa) {
   for (const bool rule : {true, false}) {
     SCOPED_TRACE(rule ? "with the rule" : "without");
     FusionOptions options;
+    options.map_objects.planes.min_tolerance_m = 0.06;
     if (!rule) options.map_objects.min_flush_share = 1.0;
     const SceneFusion fusion = Fuse(views, options);
     const SceneSegment* sofa = Largest(fusion, kSofa);
@@ -401,6 +403,29 @@ TEST(StructurePlanes, TheFloorsToleranceFollowsItsSpread) {
   EXPECT_TRUE(OnStructure({1, 1, 0.02f}, a, o));
   EXPECT_FALSE(OnStructure({1, 1, 0.04f}, a, o));
   EXPECT_TRUE(OnStructure({1, 1, 0.05f}, b, o));
+}
+
+// A wall has its own tolerance too: 4 x its points' robust spread, between
+// 2.5 and 6 cm. A flat wall measured well is thin, and a headboard 4 cm in
+// front of it is not on it; a rough one keeps the 6 cm.
+TEST(StructurePlanes, AWallsToleranceFollowsItsSpread) {
+  Cloud flat = Box({0, 0, 0}, {0, 4, 2.5f}, 0.05f);
+  Cloud rough = flat;
+  for (size_t i = 0; i < rough.size(); ++i) {
+    rough[i].x() = 0.03f * static_cast<float>(static_cast<int>(i % 7) - 3) / 3;
+  }
+  StructurePlaneOptions o;
+  const auto a = FindStructurePlanes(flat, StructureGeometry::kVertical,
+                                     Eigen::Vector3d::UnitZ(), 0.0025, o);
+  const auto b = FindStructurePlanes(rough, StructureGeometry::kVertical,
+                                     Eigen::Vector3d::UnitZ(), 0.0025, o);
+  ASSERT_EQ(a.size(), 1u);
+  ASSERT_EQ(b.size(), 1u);
+  EXPECT_DOUBLE_EQ(a[0].tolerance_m, o.min_tolerance_m);
+  EXPECT_DOUBLE_EQ(b[0].tolerance_m, o.tolerance_m);
+  EXPECT_TRUE(OnStructure({0.02f, 1, 1}, a, o));
+  EXPECT_FALSE(OnStructure({0.04f, 1, 1}, a, o));
+  EXPECT_TRUE(OnStructure({0.05f, 1, 1}, b, o));
 }
 
 // An interior wall 10 cm thick seen from both rooms: two faces, each seen
