@@ -71,6 +71,10 @@ void LabelSet::Add(const LabelClass& label_class) {
       fmt::format("label set '{}': class '{}': a footprint needs a thing and "
                   "length >= width > 0 (got {} x {} m)",
                   name_, c.name, c.max_length_m, c.max_width_m));
+  CheckArgument(!c.furniture_front || c.kind == ClassKind::kThing,
+                fmt::format("label set '{}': class '{}' is a furniture front "
+                            "but not a thing",
+                            name_, c.name));
   by_id_[label_class.id] = classes_.size();
   by_name_[label_class.name] = label_class.id;
   classes_.push_back(label_class);

@@ -55,6 +55,11 @@ struct LabelClass {
   /// objects vary too much: a cabinet, a shelf, a box).
   double max_length_m = 0.0;
   double max_width_m = 0.0;
+  /// Things only: furniture with a vertical front and a top behind it (a
+  /// cabinet, a counter, a chest of drawers). Fusion finds such fronts by
+  /// their geometry; one that views called wall and no thing holds becomes
+  /// an object of such a class (label files: "front": true).
+  bool furniture_front = false;
 };
 
 /// Name of the objects made from a set's catch-all class.

@@ -128,7 +128,8 @@ nlohmann::json MapResolutionJson(const SceneFusion& fusion,
           {"fragments_folded", r->fragments_folded},
           {"fragments_dropped", r->fragments_dropped},
           {"stranded_voxels_claimed", r->stranded_voxels_claimed},
-          {"reclassed_by_size", r->reclassed_by_size}};
+          {"reclassed_by_size", r->reclassed_by_size},
+          {"objects_from_fronts", r->objects_from_fronts}};
 }
 
 FuseSequenceResult FuseSequence(const io::SequenceReader& reader,

@@ -440,6 +440,9 @@ MapContext MakeMapContext(const LabelSet& classes,
     }
     context.geometry[c.id] =
         c.kind == ClassKind::kStuff ? c.geometry : StructureGeometry::kNone;
+    if (c.kind == ClassKind::kThing && c.furniture_front) {
+      context.front_classes.push_back(c.id);
+    }
   }
   return context;
 }

@@ -96,6 +96,12 @@ struct MapObjectOptions {
   /// min_top_surface_share) join the thing holding at least this share of
   /// the front's voxels (and lying mostly on it).
   double min_front_share = 0.1;
+  /// A front no thing takes whose voxels are mostly stranded (every view
+  /// called it wall) becomes an object of its own: of the label set's front
+  /// class (LabelClass::furniture_front) with the most votes on it, the
+  /// lowest id when none has any. A row of base cabinets every view called
+  /// wall is furniture, not wall. Off, or with no front class, it stays wall.
+  bool objects_from_fronts = true;
   /// A split-off piece with fewer voxels than this joins a touching object of
   /// its class instead of standing alone.
   size_t min_piece_voxels = 20;
@@ -183,6 +189,9 @@ struct MapContext {
   /// Per thing class id: the shortest side of one object's footprint at most
   /// (m; absent or 0: unknown; LabelClass::max_width_m).
   std::map<uint16_t, double> max_width_m;
+  /// Thing classes of furniture with a front (LabelClass::furniture_front),
+  /// by id.
+  std::vector<uint16_t> front_classes;
   /// The fusion objects' current class and kind, by (current) id.
   struct Object {
     uint16_t class_id = 0;
@@ -236,6 +245,8 @@ struct MapResolution {
   size_t stranded_voxels_claimed = 0;
   /// Objects too large for their class that took a class that fits.
   size_t reclassed_by_size = 0;
+  /// Furniture fronts no thing held that became objects of a front class.
+  size_t objects_from_fronts = 0;
 };
 
 /// Decides the objects. `resolve`: a fusion id's current id (0: dropped).

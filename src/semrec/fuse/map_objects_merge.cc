@@ -305,6 +305,8 @@ void MapResolver::ClaimFronts() {
     }
   }
   std::vector<size_t> frontier;
+  std::vector<size_t> unclaimed;     // fronts no thing takes
+  std::map<uint16_t, float> named;   // front class -> voxels of fronts taken
   for (size_t f = 0; f < fronts_.size(); ++f) {
     std::map<uint32_t, size_t> held;  // thing -> its voxels on this front
     for (size_t i : on[f]) {
@@ -327,7 +329,11 @@ void MapResolver::ClaimFronts() {
         "them ({} on fronts, {} in all){}",
         fronts_[f].class_id, on[f].size(), best, best_held, on_fronts[best],
         size[best], takes ? ": takes the stranded rest" : "");
-    if (!takes) continue;
+    if (!takes) {
+      unclaimed.push_back(f);
+      continue;
+    }
+    named[owner_class_[best]] += static_cast<float>(on[f].size());
     for (size_t i : on[f]) {
       if (cells_[i].owner == best && IsThingCell(cells_[i])) {
         frontier.push_back(i);
@@ -337,22 +343,103 @@ void MapResolver::ClaimFronts() {
   // Breadth first from the things over stranded voxels on fronts: the
   // nearest thing takes each, across the corner of an L-shaped counter too.
   size_t claimed = 0;
-  for (size_t f = 0; f < frontier.size(); ++f) {
-    const uint32_t id = cells_[frontier[f]].owner;
-    ForNeighbours(frontier[f], [&](size_t n) {
-      Cell& c = cells_[n];
-      if (!on_any[n] || !c.stranded || !IsStuff(c.class_id)) return;
-      c.excluded.push_back(c.class_id);
-      c.class_id = owner_class_[id];
-      c.owner = id;
-      c.stranded = false;
-      frontier.push_back(n);
-      ++claimed;
-    });
-  }
+  const auto take = [&](size_t i, uint32_t id) {
+    Cell& c = cells_[i];
+    c.excluded.push_back(c.class_id);
+    c.class_id = owner_class_[id];
+    c.owner = id;
+    c.stranded = false;
+    frontier.push_back(i);
+    ++claimed;
+  };
+  const auto spread = [&](size_t from) {
+    for (size_t f = from; f < frontier.size(); ++f) {
+      const uint32_t id = cells_[frontier[f]].owner;
+      ForNeighbours(frontier[f], [&](size_t n) {
+        if (on_any[n] && cells_[n].stranded && IsStuff(cells_[n].class_id)) {
+          take(n, id);
+        }
+      });
+    }
+  };
+  spread(0);
   spdlog::debug("{} stranded voxels on furniture fronts joined things",
                 claimed);
+  if (options_.objects_from_fronts && !context_.front_classes.empty()) {
+    std::set<uint32_t> made;
+    for (size_t f : unclaimed) {
+      if (const uint32_t id = NewObjectFromFront(on[f], named, frontier, take,
+                                                 spread)) {
+        made.insert(id);
+      }
+    }
+    // Their tops (a worktop every view called wall too: no front holds it),
+    // on each front a new object holds, the other leg of an L too.
+    for (size_t f : unclaimed) {
+      std::map<uint32_t, float> holders;
+      for (size_t i : on[f]) {
+        if (made.count(cells_[i].owner)) holders[cells_[i].owner] += 1.0f;
+      }
+      const uint32_t id = MostVoted(holders, [](uint32_t) { return true; });
+      if (id == 0) continue;
+      const size_t start = frontier.size();
+      for (size_t i = 0; i < cells_.size(); ++i) {
+        const Cell& c = cells_[i];
+        if (c.stranded && IsStuff(c.class_id) &&
+            OnTopOfFront(c.p, fronts_[f], context_.up_world,
+                         options_.planes)) {
+          take(i, id);
+        }
+      }
+      spread(start);
+    }
+  }
   result_.stranded_voxels_claimed += claimed;
+}
+
+uint32_t MapResolver::NewObjectFromFront(
+    const std::vector<size_t>& on, const std::map<uint16_t, float>& named,
+    const std::vector<size_t>& frontier,
+    const std::function<void(size_t, uint32_t)>& take,
+    const std::function<void(size_t)>& spread) {
+  std::vector<size_t> stranded;
+  for (size_t i : on) {
+    if (cells_[i].stranded && IsStuff(cells_[i].class_id)) {
+      stranded.push_back(i);
+    }
+  }
+  // Mostly things, structure on a plane, or reached from an earlier front
+  // (the other leg of an L-shaped counter): no new object.
+  if (stranded.empty() || 2 * stranded.size() < on.size()) return 0;
+  // The front class of the scene's other fronts (a kitchen's counters are
+  // counters), else the one with the most votes on it, else the first.
+  uint16_t cls = context_.front_classes.front();
+  float best = 0.0f;
+  for (uint16_t candidate : context_.front_classes) {
+    const auto it = named.find(candidate);
+    if (it != named.end() && it->second > best) cls = candidate, best = it->second;
+  }
+  for (uint16_t candidate : context_.front_classes) {
+    if (!named.empty()) break;
+    float weight = 0.0f;
+    for (size_t i : on) {
+      if (const ClassEvidence* e = cells_[i].evidence->Find(candidate)) {
+        weight += e->weight;
+      }
+    }
+    if (weight > best) cls = candidate, best = weight;
+  }
+  const uint32_t id = (*next_id_)++;
+  owner_class_[id] = cls;
+  ++result_.objects_from_fronts;
+  spdlog::debug(
+      "furniture front no thing holds ({} of its {} voxels stranded): new "
+      "object {} of class {}",
+      stranded.size(), on.size(), id, cls);
+  const size_t start = frontier.size();
+  for (size_t i : stranded) take(i, id);
+  spread(start);
+  return id;
 }
 
 void MapResolver::ClaimStranded() {

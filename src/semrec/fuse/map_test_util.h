@@ -122,7 +122,8 @@ inline View RoomView() {
 }
 
 inline SceneFusion Fuse(const std::vector<View>& views,
-                        FusionOptions options = {}) {
+                        FusionOptions options = {},
+                        const MapContext& context = Context()) {
   options.merge = FusionOptions::Merge::kVoxel;
   SceneFusion fusion(options);
   for (size_t i = 0; i < views.size(); ++i) {
@@ -138,7 +139,7 @@ inline SceneFusion Fuse(const std::vector<View>& views,
     fusion.Integrate(views[i].segments, i, &observation);
   }
   fusion.Finish();
-  fusion.ResolveMap(Context());
+  fusion.ResolveMap(context);
   return fusion;
 }
 

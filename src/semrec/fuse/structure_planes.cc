@@ -47,6 +47,11 @@ bool OnAnyPlane(const Eigen::Vector3f& p,
 
 namespace {
 
+// The top band: a counter top lies at the front's top edge, within a voxel or
+// two (the 95th percentile of the front's heights).
+constexpr double kBelowTopM = 0.1, kAboveTopM = 0.15;
+
+
 constexpr double kAlongBinM = 0.1;
 
 int64_t AlongBin(const Eigen::Vector3d& along, const Eigen::Vector3d& p) {
@@ -100,9 +105,6 @@ std::vector<StructurePlane> TakeFurnitureFronts(
       options.min_top_surface_share > 1.0) {
     return fronts;
   }
-  // The top band: a counter top lies at the front's top edge, within a
-  // voxel or two (the 95th percentile of the front's heights).
-  constexpr double kBelowTopM = 0.1, kAboveTopM = 0.15;
   constexpr double kDepthBinM = 0.1;
   constexpr double kMinFromAboveCos = 0.0;
   // Behind the plane by more than a wall's other face and the tolerance.
@@ -208,6 +210,16 @@ bool BehindWall(const Eigen::Vector3f& p,
     return d < -wall.Tolerance(options) && d >= -options.max_front_distance_m &&
            wall.Covers(q) && !in_front_of_opposite(wall);
   });
+}
+
+bool OnTopOfFront(const Eigen::Vector3f& p, const StructurePlane& front,
+                  const Eigen::Vector3d& up_world,
+                  const StructurePlaneOptions& options) {
+  const Eigen::Vector3d q = p.cast<double>();
+  const double behind = front.offset - front.normal.dot(q);
+  const double h = up_world.dot(q) - front.top_m;
+  return behind > 0.0 && behind <= options.max_front_distance_m + 0.2 &&
+         h >= -kBelowTopM && h <= kAboveTopM && front.Covers(q);
 }
 
 namespace {

@@ -156,4 +156,11 @@ bool BehindWall(const Eigen::Vector3f& p,
                 const std::vector<StructurePlane>& planes,
                 const StructurePlaneOptions& options);
 
+/// True when `p` lies where a furniture front's top surface is (a worktop):
+/// behind the oriented front by at most max_front_distance_m + 0.2 m, from
+/// 10 cm below to 15 cm above its top (top_m), along a stretch it covers.
+bool OnTopOfFront(const Eigen::Vector3f& p, const StructurePlane& front,
+                  const Eigen::Vector3d& up_world,
+                  const StructurePlaneOptions& options);
+
 }  // namespace semrec::fuse

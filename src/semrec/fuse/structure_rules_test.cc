@@ -191,6 +191,47 @@ TEST(MapObjects, ACounterCalledWallIsFurnitureNotWall) {
   EXPECT_GT(ShareIn(WhereItWent(old, fronts), old_wall->id), 0.6);
 }
 
+// The same L-shaped counter, but every view calls all of it wall: nothing
+// names the furniture, yet its fronts have a worktop behind their tops. With
+// front classes in the label set it becomes one object of the first (no votes
+// say which), both legs and the worktop (beside a window lamp, whose contact
+// took much of it before it was claimed as the front's top); without, it
+// stays wall.
+TEST(MapObjects, AFrontNoViewNamesBecomesFurniture) {
+  Cloud counter;
+  for (const Cloud& p : {Box({0.6f, 0.6f, 0.0f}, {0.6f, 3.4f, 0.9f}),
+                         Box({0.62f, 3.4f, 0.0f}, {3.5f, 3.4f, 0.9f}),
+                         Box({0.05f, 0.6f, 0.92f}, {0.58f, 4.0f, 0.92f}),
+                         Box({0.6f, 3.42f, 0.92f}, {3.5f, 4.0f, 0.92f})}) {
+    counter.insert(counter.end(), p.begin(), p.end());
+  }
+  const Cloud glass = Box({0.0f, 0.6f, 1.0f}, {0.0f, 4.0f, 1.6f});
+  std::vector<View> views;
+  for (int i = 0; i < 4; ++i) {
+    View v;
+    v.segments.push_back(Segment(kFloor, 1, FloorPoints()));
+    v.segments.push_back(Segment(kWall, 2, counter));
+    v.segments.push_back(Segment(kLamp, 3, glass));
+    v.camera = {2.5f, 1.5f, 1.5f};
+    views.push_back(std::move(v));
+  }
+  MapContext context = Context();
+  context.front_classes = {kTable, kShelf};
+  const SceneFusion fusion = Fuse(views, {}, context);
+  const SceneSegment* cabinet = Largest(fusion, kTable);
+  ASSERT_NE(cabinet, nullptr);
+  EXPECT_GT(ShareIn(WhereItWent(fusion, counter), cabinet->id), 0.95);
+  EXPECT_EQ(Count(fusion, kTable), 1u);
+  EXPECT_EQ(Count(fusion, kShelf), 0u);
+  EXPECT_EQ(fusion.map_resolution()->objects_from_fronts, 1u);
+
+  const SceneFusion unnamed = Fuse(views);  // no front classes
+  const SceneSegment* wall = Largest(unnamed, kWall);
+  ASSERT_NE(wall, nullptr);
+  EXPECT_GT(ShareIn(WhereItWent(unnamed, counter), wall->id), 0.6);
+  EXPECT_EQ(Count(unnamed, kTable), 0u);
+}
+
 TEST(MapObjects, WallVotesOffTheWallPlaneDoNotCount) {
   // A table 30 cm from the wall: called wall in three of four views, table in
   // one. Off every large vertical plane the wall votes are set aside.

@@ -47,7 +47,8 @@ const std::map<std::string, LabelClass>& ShippedClassData() {
       const LabelSet set =
           ParseLabelSet(ProjectDataDir() / "labels" / (stem + ".json"), false);
       for (const LabelClass& c : set.Classes()) {
-        if (c.geometry != StructureGeometry::kNone || c.max_length_m > 0.0) {
+        if (c.geometry != StructureGeometry::kNone || c.max_length_m > 0.0 ||
+            c.furniture_front) {
           by_name.emplace(c.name, c);
         }
       }
@@ -68,6 +69,7 @@ void FillFromShipped(std::vector<LabelClass>* classes) {
     c.geometry = it->second.geometry;
     c.max_length_m = it->second.max_length_m;
     c.max_width_m = it->second.max_width_m;
+    c.furniture_front = it->second.furniture_front;
   }
 }
 
@@ -118,8 +120,9 @@ LabelSet ParseLabelSet(const std::filesystem::path& path,
         c.max_length_m = size[0];
         c.max_width_m = size[1];
       }
-      has_class_data |=
-          j[i].contains("structure") || j[i].contains("footprint_m");
+      if (j[i].contains("front")) c.furniture_front = j[i]["front"].get<bool>();
+      has_class_data |= j[i].contains("structure") ||
+                        j[i].contains("footprint_m") || j[i].contains("front");
       classes.push_back(c);
     } catch (const nlohmann::json::exception& e) {
       throw FormatError(path, "class " + std::to_string(i) + ": " + e.what());
@@ -170,6 +173,7 @@ void WriteLabelSetJson(const std::filesystem::path& path,
     if (c.max_length_m > 0.0) {
       entry["footprint_m"] = {c.max_length_m, c.max_width_m};
     }
+    if (c.furniture_front) entry["front"] = true;
     j.push_back(std::move(entry));
   }
   WriteTextFileAtomic(path, j.dump(2) + "\n");

@@ -53,7 +53,10 @@ TEST(LabelSets, ShippedSetsSayWhereStructureLiesAndHowLargeFurnitureIs) {
     EXPECT_EQ(get(set, "sofa").max_width_m, 1.2);
     EXPECT_EQ(get(set, "table").max_width_m, 1.3);
     EXPECT_EQ(get(set, "cabinet").max_length_m, 0.0);  // sizes vary
+    EXPECT_TRUE(get(set, "cabinet").furniture_front);
+    EXPECT_FALSE(get(set, "chair").furniture_front);
   }
+  EXPECT_TRUE(get(LoadLabelSet("nyu40"), "dresser").furniture_front);
   EXPECT_EQ(get(LoadLabelSet("ade20k"), "sky").geometry,
             StructureGeometry::kNone);
   EXPECT_EQ(get(LoadLabelSet("ade20k"), "rug").geometry,
@@ -72,6 +75,7 @@ TEST(LabelSets, StructurePlanesAndFootprintsSurviveWritingAndReading) {
   LabelClass bench{2, "bench", {10, 20, 30}, ClassKind::kThing};
   bench.max_length_m = 2.2;
   bench.max_width_m = 0.8;
+  bench.furniture_front = true;
   set.Add(wall);
   set.Add(bench);
   set.Add({3, "box", {1, 2, 3}, ClassKind::kThing});
@@ -81,6 +85,8 @@ TEST(LabelSets, StructurePlanesAndFootprintsSurviveWritingAndReading) {
   EXPECT_EQ(back.Get(1).geometry, StructureGeometry::kVertical);
   EXPECT_EQ(back.Get(2).max_length_m, 2.2);
   EXPECT_EQ(back.Get(2).max_width_m, 0.8);
+  EXPECT_TRUE(back.Get(2).furniture_front);
+  EXPECT_FALSE(back.Get(3).furniture_front);
   EXPECT_EQ(back.Get(3).max_length_m, 0.0);
   EXPECT_EQ(back.Get(3).geometry, StructureGeometry::kNone);
   // A list that says nothing of either (older outputs, hand-written) takes
@@ -88,10 +94,12 @@ TEST(LabelSets, StructurePlanesAndFootprintsSurviveWritingAndReading) {
   semrec::testing::WriteText(
       dir.path() / "old.json",
       "[{\"id\": 1, \"name\": \"wall\", \"kind\": \"stuff\"}, "
-      "{\"id\": 2, \"name\": \"chair\", \"kind\": \"thing\"}]");
+      "{\"id\": 2, \"name\": \"chair\", \"kind\": \"thing\"}, "
+      "{\"id\": 3, \"name\": \"counter\", \"kind\": \"thing\"}]");
   const LabelSet old = ReadLabelSetJson(dir.path() / "old.json");
   EXPECT_EQ(old.Get(1).geometry, StructureGeometry::kVertical);
   EXPECT_EQ(old.Get(2).max_length_m, 0.75);
+  EXPECT_TRUE(old.Get(3).furniture_front);
   semrec::testing::WriteText(
       dir.path() / "said.json",
       "[{\"id\": 1, \"name\": \"wall\", \"kind\": \"stuff\", "
@@ -114,6 +122,9 @@ TEST(LabelSets, StructurePlanesAndFootprintsSurviveWritingAndReading) {
         std::pair{"[{\"id\": 1, \"name\": \"floor\", \"kind\": "
                   "\"stuff\", \"footprint_m\": [3.0, 1.2]}]",
                   "a footprint needs a thing"},
+        std::pair{"[{\"id\": 1, \"name\": \"wall\", \"kind\": "
+                  "\"stuff\", \"front\": true}]",
+                  "furniture front but not a thing"},
         std::pair{"[{\"id\": 1, \"name\": \"sofa\", \"kind\": "
                   "\"thing\", \"footprint_m\": [3.0]}]",
                   "class 0"}}) {

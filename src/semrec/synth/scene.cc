@@ -20,6 +20,7 @@ struct ClassSpec {
   Rgb color;
   StructureGeometry geometry = StructureGeometry::kNone;
   double max_length_m = 0.0, max_width_m = 0.0;  // LabelClass
+  bool furniture_front = false;                  // LabelClass
 };
 
 // Colours are the flat albedo of each class (people get their own clothing
@@ -35,11 +36,11 @@ constexpr ClassSpec kClasses[] = {
     {8, "box", {190, 160, 60}},
     {9, "lamp", {230, 210, 120}, StructureGeometry::kNone, 0.7, 0.7},
     {10, "bed", {90, 140, 90}, StructureGeometry::kNone, 2.4, 2.2},
-    {11, "cabinet", {110, 110, 120}},
+    {11, "cabinet", {110, 110, 120}, StructureGeometry::kNone, 0.0, 0.0, true},
     {12, "monitor", {30, 30, 35}, StructureGeometry::kNone, 1.0, 0.5},
     {13, "plant", {50, 150, 60}, StructureGeometry::kNone, 1.2, 1.2},
     {14, "person", {200, 40, 40}},
-    {15, "counter", {150, 45, 50}},
+    {15, "counter", {150, 45, 50}, StructureGeometry::kNone, 0.0, 0.0, true},
 };
 
 Eigen::Matrix3d Yaw(double yaw) {
@@ -225,6 +226,7 @@ const LabelSet& SynthClasses() {
       label.geometry = c.geometry;
       label.max_length_m = c.max_length_m;
       label.max_width_m = c.max_width_m;
+      label.furniture_front = c.furniture_front;
       set.Add(label);
     }
     return set;
