@@ -305,8 +305,8 @@ void MapResolver::ClaimFronts() {
     }
   }
   std::vector<size_t> frontier;
-  std::vector<size_t> unclaimed;     // fronts no thing takes
-  std::map<uint16_t, float> named;   // front class -> voxels of fronts taken
+  std::vector<size_t> unclaimed;    // fronts no thing takes
+  std::map<uint16_t, float> named;  // front class -> voxels of fronts taken
   for (size_t f = 0; f < fronts_.size(); ++f) {
     std::map<uint32_t, size_t> held;  // thing -> its voxels on this front
     for (size_t i : on[f]) {
@@ -368,8 +368,8 @@ void MapResolver::ClaimFronts() {
   if (options_.objects_from_fronts && !context_.front_classes.empty()) {
     std::set<uint32_t> made;
     for (size_t f : unclaimed) {
-      if (const uint32_t id = NewObjectFromFront(on[f], named, frontier, take,
-                                                 spread)) {
+      if (const uint32_t id =
+              NewObjectFromFront(on[f], named, frontier, take, spread)) {
         made.insert(id);
       }
     }
@@ -386,8 +386,7 @@ void MapResolver::ClaimFronts() {
       for (size_t i = 0; i < cells_.size(); ++i) {
         const Cell& c = cells_[i];
         if (c.stranded && IsStuff(c.class_id) &&
-            OnTopOfFront(c.p, fronts_[f], context_.up_world,
-                         options_.planes)) {
+            OnTopOfFront(c.p, fronts_[f], context_.up_world, options_.planes)) {
           take(i, id);
         }
       }
@@ -417,7 +416,8 @@ uint32_t MapResolver::NewObjectFromFront(
   float best = 0.0f;
   for (uint16_t candidate : context_.front_classes) {
     const auto it = named.find(candidate);
-    if (it != named.end() && it->second > best) cls = candidate, best = it->second;
+    if (it != named.end() && it->second > best)
+      cls = candidate, best = it->second;
   }
   for (uint16_t candidate : context_.front_classes) {
     if (!named.empty()) break;

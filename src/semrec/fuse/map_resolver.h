@@ -336,10 +336,10 @@ class MapResolver {
   // voxels and those on fronts they reach (`take` one, `spread` from
   // `frontier`'s end). Returns its id, 0 if none.
   uint32_t NewObjectFromFront(const std::vector<size_t>& on,
-                          const std::map<uint16_t, float>& named,
-                          const std::vector<size_t>& frontier,
-                          const std::function<void(size_t, uint32_t)>& take,
-                          const std::function<void(size_t)>& spread);
+                              const std::map<uint16_t, float>& named,
+                              const std::vector<size_t>& frontier,
+                              const std::function<void(size_t, uint32_t)>& take,
+                              const std::function<void(size_t)>& spread);
 
   // Voxels per thing object (owner), over the thing cells.
   std::map<uint32_t, size_t> ThingSizes() const;

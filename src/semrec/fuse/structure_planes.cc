@@ -51,7 +51,6 @@ namespace {
 // two (the 95th percentile of the front's heights).
 constexpr double kBelowTopM = 0.1, kAboveTopM = 0.15;
 
-
 constexpr double kAlongBinM = 0.1;
 
 int64_t AlongBin(const Eigen::Vector3d& along, const Eigen::Vector3d& p) {
@@ -287,7 +286,8 @@ std::vector<StructurePlane> HorizontalPlane(const Cloud& points, bool lowest,
       if (std::abs(d) <= o.tolerance_m) r.push_back(d);
     }
     // (the window's middle bin may be empty)
-    plane.tolerance_m = r.empty() ? o.tolerance_m : OwnTolerance(std::move(r), o);
+    plane.tolerance_m =
+        r.empty() ? o.tolerance_m : OwnTolerance(std::move(r), o);
     spdlog::debug("{} at {:.3f} m: {} points, tolerance {:.3f} m",
                   lowest ? "floor" : "ceiling", plane.offset, n,
                   plane.tolerance_m);
