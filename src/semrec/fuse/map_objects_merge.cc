@@ -416,11 +416,13 @@ uint32_t MapResolver::NewObjectFromFront(
   float best = 0.0f;
   for (uint16_t candidate : context_.front_classes) {
     const auto it = named.find(candidate);
-    if (it != named.end() && it->second > best)
+    if (it != named.end() && it->second > best) {
       cls = candidate, best = it->second;
+    }
   }
+  const bool from_named = best > 0.0f;
   for (uint16_t candidate : context_.front_classes) {
-    if (!named.empty()) break;
+    if (from_named) break;
     float weight = 0.0f;
     for (size_t i : on) {
       if (const ClassEvidence* e = cells_[i].evidence->Find(candidate)) {

@@ -232,6 +232,40 @@ TEST(MapObjects, AFrontNoViewNamesBecomesFurniture) {
   EXPECT_EQ(Count(unnamed, kTable), 0u);
 }
 
+// Two counters apart: one view names the first (as the second front class),
+// none the second. The second takes the first's class, not the first front
+// class of the label set: a kitchen's counters are counters.
+TEST(MapObjects, AFrontNoViewNamesTakesTheClassOfTheNamedFronts) {
+  const auto join = [](std::initializer_list<Cloud> parts) {
+    Cloud c;
+    for (const Cloud& p : parts) c.insert(c.end(), p.begin(), p.end());
+    return c;
+  };
+  const Cloud named = join({Box({0.6f, 0.6f, 0.0f}, {0.6f, 2.4f, 0.9f}),
+                            Box({0.05f, 0.6f, 0.92f}, {0.58f, 2.4f, 0.92f})});
+  const Cloud unnamed = join({Box({1.4f, 3.4f, 0.0f}, {3.5f, 3.4f, 0.9f}),
+                              Box({1.4f, 3.42f, 0.92f}, {3.5f, 4.0f, 0.92f})});
+  std::vector<View> views;
+  for (int i = 0; i < 4; ++i) {
+    View v;
+    v.segments.push_back(Segment(kFloor, 1, FloorPoints()));
+    v.segments.push_back(
+        Segment(kWall, 2, i == 0 ? unnamed : join({named, unnamed})));
+    if (i == 0) v.segments.push_back(Segment(kShelf, 3, named));
+    v.camera = {2.5f, 1.5f, 1.5f};
+    views.push_back(std::move(v));
+  }
+  MapContext context = Context();
+  context.front_classes = {kTable, kShelf};
+  const SceneFusion fusion = Fuse(views, {}, context);
+  EXPECT_EQ(Count(fusion, kTable), 0u);
+  EXPECT_EQ(Count(fusion, kShelf), 2u);
+  EXPECT_EQ(fusion.map_resolution()->objects_from_fronts, 1u);
+  const auto went = WhereItWent(fusion, unnamed);
+  const SceneSegment* wall = Largest(fusion, kWall);
+  EXPECT_LT(wall != nullptr ? ShareIn(went, wall->id) : 0.0, 0.05);
+}
+
 TEST(MapObjects, WallVotesOffTheWallPlaneDoNotCount) {
   // A table 30 cm from the wall: called wall in three of four views, table in
   // one. Off every large vertical plane the wall votes are set aside.
