@@ -1,7 +1,8 @@
 // The structure rules of objects decided per map voxel (fuse/map_objects.h,
 // fuse/structure_planes.h), on synthetic surfaces that fail the way real labels
 // do: furniture near walls called wall, legs called floor, the parts of a
-// thing flush with the wall, the two faces of an interior wall.
+// thing flush with the wall, the two faces of an interior wall (furniture
+// fronts: furniture_front_test.cc).
 #include <algorithm>
 #include <cmath>
 
@@ -131,139 +132,6 @@ TEST(MapObjects, FurnitureJustInFrontOfAWallIsNotWall) {
   const SceneSegment* wall = Largest(old, kWall);
   ASSERT_NE(wall, nullptr);
   EXPECT_GT(WhereItWent(old, front).at(wall->id), 0.9);
-}
-
-// 7-Scenes chess: an L-shaped row of base cabinets under a counter, 0.9 m
-// tall, that the 2D model calls wall in every view, one view naming the
-// corner cabinet (kTable stands for cabinet: both fronts and the top there);
-// the wall above the counter is glass it calls window (kLamp). Each row's
-// front is a large vertical plane, tall enough for a wall, but with a counter
-// top behind its top edge: a front of furniture (no view sees the top of a
-// wall). Both fronts end in the cabinet, which lies on the two fronts (on
-// neither mostly); the chair standing against one row, a fair part of it on
-// the row's plane, stays a chair and does not take the row.
-TEST(MapObjects, ACounterCalledWallIsFurnitureNotWall) {
-  const auto join = [](std::initializer_list<Cloud> parts) {
-    Cloud c;
-    for (const Cloud& p : parts) c.insert(c.end(), p.begin(), p.end());
-    return c;
-  };
-  const Cloud named = join({Box({0.6f, 2.6f, 0.0f}, {0.6f, 3.4f, 0.9f}),
-                            Box({0.62f, 3.4f, 0.0f}, {1.5f, 3.4f, 0.9f}),
-                            Box({0.05f, 2.6f, 0.92f}, {0.58f, 4.0f, 0.92f})});
-  const Cloud rest = join({Box({0.6f, 0.6f, 0.0f}, {0.6f, 2.56f, 0.9f}),
-                           Box({1.54f, 3.4f, 0.0f}, {3.5f, 3.4f, 0.9f}),
-                           Box({0.05f, 0.6f, 0.92f}, {0.58f, 2.56f, 0.92f}),
-                           Box({0.6f, 3.42f, 0.92f}, {3.5f, 4.0f, 0.92f})});
-  const Cloud fronts = join({Box({0.6f, 0.6f, 0.0f}, {0.6f, 3.4f, 0.9f}),
-                             Box({0.62f, 3.4f, 0.0f}, {3.5f, 3.4f, 0.9f})});
-  const Cloud glass = Box({0.0f, 0.6f, 1.0f}, {0.0f, 4.0f, 1.6f});
-  const Cloud chair = Box({2.0f, 2.9f, 0.02f}, {2.45f, 3.36f, 0.9f});
-  std::vector<View> views;
-  for (int i = 0; i < 4; ++i) {
-    View v;
-    v.segments.push_back(Segment(kFloor, 1, FloorPoints()));
-    v.segments.push_back(
-        Segment(kWall, 2, i == 0 ? rest : join({rest, named})));
-    v.segments.push_back(Segment(kLamp, 3, glass));
-    v.segments.push_back(Segment(kChair, 4, chair));
-    if (i == 0) v.segments.push_back(Segment(kTable, 5, named));
-    v.camera = {2.5f, 1.5f, 1.5f};
-    views.push_back(std::move(v));
-  }
-  const SceneFusion fusion = Fuse(views);
-  const SceneSegment* cabinet = Largest(fusion, kTable);
-  ASSERT_NE(cabinet, nullptr);
-  const auto went = WhereItWent(fusion, fronts);
-  EXPECT_GT(ShareIn(went, cabinet->id), 0.9);
-  const SceneSegment* wall = Largest(fusion, kWall);
-  EXPECT_LT(wall ? ShareIn(went, wall->id) : 0.0, 0.05);
-  EXPECT_EQ(Count(fusion, kTable), 1u);
-  const SceneSegment* c = Largest(fusion, kChair);
-  ASSERT_NE(c, nullptr);
-  EXPECT_GT(ShareIn(WhereItWent(fusion, chair), c->id), 0.9);
-  // Without the rule the fronts are wall planes and stay wall.
-  FusionOptions without;
-  without.map_objects.planes.min_top_surface_share = 0.0;
-  const SceneFusion old = Fuse(views, without);
-  const SceneSegment* old_wall = Largest(old, kWall);
-  ASSERT_NE(old_wall, nullptr);
-  EXPECT_GT(ShareIn(WhereItWent(old, fronts), old_wall->id), 0.6);
-}
-
-// The same L-shaped counter, but every view calls all of it wall: nothing
-// names the furniture, yet its fronts have a worktop behind their tops. With
-// front classes in the label set it becomes one object of the first (no votes
-// say which), both legs and the worktop (beside a window lamp, whose contact
-// took much of it before it was claimed as the front's top); without, it
-// stays wall.
-TEST(MapObjects, AFrontNoViewNamesBecomesFurniture) {
-  Cloud counter;
-  for (const Cloud& p : {Box({0.6f, 0.6f, 0.0f}, {0.6f, 3.4f, 0.9f}),
-                         Box({0.62f, 3.4f, 0.0f}, {3.5f, 3.4f, 0.9f}),
-                         Box({0.05f, 0.6f, 0.92f}, {0.58f, 4.0f, 0.92f}),
-                         Box({0.6f, 3.42f, 0.92f}, {3.5f, 4.0f, 0.92f})}) {
-    counter.insert(counter.end(), p.begin(), p.end());
-  }
-  const Cloud glass = Box({0.0f, 0.6f, 1.0f}, {0.0f, 4.0f, 1.6f});
-  std::vector<View> views;
-  for (int i = 0; i < 4; ++i) {
-    View v;
-    v.segments.push_back(Segment(kFloor, 1, FloorPoints()));
-    v.segments.push_back(Segment(kWall, 2, counter));
-    v.segments.push_back(Segment(kLamp, 3, glass));
-    v.camera = {2.5f, 1.5f, 1.5f};
-    views.push_back(std::move(v));
-  }
-  MapContext context = Context();
-  context.front_classes = {kTable, kShelf};
-  const SceneFusion fusion = Fuse(views, {}, context);
-  const SceneSegment* cabinet = Largest(fusion, kTable);
-  ASSERT_NE(cabinet, nullptr);
-  EXPECT_GT(ShareIn(WhereItWent(fusion, counter), cabinet->id), 0.95);
-  EXPECT_EQ(Count(fusion, kTable), 1u);
-  EXPECT_EQ(Count(fusion, kShelf), 0u);
-  EXPECT_EQ(fusion.map_resolution()->objects_from_fronts, 1u);
-
-  const SceneFusion unnamed = Fuse(views);  // no front classes
-  const SceneSegment* wall = Largest(unnamed, kWall);
-  ASSERT_NE(wall, nullptr);
-  EXPECT_GT(ShareIn(WhereItWent(unnamed, counter), wall->id), 0.6);
-  EXPECT_EQ(Count(unnamed, kTable), 0u);
-}
-
-// Two counters apart: one view names the first (as the second front class),
-// none the second. The second takes the first's class, not the first front
-// class of the label set: a kitchen's counters are counters.
-TEST(MapObjects, AFrontNoViewNamesTakesTheClassOfTheNamedFronts) {
-  const auto join = [](std::initializer_list<Cloud> parts) {
-    Cloud c;
-    for (const Cloud& p : parts) c.insert(c.end(), p.begin(), p.end());
-    return c;
-  };
-  const Cloud named = join({Box({0.6f, 0.6f, 0.0f}, {0.6f, 2.4f, 0.9f}),
-                            Box({0.05f, 0.6f, 0.92f}, {0.58f, 2.4f, 0.92f})});
-  const Cloud unnamed = join({Box({1.4f, 3.4f, 0.0f}, {3.5f, 3.4f, 0.9f}),
-                              Box({1.4f, 3.42f, 0.92f}, {3.5f, 4.0f, 0.92f})});
-  std::vector<View> views;
-  for (int i = 0; i < 4; ++i) {
-    View v;
-    v.segments.push_back(Segment(kFloor, 1, FloorPoints()));
-    v.segments.push_back(
-        Segment(kWall, 2, i == 0 ? unnamed : join({named, unnamed})));
-    if (i == 0) v.segments.push_back(Segment(kShelf, 3, named));
-    v.camera = {2.5f, 1.5f, 1.5f};
-    views.push_back(std::move(v));
-  }
-  MapContext context = Context();
-  context.front_classes = {kTable, kShelf};
-  const SceneFusion fusion = Fuse(views, {}, context);
-  EXPECT_EQ(Count(fusion, kTable), 0u);
-  EXPECT_EQ(Count(fusion, kShelf), 2u);
-  EXPECT_EQ(fusion.map_resolution()->objects_from_fronts, 1u);
-  const auto went = WhereItWent(fusion, unnamed);
-  const SceneSegment* wall = Largest(fusion, kWall);
-  EXPECT_LT(wall != nullptr ? ShareIn(went, wall->id) : 0.0, 0.05);
 }
 
 TEST(MapObjects, WallVotesOffTheWallPlaneDoNotCount) {
@@ -533,71 +401,6 @@ TEST(StructurePlanes, TheTwoFacesOfAnInteriorWallAreTwoPlanes) {
 
 // Behind a wall is inside it or on top of it, unless in front of the wall's
 // other face: the next room.
-// A wall is not a front: seen to 2.4 m (or only to 1.2 m, the views looking
-// down), with the next room behind it seen through a doorway (its floor, a
-// table 0.75 m high just behind the wall), or seen to a deep window sill, or
-// to the height of a shelf's top behind it seen through a doorway. A
-// counter's front is: 0.9 m tall, its top 60 cm deep behind the top edge.
-TEST(StructurePlanes, OnlyAFrontWithASurfaceBehindItsTopIsFurniture) {
-  const Eigen::Vector3d up = Eigen::Vector3d::UnitZ();
-  const StructurePlaneOptions o;
-  Cloud next_room = Box({-3.0f, 0.0f, 0.0f}, {-0.1f, 4.0f, 0.0f}, 0.05f);
-  const Cloud table = Box({-0.6f, 1.0f, 0.75f}, {-0.1f, 2.0f, 0.75f}, 0.05f);
-  next_room.insert(next_room.end(), table.begin(), table.end());
-  for (const float top : {2.4f, 1.2f, 0.9f}) {
-    const Cloud wall = Box({0.0f, 0.0f, 0.05f}, {0.0f, 4.0f, top}, 0.05f);
-    auto planes = FindStructurePlanes(wall, StructureGeometry::kVertical, up,
-                                      0.0025, o, {wall.size(), {1, 0, 0}});
-    ASSERT_EQ(planes.size(), 1u) << top;
-    Cloud scene = wall;
-    scene.insert(scene.end(), next_room.begin(), next_room.end());
-    EXPECT_TRUE(TakeFurnitureFronts(scene, up, o, &planes).empty()) << top;
-    EXPECT_EQ(planes.size(), 1u) << top;
-  }
-  const Cloud front = Box({0.0f, 0.0f, 0.05f}, {0.0f, 4.0f, 0.9f}, 0.05f);
-  const Cloud counter = Box({-0.6f, 0.0f, 0.92f}, {-0.05f, 4.0f, 0.92f}, 0.05f);
-  // A wall seen only below windows that reach the ceiling, its 25 cm deep
-  // sill behind its top: a wall.
-  const Cloud sill = Box({-0.25f, 0.0f, 0.92f}, {-0.05f, 4.0f, 0.92f}, 0.05f);
-  for (const bool is_counter : {true, false}) {
-    auto planes = FindStructurePlanes(front, StructureGeometry::kVertical, up,
-                                      0.0025, o, {front.size(), {1, 0, 0}});
-    ASSERT_EQ(planes.size(), 1u);
-    Cloud scene = front;
-    const Cloud& top = is_counter ? counter : sill;
-    scene.insert(scene.end(), top.begin(), top.end());
-    const auto fronts = TakeFurnitureFronts(scene, up, o, &planes);
-    EXPECT_EQ(fronts.size(), is_counter ? 1u : 0u);
-    EXPECT_EQ(planes.size(), is_counter ? 0u : 1u);
-  }
-  // A wall seen to 1.8 m, the top of a shelf in the next room level with
-  // that and 40 cm deep behind it, seen through a doorway from below (flat
-  // preset, seed 2): taken as a front only when the view directions are
-  // unknown.
-  const Cloud wall = Box({0.0f, 0.0f, 0.05f}, {0.0f, 4.0f, 1.8f}, 0.05f);
-  const Cloud shelf = Box({-0.5f, 1.5f, 1.8f}, {-0.1f, 2.5f, 1.8f}, 0.05f);
-  Cloud scene = wall;
-  scene.insert(scene.end(), shelf.begin(), shelf.end());
-  std::vector<Eigen::Vector3f> seen_from(wall.size(), {1, 0, 0});
-  seen_from.resize(scene.size(), Eigen::Vector3f(1, 0, -0.4f).normalized());
-  for (const bool directions : {true, false}) {
-    auto planes = FindStructurePlanes(wall, StructureGeometry::kVertical, up,
-                                      0.0025, o, {wall.size(), {1, 0, 0}});
-    ASSERT_EQ(planes.size(), 1u);
-    const auto fronts = TakeFurnitureFronts(
-        scene, up, o, &planes,
-        directions ? seen_from : std::vector<Eigen::Vector3f>{});
-    EXPECT_EQ(fronts.size(), directions ? 0u : 1u);
-  }
-  // Low planes are found apart, for the same test.
-  std::vector<StructurePlane> low;
-  const Cloud base = Box({0.0f, 0.0f, 0.05f}, {0.0f, 4.0f, 0.5f}, 0.05f);
-  EXPECT_TRUE(FindStructurePlanes(base, StructureGeometry::kVertical, up,
-                                  0.0025, o, {base.size(), {1, 0, 0}}, &low)
-                  .empty());
-  EXPECT_EQ(low.size(), 1u);
-}
-
 TEST(StructurePlanes, BehindAWallIsNotTheNextRoom) {
   const Cloud a = Box({3.95f, 0, 0}, {3.95f, 5, 2.5f}, 0.05f);
   const Cloud b = Box({4.05f, 0, 0}, {4.05f, 5, 2.5f}, 0.05f);
