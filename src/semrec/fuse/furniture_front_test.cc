@@ -89,19 +89,14 @@ TEST(StructurePlanes, OnlyAFrontWithASurfaceBehindItsTopIsFurniture) {
 // neither mostly); the chair standing against one row, a fair part of it on
 // the row's plane, stays a chair and does not take the row.
 TEST(MapObjects, ACounterCalledWallIsFurnitureNotWall) {
-  const auto join = [](std::initializer_list<Cloud> parts) {
-    Cloud c;
-    for (const Cloud& p : parts) c.insert(c.end(), p.begin(), p.end());
-    return c;
-  };
-  const Cloud named = join({Box({0.6f, 2.6f, 0.0f}, {0.6f, 3.4f, 0.9f}),
+  const Cloud named = Join({Box({0.6f, 2.6f, 0.0f}, {0.6f, 3.4f, 0.9f}),
                             Box({0.62f, 3.4f, 0.0f}, {1.5f, 3.4f, 0.9f}),
                             Box({0.05f, 2.6f, 0.92f}, {0.58f, 4.0f, 0.92f})});
-  const Cloud rest = join({Box({0.6f, 0.6f, 0.0f}, {0.6f, 2.56f, 0.9f}),
+  const Cloud rest = Join({Box({0.6f, 0.6f, 0.0f}, {0.6f, 2.56f, 0.9f}),
                            Box({1.54f, 3.4f, 0.0f}, {3.5f, 3.4f, 0.9f}),
                            Box({0.05f, 0.6f, 0.92f}, {0.58f, 2.56f, 0.92f}),
                            Box({0.6f, 3.42f, 0.92f}, {3.5f, 4.0f, 0.92f})});
-  const Cloud fronts = join({Box({0.6f, 0.6f, 0.0f}, {0.6f, 3.4f, 0.9f}),
+  const Cloud fronts = Join({Box({0.6f, 0.6f, 0.0f}, {0.6f, 3.4f, 0.9f}),
                              Box({0.62f, 3.4f, 0.0f}, {3.5f, 3.4f, 0.9f})});
   const Cloud glass = Box({0.0f, 0.6f, 1.0f}, {0.0f, 4.0f, 1.6f});
   const Cloud chair = Box({2.0f, 2.9f, 0.02f}, {2.45f, 3.36f, 0.9f});
@@ -110,7 +105,7 @@ TEST(MapObjects, ACounterCalledWallIsFurnitureNotWall) {
     View v;
     v.segments.push_back(Segment(kFloor, 1, FloorPoints()));
     v.segments.push_back(
-        Segment(kWall, 2, i == 0 ? rest : join({rest, named})));
+        Segment(kWall, 2, i == 0 ? rest : Join({rest, named})));
     v.segments.push_back(Segment(kLamp, 3, glass));
     v.segments.push_back(Segment(kChair, 4, chair));
     if (i == 0) v.segments.push_back(Segment(kTable, 5, named));
@@ -144,13 +139,10 @@ TEST(MapObjects, ACounterCalledWallIsFurnitureNotWall) {
 // took much of it before it was claimed as the front's top); without, it
 // stays wall.
 TEST(MapObjects, AFrontNoViewNamesBecomesFurniture) {
-  Cloud counter;
-  for (const Cloud& p : {Box({0.6f, 0.6f, 0.0f}, {0.6f, 3.4f, 0.9f}),
-                         Box({0.62f, 3.4f, 0.0f}, {3.5f, 3.4f, 0.9f}),
-                         Box({0.05f, 0.6f, 0.92f}, {0.58f, 4.0f, 0.92f}),
-                         Box({0.6f, 3.42f, 0.92f}, {3.5f, 4.0f, 0.92f})}) {
-    counter.insert(counter.end(), p.begin(), p.end());
-  }
+  const Cloud counter = Join({Box({0.6f, 0.6f, 0.0f}, {0.6f, 3.4f, 0.9f}),
+                              Box({0.62f, 3.4f, 0.0f}, {3.5f, 3.4f, 0.9f}),
+                              Box({0.05f, 0.6f, 0.92f}, {0.58f, 4.0f, 0.92f}),
+                              Box({0.6f, 3.42f, 0.92f}, {3.5f, 4.0f, 0.92f})});
   const Cloud glass = Box({0.0f, 0.6f, 1.0f}, {0.0f, 4.0f, 1.6f});
   std::vector<View> views;
   for (int i = 0; i < 4; ++i) {
@@ -182,21 +174,16 @@ TEST(MapObjects, AFrontNoViewNamesBecomesFurniture) {
 // none the second. The second takes the first's class, not the first front
 // class of the label set: a kitchen's counters are counters.
 TEST(MapObjects, AFrontNoViewNamesTakesTheClassOfTheNamedFronts) {
-  const auto join = [](std::initializer_list<Cloud> parts) {
-    Cloud c;
-    for (const Cloud& p : parts) c.insert(c.end(), p.begin(), p.end());
-    return c;
-  };
-  const Cloud named = join({Box({0.6f, 0.6f, 0.0f}, {0.6f, 2.4f, 0.9f}),
+  const Cloud named = Join({Box({0.6f, 0.6f, 0.0f}, {0.6f, 2.4f, 0.9f}),
                             Box({0.05f, 0.6f, 0.92f}, {0.58f, 2.4f, 0.92f})});
-  const Cloud unnamed = join({Box({1.4f, 3.4f, 0.0f}, {3.5f, 3.4f, 0.9f}),
+  const Cloud unnamed = Join({Box({1.4f, 3.4f, 0.0f}, {3.5f, 3.4f, 0.9f}),
                               Box({1.4f, 3.42f, 0.92f}, {3.5f, 4.0f, 0.92f})});
   std::vector<View> views;
   for (int i = 0; i < 4; ++i) {
     View v;
     v.segments.push_back(Segment(kFloor, 1, FloorPoints()));
     v.segments.push_back(
-        Segment(kWall, 2, i == 0 ? unnamed : join({named, unnamed})));
+        Segment(kWall, 2, i == 0 ? unnamed : Join({named, unnamed})));
     if (i == 0) v.segments.push_back(Segment(kShelf, 3, named));
     v.camera = {2.5f, 1.5f, 1.5f};
     views.push_back(std::move(v));

@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cstdint>
+#include <initializer_list>
 #include <map>
 #include <vector>
 
@@ -38,6 +39,12 @@ inline Cloud Box(const Eigen::Vector3f& lo, const Eigen::Vector3f& hi,
 }
 
 // The room: a wall at x = 0 and a floor at z = 0, 4 x 4 m.
+// The points of `parts`, one after the other.
+inline Cloud Join(std::initializer_list<Cloud> parts) {
+  Cloud c;
+  for (const Cloud& p : parts) c.insert(c.end(), p.begin(), p.end());
+  return c;
+}
 inline Cloud WallPoints() { return Box({0, 0, 0.05f}, {0, 4, 2.5f}, 0.03f); }
 inline Cloud FloorPoints() { return Box({0.05f, 0, 0}, {4, 4, 0}, 0.03f); }
 
