@@ -97,10 +97,12 @@ struct MapObjectOptions {
   /// the front's voxels (and lying mostly on it).
   double min_front_share = 0.1;
   /// A front no thing takes whose voxels are mostly stranded (every view
-  /// called it wall) becomes an object of its own: of the label set's front
-  /// class (LabelClass::furniture_front) with the most votes on it, the
-  /// lowest id when none has any. A row of base cabinets every view called
-  /// wall is furniture, not wall. Off, or with no front class, it stays wall.
+  /// called it wall) becomes an object of its own, with the stranded voxels
+  /// on its top (OnTopOfFront): of the label set's front class
+  /// (LabelClass::furniture_front) that things took the scene's other fronts
+  /// with, else the one with the most votes on it, else the lowest id. A row
+  /// of base cabinets every view called wall is furniture, not wall. Off, or
+  /// with no front class, it stays wall.
   bool objects_from_fronts = true;
   /// A split-off piece with fewer voxels than this joins a touching object of
   /// its class instead of standing alone.

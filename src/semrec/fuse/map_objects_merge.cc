@@ -356,9 +356,7 @@ void MapResolver::ClaimFronts() {
     for (size_t f = from; f < frontier.size(); ++f) {
       const uint32_t id = cells_[frontier[f]].owner;
       ForNeighbours(frontier[f], [&](size_t n) {
-        if (on_any[n] && cells_[n].stranded && IsStuff(cells_[n].class_id)) {
-          take(n, id);
-        }
+        if (on_any[n] && IsStranded(cells_[n])) take(n, id);
       });
     }
   };
@@ -368,10 +366,14 @@ void MapResolver::ClaimFronts() {
   if (options_.objects_from_fronts && !context_.front_classes.empty()) {
     std::set<uint32_t> made;
     for (size_t f : unclaimed) {
-      if (const uint32_t id =
-              NewObjectFromFront(on[f], named, frontier, take, spread)) {
-        made.insert(id);
+      const uint32_t id = NewObjectFromFront(on[f], named);
+      if (id == 0) continue;
+      made.insert(id);
+      const size_t start = frontier.size();
+      for (size_t i : on[f]) {
+        if (IsStranded(cells_[i])) take(i, id);
       }
+      spread(start);
     }
     // Their tops (a worktop every view called wall too: no front holds it),
     // on each front a new object holds, the other leg of an L too.
@@ -384,9 +386,9 @@ void MapResolver::ClaimFronts() {
       if (id == 0) continue;
       const size_t start = frontier.size();
       for (size_t i = 0; i < cells_.size(); ++i) {
-        const Cell& c = cells_[i];
-        if (c.stranded && IsStuff(c.class_id) &&
-            OnTopOfFront(c.p, fronts_[f], context_.up_world, options_.planes)) {
+        if (IsStranded(cells_[i]) &&
+            OnTopOfFront(cells_[i].p, fronts_[f], context_.up_world,
+                         options_.planes)) {
           take(i, id);
         }
       }
@@ -397,19 +399,12 @@ void MapResolver::ClaimFronts() {
 }
 
 uint32_t MapResolver::NewObjectFromFront(
-    const std::vector<size_t>& on, const std::map<uint16_t, float>& named,
-    const std::vector<size_t>& frontier,
-    const std::function<void(size_t, uint32_t)>& take,
-    const std::function<void(size_t)>& spread) {
-  std::vector<size_t> stranded;
-  for (size_t i : on) {
-    if (cells_[i].stranded && IsStuff(cells_[i].class_id)) {
-      stranded.push_back(i);
-    }
-  }
+    const std::vector<size_t>& on, const std::map<uint16_t, float>& named) {
+  const auto stranded = static_cast<size_t>(std::count_if(
+      on.begin(), on.end(), [&](size_t i) { return IsStranded(cells_[i]); }));
   // Mostly things, structure on a plane, or reached from an earlier front
   // (the other leg of an L-shaped counter): no new object.
-  if (stranded.empty() || 2 * stranded.size() < on.size()) return 0;
+  if (stranded == 0 || 2 * stranded < on.size()) return 0;
   // The front class of the scene's other fronts (a kitchen's counters are
   // counters), else the one with the most votes on it, else the first.
   uint16_t cls = context_.front_classes.front();
@@ -437,18 +432,13 @@ uint32_t MapResolver::NewObjectFromFront(
   spdlog::debug(
       "furniture front no thing holds ({} of its {} voxels stranded): new "
       "object {} of class {}",
-      stranded.size(), on.size(), id, cls);
-  const size_t start = frontier.size();
-  for (size_t i : stranded) take(i, id);
-  spread(start);
+      stranded, on.size(), id, cls);
   return id;
 }
 
 void MapResolver::ClaimStranded() {
   std::map<uint32_t, size_t> size = ThingSizes();
-  auto stranded = [&](size_t n) {
-    return cells_[n].stranded && IsStuff(cells_[n].class_id);
-  };
+  auto stranded = [&](size_t n) { return IsStranded(cells_[n]); };
   std::vector<bool> done(cells_.size(), false);
   size_t claimed = 0;
   for (size_t i = 0; i < cells_.size(); ++i) {

@@ -73,6 +73,10 @@ class MapResolver {
   bool IsThingCell(const Cell& c) const {
     return c.class_id != kNoClass && !IsStuff(c.class_id);
   }
+  // Structure off its planes that no other class could take (GateStructure).
+  bool IsStranded(const Cell& c) const {
+    return c.stranded && IsStuff(c.class_id);
+  }
 
   // Labelled voxels in key order (deterministic), with their winners.
   void CollectCells();
@@ -331,15 +335,12 @@ class MapResolver {
   // lies on two).
   void ClaimFronts();
   // A front no thing took (`on`: its cells) whose voxels are mostly
-  // stranded becomes a new object of a front class (that of the fronts
-  // things took, `named`: class -> their voxels, if any): its stranded
-  // voxels and those on fronts they reach (`take` one, `spread` from
-  // `frontier`'s end). Returns its id, 0 if none.
+  // stranded gets a new object id of a front class (that of the fronts
+  // things took, `named`: class -> their voxels, if any; else the most
+  // voted on it; else the first). Returns the id (0: none); the caller
+  // hands it the voxels.
   uint32_t NewObjectFromFront(const std::vector<size_t>& on,
-                              const std::map<uint16_t, float>& named,
-                              const std::vector<size_t>& frontier,
-                              const std::function<void(size_t, uint32_t)>& take,
-                              const std::function<void(size_t)>& spread);
+                              const std::map<uint16_t, float>& named);
 
   // Voxels per thing object (owner), over the thing cells.
   std::map<uint32_t, size_t> ThingSizes() const;

@@ -47,10 +47,6 @@ bool OnAnyPlane(const Eigen::Vector3f& p,
 
 namespace {
 
-// The top band: a counter top lies at the front's top edge, within a voxel or
-// two (the 95th percentile of the front's heights).
-constexpr double kBelowTopM = 0.1, kAboveTopM = 0.15;
-
 constexpr double kAlongBinM = 0.1;
 
 int64_t AlongBin(const Eigen::Vector3d& along, const Eigen::Vector3d& p) {
@@ -108,7 +104,6 @@ std::vector<StructurePlane> TakeFurnitureFronts(
   constexpr double kMinFromAboveCos = 0.0;
   // Behind the plane by more than a wall's other face and the tolerance.
   const double min_behind_m = 2.0 * options.tolerance_m;
-  const double max_behind_m = options.max_front_distance_m + 0.2;
   std::erase_if(*planes, [&](const StructurePlane& plane) {
     if (plane.geometry != StructureGeometry::kVertical ||
         plane.along_bins.empty()) {
@@ -118,9 +113,10 @@ std::vector<StructurePlane> TakeFurnitureFronts(
     for (size_t i = 0; i < scene.size(); ++i) {
       const Eigen::Vector3d q = scene[i].cast<double>();
       const double behind = plane.offset - plane.normal.dot(q);
-      if (behind < min_behind_m || behind > max_behind_m) continue;
-      const double h = up_world.dot(q) - plane.top_m;
-      if (h < -kBelowTopM || h > kAboveTopM || !plane.Covers(q)) continue;
+      if (behind < min_behind_m ||
+          !OnTopOfFront(scene[i], plane, up_world, options)) {
+        continue;
+      }
       // Seen from above, over the top edge (a worktop), not through a
       // doorway (the top of a shelf in the next room, level with the
       // wall's highest seen part).
@@ -214,6 +210,9 @@ bool BehindWall(const Eigen::Vector3f& p,
 bool OnTopOfFront(const Eigen::Vector3f& p, const StructurePlane& front,
                   const Eigen::Vector3d& up_world,
                   const StructurePlaneOptions& options) {
+  // The top band: a counter top lies at the front's top edge, within a voxel
+  // or two (the 95th percentile of the front's heights).
+  constexpr double kBelowTopM = 0.1, kAboveTopM = 0.15;
   const Eigen::Vector3d q = p.cast<double>();
   const double behind = front.offset - front.normal.dot(q);
   const double h = up_world.dot(q) - front.top_m;
