@@ -148,9 +148,11 @@ struct MapObjectOptions {
   size_t min_apart_views = 2;
   double min_hold_share = 0.2;
   /// Parts of one fusion object are cut apart when views held them in
-  /// different masks and at most this share of those views held them in one
-  /// mask.
-  double max_one_share = 0.25;
+  /// different masks and the views holding them in one mask are at most this
+  /// share of those: 1 : 3 is apart (two kitchen chairs joined only by their
+  /// one close view), 1 : 2 is not. Also the bar of "held apart" for chains
+  /// of merges (min_apart_views).
+  double max_one_share = 0.34;
   /// Structure voxels on their plane join a touching thing of a class given
   /// at least this share of their votes (1: never): a headboard or a shelf's
   /// back flush with the wall, 2-6 cm in front of it, that most views near

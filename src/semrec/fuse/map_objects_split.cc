@@ -93,14 +93,32 @@ std::vector<std::vector<size_t>> MapResolver::PiecesSeededBy(
   for (size_t j = 0; j < n; ++j) {
     for (size_t k : mask_cells.at(seeds[j].second)) piece_of[k] = j;
   }
+  // A mask holding a good part of two seeds joins them (the view that saw
+  // both as one): it says nothing about where the cells between them go.
+  std::vector<size_t> seed_cells(n, 0);
+  for (size_t j = 0; j < n; ++j) {
+    seed_cells[j] = mask_cells.at(seeds[j].second).size();
+  }
+  constexpr size_t kMinOverlapVoxels = 5;
   std::unordered_map<uint64_t, size_t> mask_piece;
   for (const auto& [m, ks] : mask_cells) {
     std::vector<size_t> count(n, 0);
     for (size_t k : ks) {
       if (piece_of[k] != kNone) ++count[piece_of[k]];
     }
+    size_t held = 0;
+    for (size_t j = 0; j < n; ++j) {
+      if (static_cast<double>(count[j]) >=
+          options_.min_hold_share * static_cast<double>(seed_cells[j])) {
+        ++held;
+      }
+    }
+    if (held >= 2) continue;
+    // A few voxels in common are the mixed depths at a contact.
     const auto best = std::max_element(count.begin(), count.end());
-    if (*best > 0) mask_piece[m] = static_cast<size_t>(best - count.begin());
+    if (*best >= std::min<size_t>(kMinOverlapVoxels, ks.size())) {
+      mask_piece[m] = static_cast<size_t>(best - count.begin());
+    }
   }
   std::vector<size_t> unplaced;
   for (size_t k = 0; k < cells.size(); ++k) {

@@ -80,6 +80,44 @@ TEST(MapObjects, TwoChairsJoinedInOneViewAndApartInThreeEndAsTwo) {
   ExpectTwoWholeObjects(fusion, a, b);
 }
 
+// The kitchen case: two chairs whose only close view held both in one mask
+// (it made them one fusion object), while three farther views held them apart
+// but saw only the near third of the second chair. Cut by a far view, the
+// rest of that chair has no mask but the joining one: it must not follow that
+// mask into the first chair's piece (the pieces would then be two chairs and
+// a third of one, which every view held in one mask with the rest).
+TEST(MapObjects,
+     TwoChairsJoinedByTheirOnlyCloseViewAreCutWhereFarViewsSawThem) {
+  const Cloud a = Box({1.0f, 1.0f, 0.1f}, {1.45f, 1.45f, 0.9f});
+  const Cloud b = Box({1.7f, 1.0f, 0.1f}, {2.15f, 1.45f, 0.9f});
+  const Cloud b_near = Box({1.7f, 1.0f, 0.1f}, {1.85f, 1.45f, 0.9f});
+  std::vector<View> views =
+      ViewsOf(4, {Segment(kChair, 2, a), Segment(kChair, 3, b_near)});
+  views[0] = ViewsOf(1, {Segment(kChair, 2, Join({a, b}))})[0];
+  const SceneFusion fusion = Fuse(views);
+  EXPECT_EQ(Count(fusion, kChair), 2u);
+  ExpectTwoWholeObjects(fusion, a, b);
+}
+
+// As above, with the other side of the second chair seen by a fourth view
+// whose mask bled onto the first chair's edge (a few voxels where the depths
+// mix): that overlap does not carry the second chair's far side into the
+// first chair's piece.
+TEST(MapObjects, AFewVoxelsAMaskBledOntoAnotherChairDoNotCarryItsChairThere) {
+  const Cloud a = Box({1.0f, 1.0f, 0.1f}, {1.45f, 1.45f, 0.9f});
+  const Cloud b = Box({1.7f, 1.0f, 0.1f}, {2.15f, 1.45f, 0.9f});
+  const Cloud b_near = Box({1.7f, 1.0f, 0.1f}, {1.85f, 1.45f, 0.9f});
+  const Cloud b_far = Box({1.9f, 1.0f, 0.1f}, {2.15f, 1.45f, 0.9f});
+  const Cloud a_edge = Box({1.45f, 1.2f, 0.5f}, {1.45f, 1.26f, 0.56f});
+  std::vector<View> views =
+      ViewsOf(3, {Segment(kChair, 2, a), Segment(kChair, 3, b_near)});
+  views.insert(views.begin(),
+               ViewsOf(1, {Segment(kChair, 2, Join({a, b}))})[0]);
+  views.push_back(ViewsOf(1, {Segment(kChair, 4, Join({b_far, a_edge}))})[0]);
+  const SceneFusion fusion = Fuse(views);
+  ExpectTwoWholeObjects(fusion, a, b);
+}
+
 // Two chairs that three views held in separate masks, and between them a
 // small piece of chair class (a bag on the floor, a coat) that only a fourth
 // view saw, touching both: the piece may join either chair, but no chain of

@@ -178,9 +178,11 @@ class MapResolver {
 
   // Pieces (global cell indices) seeded by one view's masks `seeds` (size,
   // mask): the seeds' cells, then each other mask joins the piece holding
-  // most of its cells, each remaining cell the piece most of its masks
-  // joined; cells no mask places (none, or no overlap) take their touching
-  // neighbours' piece, or the first.
+  // most of its cells (at least 5 of them: a few are the mixed depths at a
+  // contact; none when it holds min_hold_share of two seeds: a view that
+  // joined them says nothing of where their cells go), each remaining cell
+  // the piece most of its masks joined; cells no mask places take their
+  // touching neighbours' piece, or the first.
   std::vector<std::vector<size_t>> PiecesSeededBy(
       const std::vector<size_t>& cells,
       const std::unordered_map<uint64_t, std::vector<size_t>>& mask_cells,
