@@ -394,6 +394,38 @@ double MapResolver::VoteShare(const std::vector<size_t>& cells,
   return total > 0.0 ? of_class / total : 0.0;
 }
 
+std::map<uint16_t, double> MapResolver::ViewVotes(
+    const std::vector<size_t>& cells) const {
+  std::map<size_t, std::map<uint16_t, size_t>> per_view;
+  std::map<uint16_t, uint16_t> far_views;
+  for (size_t i : cells) {
+    for (uint64_t m : cells_[i].evidence->masks) {
+      if (const uint16_t cls = map_.MaskClass(m); cls != 0) {
+        ++per_view[MaskFrame(m)][cls];
+      }
+    }
+    if (const auto far = far_.find(cells_[i].key); far != far_.end()) {
+      for (const ClassEvidence& e : far->second.classes) {
+        far_views[e.class_id] = std::max(far_views[e.class_id], e.views);
+      }
+    }
+  }
+  std::map<uint16_t, double> votes;
+  const size_t floor = std::min<size_t>(cells.size(), 5);
+  for (const auto& [frame, counts] : per_view) {
+    size_t total = 0;
+    for (const auto& [cls, n] : counts) total += n;
+    if (total < floor) continue;
+    for (const auto& [cls, n] : counts) {
+      votes[cls] += static_cast<double>(n) / static_cast<double>(total);
+    }
+  }
+  for (const auto& [cls, n] : far_views) {
+    if (n >= options_.min_far_views) votes[cls] += n;  // as in Visibility
+  }
+  return votes;
+}
+
 MapResolution MapResolver::Build() {
   std::map<uint32_t, MapObject> objects;
   std::map<uint32_t, std::set<uint32_t>> sources;

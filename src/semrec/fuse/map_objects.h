@@ -161,7 +161,8 @@ struct MapObjectOptions {
   double min_flush_share = 0.15;
   /// Touching objects of different classes merge when most views that saw
   /// both held them in one mask and one's votes give the other's class at
-  /// least this share.
+  /// least this share; the class more views gave over both wins (each view
+  /// once, however many voxels it covered; voxel votes on a tie).
   double confusion_share = 0.25;
   /// ... or, when as many views held them apart as in one mask, when one's
   /// votes give the other's class at least this share.

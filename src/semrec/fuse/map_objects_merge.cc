@@ -189,8 +189,14 @@ void MapResolver::MergeByMasks() {
     // counter one view called plant).
     const uint16_t ck = owner_class_[keep], cg = owner_class_[gone];
     if (ck != cg) {
+      // Counted by views; by voxel evidence where the views tie.
+      const std::map<uint16_t, double> views = ViewVotes(members[keep]);
+      const double view_cg = views.count(cg) ? views.at(cg) : 0.0;
+      const double view_ck = views.count(ck) ? views.at(ck) : 0.0;
       const bool gone_wins =
-          VoteShare(members[keep], cg) > VoteShare(members[keep], ck);
+          view_cg != view_ck
+              ? view_cg > view_ck
+              : VoteShare(members[keep], cg) > VoteShare(members[keep], ck);
       uint16_t winner = gone_wins ? cg : ck;
       const uint16_t other = gone_wins ? ck : cg;
       const double slack = options_.size_slack;
@@ -209,6 +215,11 @@ void MapResolver::MergeByMasks() {
         }
       }
       owner_class_[keep] = winner;
+      std::set<uint16_t>& joined = part_classes_[keep];
+      joined.insert({ck, cg});
+      if (const auto it = part_classes_.find(gone); it != part_classes_.end()) {
+        joined.insert(it->second.begin(), it->second.end());
+      }
     }
     ++result_.merged_objects;
   }
@@ -249,7 +260,10 @@ void MapResolver::JudgeFragments() {
   }
   std::vector<std::pair<size_t, uint32_t>> fragments;  // (size, id)
   for (const auto& [id, cells] : members) {
-    const auto [ratio, max_views] = Visibility(cells);
+    const auto parts = part_classes_.find(id);
+    const auto [ratio, max_views] = Visibility(
+        cells, parts == part_classes_.end() ? std::set<uint16_t>{}
+                                            : parts->second);
     seen_[id] = {ratio, max_views};
     if (cells.size() < options_.min_voxels || ratio < options_.min_seen_ratio) {
       fragments.emplace_back(cells.size(), id);
@@ -500,13 +514,14 @@ void MapResolver::ClaimStranded() {
 }
 
 std::pair<double, uint32_t> MapResolver::Visibility(
-    const std::vector<size_t>& cells) const {
+    const std::vector<size_t>& cells, const std::set<uint16_t>& parts) const {
   double labelled = 0.0, observed = 0.0;
   uint32_t max_views = 0;
-  const auto counted = [](const Cell& c, const std::vector<ClassEvidence>& in) {
+  const auto counted = [&parts](const Cell& c,
+                                const std::vector<ClassEvidence>& in) {
     uint32_t views = 0;
     for (const ClassEvidence& e : in) {
-      if (e.class_id == c.class_id ||
+      if (e.class_id == c.class_id || parts.count(e.class_id) != 0 ||
           std::find(c.excluded.begin(), c.excluded.end(), e.class_id) !=
               c.excluded.end()) {
         views += e.views;

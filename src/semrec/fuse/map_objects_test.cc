@@ -523,6 +523,42 @@ TEST(MapObjects,
   EXPECT_THROW(bad.Check(), InvalidArgument);
 }
 
+// The flat's shelf: its one ranged view, close, calls it lamp and sees its
+// front, top and side; two far views (their sensor stopped at 4 m) see the
+// upper half of its front and call it shelf. Voxel by voxel the lamp part is
+// larger (the close view covers more of it), but three views saw the object
+// and two of them called it shelf: the joined parts take the class of more
+// views, and the lamp-voted voxels, seen by their one view, keep the object
+// from being judged a fragment.
+TEST(MapObjects, ConfusedPartsJoinUnderTheClassMoreViewsGave) {
+  const Cloud front = Box({0.7f, 1.5f, 0.05f}, {0.7f, 2.5f, 1.8f});
+  const Cloud top = Box({0.3f, 1.5f, 1.8f}, {0.7f, 2.5f, 1.8f});
+  const Cloud side = Box({0.3f, 2.5f, 0.05f}, {0.7f, 2.5f, 1.8f});
+  View ranged;
+  ranged.camera = {2.0f, 3.2f, 2.2f};
+  ranged.segments = {Segment(kFloor, 1, FloorPoints()),
+                     Segment(kLamp, 2, Join({front, top, side}))};
+  std::vector<View> views = {ranged};
+  for (double y : {1.6, 2.4}) {
+    const Eigen::Vector3d eye(6.5, y, 1.0);
+    View far;
+    far.camera = eye.cast<float>();
+    far.far = FarViewAlongMinusX(eye, 4.0f, [&](int px, int py) -> uint16_t {
+      const double t = (6.5 - 0.7) / 525.0;
+      const double wy = y + (px - 319.5) * t, wz = 1.0 - (py - 239.5) * t;
+      if (wy >= 1.5 && wy <= 2.5 && wz >= 0.95 && wz <= 1.8) return kShelf;
+      return py > 240 ? kFloor : uint16_t{0};
+    });
+    views.push_back(far);
+  }
+  const SceneFusion fusion = Fuse(views);
+  EXPECT_EQ(Count(fusion, kLamp), 0u);
+  ASSERT_NE(Largest(fusion, kShelf), nullptr);
+  const uint32_t shelf = Largest(fusion, kShelf)->id;
+  EXPECT_GT(ShareIn(WhereItWent(fusion, Join({front, top, side})), shelf),
+            0.9);
+}
+
 // A 2.4 m long low unit (a shelf: no known size) that views call chair (at
 // most 0.75 m): one chair is not that long, so the object takes the voted
 // class that fits, when that class has a fair share of its votes.
@@ -557,20 +593,25 @@ TEST(MapObjects, AnObjectTooLargeForItsClassTakesAVotedClassThatFits) {
   EXPECT_THROW(bad.Check(), InvalidArgument);
 }
 
-// One close view calls the whole unit chair; two others see its left third
-// and call it shelf. The parts are one object (one mask held both), and the
-// merged object keeps the class that fits it: chair has more votes over
-// both, but no chair is 2.4 m long.
+// Two views call the whole unit chair, two more its right end; three others
+// see its left third and call it shelf (that part's voxels are shelf). The
+// parts are one object (two masks held both), and the merged object keeps
+// the class that fits it: chair has more views, but no chair is 2.4 m long.
 TEST(MapObjects, ConfusedPartsJoinUnderAClassThatFitsTheWhole) {
   const Cloud unit = Box({1.0f, 1.0f, 0.05f}, {3.4f, 1.5f, 0.8f});
-  Cloud left;
+  Cloud left, right;
   for (const Eigen::Vector3f& p : unit) {
     if (p.x() < 1.8f) left.push_back(p);
+    if (p.x() > 2.6f) right.push_back(p);
   }
-  std::vector<View> views(3, RoomView());
-  views[0].segments.push_back(Segment(kChair, 3, unit));
-  views[1].segments.push_back(Segment(kShelf, 3, left));
-  views[2].segments.push_back(Segment(kShelf, 3, left));
+  std::vector<View> views(7, RoomView());
+  for (int i = 0; i < 2; ++i) {
+    views[i].segments.push_back(Segment(kChair, 3, unit));
+    views[2 + i].segments.push_back(Segment(kChair, 3, right));
+  }
+  for (int i = 4; i < 7; ++i) {
+    views[i].segments.push_back(Segment(kShelf, 3, left));
+  }
   for (const double slack : {1.25, 0.0}) {
     FusionOptions options;
     options.map_objects.size_slack = slack;

@@ -202,6 +202,13 @@ class MapResolver {
 
   // Share of `cells`' class evidence that goes to `class_id`.
   double VoteShare(const std::vector<size_t>& cells, uint16_t class_id) const;
+  // Per class, the views that gave it to `cells`, each view one vote split
+  // over the classes of its masks there (a view counts where it put at least
+  // 5 of the cells, or all, in object masks); far views add, per class, the
+  // most that voted it on any one cell when those are min_far_views. A close view covers many voxels and
+  // a far one few, so voxel sums weigh the close view's class; these count
+  // each view once.
+  std::map<uint16_t, double> ViewVotes(const std::vector<size_t>& cells) const;
 
   // A piece of one class much smaller than the object it touches, most of
   // its voxels in direct contact with it (a chair's rail, a seat's edge that
@@ -350,9 +357,12 @@ class MapResolver {
   // Of the views that could see `cells` (ranged, and far ones for a class
   // only far views gave), the share that gave them their class, and the most
   // views any cell had of its class: fragments are objects seen in few of
-  // the views that could have seen them.
+  // the views that could have seen them. The classes of `parts` count as
+  // the object's (the confused parts it was joined from: a shelf its one
+  // close view called plant was seen by that view).
   std::pair<double, uint32_t> Visibility(
-      const std::vector<size_t>& cells) const;
+      const std::vector<size_t>& cells,
+      const std::set<uint16_t>& parts = {}) const;
 
   MapResolution Build();
 
@@ -373,6 +383,8 @@ class MapResolver {
   // Vertical planes of structure classes that are furniture fronts.
   std::vector<StructurePlane> fronts_;
   std::map<uint32_t, uint16_t> owner_class_;
+  // Classes of the confused parts each object was joined from (MergeByMasks).
+  std::map<uint32_t, std::set<uint16_t>> part_classes_;
   std::map<uint32_t, std::pair<double, uint32_t>> seen_;
   MapResolution result_;
 };

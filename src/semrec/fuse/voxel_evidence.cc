@@ -115,6 +115,9 @@ void VoxelEvidenceMap::AddFrame(const std::vector<FrameSegment>& segments,
   for (size_t f = 0; f < segments.size(); ++f) {
     const FrameSegment& s = segments[f];
     if (s.map_object != 0) continue;
+    if (s.kind != ClassKind::kStuff && s.source_label != 0) {
+      mask_classes_[MaskId(frame_index, s.source_label)] = s.class_id;
+    }
     for (const Eigen::Vector3f& p : s.points_world) {
       votes.push_back(
           {VoxelKey(p, inv_voxel_), object_ids[f], s.class_id,

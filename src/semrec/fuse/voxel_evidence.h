@@ -139,6 +139,11 @@ class VoxelEvidenceMap {
     uint32_t views = 0;
   };
   std::unordered_map<uint64_t, FarEvidence> FarVotes() const;
+  /// The class of each object mask (MaskId) in VoxelEvidence::masks.
+  uint16_t MaskClass(uint64_t mask) const {
+    const auto it = mask_classes_.find(mask);
+    return it == mask_classes_.end() ? uint16_t{0} : it->second;
+  }
   size_t far_view_count() const { return far_views_.size(); }
 
  private:
@@ -147,6 +152,7 @@ class VoxelEvidenceMap {
   VoxelEvidenceOptions options_;
   std::unordered_map<uint64_t, VoxelEvidence> voxels_;
   std::vector<FarView> far_views_;  // those with labelled cells
+  std::unordered_map<uint64_t, uint16_t> mask_classes_;
 };
 
 /// A view's mask: frame index and the mask's label in that frame.
