@@ -420,10 +420,18 @@ std::map<uint16_t, double> MapResolver::ViewVotes(
       votes[cls] += static_cast<double>(n) / static_cast<double>(total);
     }
   }
-  for (const auto& [cls, n] : far_views) {
-    if (n >= options_.min_far_views) votes[cls] += n;  // as in Visibility
-  }
+  for (const auto& [cls, n] : far_views) votes[cls] += n;
   return votes;
+}
+
+double MapResolver::ViewShare(const std::vector<size_t>& cells,
+                              uint16_t class_id) const {
+  double total = 0.0, of_class = 0.0;
+  for (const auto& [cls, votes] : ViewVotes(cells)) {
+    total += votes;
+    if (cls == class_id) of_class += votes;
+  }
+  return total > 0.0 ? of_class / total : 0.0;
 }
 
 MapResolution MapResolver::Build() {

@@ -32,7 +32,31 @@ bool MapResolver::OneObject(const std::vector<size_t>& a,
   // votes of one give the other's class nearly half (a sofa seen whole in
   // one view and cut, with a piece called plant, in the other: 46%).
   const double share = std::max(VoteShare(a, cb), VoteShare(b, ca));
-  if (views.one > views.two) return share >= options_.confusion_share;
+  if (views.one > views.two) {
+    // Counted by views too, when several views held them in one mask: a
+    // part only its one flipped view saw whole (a shelf's side called sofa)
+    // has few voxel votes for the shelf, but the views that held it with the
+    // shelf called it shelf. (One view joining a plant to a chair is not
+    // enough: each view's class counts as much as the plant's own view.)
+    double view_share = 0.0;
+    if (views.one >= options_.min_one_views) {
+      // Only for a part of the other (at most half its size) that one view
+      // at most gave its own class: two views that agree on it (a cabinet
+      // beside a counter) keep it apart, and so does a counter one view
+      // called plant from the chair beside it.
+      const auto lone_share = [&](const std::vector<size_t>& part,
+                                  uint16_t own, uint16_t other) {
+        const std::vector<size_t>& rest = &part == &a ? b : a;
+        if (2 * part.size() > rest.size()) return 0.0;
+        const std::map<uint16_t, double> votes = ViewVotes(part);
+        const auto it = votes.find(own);
+        if (it != votes.end() && it->second > 1.0) return 0.0;
+        return ViewShare(part, other);
+      };
+      view_share = std::max(lone_share(a, ca, cb), lone_share(b, cb, ca));
+    }
+    return std::max(share, view_share) >= options_.confusion_share;
+  }
   return views.one >= 1 && views.one == views.two &&
          share >= options_.tie_confusion_share;
 }

@@ -205,10 +205,12 @@ class MapResolver {
   // Per class, the views that gave it to `cells`, each view one vote split
   // over the classes of its masks there (a view counts where it put at least
   // 5 of the cells, or all, in object masks); far views add, per class, the
-  // most that voted it on any one cell when those are min_far_views. A close view covers many voxels and
+  // most that voted it on any one cell. A close view covers many voxels and
   // a far one few, so voxel sums weigh the close view's class; these count
   // each view once.
   std::map<uint16_t, double> ViewVotes(const std::vector<size_t>& cells) const;
+  // Share of ViewVotes(cells) that goes to `class_id`.
+  double ViewShare(const std::vector<size_t>& cells, uint16_t class_id) const;
 
   // A piece of one class much smaller than the object it touches, most of
   // its voxels in direct contact with it (a chair's rail, a seat's edge that
