@@ -44,8 +44,8 @@ bool MapResolver::OneObject(const std::vector<size_t>& a,
       // at most gave its own class: two views that agree on it (a cabinet
       // beside a counter) keep it apart, and so does a counter one view
       // called plant from the chair beside it.
-      const auto lone_share = [&](const std::vector<size_t>& part,
-                                  uint16_t own, uint16_t other) {
+      const auto lone_share = [&](const std::vector<size_t>& part, uint16_t own,
+                                  uint16_t other) {
         const std::vector<size_t>& rest = &part == &a ? b : a;
         if (2 * part.size() > rest.size()) return 0.0;
         const std::map<uint16_t, double> votes = ViewVotes(part);
@@ -285,9 +285,9 @@ void MapResolver::JudgeFragments() {
   std::vector<std::pair<size_t, uint32_t>> fragments;  // (size, id)
   for (const auto& [id, cells] : members) {
     const auto parts = part_classes_.find(id);
-    const auto [ratio, max_views] = Visibility(
-        cells, parts == part_classes_.end() ? std::set<uint16_t>{}
-                                            : parts->second);
+    const auto [ratio, max_views] =
+        Visibility(cells, parts == part_classes_.end() ? std::set<uint16_t>{}
+                                                       : parts->second);
     seen_[id] = {ratio, max_views};
     if (cells.size() < options_.min_voxels || ratio < options_.min_seen_ratio) {
       fragments.emplace_back(cells.size(), id);
