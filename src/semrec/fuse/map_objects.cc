@@ -344,7 +344,7 @@ std::map<size_t, std::set<uint64_t>> MapResolver::Holders(
       ++in_view[MaskFrame(m)];
     }
   }
-  const size_t floor = std::min<size_t>(cells.size(), 5);
+  const size_t floor = std::min(cells.size(), kContactVoxels);
   std::map<size_t, std::set<uint64_t>> holders;
   for (const auto& [m, n] : count) {
     const size_t seen = in_view[MaskFrame(m)];
@@ -411,7 +411,7 @@ std::map<uint16_t, double> MapResolver::ViewVotes(
     }
   }
   std::map<uint16_t, double> votes;
-  const size_t floor = std::min<size_t>(cells.size(), 5);
+  const size_t floor = std::min(cells.size(), kContactVoxels);
   for (const auto& [frame, counts] : per_view) {
     size_t total = 0;
     for (const auto& [cls, n] : counts) total += n;
@@ -424,14 +424,12 @@ std::map<uint16_t, double> MapResolver::ViewVotes(
   return votes;
 }
 
-double MapResolver::ViewShare(const std::vector<size_t>& cells,
-                              uint16_t class_id) const {
-  double total = 0.0, of_class = 0.0;
-  for (const auto& [cls, votes] : ViewVotes(cells)) {
-    total += votes;
-    if (cls == class_id) of_class += votes;
-  }
-  return total > 0.0 ? of_class / total : 0.0;
+double MapResolver::ShareOf(const std::map<uint16_t, double>& votes,
+                            uint16_t class_id) {
+  double total = 0.0;
+  for (const auto& [cls, n] : votes) total += n;
+  const auto it = votes.find(class_id);
+  return total > 0.0 && it != votes.end() ? it->second / total : 0.0;
 }
 
 MapResolution MapResolver::Build() {

@@ -51,7 +51,7 @@ bool MapResolver::OneObject(const std::vector<size_t>& a,
         const std::map<uint16_t, double> votes = ViewVotes(part);
         const auto it = votes.find(own);
         if (it != votes.end() && it->second > 1.0) return 0.0;
-        return ViewShare(part, other);
+        return ShareOf(votes, other);
       };
       view_share = std::max(lone_share(a, ca, cb), lone_share(b, cb, ca));
     }
@@ -215,8 +215,7 @@ void MapResolver::MergeByMasks() {
     if (ck != cg) {
       // Counted by views; by voxel evidence where the views tie.
       const std::map<uint16_t, double> views = ViewVotes(members[keep]);
-      const double view_cg = views.count(cg) ? views.at(cg) : 0.0;
-      const double view_ck = views.count(ck) ? views.at(ck) : 0.0;
+      const double view_cg = ShareOf(views, cg), view_ck = ShareOf(views, ck);
       const bool gone_wins =
           view_cg != view_ck
               ? view_cg > view_ck

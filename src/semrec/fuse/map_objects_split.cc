@@ -99,7 +99,6 @@ std::vector<std::vector<size_t>> MapResolver::PiecesSeededBy(
   for (size_t j = 0; j < n; ++j) {
     seed_cells[j] = mask_cells.at(seeds[j].second).size();
   }
-  constexpr size_t kMinOverlapVoxels = 5;
   std::unordered_map<uint64_t, size_t> mask_piece;
   for (const auto& [m, ks] : mask_cells) {
     std::vector<size_t> count(n, 0);
@@ -114,9 +113,9 @@ std::vector<std::vector<size_t>> MapResolver::PiecesSeededBy(
       }
     }
     if (held >= 2) continue;
-    // A few voxels in common are the mixed depths at a contact.
+    // A few voxels in common are a contact (kContactVoxels).
     const auto best = std::max_element(count.begin(), count.end());
-    if (*best >= std::min<size_t>(kMinOverlapVoxels, ks.size())) {
+    if (*best >= std::min(kContactVoxels, ks.size())) {
       mask_piece[m] = static_cast<size_t>(best - count.begin());
     }
   }

@@ -70,6 +70,10 @@ class MapResolver {
     const auto it = context_.kinds.find(class_id);
     return it != context_.kinds.end() && it->second == ClassKind::kStuff;
   }
+  // A few voxels two objects share are the mixed depths at their contact,
+  // not a view's evidence about them (Holders, PiecesSeededBy, ViewVotes).
+  static constexpr size_t kContactVoxels = 5;
+
   bool IsThingCell(const Cell& c) const {
     return c.class_id != kNoClass && !IsStuff(c.class_id);
   }
@@ -209,8 +213,9 @@ class MapResolver {
   // a far one few, so voxel sums weigh the close view's class; these count
   // each view once.
   std::map<uint16_t, double> ViewVotes(const std::vector<size_t>& cells) const;
-  // Share of ViewVotes(cells) that goes to `class_id`.
-  double ViewShare(const std::vector<size_t>& cells, uint16_t class_id) const;
+  // Share of `votes` (ViewVotes) that goes to `class_id`.
+  static double ShareOf(const std::map<uint16_t, double>& votes,
+                        uint16_t class_id);
 
   // A piece of one class much smaller than the object it touches, most of
   // its voxels in direct contact with it (a chair's rail, a seat's edge that
@@ -284,7 +289,10 @@ class MapResolver {
   // so 1 : 1 is the common split of one object (attached pieces, Attached,
   // are linked besides). Two classes: when most views that saw both held them
   // in one mask and one's votes give the other's class at least
-  // confusion_share (one object, its class confused).
+  // confusion_share (one object, its class confused); when several views
+  // did, also one's ViewVotes, for a part at most half the other's size whose
+  // own class one view at most gave (a shelf's side its one close view
+  // called sofa).
   bool OneObject(const std::vector<size_t>& a, const std::vector<size_t>& b,
                  uint32_t id_a, uint32_t id_b, const PairViews& views,
                  size_t contact_voxels) const;
