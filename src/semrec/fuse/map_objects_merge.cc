@@ -200,6 +200,23 @@ void MapResolver::MergeByMasks() {
                     link.b);
       continue;
     }
+    // Two classes need most views that saw both to hold them in one mask
+    // (OneObject), counted again on the groups the link would join: a box
+    // whose pieces joined first, seen in its own mask by four views, is not
+    // one with the shelf three views held it with, though the piece at the
+    // shelf was held with it by more views than apart. (The class evidence
+    // stays the pair's: a group dilutes a confused part's votes.)
+    if (!same && !link.attached &&
+        (parts[x].size() > 1 || parts[y].size() > 1)) {
+      const PairViews v = CoViews(Holders(members[x]), Holders(members[y]));
+      if (v.one < v.two) {
+        spdlog::debug(
+            "objects {} and {}: not joined, their groups ({} and {} voxels) "
+            "held apart ({} views one, {} two)",
+            link.a, link.b, members[x].size(), members[y].size(), v.one, v.two);
+        continue;
+      }
+    }
     const bool x_keeps = members[x].size() >= members[y].size();
     const uint32_t keep = x_keeps ? x : y, gone = x_keeps ? y : x;
     into[gone] = keep;

@@ -325,7 +325,9 @@ class MapResolver {
 
   // Touching objects that are one (MergeLinks) become one, unless that joins
   // objects held apart (HeldApart) that together neither fit one object of
-  // their class (FitsOne) nor are nested (Nested); the larger keeps its id.
+  // their class (FitsOne) nor are nested (Nested), or joins groups of two
+  // classes that more views held apart than in one mask; the larger keeps
+  // its id.
   void MergeByMasks();
 
   // Thing voxels no object of their class claimed: each connected group joins
