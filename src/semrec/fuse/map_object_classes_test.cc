@@ -122,20 +122,24 @@ TEST(MapObjects, ConfusedPartsJoinUnderTheClassMoreViewsGave) {
 // sofa. Voxel by voxel the side is sofa (the close view outweighs the far
 // ones on the edge) and gives the shelf under a quarter of its votes, but
 // three views held it with the shelf and called it shelf: one object, a
-// shelf. One such view is not enough (a plant one view joined to a chair),
-// nor are three when two views agree on the part's own class (a cabinet
-// beside a counter) or when the part is more than half the size of the
-// object (a counter one view called plant, beside a chair).
+// shelf, also where a fourth, far view held side and front apart (calling
+// the side's back table). One such view is not enough (a plant one view
+// joined to a chair), nor, where a view held them apart, are three when two
+// views agree on the part's own class (a cabinet beside a counter) or when
+// the part is more than half the size of the object (a counter one view
+// called plant, beside a chair).
 TEST(MapObjects, APartOneFlippedViewSawWholeJoinsTheObjectViewsHeldItWith) {
   const Cloud side = Box({0.2f, 2.5f, 0.05f}, {0.7f, 2.5f, 1.8f});
   const Cloud edge = Box({0.6f, 2.5f, 0.05f}, {0.7f, 2.5f, 1.8f});
   struct Case {
     int far_views, close_views;
     float front_from_y;
-    bool joined;
+    bool apart_view, joined;
   };
-  for (const Case& c : {Case{3, 1, 1.0f, true}, Case{1, 1, 1.0f, false},
-                        Case{3, 2, 1.0f, false}, Case{3, 1, 2.0f, false}}) {
+  for (const Case& c :
+       {Case{3, 1, 1.0f, false, true}, Case{3, 1, 1.0f, true, true},
+        Case{1, 1, 1.0f, false, false}, Case{3, 2, 1.0f, true, false},
+        Case{3, 1, 2.0f, true, false}}) {
     const Cloud front = Box({0.7f, c.front_from_y, 0.05f}, {0.7f, 2.5f, 1.8f});
     std::vector<View> views;
     for (int i = 0; i < c.far_views; ++i) {
@@ -144,6 +148,14 @@ TEST(MapObjects, APartOneFlippedViewSawWholeJoinsTheObjectViewsHeldItWith) {
       v.segments = {Segment(kFloor, 1, FloorPoints()),
                     Segment(kShelf, 2, Join({front, edge}))};
       views.push_back(v);
+    }
+    if (c.apart_view) {
+      View apart;
+      apart.camera = {6.0f, 5.5f, 1.0f};
+      apart.segments = {
+          Segment(kFloor, 1, FloorPoints()), Segment(kShelf, 2, front),
+          Segment(kTable, 3, Box({0.2f, 2.5f, 0.05f}, {0.55f, 2.5f, 1.8f}))};
+      views.push_back(apart);
     }
     for (int i = 0; i < c.close_views; ++i) {
       View close;
@@ -160,7 +172,8 @@ TEST(MapObjects, APartOneFlippedViewSawWholeJoinsTheObjectViewsHeldItWith) {
       EXPECT_EQ(TopObject(in_front), TopObject(in_side));
       EXPECT_GT(ShareIn(in_side, TopObject(in_front)), 0.9);
     } else {
-      EXPECT_EQ(Count(fusion, kSofa), 1u) << c.far_views << c.close_views;
+      EXPECT_EQ(Count(fusion, kSofa), 1u)
+          << c.far_views << c.close_views << c.front_from_y;
       EXPECT_NE(TopObject(in_front), TopObject(in_side));
     }
   }
@@ -267,6 +280,34 @@ TEST(MapObjects, APieceOfAnObjectTheViewsHeldApartDoesNotJoinItToAnother) {
   EXPECT_GT(WhereItWent(fusion, chair).at(kept->id), 0.9);
   ASSERT_NE(Largest(fusion, kShelf), nullptr);
   EXPECT_GT(WhereItWent(fusion, shelf).at(Largest(fusion, kShelf)->id), 0.9);
+}
+
+// A shelf unit two views call lamp over its left two thirds and shelf over
+// the rest, in one mask; a third view calls shelf the right end and a strip
+// of the left, in one mask too. No view held the parts apart and three held
+// them in one mask: one object, of the class more views gave it (shelf),
+// though the lamp part is the larger and two views gave it its class.
+TEST(MapObjects, PartsNoViewHeldApartJoinWhateverTheirSizes) {
+  const Cloud left = Box({1.0f, 1.0f, 0.05f}, {1.5f, 1.8f, 0.9f});
+  const Cloud right = Box({1.0f, 1.82f, 0.05f}, {1.5f, 2.2f, 0.9f});
+  Cloud strip;
+  for (const Eigen::Vector3f& p : left) {
+    if (p.y() > 1.6f) strip.push_back(p);
+  }
+  std::vector<View> views(4);
+  for (View& v : views) v.segments.push_back(Segment(kFloor, 1, FloorPoints()));
+  for (int i = 0; i < 2; ++i) {
+    views[i].segments.push_back(Segment(kLamp, 2, left));
+    views[i].segments.push_back(Segment(kShelf, 2, right));
+  }
+  views[2].segments.push_back(Segment(kShelf, 2, Join({strip, right})));
+  views[3].segments.push_back(Segment(kShelf, 2, right));
+  const SceneFusion fusion = Fuse(views);
+  EXPECT_EQ(Count(fusion, kLamp), 0u);
+  ASSERT_NE(Largest(fusion, kShelf), nullptr);
+  EXPECT_GT(
+      WhereItWent(fusion, Join({left, right})).at(Largest(fusion, kShelf)->id),
+      0.9);
 }
 
 }  // namespace

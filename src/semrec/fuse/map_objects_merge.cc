@@ -40,17 +40,20 @@ bool MapResolver::OneObject(const std::vector<size_t>& a,
     // enough: each view's class counts as much as the plant's own view.)
     double view_share = 0.0;
     if (views.one >= options_.min_one_views) {
-      // Only for a part of the other (at most half its size) that one view
-      // at most gave its own class: two views that agree on it (a cabinet
-      // beside a counter) keep it apart, and so does a counter one view
-      // called plant from the chair beside it.
+      // Where some view held them apart, only for a part of the other (at
+      // most half its size) that one view at most gave its own class: two
+      // views that agree on it (a cabinet beside a counter) keep it apart,
+      // and so does a counter one view called plant from the chair beside it.
+      // Where none did, for either part whatever its size (a counter's
+      // larger part its one close view called plant).
       const auto lone_share = [&](const std::vector<size_t>& part, uint16_t own,
                                   uint16_t other) {
         const std::vector<size_t>& rest = &part == &a ? b : a;
-        if (2 * part.size() > rest.size()) return 0.0;
+        const bool held_apart = views.two > 0;
+        if (held_apart && 2 * part.size() > rest.size()) return 0.0;
         const std::map<uint16_t, double> votes = ViewVotes(part);
         const auto it = votes.find(own);
-        if (it != votes.end() && it->second > 1.0) return 0.0;
+        if (held_apart && it != votes.end() && it->second > 1.0) return 0.0;
         return ShareOf(votes, other);
       };
       view_share = std::max(lone_share(a, ca, cb), lone_share(b, cb, ca));

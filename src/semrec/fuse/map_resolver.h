@@ -292,7 +292,7 @@ class MapResolver {
   // confusion_share (one object, its class confused); when several views
   // did, also one's ViewVotes, for a part at most half the other's size whose
   // own class one view at most gave (a shelf's side its one close view
-  // called sofa).
+  // called sofa), or for either part where no view held them apart.
   bool OneObject(const std::vector<size_t>& a, const std::vector<size_t>& b,
                  uint32_t id_a, uint32_t id_b, const PairViews& views,
                  size_t contact_voxels) const;
