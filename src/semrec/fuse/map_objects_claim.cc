@@ -1,0 +1,242 @@
+// Stranded structure voxels claimed by things: furniture fronts (the front
+// of a counter some views called wall) and the rest (see map_resolver.h).
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <set>
+#include <vector>
+
+#include <spdlog/spdlog.h>
+
+#include "semrec/fuse/map_resolver.h"
+
+namespace semrec::fuse::internal {
+
+std::map<uint32_t, size_t> MapResolver::ThingSizes() const {
+  std::map<uint32_t, size_t> size;
+  for (const Cell& c : cells_) {
+    if (c.owner != 0 && IsThingCell(c)) ++size[c.owner];
+  }
+  return size;
+}
+
+void MapResolver::ClaimFronts() {
+  if (fronts_.empty()) return;
+  std::map<uint32_t, size_t> size = ThingSizes();
+  // The cells on each front, and per thing its voxels on any front (an
+  // L-shaped counter is one cabinet over two fronts).
+  std::vector<std::vector<size_t>> on(fronts_.size());
+  std::vector<bool> on_any(cells_.size(), false);
+  std::map<uint32_t, size_t> on_fronts;
+  for (size_t i = 0; i < cells_.size(); ++i) {
+    const Eigen::Vector3d q = cells_[i].p.cast<double>();
+    for (size_t f = 0; f < fronts_.size(); ++f) {
+      const StructurePlane& front = fronts_[f];
+      if (std::abs(front.normal.dot(q) - front.offset) >
+              front.Tolerance(options_.planes) ||
+          !front.Covers(q)) {
+        continue;
+      }
+      on[f].push_back(i);
+      if (!on_any[i] && cells_[i].owner != 0 && IsThingCell(cells_[i])) {
+        ++on_fronts[cells_[i].owner];
+      }
+      on_any[i] = true;
+    }
+  }
+  std::vector<size_t> frontier;
+  std::vector<size_t> unclaimed;    // fronts no thing takes
+  std::map<uint16_t, float> named;  // front class -> voxels of fronts taken
+  for (size_t f = 0; f < fronts_.size(); ++f) {
+    std::map<uint32_t, size_t> held;  // thing -> its voxels on this front
+    for (size_t i : on[f]) {
+      if (cells_[i].owner != 0 && IsThingCell(cells_[i])) {
+        ++held[cells_[i].owner];
+      }
+    }
+    uint32_t best = 0;
+    size_t best_held = 0;
+    for (const auto& [id, n] : held) {
+      if (n > best_held) best = id, best_held = n;
+    }
+    const bool takes =
+        best != 0 &&
+        static_cast<double>(best_held) >=
+            options_.min_front_share * static_cast<double>(on[f].size()) &&
+        2 * on_fronts[best] >= size[best];
+    spdlog::debug(
+        "furniture front (class {}, {} voxels on it): object {} holds {} of "
+        "them ({} on fronts, {} in all){}",
+        fronts_[f].class_id, on[f].size(), best, best_held, on_fronts[best],
+        size[best], takes ? ": takes the stranded rest" : "");
+    if (!takes) {
+      unclaimed.push_back(f);
+      continue;
+    }
+    named[owner_class_[best]] += static_cast<float>(on[f].size());
+    for (size_t i : on[f]) {
+      if (cells_[i].owner == best && IsThingCell(cells_[i])) {
+        frontier.push_back(i);
+      }
+    }
+  }
+  // Breadth first from the things over stranded voxels on fronts: the
+  // nearest thing takes each, across the corner of an L-shaped counter too.
+  size_t claimed = 0;
+  const auto take = [&](size_t i, uint32_t id) {
+    Cell& c = cells_[i];
+    c.excluded.push_back(c.class_id);
+    c.class_id = owner_class_[id];
+    c.owner = id;
+    c.stranded = false;
+    frontier.push_back(i);
+    ++claimed;
+  };
+  const auto spread = [&](size_t from) {
+    for (size_t f = from; f < frontier.size(); ++f) {
+      const uint32_t id = cells_[frontier[f]].owner;
+      ForNeighbours(frontier[f], [&](size_t n) {
+        if (on_any[n] && IsStranded(cells_[n])) take(n, id);
+      });
+    }
+  };
+  spread(0);
+  spdlog::debug("{} stranded voxels on furniture fronts joined things",
+                claimed);
+  if (options_.objects_from_fronts && !context_.front_classes.empty()) {
+    std::set<uint32_t> made;
+    for (size_t f : unclaimed) {
+      const uint32_t id = NewObjectFromFront(on[f], named);
+      if (id == 0) continue;
+      made.insert(id);
+      const size_t start = frontier.size();
+      for (size_t i : on[f]) {
+        if (IsStranded(cells_[i])) take(i, id);
+      }
+      spread(start);
+    }
+    // Their tops (a worktop every view called wall too: no front holds it),
+    // on each front a new object holds, the other leg of an L too.
+    for (size_t f : unclaimed) {
+      std::map<uint32_t, float> holders;
+      for (size_t i : on[f]) {
+        if (made.count(cells_[i].owner)) holders[cells_[i].owner] += 1.0f;
+      }
+      const uint32_t id = MostVoted(holders, [](uint32_t) { return true; });
+      if (id == 0) continue;
+      const size_t start = frontier.size();
+      for (size_t i = 0; i < cells_.size(); ++i) {
+        if (IsStranded(cells_[i]) &&
+            OnTopOfFront(cells_[i].p, fronts_[f], context_.up_world,
+                         options_.planes)) {
+          take(i, id);
+        }
+      }
+      spread(start);
+    }
+  }
+  result_.stranded_voxels_claimed += claimed;
+}
+
+uint32_t MapResolver::NewObjectFromFront(
+    const std::vector<size_t>& on, const std::map<uint16_t, float>& named) {
+  const auto stranded = static_cast<size_t>(std::count_if(
+      on.begin(), on.end(), [&](size_t i) { return IsStranded(cells_[i]); }));
+  // Mostly things, structure on a plane, or reached from an earlier front
+  // (the other leg of an L-shaped counter): no new object.
+  if (stranded == 0 || 2 * stranded < on.size()) return 0;
+  // The front class of the scene's other fronts (a kitchen's counters are
+  // counters), else the one with the most votes on it, else the first.
+  uint16_t cls = context_.front_classes.front();
+  float best = 0.0f;
+  for (uint16_t candidate : context_.front_classes) {
+    const auto it = named.find(candidate);
+    if (it != named.end() && it->second > best) {
+      cls = candidate, best = it->second;
+    }
+  }
+  const bool from_named = best > 0.0f;
+  for (uint16_t candidate : context_.front_classes) {
+    if (from_named) break;
+    float weight = 0.0f;
+    for (size_t i : on) {
+      if (const ClassEvidence* e = cells_[i].evidence->Find(candidate)) {
+        weight += e->weight;
+      }
+    }
+    if (weight > best) cls = candidate, best = weight;
+  }
+  const uint32_t id = (*next_id_)++;
+  owner_class_[id] = cls;
+  ++result_.objects_from_fronts;
+  spdlog::debug(
+      "furniture front no thing holds ({} of its {} voxels stranded): new "
+      "object {} of class {}",
+      stranded, on.size(), id, cls);
+  return id;
+}
+
+void MapResolver::ClaimStranded() {
+  std::map<uint32_t, size_t> size = ThingSizes();
+  auto stranded = [&](size_t n) { return IsStranded(cells_[n]); };
+  std::vector<bool> done(cells_.size(), false);
+  size_t claimed = 0;
+  for (size_t i = 0; i < cells_.size(); ++i) {
+    if (done[i] || !stranded(i)) continue;
+    const auto group = Component(i, &done, stranded);
+    // Where the group touches things, and which: each voxel joins the thing
+    // nearest to it (breadth first from the contacts), so a chair's top and
+    // the table beside it each take their own part.
+    std::vector<size_t> frontier;
+    std::map<size_t, uint32_t> owner;
+    size_t largest = 0;
+    for (size_t k : group) {
+      std::map<uint32_t, float> contacts;
+      ForNeighbours(k, [&](size_t n) {
+        if (cells_[n].owner != 0 && IsThingCell(cells_[n])) {
+          contacts[cells_[n].owner] += 1.0f;
+        }
+      });
+      for (const auto& [id, n] : contacts) {
+        largest = std::max(largest, size[id]);
+      }
+      if (const uint32_t id =
+              MostVoted(contacts, [](uint32_t) { return true; });
+          id != 0) {
+        owner[k] = id;
+        frontier.push_back(k);
+      }
+    }
+    spdlog::debug("stranded structure voxels: {} ({} touching things)",
+                  group.size(), frontier.size());
+    // Larger than every thing it touches, or touching them only along a
+    // small part of it: more likely structure no plane was fitted to (a floor
+    // seen twice after drift) than a part of a thing.
+    if (frontier.empty() || group.size() > largest ||
+        static_cast<double>(frontier.size()) <
+            options_.min_stranded_contact_share *
+                static_cast<double>(group.size())) {
+      continue;
+    }
+    for (size_t f = 0; f < frontier.size(); ++f) {
+      const uint32_t id = owner[frontier[f]];
+      ForNeighbours(frontier[f], [&](size_t n) {
+        if (stranded(n) && !owner.count(n)) {
+          owner[n] = id;
+          frontier.push_back(n);
+        }
+      });
+    }
+    for (const auto& [k, id] : owner) {
+      Cell& c = cells_[k];
+      c.excluded.push_back(c.class_id);
+      c.class_id = owner_class_[id];
+      c.owner = id;
+    }
+    claimed += owner.size();
+  }
+  result_.stranded_voxels_claimed += claimed;
+  spdlog::debug("{} stranded structure voxels joined things", claimed);
+}
+
+}  // namespace semrec::fuse::internal
