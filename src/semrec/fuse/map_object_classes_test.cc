@@ -310,5 +310,48 @@ TEST(MapObjects, PartsNoViewHeldApartJoinWhateverTheirSizes) {
       0.9);
 }
 
+// A table beside a cabinet (a shelf here), in two halves: three views see
+// the near half alone and call it table, two the far half, three the
+// cabinet; two views call the cabinet and the near half shelf, in one mask,
+// one of them holding the far half (called table) in that mask too. The near
+// half joins the cabinet (two views one, none apart, two fifths of its votes
+// shelf). The far half is one with the near half by the rule for one class, but
+// that link says nothing of the cabinet: judged as a table and a cabinet, the
+// groups are not one (one view, no votes confused), and the far half stays a
+// table.
+TEST(MapObjects, ALinkOfOneClassDoesNotCarryAnObjectIntoAGroupOfAnother) {
+  const Cloud cabinet = Box({0.3f, 1.0f, 0.05f}, {0.68f, 2.0f, 1.2f});
+  const Cloud near = Box({0.72f, 1.2f, 0.7f}, {1.22f, 1.8f, 0.75f});
+  const Cloud far = Box({1.26f, 1.2f, 0.7f}, {1.8f, 1.8f, 0.75f});
+  std::vector<View> views(10);
+  for (View& v : views) v.segments.push_back(Segment(kFloor, 1, FloorPoints()));
+  for (int i = 0; i < 3; ++i) {
+    views[i].segments.push_back(Segment(kTable, 3, near));
+  }
+  views[8].segments.push_back(Segment(kShelf, 2, cabinet));
+  views[9].segments.push_back(Segment(kShelf, 2, cabinet));
+  for (int i = 3; i < 5; ++i) {
+    views[i].segments.push_back(Segment(kTable, 3, far));
+  }
+  views[5].segments.push_back(Segment(kShelf, 2, cabinet));
+  for (int i = 6; i < 8; ++i) {
+    views[i].segments.push_back(Segment(kShelf, 2, Join({cabinet, near})));
+  }
+  views[7].segments.push_back(Segment(kTable, 2, far));
+  // The streaming rule's merges off: the halves stay two objects until the
+  // map decides.
+  FusionOptions options;
+  options.evidence.cross_class_alpha = 1.0;
+  options.evidence.confusion_share = 1.0;
+  options.evidence.min_one_views = 100;
+  const SceneFusion fusion = Fuse(views, options);
+  const SceneSegment* shelf = Largest(fusion, kShelf);
+  const SceneSegment* table = Largest(fusion, kTable);
+  ASSERT_NE(shelf, nullptr);
+  ASSERT_NE(table, nullptr);
+  EXPECT_GT(WhereItWent(fusion, cabinet).at(shelf->id), 0.9);
+  EXPECT_GT(ShareIn(WhereItWent(fusion, far), table->id), 0.9);
+}
+
 }  // namespace
 }  // namespace semrec::fuse

@@ -116,7 +116,8 @@ std::vector<MapResolver::MergeLink> MapResolver::MergeLinks(
     const bool attached =
         same && Attached(ca.size(), cb.size(), contact_voxels);
     if (attached || OneObject(ca, cb, a, b, v, contact_voxels)) {
-      links.push_back({a, b, v, contact_voxels, attached, false, false});
+      links.push_back(
+          {a, b, v, contact_voxels, attached, false, false, same});
     } else if (same && PartsOfOne(ca, cb, class_a, contact_voxels)) {
       links.push_back({a, b, v, contact_voxels, true, true, false});
     } else if (same && !context_.max_length_m.count(class_a) &&
@@ -207,15 +208,22 @@ void MapResolver::MergeByMasks() {
     // whose pieces joined first, seen in its own mask by four views, is not
     // one with the shelf three views held it with, though the piece at the
     // shelf was held with it by more views than apart. (The class evidence
-    // stays the pair's: a group dilutes a confused part's votes.)
-    if (!same && !link.attached &&
-        (parts[x].size() > 1 || parts[y].size() > 1)) {
+    // stays the pair's: a group dilutes a confused part's votes.) A link of
+    // one class between groups of two (a table's piece joined the cabinet
+    // beside it first) says nothing of their classes: the groups must be one
+    // by the rule for two classes.
+    if (!same && (parts[x].size() > 1 || parts[y].size() > 1)) {
       const PairViews v = CoViews(Holders(members[x]), Holders(members[y]));
-      if (v.one < v.two) {
+      const bool one =
+          link.same_class
+              ? OneObject(members[x], members[y], x, y, v, link.contact)
+              : v.one >= v.two;
+      if (!one) {
         spdlog::debug(
-            "objects {} and {}: not joined, their groups ({} and {} voxels) "
-            "held apart ({} views one, {} two)",
-            link.a, link.b, members[x].size(), members[y].size(), v.one, v.two);
+            "objects {} and {}: not joined, their groups ({} and {} voxels, "
+            "{} views one, {} two) are not one",
+            link.a, link.b, members[x].size(), members[y].size(), v.one,
+            v.two);
         continue;
       }
     }

@@ -310,6 +310,8 @@ class MapResolver {
     bool parts = false;
     // Nested: the groups it joins must still be nested.
     bool nested = false;
+    // The pair was of one class (the groups it joins may not be).
+    bool same_class = true;
   };
   // Touching pairs that are one (OneObject, Attached, PartsOfOne or Nested),
   // judged on the objects as they were, surest first: the most views holding
