@@ -246,6 +246,16 @@ TEST(MapObjects, ConfusedPartsJoinUnderAClassThatFitsTheWhole) {
   }
 }
 
+// The streaming rule's merges off: pieces stay apart until the map decides
+// (on real scenes such pieces come from cuts and orphan voxels).
+FusionOptions StreamingMergesOff() {
+  FusionOptions options;
+  options.evidence.cross_class_alpha = 1.0;
+  options.evidence.confusion_share = 1.0;
+  options.evidence.min_one_views = 100;
+  return options;
+}
+
 // A chair beside a shelf, in two halves no view but two showed together: two
 // views call shelf and chair shelf in one mask; three show the shelf and the
 // chair's far half apart, one the shelf and the near half; two see the near
@@ -268,13 +278,7 @@ TEST(MapObjects, APieceOfAnObjectTheViewsHeldApartDoesNotJoinItToAnother) {
     views[i].segments.push_back(Segment(kShelf, 2, shelf));
     views[i].segments.push_back(Segment(kChair, 3, i < 5 ? far : near));
   }
-  // The streaming rule's merges off: the halves stay two objects until the
-  // map decides (on real scenes such pieces come from cuts and orphans).
-  FusionOptions options;
-  options.evidence.cross_class_alpha = 1.0;
-  options.evidence.confusion_share = 1.0;
-  options.evidence.min_one_views = 100;
-  const SceneFusion fusion = Fuse(views, options);
+  const SceneFusion fusion = Fuse(views, StreamingMergesOff());
   const SceneSegment* kept = Largest(fusion, kChair);
   ASSERT_NE(kept, nullptr);
   EXPECT_GT(WhereItWent(fusion, chair).at(kept->id), 0.9);
@@ -338,13 +342,7 @@ TEST(MapObjects, ALinkOfOneClassDoesNotCarryAnObjectIntoAGroupOfAnother) {
     views[i].segments.push_back(Segment(kShelf, 2, Join({cabinet, near})));
   }
   views[7].segments.push_back(Segment(kTable, 2, far));
-  // The streaming rule's merges off: the halves stay two objects until the
-  // map decides.
-  FusionOptions options;
-  options.evidence.cross_class_alpha = 1.0;
-  options.evidence.confusion_share = 1.0;
-  options.evidence.min_one_views = 100;
-  const SceneFusion fusion = Fuse(views, options);
+  const SceneFusion fusion = Fuse(views, StreamingMergesOff());
   const SceneSegment* shelf = Largest(fusion, kShelf);
   const SceneSegment* table = Largest(fusion, kTable);
   ASSERT_NE(shelf, nullptr);
