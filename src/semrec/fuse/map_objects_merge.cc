@@ -45,7 +45,7 @@ bool MapResolver::OneObject(const std::vector<size_t>& a,
       // and so does a counter one view called plant from the chair beside it.
       // Where none did, for either part whatever its size (a counter's
       // larger part its one close view called plant).
-      const auto lone_share = [&](const std::vector<size_t>& part, uint16_t own,
+      const auto part_share = [&](const std::vector<size_t>& part, uint16_t own,
                                   uint16_t other) {
         const std::vector<size_t>& rest = &part == &a ? b : a;
         const bool held_apart = views.two > 0;
@@ -55,7 +55,7 @@ bool MapResolver::OneObject(const std::vector<size_t>& a,
         if (held_apart && it != votes.end() && it->second > 1.0) return 0.0;
         return ShareOf(votes, other);
       };
-      view_share = std::max(lone_share(a, ca, cb), lone_share(b, cb, ca));
+      view_share = std::max(part_share(a, ca, cb), part_share(b, cb, ca));
     }
     return std::max(share, view_share) >= options_.confusion_share;
   }
@@ -116,8 +116,7 @@ std::vector<MapResolver::MergeLink> MapResolver::MergeLinks(
     const bool attached =
         same && Attached(ca.size(), cb.size(), contact_voxels);
     if (attached || OneObject(ca, cb, a, b, v, contact_voxels)) {
-      links.push_back(
-          {a, b, v, contact_voxels, attached, false, false, same});
+      links.push_back({a, b, v, contact_voxels, attached, false, false, same});
     } else if (same && PartsOfOne(ca, cb, class_a, contact_voxels)) {
       links.push_back({a, b, v, contact_voxels, true, true, false});
     } else if (same && !context_.max_length_m.count(class_a) &&
@@ -203,27 +202,25 @@ void MapResolver::MergeByMasks() {
                     link.b);
       continue;
     }
-    // Two classes need most views that saw both to hold them in one mask
-    // (OneObject), counted again on the groups the link would join: a box
-    // whose pieces joined first, seen in its own mask by four views, is not
-    // one with the shelf three views held it with, though the piece at the
-    // shelf was held with it by more views than apart. (The class evidence
-    // stays the pair's: a group dilutes a confused part's votes.) A link of
-    // one class between groups of two (a table's piece joined the cabinet
-    // beside it first) says nothing of their classes: the groups must be one
-    // by the rule for two classes.
+    // Two classes: the views are counted again on the groups the link would
+    // join, and more views holding them apart than in one mask keep them
+    // apart (a box whose pieces joined first, seen in its own mask by four
+    // views, is not one with the shelf three views held it with, though the
+    // piece at the shelf was held with it by more views than apart). The
+    // class evidence stays the pair's: a group dilutes a confused part's
+    // votes. A link of one class between groups of two (a table's piece
+    // joined the cabinet beside it first) says nothing of their classes: the
+    // groups must be one by the rule for two classes.
     if (!same && (parts[x].size() > 1 || parts[y].size() > 1)) {
       const PairViews v = CoViews(Holders(members[x]), Holders(members[y]));
-      const bool one =
-          link.same_class
-              ? OneObject(members[x], members[y], x, y, v, link.contact)
-              : v.one >= v.two;
+      const bool one = link.same_class ? OneObject(members[x], members[y], x, y,
+                                                   v, link.contact)
+                                       : v.one >= v.two;
       if (!one) {
         spdlog::debug(
             "objects {} and {}: not joined, their groups ({} and {} voxels, "
             "{} views one, {} two) are not one",
-            link.a, link.b, members[x].size(), members[y].size(), v.one,
-            v.two);
+            link.a, link.b, members[x].size(), members[y].size(), v.one, v.two);
         continue;
       }
     }
