@@ -181,6 +181,17 @@ void MapResolver::MergeByMasks() {
   // The objects each group holds, as they were before merging.
   std::map<uint32_t, std::vector<uint32_t>> parts;
   for (const auto& entry : members) parts[entry.first] = {entry.first};
+  // Each merged group's mask holders, computed when first needed (a large
+  // group meets many links).
+  std::map<uint32_t, std::map<size_t, std::set<uint64_t>>> holders_of_group;
+  auto group_holders = [&](uint32_t id) -> const auto& {
+    if (parts[id].size() == 1) return holders.at(id);
+    auto it = holders_of_group.find(id);
+    if (it == holders_of_group.end()) {
+      it = holders_of_group.emplace(id, Holders(members[id])).first;
+    }
+    return it->second;
+  };
   for (const MergeLink& link : links) {
     const uint32_t x = find(link.a), y = find(link.b);
     if (x == y) continue;
@@ -212,7 +223,7 @@ void MapResolver::MergeByMasks() {
     // joined the cabinet beside it first) says nothing of their classes: the
     // groups must be one by the rule for two classes.
     if (!same && (parts[x].size() > 1 || parts[y].size() > 1)) {
-      const PairViews v = CoViews(Holders(members[x]), Holders(members[y]));
+      const PairViews v = CoViews(group_holders(x), group_holders(y));
       const bool one = link.same_class ? OneObject(members[x], members[y], x, y,
                                                    v, link.contact)
                                        : v.one >= v.two;
@@ -227,6 +238,8 @@ void MapResolver::MergeByMasks() {
     const bool x_keeps = members[x].size() >= members[y].size();
     const uint32_t keep = x_keeps ? x : y, gone = x_keeps ? y : x;
     into[gone] = keep;
+    holders_of_group.erase(keep);
+    holders_of_group.erase(gone);
     members[keep].insert(members[keep].end(), members[gone].begin(),
                          members[gone].end());
     parts[keep].insert(parts[keep].end(), parts[gone].begin(),
