@@ -329,15 +329,11 @@ TEST(MapObjects, ALinkOfOneClassDoesNotCarryAnObjectIntoAGroupOfAnother) {
   const Cloud far = Box({1.26f, 1.2f, 0.7f}, {1.8f, 1.8f, 0.75f});
   std::vector<View> views(10);
   for (View& v : views) v.segments.push_back(Segment(kFloor, 1, FloorPoints()));
-  for (int i = 0; i < 3; ++i) {
-    views[i].segments.push_back(Segment(kTable, 3, near));
+  for (int i : {0, 1, 2}) views[i].segments.push_back(Segment(kTable, 3, near));
+  for (int i : {3, 4}) views[i].segments.push_back(Segment(kTable, 3, far));
+  for (int i : {5, 8, 9}) {
+    views[i].segments.push_back(Segment(kShelf, 2, cabinet));
   }
-  views[8].segments.push_back(Segment(kShelf, 2, cabinet));
-  views[9].segments.push_back(Segment(kShelf, 2, cabinet));
-  for (int i = 3; i < 5; ++i) {
-    views[i].segments.push_back(Segment(kTable, 3, far));
-  }
-  views[5].segments.push_back(Segment(kShelf, 2, cabinet));
   for (int i = 6; i < 8; ++i) {
     views[i].segments.push_back(Segment(kShelf, 2, Join({cabinet, near})));
   }

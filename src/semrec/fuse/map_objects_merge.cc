@@ -45,10 +45,10 @@ bool MapResolver::OneObject(const std::vector<size_t>& a,
       // and so does a counter one view called plant from the chair beside it.
       // Where none did, for either part whatever its size (a counter's
       // larger part its one close view called plant).
+      const bool held_apart = views.two > 0;
       const auto part_share = [&](const std::vector<size_t>& part, uint16_t own,
                                   uint16_t other) {
         const std::vector<size_t>& rest = &part == &a ? b : a;
-        const bool held_apart = views.two > 0;
         if (held_apart && 2 * part.size() > rest.size()) return 0.0;
         const std::map<uint16_t, double> votes = ViewVotes(part);
         const auto it = votes.find(own);
