@@ -1,8 +1,11 @@
 #include "semrec/pipeline/object_surfaces.h"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
+#include <set>
 #include <unordered_map>
+#include <utility>
 #include <vector>
 
 #include "semrec/fuse/voxel.h"
@@ -74,7 +77,149 @@ class MeshCollector {
   std::map<uint32_t, std::unordered_map<int, int>> remaps_;
 };
 
+// The vertices of a mesh hashed by cell (cell size = the search radius), for
+// "is any vertex within r of p".
+class VertexGrid {
+ public:
+  VertexGrid(const open3d::geometry::TriangleMesh& mesh, double radius_m)
+      : radius_m_(radius_m) {
+    for (const Eigen::Vector3d& v : mesh.vertices_) {
+      cells_[Key(v)].push_back(v);
+    }
+  }
+  bool AnyWithin(const Eigen::Vector3d& p) const {
+    const Eigen::Vector3i c = Cell(p);
+    for (int dx = -1; dx <= 1; ++dx) {
+      for (int dy = -1; dy <= 1; ++dy) {
+        for (int dz = -1; dz <= 1; ++dz) {
+          const auto it =
+              cells_.find(fuse::PackVoxel(c.x() + dx, c.y() + dy, c.z() + dz));
+          if (it == cells_.end()) continue;
+          for (const Eigen::Vector3d& v : it->second) {
+            if ((v - p).squaredNorm() <= radius_m_ * radius_m_) return true;
+          }
+        }
+      }
+    }
+    return false;
+  }
+
+ private:
+  Eigen::Vector3i Cell(const Eigen::Vector3d& p) const {
+    return (p / radius_m_).array().floor().cast<int>();
+  }
+  uint64_t Key(const Eigen::Vector3d& p) const {
+    const Eigen::Vector3i c = Cell(p);
+    return fuse::PackVoxel(c.x(), c.y(), c.z());
+  }
+  double radius_m_;
+  std::unordered_map<uint64_t, std::vector<Eigen::Vector3d>> cells_;
+};
+
+// A square of side `size_m` centred on `centre`, facing `normal`, as a fan of
+// four triangles around its centre (wound counter-clockwise seen from the
+// normal's side).
+void AddPatch(const Eigen::Vector3d& centre, const Eigen::Vector3d& normal,
+              double size_m, const Eigen::Vector3d& color,
+              open3d::geometry::TriangleMesh* mesh) {
+  const Eigen::Vector3d u = normal.unitOrthogonal(), v = normal.cross(u);
+  const double h = size_m / 2;
+  const auto first = static_cast<int>(mesh->vertices_.size());
+  mesh->vertices_.push_back(centre);
+  for (const auto& [a, b] : {std::pair{1, 1}, {-1, 1}, {-1, -1}, {1, -1}}) {
+    mesh->vertices_.push_back(centre + h * (a * u + b * v));
+  }
+  for (int k = 0; k < 5; ++k) {
+    mesh->vertex_normals_.push_back(normal);
+    mesh->vertex_colors_.push_back(color);
+  }
+  for (int k = 0; k < 4; ++k) {
+    mesh->triangles_.emplace_back(first, first + 1 + k,
+                                  first + 1 + (k + 1) % 4);
+  }
+}
+
 }  // namespace
+
+size_t CoverOwnedVoxels(
+    const fuse::MapResolution& resolution,
+    const std::unordered_map<uint64_t, fuse::VoxelEvidence>& evidence,
+    double voxel_size_m, uint32_t min_points, MeshMap* meshes) {
+  const double size_m = voxel_size_m;
+  // Things' voxels by owner, in key order (the same patches every run).
+  // Structure is left as its volumes show it: large planes a TSDF meshes
+  // well, and a patch at a wall's edge would reach into the thing before it.
+  std::set<uint32_t> things;
+  for (const fuse::MapObject& o : resolution.objects) {
+    if (o.kind != ClassKind::kStuff) things.insert(o.id);
+  }
+  std::map<uint32_t, std::vector<uint64_t>> voxels;
+  for (const auto& [key, owner] : resolution.owners) {
+    if (things.contains(owner.owner)) voxels[owner.owner].push_back(key);
+  }
+  // Any object's surface within a voxel of the points shows them already:
+  // another object's surface there is theirs under another label (the
+  // points' centroid lies a few cm off it with depth noise), and a patch
+  // would take its place.
+  std::vector<VertexGrid> grids;
+  for (const auto& [id, mesh] : *meshes) {
+    if (mesh) grids.emplace_back(*mesh, size_m);
+  }
+  auto covered = [&](const Eigen::Vector3d& p) {
+    return std::any_of(grids.begin(), grids.end(),
+                       [&](const VertexGrid& g) { return g.AnyWithin(p); });
+  };
+  size_t added = 0;
+  for (auto& [owner, keys] : voxels) {
+    std::sort(keys.begin(), keys.end());
+    auto& mesh = (*meshes)[owner];
+    if (!mesh) mesh = std::make_shared<open3d::geometry::TriangleMesh>();
+    Eigen::Vector3d color(0.5, 0.5, 0.5);
+    if (mesh->HasVertexColors()) {
+      color.setZero();
+      for (const Eigen::Vector3d& c : mesh->vertex_colors_) color += c;
+      color /= static_cast<double>(mesh->vertex_colors_.size());
+    }
+    // Patches keep the mesh's attributes parallel to its vertices.
+    const bool had_vertices = !mesh->vertices_.empty();
+    const bool normals = !had_vertices || mesh->HasVertexNormals();
+    const bool colors = !had_vertices || mesh->HasVertexColors();
+    open3d::geometry::TriangleMesh patches;
+    for (const uint64_t key : keys) {
+      const auto it = evidence.find(key);
+      if (it == evidence.end() || it->second.points < min_points) {
+        continue;
+      }
+      const Eigen::Vector3d centre = it->second.Centroid().cast<double>();
+      if (covered(centre)) continue;
+      const Eigen::Vector3f seen = it->second.towards_camera_sum;
+      const Eigen::Vector3d normal =
+          seen.norm() > 1e-3f
+              ? Eigen::Vector3d(seen.normalized().cast<double>())
+              : Eigen::Vector3d(Eigen::Vector3d::UnitZ());
+      AddPatch(centre, normal, size_m, color, &patches);
+      ++added;
+    }
+    if (patches.triangles_.empty()) continue;
+    const auto offset = static_cast<int>(mesh->vertices_.size());
+    mesh->vertices_.insert(mesh->vertices_.end(), patches.vertices_.begin(),
+                           patches.vertices_.end());
+    if (normals) {
+      mesh->vertex_normals_.insert(mesh->vertex_normals_.end(),
+                                   patches.vertex_normals_.begin(),
+                                   patches.vertex_normals_.end());
+    }
+    if (colors) {
+      mesh->vertex_colors_.insert(mesh->vertex_colors_.end(),
+                                  patches.vertex_colors_.begin(),
+                                  patches.vertex_colors_.end());
+    }
+    for (const Eigen::Vector3i& t : patches.triangles_) {
+      mesh->triangles_.push_back(t + Eigen::Vector3i::Constant(offset));
+    }
+  }
+  return added;
+}
 
 MeshMap CutMeshesByOwner(const MeshMap& volume_meshes,
                          const fuse::MapResolution& resolution,

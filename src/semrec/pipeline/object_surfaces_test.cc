@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <map>
+#include <unordered_map>
+#include <utility>
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -90,6 +92,106 @@ TEST(ObjectSurfaces, VolumeWithoutMeshDoesNotLeaveAHole) {
   const MeshMap cut = CutMeshesByOwner(volumes, r, 0.05);
   ASSERT_EQ(cut.count(3), 1u);
   EXPECT_FALSE(cut.at(3)->triangles_.empty());
+}
+
+// A voxel of the map with labelled points at `centroid`, seen from +x.
+fuse::VoxelEvidence SeenFromPlusX(const Eigen::Vector3d& centroid,
+                                  uint32_t points) {
+  fuse::VoxelEvidence v;
+  v.points = points;
+  v.point_sum = centroid * points;
+  v.towards_camera_sum = Eigen::Vector3f(2.0f, 0.0f, 0.0f);
+  return v;
+}
+
+TEST(ObjectSurfaces, ThingVoxelsWithoutSurfaceGetAPatchFacingTheirViews) {
+  // A wall sheet (volume and owner 1) at x = 0.01 and a lamp's pole (owner 5)
+  // standing 0.5 m in front of it, which no volume meshed: a 2 cm TSDF gives
+  // a thin pole seen once no surface.
+  const double s = 0.05;
+  fuse::MapResolution r;
+  std::unordered_map<uint64_t, fuse::VoxelEvidence> evidence;
+  for (int iy = 0; iy < 20; ++iy) {
+    for (int iz = 0; iz < 20; ++iz) {
+      const uint64_t key = fuse::PackVoxel(0, iy, iz);
+      r.owners[key] = {1u, 1u};
+      evidence[key] = SeenFromPlusX({0.012, (iy + 0.5) * s, (iz + 0.5) * s}, 4);
+    }
+  }
+  // A stretch of the wall its volume did not mesh: structure gets no patch.
+  for (int iz = 30; iz < 33; ++iz) {
+    const uint64_t key = fuse::PackVoxel(0, 5, iz);
+    r.owners[key] = {1u, 1u};
+    evidence[key] = SeenFromPlusX({0.012, 0.27, (iz + 0.5) * s}, 4);
+  }
+  std::vector<Eigen::Vector3d> pole;
+  for (int iz = 0; iz < 10; ++iz) {
+    const uint64_t key = fuse::PackVoxel(10, 8, iz);
+    pole.emplace_back(0.51, 0.42, (iz + 0.5) * s);
+    r.owners[key] = {5u, 5u};
+    evidence[key] = SeenFromPlusX(pole.back(), iz == 9 ? 1 : 3);
+  }
+  // A voxel of object 6 on the wall's surface (wall points a view labelled
+  // as a thing, 3 cm off with depth noise): the wall shows it already.
+  const uint64_t on_wall = fuse::PackVoxel(0, 3, 3);
+  r.owners[on_wall] = {6u, 1u};
+  evidence[on_wall] = SeenFromPlusX({0.04, 0.17, 0.17}, 5);
+  // A voxel of object 7 with no labelled points: nothing to place.
+  r.owners[fuse::PackVoxel(20, 20, 20)] = {7u, 7u};
+  for (const auto& [id, kind] : {std::pair{1u, ClassKind::kStuff},
+                                 {5u, ClassKind::kThing},
+                                 {6u, ClassKind::kThing},
+                                 {7u, ClassKind::kThing}}) {
+    fuse::MapObject o;
+    o.id = id;
+    o.kind = kind;
+    r.objects.push_back(o);
+  }
+
+  MeshMap meshes;
+  meshes[1] = Sheet(0.01, 0.0, 1.0);
+  meshes[1]->ComputeVertexNormals();
+  const size_t wall_vertices = meshes[1]->vertices_.size();
+  const size_t added = CoverOwnedVoxels(r, evidence, s, 2, &meshes);
+
+  // The pole's voxels with two points or more (not its top one) get one patch
+  // each; the wall (structure), object 6 (on the wall's surface) and object 7
+  // (no points) none.
+  EXPECT_EQ(added, 9u);
+  EXPECT_EQ(meshes.at(1)->vertices_.size(), wall_vertices);
+  EXPECT_TRUE(meshes.count(6) == 0 || meshes.at(6)->triangles_.empty());
+  EXPECT_TRUE(meshes.count(7) == 0 || meshes.at(7)->triangles_.empty());
+  ASSERT_EQ(meshes.count(5), 1u);
+  const open3d::geometry::TriangleMesh& lamp = *meshes.at(5);
+  EXPECT_EQ(lamp.triangles_.size(), 9u * 4);
+  ASSERT_EQ(lamp.vertex_normals_.size(), lamp.vertices_.size());
+  ASSERT_EQ(lamp.vertex_colors_.size(), lamp.vertices_.size());
+  // Each patch is centred on its voxel's points, a voxel wide, and faces the
+  // camera (+x): its triangles wound counter-clockwise seen from there.
+  for (size_t k = 0; k + 1 < pole.size(); ++k) {
+    EXPECT_EQ(std::count_if(lamp.vertices_.begin(), lamp.vertices_.end(),
+                            [&](const Eigen::Vector3d& v) {
+                              return (v - pole[k]).norm() < 1e-6;
+                            }),
+              1)
+        << "pole voxel " << k;
+  }
+  for (const Eigen::Vector3d& v : lamp.vertices_) {
+    EXPECT_NEAR(v.x(), 0.51, 1e-6);
+    EXPECT_NEAR(v.y(), 0.42, s / 2 + 1e-6);
+    EXPECT_LE(v.z(), 9 * s + 1e-6);  // not the top voxel's single point
+  }
+  for (const Eigen::Vector3i& t : lamp.triangles_) {
+    const Eigen::Vector3d n =
+        (lamp.vertices_[t.y()] - lamp.vertices_[t.x()])
+            .cross(lamp.vertices_[t.z()] - lamp.vertices_[t.x()]);
+    EXPECT_GT(n.normalized().x(), 0.99);
+  }
+  for (const Eigen::Vector3d& n : lamp.vertex_normals_) {
+    EXPECT_NEAR(n.x(), 1.0, 1e-9);
+  }
+  // A second pass adds nothing: every thing's voxel is shown now.
+  EXPECT_EQ(CoverOwnedVoxels(r, evidence, s, 2, &meshes), 0u);
 }
 
 // The ground truth's labels, except that every `every`-th frame paints one

@@ -99,6 +99,7 @@ ReconstructResult Reconstruct(const io::SequenceReader& reader,
            {"map_objects",
             fuse::MapResolutionJson(builder.fusion(), source.classes())},
            {"skipped_empty_objects", written.skipped_empty_objects},
+           {"surface_patches", written.patches},
            {"seconds", result.seconds}})
               .dump(2) +
           "\n");

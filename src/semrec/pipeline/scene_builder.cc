@@ -259,6 +259,12 @@ std::vector<usd::MeshPrim> SceneBuilder::Meshes(SceneWriteResult* out) {
   if (resolution != nullptr) {
     meshes = CutMeshesByOwner(meshes, *resolution,
                               options_.fusion.store_voxel_size_m);
+    if (options_.cover_owned_voxels) {
+      const fuse::VoxelEvidenceMap& evidence = *fusion_.voxel_evidence();
+      result.patches = CoverOwnedVoxels(*resolution, evidence.voxels(),
+                                        evidence.voxel_size_m(),
+                                        options_.cover_min_points, &meshes);
+    }
   }
   const std::vector<fuse::SceneSegment>& segments =
       preview ? preview->segments : fusion_.segments();

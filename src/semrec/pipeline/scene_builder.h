@@ -51,6 +51,12 @@ struct SceneBuilderOptions {
   /// Integrate each object's volume as its frames arrive (true), or only
   /// after Finish() with the final ids (RebuildVolumes; the reference).
   bool stream_volumes = true;
+  /// With the voxel merge rule: owned map voxels the volumes gave no surface
+  /// (something thin seen once, a 2 cm TSDF's blind spot) get a patch of
+  /// their own (CoverOwnedVoxels), when they hold at least
+  /// cover_min_points labelled points.
+  bool cover_owned_voxels = true;
+  uint32_t cover_min_points = 1;
   void Check() const;
 };
 
@@ -74,6 +80,8 @@ struct SceneWriteResult {
   /// Structure prims (one per stuff class) among `objects`.
   size_t structure = 0;
   size_t skipped_empty_objects = 0;
+  /// Map voxels covered by a patch (SceneBuilderOptions::cover_owned_voxels).
+  size_t patches = 0;
   size_t triangles = 0;
   size_t people = 0;
   /// Objects re-meshed for this write (the others kept their mesh).
