@@ -264,6 +264,12 @@ std::vector<usd::MeshPrim> SceneBuilder::Meshes(SceneWriteResult* out) {
       result.patches = CoverOwnedVoxels(*resolution, evidence.voxels(),
                                         evidence.voxel_size_m(),
                                         options_.cover_min_points, &meshes);
+      if (result.patches > 0 && !preview) {
+        spdlog::info(
+            "{} map voxels of things no volume meshed (thin, or seen once) "
+            "got a surface patch",
+            result.patches);
+      }
     }
   }
   const std::vector<fuse::SceneSegment>& segments =

@@ -54,9 +54,9 @@ struct SceneBuilderOptions {
   /// With the voxel merge rule: owned map voxels the volumes gave no surface
   /// (something thin seen once, a 2 cm TSDF's blind spot) get a patch of
   /// their own (CoverOwnedVoxels), when they hold at least
-  /// cover_min_points labelled points.
+  /// cover_min_points labelled points (2: not a lone stray depth pixel).
   bool cover_owned_voxels = true;
-  uint32_t cover_min_points = 1;
+  uint32_t cover_min_points = 2;
   void Check() const;
 };
 
