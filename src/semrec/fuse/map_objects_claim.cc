@@ -176,6 +176,22 @@ uint32_t MapResolver::NewObjectFromFront(
   return id;
 }
 
+bool MapResolver::StillFits(uint32_t id,
+                            const std::vector<size_t>& added) const {
+  const uint16_t cls = owner_class_.at(id);
+  if (MaxFootprint(cls).x() <= 0.0) return true;  // any size
+  std::vector<size_t> cells;
+  for (size_t i = 0; i < cells_.size(); ++i) {
+    if (cells_[i].owner == id && IsThingCell(cells_[i])) cells.push_back(i);
+  }
+  const double slack = options_.size_slack;
+  if (!FitsSize(CoreFootprintSize(cells, kSizeTrimShare), cls, slack)) {
+    return true;  // too large already: FitClassesToSizes decides
+  }
+  cells.insert(cells.end(), added.begin(), added.end());
+  return FitsSize(CoreFootprintSize(cells, kSizeTrimShare), cls, slack);
+}
+
 void MapResolver::ClaimStranded() {
   std::map<uint32_t, size_t> size = ThingSizes();
   auto stranded = [&](size_t n) { return IsStranded(cells_[n]); };
@@ -227,13 +243,26 @@ void MapResolver::ClaimStranded() {
         }
       });
     }
-    for (const auto& [k, id] : owner) {
-      Cell& c = cells_[k];
-      c.excluded.push_back(c.class_id);
-      c.class_id = owner_class_[id];
-      c.owner = id;
+    // A thing of a known size takes its share only while it still fits one
+    // object of its class: a counter every view called wall, stranded beside
+    // a plant, is no part of the plant (kitchen 2: a 2.5 m "plant").
+    std::map<uint32_t, std::vector<size_t>> shares;
+    for (const auto& [k, id] : owner) shares[id].push_back(k);
+    for (const auto& [id, share] : shares) {
+      if (!StillFits(id, share)) {
+        spdlog::debug(
+            "  {} of them left out: object {} would outgrow its class",
+            share.size(), id);
+        continue;
+      }
+      for (size_t k : share) {
+        Cell& c = cells_[k];
+        c.excluded.push_back(c.class_id);
+        c.class_id = owner_class_[id];
+        c.owner = id;
+      }
+      claimed += share.size();
     }
-    claimed += owner.size();
   }
   result_.stranded_voxels_claimed += claimed;
   spdlog::debug("{} stranded structure voxels joined things", claimed);

@@ -102,6 +102,40 @@ TEST(MapObjects, LegsEveryViewCalledFloorJoinTheChairTheyTouch) {
   }
 }
 
+// A low board every view calls floor, along a chair's side and smaller than
+// it, is no part of the chair: chair and board together are 1.1 m long, more
+// than one chair can be (kitchen 2: a counter every view called wall joined the
+// plant beside it, a 2.5 m "plant"). The legs of another chair, called floor
+// too, still join it.
+TEST(MapObjects, StrandedStructureDoesNotMakeAThingTooLargeForItsClass) {
+  const Cloud seat = Box({1.0f, 1.0f, 0.32f}, {1.45f, 1.45f, 0.9f});
+  const Cloud legs = Box({1.0f, 1.0f, 0.1f}, {1.45f, 1.45f, 0.3f});
+  const Cloud chair = Box({2.5f, 2.5f, 0.1f}, {2.95f, 2.95f, 0.9f});
+  const Cloud bench = Box({2.97f, 2.5f, 0.1f}, {3.05f, 3.6f, 0.45f});
+  std::vector<View> views;
+  for (int i = 0; i < 3; ++i) {
+    View v;
+    v.segments.push_back(Segment(kWall, 1, WallPoints()));
+    v.segments.push_back(
+        Segment(kFloor, 2, Join({FloorPoints(), legs, bench})));
+    v.segments.push_back(Segment(kChair, 3, seat));
+    v.segments.push_back(Segment(kChair, 4, chair));
+    views.push_back(std::move(v));
+  }
+  const SceneFusion fusion = Fuse(views);
+  const SceneSegment* floor = Largest(fusion, kFloor);
+  ASSERT_NE(floor, nullptr);
+  EXPECT_EQ(Count(fusion, kChair), 2u);
+  const auto bench_went = WhereItWent(fusion, bench);
+  const auto chair_went = WhereItWent(fusion, chair);
+  const uint32_t chair_id = TopObject(chair_went);
+  EXPECT_LT(ShareIn(bench_went, chair_id),
+            0.2);  // its face 2 cm from the chair's
+  EXPECT_GT(ShareIn(bench_went, floor->id), 0.8);
+  const auto legs_went = WhereItWent(fusion, legs);
+  EXPECT_GT(ShareIn(legs_went, TopObject(WhereItWent(fusion, seat))), 0.8);
+}
+
 // A cabinet's front 15 cm before the wall, tall and wide enough to be a wall
 // plane of its own, called wall in three views of four: no wall stands a
 // hand's width in front of a larger one seen above it, so it is a cabinet.
