@@ -44,7 +44,10 @@
 //  6. Structure voxels off their planes that no other class can take (every
 //     view called a chair's legs floor, a chair's back by the wall wall) join
 //     the things they touch, each voxel the nearest, unless the group is
-//     larger than every thing it touches or few of its voxels touch one.
+//     larger than every thing it touches or few of its voxels touch one; a
+//     thing of a known size takes its share only while it still fits one
+//     object of its class (a counter every view called wall is no part of
+//     the plant beside it).
 //     Those on a furniture front first join the thing that holds a fair part
 //     of the front and lies mostly on it (a view named part of the row of
 //     cabinets), across the fronts it touches.
