@@ -20,12 +20,14 @@ struct MeshArgs {
   bool no_structure = false;
   std::string merge = "voxel";
   bool two_pass = false;
+  bool no_surface_patches = false;
 };
 
 void RunMesh(MeshArgs args) {
   args.options.write_ply = !args.no_ply;
   args.options.scene.gravity = fuse::ParseGravity(args.gravity);
   args.options.scene.stream_volumes = !args.two_pass;
+  args.options.scene.cover_owned_voxels = !args.no_surface_patches;
   args.options.scene.fusion.stuff_per_class = !args.no_structure;
   args.options.scene.fusion.merge = fuse::ParseMerge(args.merge);
   CheckUsage(args.options);
@@ -40,11 +42,14 @@ void RunMesh(MeshArgs args) {
       "%s",
       fmt::format(
           "{} frames -> {} objects + {} structure ({} triangles), {} "
-          "people{}; gravity: {}; wrote {}/scene.usda in {:.1f} s\n",
+          "people{}{}; gravity: {}; wrote {}/scene.usda in {:.1f} s\n",
           r.frames, r.scene.objects - r.scene.structure, r.scene.structure,
           r.scene.triangles, r.scene.people,
           r.scene.skipped_empty_objects > 0
               ? fmt::format(", {} empty skipped", r.scene.skipped_empty_objects)
+              : "",
+          r.scene.patches > 0
+              ? fmt::format(", {} surface patches", r.scene.patches)
               : "",
           r.scene.gravity.method, args.out, r.seconds)
           .c_str());
@@ -118,6 +123,11 @@ void RegisterMesh(CLI::App& app) {
                 "Fuse stuff classes (wall, floor, ceiling...) like objects "
                 "instead of one /World/Structure prim per class");
   cmd->add_flag("--no-ply", args->no_ply, "Do not write PLY per object");
+  cmd->add_flag("--no-surface-patches", args->no_surface_patches,
+                "Do not cover the map voxels of things that no volume meshed "
+                "(something thin, or seen once: a 2 cm TSDF gives it no "
+                "surface) with small patches at their points; such objects "
+                "then show holes, or no surface at all");
   cmd->add_flag("--two-pass", args->two_pass,
                 "Build the object volumes in a second pass over the frames "
                 "with fusion's final ids (the reference for the default "

@@ -32,6 +32,7 @@ struct RunArgs {
   std::string merge = "voxel";
   std::string gravity = "auto";
   bool no_structure = false;
+  bool no_surface_patches = false;
   pipeline::RunOptions run;
   bool no_ply = false;
   bool no_overlays = false;
@@ -152,6 +153,7 @@ void RunRun(RunArgs& args, CLI::App* cmd) {
   p.overlays = !args.no_overlays;
   p.scene.gravity = fuse::ParseGravity(args.gravity);
   p.scene.fusion.stuff_per_class = !args.no_structure;
+  p.scene.cover_owned_voxels = !args.no_surface_patches;
   p.scene.fusion.merge = fuse::ParseMerge(args.merge);
   run.write_ply = !args.no_ply;
   CheckUsage(run);
@@ -317,6 +319,11 @@ void RegisterRun(CLI::App& app) {
       ->capture_default_str();
   cmd->add_flag("--no-structure", args->no_structure,
                 "Fuse stuff classes like objects (no Structure prims)");
+  cmd->add_flag("--no-surface-patches", args->no_surface_patches,
+                "Do not cover the map voxels of things that no volume meshed "
+                "(something thin, or seen once: a 2 cm TSDF gives it no "
+                "surface) with small patches at their points; such objects "
+                "then show holes, or no surface at all");
   cmd->add_option("--snapshot-every", args->run.snapshot_every,
                   "Write the scene (valid USD) every n frames while running "
                   "(0 = at the end only)")

@@ -56,4 +56,15 @@ ok &= p["map_objects"] is None  # only the voxel rule decides per voxel
 sys.exit(0 if ok else 1)
 PY
   fail "summary.json does not report the per-voxel decision (map_objects)"
+# Surface patches: map voxels of things no volume meshed get one each (4 triangles), unless off.
+"$SEMREC" mesh "$tmp/syn" --labels "$tmp/syn/labels_noisy" --no-surface-patches --out "$tmp/bare" \
+  --no-ply >/dev/null 2>&1 || fail "mesh --no-surface-patches failed"
+python3 - "$tmp/noisy_voxel/summary.json" "$tmp/bare/summary.json" <<'PY' ||
+import json, sys
+with_, bare = (json.load(open(f)) for f in sys.argv[1:])
+tris = lambda j: sum(o["triangles"] for o in j["objects"])
+n = with_["surface_patches"]
+sys.exit(0 if n > 0 and bare["surface_patches"] == 0 and tris(with_) - tris(bare) == 4 * n else 1)
+PY
+  fail "surface patches: not counted in summary.json, or --no-surface-patches does not turn them off"
 echo "ok"
