@@ -169,21 +169,24 @@ size_t CoverOwnedVoxels(
     return std::any_of(grids.begin(), grids.end(),
                        [&](const VertexGrid& g) { return g.AnyWithin(p); });
   };
+  const open3d::geometry::TriangleMesh none;
   size_t added = 0;
   for (auto& [owner, keys] : voxels) {
     std::sort(keys.begin(), keys.end());
-    auto& mesh = (*meshes)[owner];
-    if (!mesh) mesh = std::make_shared<open3d::geometry::TriangleMesh>();
+    // An owner without a mesh gets one only if it gets a patch.
+    const auto found = meshes->find(owner);
+    const open3d::geometry::TriangleMesh& mesh =
+        found != meshes->end() && found->second ? *found->second : none;
     Eigen::Vector3d color(0.5, 0.5, 0.5);
-    if (mesh->HasVertexColors()) {
+    if (mesh.HasVertexColors()) {
       color.setZero();
-      for (const Eigen::Vector3d& c : mesh->vertex_colors_) color += c;
-      color /= static_cast<double>(mesh->vertex_colors_.size());
+      for (const Eigen::Vector3d& c : mesh.vertex_colors_) color += c;
+      color /= static_cast<double>(mesh.vertex_colors_.size());
     }
     // Patches keep the mesh's attributes parallel to its vertices.
-    const bool had_vertices = !mesh->vertices_.empty();
-    const bool normals = !had_vertices || mesh->HasVertexNormals();
-    const bool colors = !had_vertices || mesh->HasVertexColors();
+    const bool had_vertices = !mesh.vertices_.empty();
+    const bool normals = !had_vertices || mesh.HasVertexNormals();
+    const bool colors = !had_vertices || mesh.HasVertexColors();
     open3d::geometry::TriangleMesh patches;
     for (const uint64_t key : keys) {
       const auto it = evidence.find(key);
@@ -201,21 +204,24 @@ size_t CoverOwnedVoxels(
       ++added;
     }
     if (patches.triangles_.empty()) continue;
-    const auto offset = static_cast<int>(mesh->vertices_.size());
-    mesh->vertices_.insert(mesh->vertices_.end(), patches.vertices_.begin(),
-                           patches.vertices_.end());
+    auto& target = (*meshes)[owner];
+    if (!target) target = std::make_shared<open3d::geometry::TriangleMesh>();
+    open3d::geometry::TriangleMesh* out = target.get();
+    const auto offset = static_cast<int>(out->vertices_.size());
+    out->vertices_.insert(out->vertices_.end(), patches.vertices_.begin(),
+                          patches.vertices_.end());
     if (normals) {
-      mesh->vertex_normals_.insert(mesh->vertex_normals_.end(),
-                                   patches.vertex_normals_.begin(),
-                                   patches.vertex_normals_.end());
+      out->vertex_normals_.insert(out->vertex_normals_.end(),
+                                  patches.vertex_normals_.begin(),
+                                  patches.vertex_normals_.end());
     }
     if (colors) {
-      mesh->vertex_colors_.insert(mesh->vertex_colors_.end(),
-                                  patches.vertex_colors_.begin(),
-                                  patches.vertex_colors_.end());
+      out->vertex_colors_.insert(out->vertex_colors_.end(),
+                                 patches.vertex_colors_.begin(),
+                                 patches.vertex_colors_.end());
     }
     for (const Eigen::Vector3i& t : patches.triangles_) {
-      mesh->triangles_.push_back(t + Eigen::Vector3i::Constant(offset));
+      out->triangles_.push_back(t + Eigen::Vector3i::Constant(offset));
     }
   }
   return added;
