@@ -20,6 +20,16 @@ std::map<uint32_t, size_t> MapResolver::ThingSizes() const {
   return size;
 }
 
+MapResolver::Members MapResolver::ThingMembers() const {
+  Members members;
+  for (size_t i = 0; i < cells_.size(); ++i) {
+    if (cells_[i].owner != 0 && IsThingCell(cells_[i])) {
+      members[cells_[i].owner].push_back(i);
+    }
+  }
+  return members;
+}
+
 void MapResolver::ClaimFronts() {
   if (fronts_.empty()) return;
   std::map<uint32_t, size_t> size = ThingSizes();
@@ -176,24 +186,22 @@ uint32_t MapResolver::NewObjectFromFront(
   return id;
 }
 
-bool MapResolver::StillFits(uint32_t id,
+bool MapResolver::StillFits(const std::vector<size_t>& cells, uint16_t class_id,
                             const std::vector<size_t>& added) const {
-  const uint16_t cls = owner_class_.at(id);
-  if (MaxFootprint(cls).x() <= 0.0) return true;  // any size
-  std::vector<size_t> cells;
-  for (size_t i = 0; i < cells_.size(); ++i) {
-    if (cells_[i].owner == id && IsThingCell(cells_[i])) cells.push_back(i);
-  }
+  if (MaxFootprint(class_id).x() <= 0.0) return true;  // any size
   const double slack = options_.size_slack;
-  if (!FitsSize(CoreFootprintSize(cells, kSizeTrimShare), cls, slack)) {
+  if (!FitsSize(CoreFootprintSize(cells, kSizeTrimShare), class_id, slack)) {
     return true;  // too large already: FitClassesToSizes decides
   }
-  cells.insert(cells.end(), added.begin(), added.end());
-  return FitsSize(CoreFootprintSize(cells, kSizeTrimShare), cls, slack);
+  std::vector<size_t> both = cells;
+  both.insert(both.end(), added.begin(), added.end());
+  return FitsSize(CoreFootprintSize(both, kSizeTrimShare), class_id, slack);
 }
 
 void MapResolver::ClaimStranded() {
   std::map<uint32_t, size_t> size = ThingSizes();
+  // Each thing's cells, kept current as it takes stranded voxels (StillFits).
+  Members members = ThingMembers();
   auto stranded = [&](size_t n) { return IsStranded(cells_[n]); };
   std::vector<bool> done(cells_.size(), false);
   size_t claimed = 0;
@@ -249,7 +257,8 @@ void MapResolver::ClaimStranded() {
     std::map<uint32_t, std::vector<size_t>> shares;
     for (const auto& [k, id] : owner) shares[id].push_back(k);
     for (const auto& [id, share] : shares) {
-      if (!StillFits(id, share)) {
+      std::vector<size_t>& cells = members[id];
+      if (!StillFits(cells, owner_class_[id], share)) {
         spdlog::debug(
             "  {} of them left out: object {} would outgrow its class",
             share.size(), id);
@@ -261,6 +270,7 @@ void MapResolver::ClaimStranded() {
         c.class_id = owner_class_[id];
         c.owner = id;
       }
+      cells.insert(cells.end(), share.begin(), share.end());
       claimed += share.size();
     }
   }

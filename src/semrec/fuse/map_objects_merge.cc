@@ -164,12 +164,7 @@ bool MapResolver::HeldApart(const std::vector<uint32_t>& x_parts,
 }
 
 void MapResolver::MergeByMasks() {
-  Members members;
-  for (size_t i = 0; i < cells_.size(); ++i) {
-    if (cells_[i].owner != 0 && IsThingCell(cells_[i])) {
-      members[cells_[i].owner].push_back(i);
-    }
-  }
+  Members members = ThingMembers();
   MaskHolders holders;
   for (const auto& [id, cells] : members) holders[id] = Holders(cells);
   const std::vector<MergeLink> links = MergeLinks(members, holders);
@@ -312,12 +307,7 @@ void MapResolver::AttachOrphans() {
 }
 
 void MapResolver::JudgeFragments() {
-  std::map<uint32_t, std::vector<size_t>> members;
-  for (size_t i = 0; i < cells_.size(); ++i) {
-    if (cells_[i].owner != 0 && IsThingCell(cells_[i])) {
-      members[cells_[i].owner].push_back(i);
-    }
-  }
+  Members members = ThingMembers();
   std::vector<std::pair<size_t, uint32_t>> fragments;  // (size, id)
   for (const auto& [id, cells] : members) {
     const auto parts = part_classes_.find(id);

@@ -208,12 +208,7 @@ std::map<uint16_t, double> MapResolver::ThingShares(
 }
 
 void MapResolver::FitClassesToSizes() {
-  std::map<uint32_t, std::vector<size_t>> members;
-  for (size_t i = 0; i < cells_.size(); ++i) {
-    if (cells_[i].owner != 0 && IsThingCell(cells_[i])) {
-      members[cells_[i].owner].push_back(i);
-    }
-  }
+  const Members members = ThingMembers();
   const double slack = options_.size_slack;
   for (const auto& [id, cells] : members) {
     const uint16_t cls = owner_class_[id];

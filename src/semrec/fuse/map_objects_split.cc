@@ -16,12 +16,7 @@ namespace semrec::fuse::internal {
 
 void MapResolver::SplitByMasks() {
   for (int round = 0; round < 3; ++round) {
-    std::map<uint32_t, std::vector<size_t>> members;
-    for (size_t i = 0; i < cells_.size(); ++i) {
-      if (cells_[i].owner != 0 && IsThingCell(cells_[i])) {
-        members[cells_[i].owner].push_back(i);
-      }
-    }
+    const Members members = ThingMembers();
     bool split = false;
     for (const auto& [owner, cells] : members) {
       split = SplitObjectByMasks(owner, cells) || split;

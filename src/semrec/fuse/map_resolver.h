@@ -367,10 +367,13 @@ class MapResolver {
 
   // Voxels per thing object (owner), over the thing cells.
   std::map<uint32_t, size_t> ThingSizes() const;
-  // Whether thing `id` with the cells `added` still fits one object of its
-  // class (CoreFootprintSize within size_slack), or did not fit before
-  // either, or has no known size.
-  bool StillFits(uint32_t id, const std::vector<size_t>& added) const;
+  // The thing cells of each thing object (owner), in cell order.
+  Members ThingMembers() const;
+  // Whether a thing of class `class_id` with cells `cells` and the cells
+  // `added` still fits one object of its class (CoreFootprintSize within
+  // size_slack), or did not fit before either, or has no known size.
+  bool StillFits(const std::vector<size_t>& cells, uint16_t class_id,
+                 const std::vector<size_t>& added) const;
 
   // Of the views that could see `cells` (ranged, and far ones for a class
   // only far views gave), the share that gave them their class, and the most
