@@ -77,45 +77,6 @@ class MeshCollector {
   std::map<uint32_t, std::unordered_map<int, int>> remaps_;
 };
 
-// The vertices of a mesh hashed by cell (cell size = the search radius), for
-// "is any vertex within r of p".
-class VertexGrid {
- public:
-  VertexGrid(const open3d::geometry::TriangleMesh& mesh, double radius_m)
-      : radius_m_(radius_m) {
-    for (const Eigen::Vector3d& v : mesh.vertices_) {
-      cells_[Key(v)].push_back(v);
-    }
-  }
-  bool AnyWithin(const Eigen::Vector3d& p) const {
-    const Eigen::Vector3i c = Cell(p);
-    for (int dx = -1; dx <= 1; ++dx) {
-      for (int dy = -1; dy <= 1; ++dy) {
-        for (int dz = -1; dz <= 1; ++dz) {
-          const auto it =
-              cells_.find(fuse::PackVoxel(c.x() + dx, c.y() + dy, c.z() + dz));
-          if (it == cells_.end()) continue;
-          for (const Eigen::Vector3d& v : it->second) {
-            if ((v - p).squaredNorm() <= radius_m_ * radius_m_) return true;
-          }
-        }
-      }
-    }
-    return false;
-  }
-
- private:
-  Eigen::Vector3i Cell(const Eigen::Vector3d& p) const {
-    return (p / radius_m_).array().floor().cast<int>();
-  }
-  uint64_t Key(const Eigen::Vector3d& p) const {
-    const Eigen::Vector3i c = Cell(p);
-    return fuse::PackVoxel(c.x(), c.y(), c.z());
-  }
-  double radius_m_;
-  std::unordered_map<uint64_t, std::vector<Eigen::Vector3d>> cells_;
-};
-
 // A square of side `size_m` centred on `centre`, facing `normal`, as a fan of
 // four triangles around its centre (wound counter-clockwise seen from the
 // normal's side).
@@ -161,13 +122,19 @@ size_t CoverOwnedVoxels(
   // another object's surface there is theirs under another label (the
   // points' centroid lies a few cm off it with depth noise), and a patch
   // would take its place.
-  std::vector<VertexGrid> grids;
+  fuse::Cloud vertices;
   for (const auto& [id, mesh] : *meshes) {
-    if (mesh) grids.emplace_back(*mesh, size_m);
+    if (!mesh) continue;
+    for (const Eigen::Vector3d& v : mesh->vertices_) {
+      vertices.push_back(v.cast<float>());
+    }
   }
+  const fuse::VoxelGrid grid(vertices, size_m);
+  const auto max_d2 = static_cast<float>(size_m * size_m);
   auto covered = [&](const Eigen::Vector3d& p) {
-    return std::any_of(grids.begin(), grids.end(),
-                       [&](const VertexGrid& g) { return g.AnyWithin(p); });
+    uint64_t computations = 0;
+    return grid.Nearest(vertices, p.cast<float>(), max_d2, &computations)
+               .index >= 0;
   };
   const open3d::geometry::TriangleMesh none;
   size_t added = 0;
