@@ -123,11 +123,7 @@ void RegisterMesh(CLI::App& app) {
                 "Fuse stuff classes (wall, floor, ceiling...) like objects "
                 "instead of one /World/Structure prim per class");
   cmd->add_flag("--no-ply", args->no_ply, "Do not write PLY per object");
-  cmd->add_flag("--no-surface-patches", args->no_surface_patches,
-                "Do not cover the map voxels of things that no volume meshed "
-                "(something thin, or seen once: a 2 cm TSDF gives it no "
-                "surface) with small patches at their points; such objects "
-                "then show holes, or no surface at all");
+  AddSurfacePatchesFlag(cmd, &args->no_surface_patches);
   cmd->add_flag("--two-pass", args->two_pass,
                 "Build the object volumes in a second pass over the frames "
                 "with fusion's final ids (the reference for the default "

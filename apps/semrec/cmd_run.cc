@@ -319,11 +319,7 @@ void RegisterRun(CLI::App& app) {
       ->capture_default_str();
   cmd->add_flag("--no-structure", args->no_structure,
                 "Fuse stuff classes like objects (no Structure prims)");
-  cmd->add_flag("--no-surface-patches", args->no_surface_patches,
-                "Do not cover the map voxels of things that no volume meshed "
-                "(something thin, or seen once: a 2 cm TSDF gives it no "
-                "surface) with small patches at their points; such objects "
-                "then show holes, or no surface at all");
+  AddSurfacePatchesFlag(cmd, &args->no_surface_patches);
   cmd->add_option("--snapshot-every", args->run.snapshot_every,
                   "Write the scene (valid USD) every n frames while running "
                   "(0 = at the end only)")

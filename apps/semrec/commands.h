@@ -61,6 +61,10 @@ struct SequenceArgs {
 };
 void AddSequenceArgs(CLI::App* cmd, SequenceArgs* args);
 
+/// --no-surface-patches (mesh, run): SceneBuilderOptions::cover_owned_voxels
+/// off.
+void AddSurfacePatchesFlag(CLI::App* cmd, bool* no_surface_patches);
+
 /// What every command that runs ONNX models accepts: --registry, --threads,
 /// --provider.
 struct ModelArgs {

@@ -12,6 +12,14 @@ io::SequenceReaderOptions SequenceArgs::ReaderOptions() const {
   return options;
 }
 
+void AddSurfacePatchesFlag(CLI::App* cmd, bool* no_surface_patches) {
+  cmd->add_flag("--no-surface-patches", *no_surface_patches,
+                "Do not cover the map voxels of things that no volume meshed "
+                "(something thin, or seen once: a 2 cm TSDF gives it no "
+                "surface) with small patches at their points; such objects "
+                "then show holes, or no surface at all");
+}
+
 void AddSequenceArgs(CLI::App* cmd, SequenceArgs* args) {
   cmd->add_option("sequence", args->path,
                   "Sequence folder, sequence.yaml, a ROS 2 bag (*.mcap, "
