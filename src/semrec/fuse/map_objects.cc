@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 #include <map>
+#include <numbers>
 #include <set>
 #include <utility>
 #include <vector>
@@ -176,21 +177,49 @@ void MapResolver::GateStructure() {
     planes_[cls] = std::move(found);
   }
   for (Cell& c : cells_) {
+    // The surface's own orientation, where its normals agree: a board running
+    // into the wall lies within the wall plane's tolerance but is no wall.
+    Eigen::Vector3f axis;
+    const Eigen::Vector3f* surface =
+        c.evidence->SurfaceAxis(
+            static_cast<float>(options_.planes.min_normal_agreement),
+            static_cast<float>(options_.planes.min_normal_points), &axis)
+            ? &axis
+            : nullptr;
+    // On its class's planes and turned along them; or in the corner where
+    // such a plane meets another structure plane it is turned along (a wall
+    // voxel holding the ceiling's edge holds both).
+    auto on_own = [&](const std::vector<StructurePlane>& own, double scale) {
+      return OnStructure(c.p, own, options_.planes, scale, surface) ||
+             (surface != nullptr &&
+              OnStructure(c.p, own, options_.planes, scale) &&
+              OnStructure(c.p, result_.planes, options_.planes, scale,
+                          surface));
+    };
     for (;;) {
       const auto it = planes_.find(c.class_id);
-      if (it == planes_.end() ||
-          OnStructure(c.p, it->second, options_.planes)) {
-        break;
-      }
+      if (it == planes_.end() || on_own(it->second, 1.0)) break;
       // With no other class in view, the structure class stays: nothing
       // says otherwise (a patch of wall too small to fit a plane to).
       std::vector<uint16_t> excluded = c.excluded;
       excluded.push_back(c.class_id);
-      const uint16_t next = Winner(*c.evidence, excluded);
+      uint16_t next = Winner(*c.evidence, excluded);
+      // Nor a structure class no plane was found for (little ceiling seen)
+      // when the surface is not turned as that class's are: the end of a
+      // partition, off its faces' planes, had a few votes for the ceiling.
+      while (next != kNoClass && IsStuff(next) &&
+             UnplacedAndTurnedAway(next, surface)) {
+        excluded.push_back(next);
+        next = Winner(*c.evidence, excluded);
+      }
       if (!CanTakeOver(*c.evidence, next)) {
-        // Stranded only clearly off the planes: a bumpy wall's noise band
-        // (just beyond the tolerance) stays structure.
-        c.stranded = !OnStructure(c.p, it->second, options_.planes, 1.5);
+        // Stranded only clearly off the planes (a bumpy wall's noise band,
+        // just beyond the tolerance, stays structure), and not where it lies
+        // on another structure plane it is turned along: structure still.
+        c.stranded = !on_own(it->second, 1.5) &&
+                     (surface == nullptr ||
+                      !OnStructure(c.p, result_.planes, options_.planes, 1.5,
+                                   surface));
         break;
       }
       c.excluded = std::move(excluded);
@@ -198,6 +227,22 @@ void MapResolver::GateStructure() {
     }
     if (!c.excluded.empty()) ++result_.gated_voxels;
   }
+}
+
+bool MapResolver::UnplacedAndTurnedAway(
+    uint16_t class_id, const Eigen::Vector3f* surface_axis) const {
+  const auto g = context_.geometry.find(class_id);
+  if (surface_axis == nullptr || g == context_.geometry.end() ||
+      g->second == StructureGeometry::kNone || planes_.count(class_id) != 0) {
+    return false;
+  }
+  const double up = std::abs(context_.up_world.dot(surface_axis->cast<double>()));
+  const double tilt_cos =
+      std::cos(options_.planes.max_surface_tilt_deg * std::numbers::pi / 180.0);
+  // A wall's normal is horizontal, a floor's or a ceiling's vertical.
+  return g->second == StructureGeometry::kVertical
+             ? up > std::sqrt(std::max(0.0, 1.0 - tilt_cos * tilt_cos))
+             : up < tilt_cos;
 }
 
 void MapResolver::ReleaseFlushParts() {

@@ -97,6 +97,10 @@ class MapResolver {
   // where it held most of the voxel's pixels and a share of its votes (not
   // the stray vote of a mask's fringe).
   bool CanTakeOver(const VoxelEvidence& v, uint16_t class_id) const;
+  // A structure class that lives on planes, none of which was found, and a
+  // surface not turned as that class's surfaces are (null: unknown, false).
+  bool UnplacedAndTurnedAway(uint16_t class_id,
+                             const Eigen::Vector3f* surface_axis) const;
 
   uint32_t StructureId(uint16_t class_id);
 

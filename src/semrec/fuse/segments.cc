@@ -151,6 +151,50 @@ std::unique_ptr<SegmentationSource> SegmentationSource::Create(
   return std::make_unique<FolderSource>(spec);
 }
 
+Eigen::Vector3f SurfaceNormalAt(const DepthImage& depth,
+                                const CameraIntrinsics& k, int u, int v,
+                                int step_px) {
+  const float z = depth(u, v);
+  if (z <= 0.0f) return Eigen::Vector3f::Zero();
+  const Eigen::Vector3f c = k.BackProject(u, v, z).cast<float>();
+  // The neighbour `d` steps along (du, dv), when it lies on the same surface.
+  auto neighbour = [&](int du, int dv, Eigen::Vector3f* q) {
+    const int nu = u + du * step_px, nv = v + dv * step_px;
+    if (nu < 0 || nv < 0 || nu >= depth.width() || nv >= depth.height()) {
+      return false;
+    }
+    const float zn = depth(nu, nv);
+    if (zn <= 0.0f || std::abs(zn - z) > 0.1f * z) return false;
+    *q = k.BackProject(nu, nv, zn).cast<float>();
+    return true;
+  };
+  // Difference along one image axis: central where both sides are there.
+  auto difference = [&](int du, int dv, Eigen::Vector3f* d) {
+    Eigen::Vector3f plus, minus;
+    const bool has_plus = neighbour(du, dv, &plus);
+    const bool has_minus = neighbour(-du, -dv, &minus);
+    if (has_plus && has_minus) {
+      *d = plus - minus;
+    } else if (has_plus) {
+      *d = plus - c;
+    } else if (has_minus) {
+      *d = c - minus;
+    } else {
+      return false;
+    }
+    return true;
+  };
+  Eigen::Vector3f du, dv;
+  if (!difference(1, 0, &du) || !difference(0, 1, &dv)) {
+    return Eigen::Vector3f::Zero();
+  }
+  Eigen::Vector3f n = du.cross(dv);
+  const float norm = n.norm();
+  if (!(norm > 0.0f)) return Eigen::Vector3f::Zero();
+  n /= norm;
+  return n.dot(c) > 0.0f ? Eigen::Vector3f(-n) : n;
+}
+
 void SegmentExtractionOptions::Check() const {
   CheckArgument(pixel_stride >= 1, "segments: pixel_stride must be >= 1");
 }
@@ -170,10 +214,18 @@ std::vector<FrameSegment> ExtractFrameSegments(
   // Per instance: its points and a histogram of its semantic labels.
   struct Accumulator {
     Cloud points;
+    Cloud normals;
     std::map<uint16_t, size_t> votes;
   };
   std::map<uint16_t, Accumulator> by_instance;
   const CameraIntrinsics& k = frame.intrinsics;
+  // The normal's pixel step grows with depth (3 pixels per metre at 640
+  // wide: a 1.1 cm baseline each way at 1 m, 18 cm at 4 m): a depth sensor's
+  // noise and its disparity steps grow with the square of the depth, and a
+  // far wall's normals from neighbouring pixels point along the rays.
+  const float normal_step_per_m = 3.0f * static_cast<float>(w) / 640.0f;
+  const Eigen::Matrix3f R_world_camera =
+      frame.T_world_camera.rotation().cast<float>();
   for (int v = 0; v < h; v += options.pixel_stride) {
     for (int u = 0; u < w; u += options.pixel_stride) {
       const uint16_t instance = labels.instance(u, v);
@@ -184,6 +236,11 @@ std::vector<FrameSegment> ExtractFrameSegments(
       if (z <= 0.0f) continue;
       acc.points.push_back(
           (frame.T_world_camera * k.BackProject(u, v, z)).cast<float>());
+      acc.normals.push_back(
+          R_world_camera *
+          SurfaceNormalAt(
+              frame.depth, k, u, v,
+              std::max(2, static_cast<int>(std::lround(normal_step_per_m * z)))));
     }
   }
   std::vector<FrameSegment> out;
@@ -211,7 +268,8 @@ std::vector<FrameSegment> ExtractFrameSegments(
     out.push_back(
         {cls, instance, std::move(acc.points), classes.Get(cls).kind,
          map_object == labels.map_objects.end() ? 0u : map_object->second,
-         confidence == labels.confidence.end() ? 1.0f : confidence->second});
+         confidence == labels.confidence.end() ? 1.0f : confidence->second,
+         std::move(acc.normals)});
   }
   return out;
 }

@@ -32,6 +32,12 @@ void StructurePlaneOptions::Check() const {
                 "structure planes: min_top_surface_share must be >= 0");
   CheckArgument(max_front_distance_m >= 0.0,
                 "structure planes: max_front_distance_m must be >= 0");
+  CheckArgument(max_surface_tilt_deg >= 0.0,
+                "structure planes: max_surface_tilt_deg must be >= 0");
+  CheckArgument(min_normal_agreement > 1.0 / 3.0 && min_normal_agreement <= 1.0,
+                "structure planes: min_normal_agreement must be in (1/3, 1]");
+  CheckArgument(min_normal_points >= 1,
+                "structure planes: min_normal_points must be >= 1");
   CheckArgument(max_planes > 0, "structure planes: max_planes must be > 0");
   CheckArgument(ransac_iterations > 0,
                 "structure planes: ransac_iterations must be > 0");
@@ -163,9 +169,14 @@ std::vector<StructurePlane> TakeFurnitureFronts(
 
 bool OnStructure(const Eigen::Vector3f& p,
                  const std::vector<StructurePlane>& planes,
-                 const StructurePlaneOptions& options, double near_scale) {
+                 const StructurePlaneOptions& options, double near_scale,
+                 const Eigen::Vector3f* surface_axis) {
   const Eigen::Vector3d q = p.cast<double>();
   const double parallel = ParallelCos(options);
+  const double min_facing =
+      options.max_surface_tilt_deg >= 90.0
+          ? 0.0
+          : std::cos(options.max_surface_tilt_deg * std::numbers::pi / 180.0);
   auto in_front_of_larger = [&](const StructurePlane& plane) {
     return std::any_of(planes.begin(), planes.end(), [&](const auto& wall) {
       if (wall.geometry != StructureGeometry::kVertical ||
@@ -181,6 +192,10 @@ bool OnStructure(const Eigen::Vector3f& p,
   return std::any_of(planes.begin(), planes.end(), [&](const auto& plane) {
     const double near_m = near_scale * plane.Tolerance(options);
     if (std::abs(plane.normal.dot(q) - plane.offset) > near_m) return false;
+    if (surface_axis != nullptr &&
+        std::abs(plane.normal.dot(surface_axis->cast<double>())) < min_facing) {
+      return false;
+    }
     return plane.geometry != StructureGeometry::kVertical ||
            !in_front_of_larger(plane);
   });

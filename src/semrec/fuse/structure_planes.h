@@ -56,6 +56,18 @@ struct StructurePlaneOptions {
   /// counter top over the cabinets a 2D model calls wall (7-Scenes chess:
   /// the red base cabinets, 0.88 m tall). 0 or more than 1: off.
   double min_top_surface_share = 0.2;
+  /// A voxel whose own surface turns more than this from a plane's normal is
+  /// not on the plane (OnStructure's `surface_axis`): the side of a shelf or a
+  /// board running into the wall lies within a voxel of the wall's plane, and
+  /// a 2D model calls the part near the wall wall in every view. >= 90: off.
+  double max_surface_tilt_deg = 45.0;
+  /// ... when the voxel's point normals agree on an axis: its share of their
+  /// scatter at least this (VoxelEvidence::SurfaceAxis; a voxel holding a
+  /// corner of the wall and a board has none and counts as on the plane).
+  double min_normal_agreement = 0.6;
+  /// ... and at least this many of its points have a normal (one or two
+  /// pixels' normals agree with themselves).
+  int min_normal_points = 10;
   /// At most this many vertical planes per class.
   int max_planes = 16;
   /// RANSAC hypotheses per vertical plane.
@@ -143,9 +155,13 @@ std::vector<StructurePlane> TakeFurnitureFronts(
 /// stay wall where no other class has evidence and no thing claims them.
 /// Planes must be oriented (OrientToInterior). Within `near_scale` x a
 /// plane's tolerance (its own, else the options') counts as on it.
+/// `surface_axis` (may be null: unknown): the normal axis of the surface at
+/// `p`; a plane it turns more than max_surface_tilt_deg from does not hold
+/// `p`.
 bool OnStructure(const Eigen::Vector3f& p,
                  const std::vector<StructurePlane>& planes,
-                 const StructurePlaneOptions& options, double near_scale = 1.0);
+                 const StructurePlaneOptions& options, double near_scale = 1.0,
+                 const Eigen::Vector3f* surface_axis = nullptr);
 
 /// True when `p` lies behind an oriented wall (more than its tolerance and
 /// at most max_front_distance_m behind it, along a stretch it covers) and

@@ -6,6 +6,8 @@
 #include <unordered_set>
 #include <utility>
 
+#include <Eigen/Eigenvalues>
+
 #include "semrec/core/error.h"
 
 namespace semrec::fuse {
@@ -33,6 +35,18 @@ const ClassEvidence* VoxelEvidence::Find(uint16_t class_id) const {
   return nullptr;
 }
 
+bool VoxelEvidence::SurfaceAxis(float min_share, float min_points,
+                                Eigen::Vector3f* axis) const {
+  // Each unit normal adds 1 to the trace.
+  const float trace = normal_scatter.trace();
+  if (!(trace > 0.0f) || trace < min_points) return false;
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3f> eig(normal_scatter);
+  // Eigenvalues ascending: the last is the dominant axis.
+  if (eig.eigenvalues()(2) < min_share * trace) return false;
+  *axis = eig.eigenvectors().col(2).normalized();
+  return true;
+}
+
 VoxelEvidenceMap::VoxelEvidenceMap(double voxel_size_m,
                                    const VoxelEvidenceOptions& options)
     : voxel_size_m_(voxel_size_m),
@@ -58,6 +72,7 @@ struct Vote {
   uint16_t label;
   Eigen::Vector3f p;
   float confidence;
+  Eigen::Vector3f normal;  // zero: none
 };
 
 ObjectVote* FindOrAddObject(std::vector<ObjectVote>* objects, uint32_t id) {
@@ -118,11 +133,14 @@ void VoxelEvidenceMap::AddFrame(const std::vector<FrameSegment>& segments,
     if (s.kind != ClassKind::kStuff && s.source_label != 0) {
       mask_classes_[MaskId(frame_index, s.source_label)] = s.class_id;
     }
-    for (const Eigen::Vector3f& p : s.points_world) {
+    const bool has_normals = s.normals_world.size() == s.points_world.size();
+    for (size_t i = 0; i < s.points_world.size(); ++i) {
+      const Eigen::Vector3f& p = s.points_world[i];
       votes.push_back(
           {VoxelKey(p, inv_voxel_), object_ids[f], s.class_id,
            s.kind == ClassKind::kStuff ? uint16_t{0} : s.source_label, p,
-           s.confidence});
+           s.confidence,
+           has_normals ? s.normals_world[i] : Eigen::Vector3f::Zero()});
     }
   }
   // Grouped by voxel, then class and object: one pass casts each voxel's vote.
@@ -141,8 +159,13 @@ void VoxelEvidenceMap::AddFrame(const std::vector<FrameSegment>& segments,
     VoxelEvidence& v = voxels_[votes[i].key];
     const auto n = static_cast<float>(end - i);
     Eigen::Vector3d sum = Eigen::Vector3d::Zero();
-    for (size_t k = i; k < end; ++k) sum += votes[k].p.cast<double>();
+    Eigen::Matrix3f scatter = Eigen::Matrix3f::Zero();
+    for (size_t k = i; k < end; ++k) {
+      sum += votes[k].p.cast<double>();
+      scatter.noalias() += votes[k].normal * votes[k].normal.transpose();
+    }
     v.point_sum += sum;
+    v.normal_scatter += scatter;
     v.points += static_cast<uint32_t>(end - i);
     float weight = 1.0f;
     if (observation != nullptr) {

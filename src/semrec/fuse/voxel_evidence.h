@@ -80,6 +80,10 @@ struct VoxelEvidence {
   /// the camera (zero without camera positions): the side a surface was seen
   /// from; an interior wall's two faces, 10 cm apart, face opposite ways.
   Eigen::Vector3f towards_camera_sum = Eigen::Vector3f::Zero();
+  /// Sum over the labelled points with a surface normal (FrameSegment::
+  /// normals_world) of n n^T: the surface's orientation whichever side it was
+  /// seen from (the two faces of a board cancel in a sum of normals, not here).
+  Eigen::Matrix3f normal_scatter = Eigen::Matrix3f::Zero();
   std::vector<ClassEvidence> classes;
   std::vector<ObjectVote> objects;
   /// Per view that put object pixels here, the object mask (MaskId) holding
@@ -92,6 +96,13 @@ struct VoxelEvidence {
     return (point_sum / static_cast<double>(points)).cast<float>();
   }
   const ClassEvidence* Find(uint16_t class_id) const;
+  /// The surface's normal axis (unit, either sign) when at least
+  /// `min_points` points' normals agree on one: its share of the scatter (the
+  /// largest eigenvalue over the trace, the number of normals) at least
+  /// `min_share`; a corner of two surfaces, a rough or barely measured one
+  /// has none (false).
+  bool SurfaceAxis(float min_share, float min_points,
+                   Eigen::Vector3f* axis) const;
 };
 
 class VoxelEvidenceMap {
