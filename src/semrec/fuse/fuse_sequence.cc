@@ -128,6 +128,7 @@ nlohmann::json MapResolutionJson(const SceneFusion& fusion,
           {"fragments_folded", r->fragments_folded},
           {"fragments_dropped", r->fragments_dropped},
           {"stranded_voxels_claimed", r->stranded_voxels_claimed},
+          {"enclosed_voxels_claimed", r->enclosed_voxels_claimed},
           {"reclassed_by_size", r->reclassed_by_size},
           {"objects_from_fronts", r->objects_from_fronts}};
 }

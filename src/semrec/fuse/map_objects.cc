@@ -91,6 +91,7 @@ MapResolution MapResolver::Run() {
     ClaimFronts();
     ClaimStranded();
   }
+  if (options_.structure_planes && options_.claim_enclosed) ClaimEnclosed();
   return Build();
 }
 

@@ -107,6 +107,9 @@ struct MapObjectOptions {
   /// of base cabinets every view called wall is furniture, not wall. Off, or
   /// with no front class, it stays wall.
   bool objects_from_fronts = true;
+  /// Wall voxels a thing's voxels at the wall close in on the wall's plane
+  /// join the thing (fuse/map_resolver.h: ClaimEnclosed).
+  bool claim_enclosed = true;
   /// A split-off piece with fewer voxels than this joins a touching object of
   /// its class instead of standing alone.
   size_t min_piece_voxels = 20;
@@ -255,6 +258,8 @@ struct MapResolution {
   size_t reclassed_by_size = 0;
   /// Furniture fronts no thing held that became objects of a front class.
   size_t objects_from_fronts = 0;
+  /// Wall voxels closed in by a thing at the wall that joined it.
+  size_t enclosed_voxels_claimed = 0;
 };
 
 /// Decides the objects. `resolve`: a fusion id's current id (0: dropped).

@@ -361,6 +361,13 @@ class MapResolver {
   // touching the cabinets does not take them; an L-shaped counter's cabinet
   // lies on two).
   void ClaimFronts();
+
+  // Wall voxels on a vertical plane that a thing's voxels at the wall close
+  // in, in the plane (four-connected, within the box of those voxels), join
+  // the thing: the back panel of a shelf between its sides and boards. A
+  // chair's back or a table against the wall leaves the wall open below or
+  // beside it.
+  void ClaimEnclosed();
   // A front no thing took (`on`: its cells) whose voxels are mostly
   // stranded gets a new object id of a front class (that of the fronts
   // things took, `named`: class -> their voxels, if any; else the most

@@ -203,5 +203,67 @@ TEST(MapObjects, BoardsRunningIntoTheWallAreNotWall) {
   EXPECT_GT(ShareIn(WhereItWent(old, rear_near), old_wall->id), 0.8);
 }
 
+// The same shelf's back panel, 1 cm before the wall and turned like it, is
+// called wall in every view (a 2D model sees a flat vertical surface between
+// the boards); the shelf's sides and boards close it in on the wall's plane:
+// it joins the shelf. The wall above the shelf stays wall, and so does the
+// wall under a table against the wall (open below: nothing closes it in).
+TEST(MapObjects, WallClosedInByAShelfOnTheWallJoinsIt) {
+  const Cloud shelf = Join({Box({0.0f, 1.5f, 0.05f}, {0.36f, 1.5f, 1.8f}),
+                            Box({0.0f, 2.4f, 0.05f}, {0.36f, 2.4f, 1.8f}),
+                            Box({0.0f, 1.53f, 0.6f}, {0.36f, 2.37f, 0.6f}),
+                            Box({0.0f, 1.53f, 1.2f}, {0.36f, 2.37f, 1.2f}),
+                            Box({0.0f, 1.53f, 1.8f}, {0.36f, 2.37f, 1.8f})});
+  const Cloud panel = Join({Box({0.01f, 1.53f, 0.65f}, {0.01f, 2.37f, 1.15f}),
+                            Box({0.01f, 1.53f, 1.25f}, {0.01f, 2.37f, 1.75f})});
+  // A table against the wall: its top and its legs touch it.
+  const Cloud table = Join({Box({0.0f, 0.2f, 0.7f}, {0.6f, 1.2f, 0.74f}),
+                            Box({0.0f, 0.2f, 0.05f}, {0.04f, 0.24f, 0.7f}),
+                            Box({0.0f, 1.16f, 0.05f}, {0.04f, 1.2f, 0.7f})});
+  Cloud wall = WallPoints();
+  std::erase_if(wall, [](const Eigen::Vector3f& p) {
+    return p.y() > 1.49f && p.y() < 2.41f && p.z() < 1.81f;
+  });
+  auto near = [](const Cloud& c, float y0, float y1, float z0, float z1) {
+    Cloud out;
+    for (const Eigen::Vector3f& p : c) {
+      if (p.y() > y0 && p.y() < y1 && p.z() > z0 && p.z() < z1) {
+        out.push_back(p);
+      }
+    }
+    return out;
+  };
+  const Cloud above_shelf = near(wall, 1.6f, 2.3f, 1.95f, 2.4f);
+  const Cloud under_table = near(wall, 0.3f, 1.1f, 0.1f, 0.6f);
+  ASSERT_GT(above_shelf.size(), 20u);
+  ASSERT_GT(under_table.size(), 100u);
+  std::vector<View> views;
+  for (int i = 0; i < 4; ++i) {
+    View v;
+    v.camera = {2.5f, 0.8f + 0.5f * static_cast<float>(i), 1.4f};
+    v.segments.push_back(Segment(kWall, 1, Join({wall, panel})));
+    v.segments.push_back(Segment(kFloor, 2, FloorPoints()));
+    v.segments.push_back(Segment(kShelf, 3, shelf));
+    v.segments.push_back(Segment(kTable, 4, table));
+    views.push_back(std::move(v));
+  }
+  const SceneFusion fusion = Fuse(views);
+  const SceneSegment* s = Largest(fusion, kShelf);
+  const SceneSegment* w = Largest(fusion, kWall);
+  ASSERT_NE(s, nullptr);
+  ASSERT_NE(w, nullptr);
+  EXPECT_GT(fusion.map_resolution()->enclosed_voxels_claimed, 50u);
+  EXPECT_GT(ShareIn(WhereItWent(fusion, panel), s->id), 0.9);
+  EXPECT_GT(ShareIn(WhereItWent(fusion, above_shelf), w->id), 0.9);
+  EXPECT_GT(ShareIn(WhereItWent(fusion, under_table), w->id), 0.97);
+
+  FusionOptions without;
+  without.map_objects.claim_enclosed = false;
+  const SceneFusion old = Fuse(views, without);
+  const SceneSegment* old_wall = Largest(old, kWall);
+  ASSERT_NE(old_wall, nullptr);
+  EXPECT_GT(ShareIn(WhereItWent(old, panel), old_wall->id), 0.9);
+}
+
 }  // namespace
 }  // namespace semrec::fuse

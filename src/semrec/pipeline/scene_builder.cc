@@ -213,12 +213,13 @@ void SceneBuilder::Finish() {
         "objects decided per map voxel: {} objects, {} structure planes, {} "
         "voxels moved off structure, {} split, {} merged by masks, {} new, "
         "fragments {} folded / {} dropped, {} stranded structure voxels "
-        "joined things, {} took a class that fits their size, {} furniture "
-        "fronts no view named became objects",
+        "joined things, {} wall voxels closed in by things joined them, {} "
+        "took a class that fits their size, {} furniture fronts no view "
+        "named became objects",
         r.objects.size(), r.planes.size(), r.gated_voxels, r.split_objects,
         r.merged_objects, r.new_objects, r.fragments_folded,
-        r.fragments_dropped, r.stranded_voxels_claimed, r.reclassed_by_size,
-        r.objects_from_fronts);
+        r.fragments_dropped, r.stranded_voxels_claimed,
+        r.enclosed_voxels_claimed, r.reclassed_by_size, r.objects_from_fronts);
   }
 }
 
