@@ -217,10 +217,10 @@ void MapResolver::GateStructure() {
         // Stranded only clearly off the planes (a bumpy wall's noise band,
         // just beyond the tolerance, stays structure), and not where it lies
         // on another structure plane it is turned along: structure still.
-        c.stranded = !on_own(it->second, 1.5) &&
-                     (surface == nullptr ||
-                      !OnStructure(c.p, result_.planes, options_.planes, 1.5,
-                                   surface));
+        c.stranded =
+            !on_own(it->second, 1.5) &&
+            (surface == nullptr ||
+             !OnStructure(c.p, result_.planes, options_.planes, 1.5, surface));
         break;
       }
       c.excluded = std::move(excluded);
@@ -237,7 +237,8 @@ bool MapResolver::UnplacedAndTurnedAway(
       g->second == StructureGeometry::kNone || planes_.count(class_id) != 0) {
     return false;
   }
-  const double up = std::abs(context_.up_world.dot(surface_axis->cast<double>()));
+  const double up =
+      std::abs(context_.up_world.dot(surface_axis->cast<double>()));
   const double tilt_cos =
       std::cos(options_.planes.max_surface_tilt_deg * std::numbers::pi / 180.0);
   // A wall's normal is horizontal, a floor's or a ceiling's vertical.

@@ -104,9 +104,8 @@ void MapResolver::ClaimEnclosed() {
       }
       // Closed compartments need a cell of room inside: three across.
       if (hi.first - lo.first < 2 || hi.second - lo.second < 2) continue;
-      const std::set<Cell2> open =
-          ReachableFromBorder({lo.first - 1, lo.second - 1},
-                              {hi.first + 1, hi.second + 1}, around);
+      const std::set<Cell2> open = ReachableFromBorder(
+          {lo.first - 1, lo.second - 1}, {hi.first + 1, hi.second + 1}, around);
       // The holes in the outline (a shelf's compartments), then the wall
       // under the outline around them (a board's back edge, its voxel shared
       // with the back panel).
@@ -122,13 +121,11 @@ void MapResolver::ClaimEnclosed() {
         take(it->second, id);
       }
       for (const Cell2& h : holes) {
-        for (const Cell2& n : {Cell2{h.first + 1, h.second},
-                               Cell2{h.first - 1, h.second},
-                               Cell2{h.first, h.second + 1},
-                               Cell2{h.first, h.second - 1}}) {
+        for (const Cell2& n :
+             {Cell2{h.first + 1, h.second}, Cell2{h.first - 1, h.second},
+              Cell2{h.first, h.second + 1}, Cell2{h.first, h.second - 1}}) {
           const auto it = wall.find(n);
-          if (it == wall.end() || holes.count(n) != 0 ||
-              around.count(n) == 0) {
+          if (it == wall.end() || holes.count(n) != 0 || around.count(n) == 0) {
             continue;
           }
           take(it->second, id);

@@ -157,7 +157,7 @@ Eigen::Vector3f SurfaceNormalAt(const DepthImage& depth,
   const float z = depth(u, v);
   if (z <= 0.0f) return Eigen::Vector3f::Zero();
   const Eigen::Vector3f c = k.BackProject(u, v, z).cast<float>();
-  // The neighbour `d` steps along (du, dv), when it lies on the same surface.
+  // The point step_px pixels along (du, dv), when on the same surface.
   auto neighbour = [&](int du, int dv, Eigen::Vector3f* q) {
     const int nu = u + du * step_px, nv = v + dv * step_px;
     if (nu < 0 || nv < 0 || nu >= depth.width() || nv >= depth.height()) {
@@ -238,9 +238,9 @@ std::vector<FrameSegment> ExtractFrameSegments(
           (frame.T_world_camera * k.BackProject(u, v, z)).cast<float>());
       acc.normals.push_back(
           R_world_camera *
-          SurfaceNormalAt(
-              frame.depth, k, u, v,
-              std::max(2, static_cast<int>(std::lround(normal_step_per_m * z)))));
+          SurfaceNormalAt(frame.depth, k, u, v,
+                          std::max(2, static_cast<int>(std::lround(
+                                          normal_step_per_m * z)))));
     }
   }
   std::vector<FrameSegment> out;

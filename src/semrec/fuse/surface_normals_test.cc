@@ -57,11 +57,11 @@ TEST(SurfaceNormals, APlanesNormalFacesTheCameraWhateverTheStep) {
   const Eigen::Vector3f expected = -n.cast<float>();
   for (int step : {1, 3, 12}) {
     for (const auto& [u, v] : {std::pair{320, 240}, std::pair{0, 0},
-                              std::pair{639, 479}, std::pair{50, 400}}) {
+                               std::pair{639, 479}, std::pair{50, 400}}) {
       const Eigen::Vector3f got = SurfaceNormalAt(depth, k, u, v, step);
       EXPECT_NEAR(got.norm(), 1.0f, 1e-5f);
-      EXPECT_LT(AngleDeg(got, expected), 0.5) << u << "," << v << " step "
-                                              << step;
+      EXPECT_LT(AngleDeg(got, expected), 0.5)
+          << u << "," << v << " step " << step;
     }
   }
 }
@@ -79,9 +79,9 @@ TEST(SurfaceNormals, DepthJumpsAndHolesAreLeftOut) {
   }
   // At the box's edge the neighbours across the jump do not count: each side
   // keeps its own surface's normal.
-  EXPECT_LT(AngleDeg(SurfaceNormalAt(depth, k, 319, 200, 3),
-                     -box_n.cast<float>()),
-            0.5);
+  EXPECT_LT(
+      AngleDeg(SurfaceNormalAt(depth, k, 319, 200, 3), -box_n.cast<float>()),
+      0.5);
   EXPECT_LT(AngleDeg(SurfaceNormalAt(depth, k, 320, 200, 3),
                      -Eigen::Vector3f::UnitZ()),
             0.5);
@@ -111,8 +111,8 @@ TEST(SurfaceNormals, AVoxelsAxisNeedsAgreeingNormalsEnough) {
   EXPECT_FALSE(v.SurfaceAxis(0.6f, 20.0f, &axis));  // too few
   // A corner: as many normals along x as along y: no axis.
   for (int i = 0; i < 12; ++i) {
-    v.normal_scatter += Eigen::Vector3f::UnitX() *
-                        Eigen::Vector3f::UnitX().transpose();
+    v.normal_scatter +=
+        Eigen::Vector3f::UnitX() * Eigen::Vector3f::UnitX().transpose();
   }
   EXPECT_FALSE(v.SurfaceAxis(0.6f, 10.0f, &axis));
 }
@@ -171,10 +171,9 @@ TEST(MapObjects, BoardsRunningIntoTheWallAreNotWall) {
                              rb.normals_world.end());
       v.segments.push_back(std::move(w));
       v.segments.push_back(Segment(kFloor, 2, FloorPoints()));
-      v.segments.push_back(Segment(
-          kShelf, 3,
-          Join({sides(rear_m + 0.02f, depth_m), shelves(rear_m + 0.02f,
-                                                        depth_m)})));
+      v.segments.push_back(Segment(kShelf, 3,
+                                   Join({sides(rear_m + 0.02f, depth_m),
+                                         shelves(rear_m + 0.02f, depth_m)})));
       out.push_back(std::move(v));
     }
     return out;
@@ -185,7 +184,8 @@ TEST(MapObjects, BoardsRunningIntoTheWallAreNotWall) {
     std::erase_if(c, [](const Eigen::Vector3f& p) { return p.x() > 0.045f; });
     return c;
   };
-  const Cloud rear_near = Join({near_wall(rear_sides), near_wall(rear_shelves)});
+  const Cloud rear_near =
+      Join({near_wall(rear_sides), near_wall(rear_shelves)});
   ASSERT_GT(rear_near.size(), 100u);
 
   const SceneFusion fusion = Fuse(views(true));
