@@ -83,6 +83,17 @@ struct View {
   FarView far;  // its labels where it had no depth (FarViewAlongMinusX)
 };
 
+// A Kinect's camera: 640 x 480, f 525 px (0.11 degrees a pixel).
+inline CameraIntrinsics Kinect() {
+  CameraIntrinsics k;
+  k.width = 640;
+  k.height = 480;
+  k.fx = k.fy = 525.0;
+  k.cx = 319.5;
+  k.cy = 239.5;
+  return k;
+}
+
 // A 640 x 480 camera (f 525 px) at `eye` looking along -x: image x = world
 // +y, image y = world -z.
 inline Transform LookingAlongMinusX(const Eigen::Vector3d& eye) {
@@ -100,11 +111,7 @@ FarView FarViewAlongMinusX(const Eigen::Vector3d& eye, float reach_m,
                            const ClassOf& class_of) {
   FarView far;
   far.T_world_camera = LookingAlongMinusX(eye);
-  far.intrinsics.width = 640;
-  far.intrinsics.height = 480;
-  far.intrinsics.fx = far.intrinsics.fy = 525.0;
-  far.intrinsics.cx = 319.5;
-  far.intrinsics.cy = 239.5;
+  far.intrinsics = Kinect();
   far.max_ranged_depth_m = reach_m;
   for (int row = 0; row < far.rows(); ++row) {
     for (int col = 0; col < far.columns(); ++col) {

@@ -22,18 +22,6 @@ double AngleDeg(const Eigen::Vector3f& a, const Eigen::Vector3f& b) {
   return std::acos(c) * 180.0 / std::numbers::pi;
 }
 
-// A Kinect's: at 0.11 degrees a pixel, a surface turned up to ~80 degrees
-// from the ray changes depth by less than 10 % over a dozen pixels.
-CameraIntrinsics Camera() {
-  CameraIntrinsics k;
-  k.width = 640;
-  k.height = 480;
-  k.fx = k.fy = 525.0;
-  k.cx = 319.5;
-  k.cy = 239.5;
-  return k;
-}
-
 // Depth of the plane n . p = d (camera frame) along each pixel's ray.
 DepthImage PlaneDepth(const CameraIntrinsics& k, const Eigen::Vector3d& n,
                       double d) {
@@ -48,7 +36,9 @@ DepthImage PlaneDepth(const CameraIntrinsics& k, const Eigen::Vector3d& n,
 }
 
 TEST(SurfaceNormals, APlanesNormalFacesTheCameraWhateverTheStep) {
-  const CameraIntrinsics k = Camera();
+  // At 0.11 degrees a pixel, a surface turned up to ~80 degrees from the ray
+  // changes depth by less than 10 % over a dozen pixels.
+  const CameraIntrinsics k = Kinect();
   // A plane turned 40 degrees about the camera's y axis, 2 m ahead.
   const double a = 40.0 * std::numbers::pi / 180.0;
   const Eigen::Vector3d n(std::sin(a), 0.0, std::cos(a));
@@ -67,7 +57,7 @@ TEST(SurfaceNormals, APlanesNormalFacesTheCameraWhateverTheStep) {
 }
 
 TEST(SurfaceNormals, DepthJumpsAndHolesAreLeftOut) {
-  const CameraIntrinsics k = Camera();
+  const CameraIntrinsics k = Kinect();
   // A wall 3 m ahead, facing the camera; the left half a box 1 m ahead whose
   // face is tilted 30 degrees.
   DepthImage depth = PlaneDepth(k, Eigen::Vector3d::UnitZ(), 3.0);
