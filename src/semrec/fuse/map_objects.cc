@@ -4,7 +4,6 @@
 #include <chrono>
 #include <cmath>
 #include <map>
-#include <numbers>
 #include <set>
 #include <utility>
 #include <vector>
@@ -190,16 +189,14 @@ void MapResolver::GateStructure() {
     // On its class's planes and turned along them; or in the corner where
     // such a plane meets another structure plane it is turned along (a wall
     // voxel holding the ceiling's edge holds both).
-    auto on_own = [&](const std::vector<StructurePlane>& own, double scale) {
-      return OnStructure(c.p, own, options_.planes, scale, surface) ||
-             (surface != nullptr &&
-              OnStructure(c.p, own, options_.planes, scale) &&
-              OnStructure(c.p, result_.planes, options_.planes, scale,
-                          surface));
+    auto on_own = [&](const std::vector<StructurePlane>& own) {
+      return OnStructure(c.p, own, options_.planes, 1.0, surface) ||
+             (surface != nullptr && OnStructure(c.p, own, options_.planes) &&
+              OnStructure(c.p, result_.planes, options_.planes, 1.0, surface));
     };
     for (;;) {
       const auto it = planes_.find(c.class_id);
-      if (it == planes_.end() || on_own(it->second, 1.0)) break;
+      if (it == planes_.end() || on_own(it->second)) break;
       // With no other class in view, the structure class stays: nothing
       // says otherwise (a patch of wall too small to fit a plane to).
       std::vector<uint16_t> excluded = c.excluded;
@@ -218,7 +215,7 @@ void MapResolver::GateStructure() {
         // just beyond the tolerance, stays structure), and not where it lies
         // on another structure plane it is turned along: structure still.
         c.stranded =
-            !on_own(it->second, 1.5) &&
+            !OnStructure(c.p, it->second, options_.planes, 1.5, surface) &&
             (surface == nullptr ||
              !OnStructure(c.p, result_.planes, options_.planes, 1.5, surface));
         break;
@@ -239,12 +236,12 @@ bool MapResolver::UnplacedAndTurnedAway(
   }
   const double up =
       std::abs(context_.up_world.dot(surface_axis->cast<double>()));
-  const double tilt_cos =
-      std::cos(options_.planes.max_surface_tilt_deg * std::numbers::pi / 180.0);
-  // A wall's normal is horizontal, a floor's or a ceiling's vertical.
-  return g->second == StructureGeometry::kVertical
-             ? up > std::sqrt(std::max(0.0, 1.0 - tilt_cos * tilt_cos))
-             : up < tilt_cos;
+  // A wall's normal is horizontal, a floor's or a ceiling's vertical: the
+  // best |cos| the axis can have with such a normal.
+  const double facing = g->second == StructureGeometry::kVertical
+                            ? std::sqrt(std::max(0.0, 1.0 - up * up))
+                            : up;
+  return facing < options_.planes.MinSurfaceFacing();
 }
 
 void MapResolver::ReleaseFlushParts() {

@@ -94,11 +94,8 @@ void MapResolver::ClaimFronts() {
   // nearest thing takes each, across the corner of an L-shaped counter too.
   size_t claimed = 0;
   const auto take = [&](size_t i, uint32_t id) {
-    Cell& c = cells_[i];
-    c.excluded.push_back(c.class_id);
-    c.class_id = owner_class_[id];
-    c.owner = id;
-    c.stranded = false;
+    JoinThing(i, id);
+    cells_[i].stranded = false;
     frontier.push_back(i);
     ++claimed;
   };
@@ -264,12 +261,7 @@ void MapResolver::ClaimStranded() {
             share.size(), id);
         continue;
       }
-      for (size_t k : share) {
-        Cell& c = cells_[k];
-        c.excluded.push_back(c.class_id);
-        c.class_id = owner_class_[id];
-        c.owner = id;
-      }
+      for (size_t k : share) JoinThing(k, id);
       cells.insert(cells.end(), share.begin(), share.end());
       claimed += share.size();
     }

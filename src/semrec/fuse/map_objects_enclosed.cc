@@ -87,13 +87,8 @@ void MapResolver::ClaimEnclosed() {
       }
     }
     auto take = [&](const std::vector<size_t>& members, uint32_t id) {
-      for (size_t k : members) {
-        Cell& cell = cells_[k];
-        cell.excluded.push_back(cell.class_id);
-        cell.class_id = owner_class_[id];
-        cell.owner = id;
-        ++claimed;
-      }
+      for (size_t k : members) JoinThing(k, id);
+      claimed += members.size();
     };
     for (const auto& [id, around] : outline) {
       if (touching[id] < kMinContactCells) continue;

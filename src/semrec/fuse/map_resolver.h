@@ -376,6 +376,13 @@ class MapResolver {
   uint32_t NewObjectFromFront(const std::vector<size_t>& on,
                               const std::map<uint16_t, float>& named);
 
+  // Cell `i` joins thing `id` (its class set aside, the thing's taken).
+  void JoinThing(size_t i, uint32_t id) {
+    Cell& c = cells_[i];
+    c.excluded.push_back(c.class_id);
+    c.class_id = owner_class_[id];
+    c.owner = id;
+  }
   // Voxels per thing object (owner), over the thing cells.
   std::map<uint32_t, size_t> ThingSizes() const;
   // The thing cells of each thing object (owner), in cell order.

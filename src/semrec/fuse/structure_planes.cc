@@ -43,6 +43,12 @@ void StructurePlaneOptions::Check() const {
                 "structure planes: ransac_iterations must be > 0");
 }
 
+double StructurePlaneOptions::MinSurfaceFacing() const {
+  return max_surface_tilt_deg >= 90.0
+             ? 0.0
+             : std::cos(max_surface_tilt_deg * std::numbers::pi / 180.0);
+}
+
 bool OnAnyPlane(const Eigen::Vector3f& p,
                 const std::vector<StructurePlane>& planes, double tolerance_m) {
   const Eigen::Vector3d q = p.cast<double>();
@@ -173,10 +179,7 @@ bool OnStructure(const Eigen::Vector3f& p,
                  const Eigen::Vector3f* surface_axis) {
   const Eigen::Vector3d q = p.cast<double>();
   const double parallel = ParallelCos(options);
-  const double min_facing =
-      options.max_surface_tilt_deg >= 90.0
-          ? 0.0
-          : std::cos(options.max_surface_tilt_deg * std::numbers::pi / 180.0);
+  const double min_facing = options.MinSurfaceFacing();
   auto in_front_of_larger = [&](const StructurePlane& plane) {
     return std::any_of(planes.begin(), planes.end(), [&](const auto& wall) {
       if (wall.geometry != StructureGeometry::kVertical ||

@@ -61,6 +61,9 @@ struct StructurePlaneOptions {
   /// board running into the wall lies within a voxel of the wall's plane, and
   /// a 2D model calls the part near the wall wall in every view. >= 90: off.
   double max_surface_tilt_deg = 45.0;
+  /// cos(max_surface_tilt_deg); 0 when off (>= 90): the least |cos| between
+  /// a surface's axis and a plane's normal for the surface to lie along it.
+  double MinSurfaceFacing() const;
   /// ... when the voxel's point normals agree on an axis: its share of their
   /// scatter at least this (VoxelEvidence::SurfaceAxis; a voxel holding a
   /// corner of the wall and a board has none and counts as on the plane).
