@@ -62,8 +62,15 @@ std::string ClassVotesText(const SceneSegment& segment,
 }
 
 double ClassConfidence(const SceneSegment& segment) {
+  // The object's own class, which the map need not give the most votes: a
+  // chair most views called wall is a chair of little confidence, not one as
+  // sure as the wall's share.
   const auto shares = SortedShares(segment);
-  return shares.empty() ? 1.0 : shares.front().second;
+  if (shares.empty()) return 1.0;
+  for (const auto& [cls, share] : shares) {
+    if (cls == segment.class_id) return share;
+  }
+  return 0.0;
 }
 
 nlohmann::json FusionEventsJson(const SceneFusion& fusion,

@@ -29,7 +29,8 @@ nlohmann::json ClassVotesJson(const SceneSegment& segment,
                               const LabelSet& classes);
 std::string ClassVotesText(const SceneSegment& segment,
                            const LabelSet& classes);
-/// The share of the winning class (1 without votes).
+/// The share of the object's class among its votes (1 without votes; 0 when
+/// none is for its class).
 double ClassConfidence(const SceneSegment& segment);
 /// fusion.events() for summary.json.
 /// Up and the floor from the scene's objects (those of a class named

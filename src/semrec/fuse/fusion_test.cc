@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 
 #include "semrec/core/error.h"
+#include "semrec/fuse/fuse_sequence.h"
 #include "semrec/io/sequence_reader.h"
 #include "semrec/synth/generator.h"
 #include "semrec/testing/small_scene.h"
@@ -396,4 +397,19 @@ TEST(Segments, BadLabelsGiveClearErrors) {
 }
 
 }  // namespace
+// The confidence written with an object is its own class's share of the
+// votes: the map may give a thing the class after structure (a chair most
+// views called wall), whose share is not the winner's.
+TEST(ClassConfidence, IsTheShareOfTheObjectsOwnClass) {
+  SceneSegment s;
+  s.class_id = 5;
+  EXPECT_DOUBLE_EQ(ClassConfidence(s), 1.0);  // no votes: nothing says less
+  s.class_votes = {{2, 72}, {5, 12}, {13, 9}, {15, 7}};
+  EXPECT_DOUBLE_EQ(ClassConfidence(s), 0.12);
+  s.class_id = 2;
+  EXPECT_DOUBLE_EQ(ClassConfidence(s), 0.72);
+  s.class_id = 9;  // a class no view gave
+  EXPECT_DOUBLE_EQ(ClassConfidence(s), 0.0);
+}
+
 }  // namespace semrec::fuse
