@@ -65,6 +65,7 @@ grep -q 'semantics:labels:class = \["chair"\]' "$tmp/scene/static.usda" || fail 
 "$SEMREC" query "$tmp/scene/scene.usda" --class chair --json >"$tmp/q.json" || fail "query failed"
 grep -q '"class": "chair"' "$tmp/q.json" || fail "query: no chair: $(cat "$tmp/q.json")"
 [ "$(grep -c '"class"' "$tmp/q.json")" -eq 1 ] || fail "query --class returned other classes"
+grep -Eq '"confidence": (0|1|0\.[0-9]+|1\.0)' "$tmp/q.json" || fail "query: no confidence: $(cat "$tmp/q.json")"
 "$SEMREC" query "$tmp/scene/scene.usda" >"$tmp/q.txt" || fail "query (table) failed"
 grep -q "objects" "$tmp/q.txt" || fail "query: no table"
 # 3D scores of the ground-truth reconstruction: near perfect on what the cameras saw.

@@ -48,24 +48,25 @@ void RunQuery(const QueryArgs& args) {
          {"vertices", m.points.size()},
          {"triangles", m.triangles.size()},
          {"fused_points", m.point_count},
+         {"confidence", m.confidence},
          {"bounds_min", {box.min().x(), box.min().y(), box.min().z()}},
          {"bounds_max", {box.max().x(), box.max().y(), box.max().z()}},
          {"centroid", {centroid.x(), centroid.y(), centroid.z()}}});
     table += fmt::format(
-        "{:<14} {:>5} {:>9} {:>9}  [{:.2f} {:.2f} {:.2f}] - [{:.2f} {:.2f} "
-        "{:.2f}]"
+        "{:<14} {:>5} {:>5.2f} {:>9} {:>9}  [{:.2f} {:.2f} {:.2f}] - [{:.2f} "
+        "{:.2f} {:.2f}]"
         "  ({:.2f}, {:.2f}, {:.2f})\n",
-        m.label, m.instance_id, m.points.size(), m.triangles.size(),
-        box.min().x(), box.min().y(), box.min().z(), box.max().x(),
+        m.label, m.instance_id, m.confidence, m.points.size(),
+        m.triangles.size(), box.min().x(), box.min().y(), box.min().z(), box.max().x(),
         box.max().y(), box.max().z(), centroid.x(), centroid.y(), centroid.z());
   }
   if (args.json) {
     std::printf("%s\n", out.dump(2).c_str());
     return;
   }
-  std::printf("%-14s %5s %9s %9s  %-38s  %s\n%s%zu objects\n", "class", "id",
-              "vertices", "triangles", "bounds (m)", "centroid (m)",
-              table.c_str(), out.size());
+  std::printf("%-14s %5s %5s %9s %9s  %-38s  %s\n%s%zu objects\n", "class",
+              "id", "conf", "vertices", "triangles", "bounds (m)",
+              "centroid (m)", table.c_str(), out.size());
 }
 
 }  // namespace
@@ -74,8 +75,10 @@ void RegisterQuery(CLI::App& app) {
   auto args = std::make_shared<QueryArgs>();
   CLI::App* cmd = app.add_subcommand("query",
                                      "List the objects of a semrec USD scene "
-                                     "(class, id, vertex/triangle counts, "
-                                     "bounds, centroid), optionally filtered.");
+                                     "(class, id, confidence = the class's "
+                                     "share of the votes, vertex/triangle "
+                                     "counts, bounds, centroid), optionally "
+                                     "filtered.");
   cmd->add_option("scene", args->scene, "scene.usda (or static.usda)")
       ->required();
   cmd->add_option("--class", args->cls, "Only this class");
