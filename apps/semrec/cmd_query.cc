@@ -57,8 +57,9 @@ void RunQuery(const QueryArgs& args) {
         "{:.2f} {:.2f}]"
         "  ({:.2f}, {:.2f}, {:.2f})\n",
         m.label, m.instance_id, m.confidence, m.points.size(),
-        m.triangles.size(), box.min().x(), box.min().y(), box.min().z(), box.max().x(),
-        box.max().y(), box.max().z(), centroid.x(), centroid.y(), centroid.z());
+        m.triangles.size(), box.min().x(), box.min().y(), box.min().z(),
+        box.max().x(), box.max().y(), box.max().z(), centroid.x(), centroid.y(),
+        centroid.z());
   }
   if (args.json) {
     std::printf("%s\n", out.dump(2).c_str());
