@@ -153,6 +153,11 @@ for (const dir of ['six', 'people']) {
     Check(r.objects.every((o) => o.vertices > 0 && o.triangles > 0), `${what}: an empty mesh`);
     const ids = new Set(ours.map((o) => o.id));
     Check(r.objects.every((o) => ids.has(o.instanceId)), `${what}: instance ids differ`);
+    const confidence = new Map(ours.map((o) => [o.id, o.confidence]));
+    Check(r.objects.every((o) => typeof o.confidence === 'number' &&
+                                 Math.abs(o.confidence - confidence.get(o.instanceId)) < 1e-4),
+          `${what}: confidences ${JSON.stringify(r.objects.map((o) => o.confidence))} vs ` +
+          `${JSON.stringify(ours.map((o) => o.confidence))}`);
     Check(r.people.length === (summary.people ?? 0),
           `${what}: ${r.people.length} people read, semrec wrote ${summary.people}`);
     Check(r.people.every((p) => p.points > 0), `${what}: a person without points`);

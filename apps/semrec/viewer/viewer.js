@@ -235,6 +235,7 @@ async function LoadUsd(config, root) {
     const item = {
       object: prim.object, prim, path: holderPath, name, label, person,
       instanceId: AttributeValue(holder, person ? 'semrec:trackId' : 'semrec:instanceId'),
+      confidence: person ? null : AttributeValue(holder, 'semrec:confidence') ?? null,
       structure: path.startsWith('/World/Structure/') || kStructureClasses.has(label),
       visibility: person ? (facts.visibility.get(name) ?? []) : [],
     };
@@ -270,6 +271,7 @@ async function LoadGlb(config, root) {
       const item = {
         object: child, path: node.name, name: node.name, label: extras.semrec_class, person,
         instanceId: extras.semrec_instance_id ?? null,
+        confidence: person ? null : extras.semrec_confidence ?? null,
         structure: extras.semrec_kind === 'structure', visibility: [],
       };
       child.userData.item = item;
@@ -445,8 +447,10 @@ function Describe(item) {
   const unit = loaded.facts.metersPerUnit || 1;
   // Width × depth × height, height along the scene's up axis.
   const [w, d, h] = loaded.facts.upAxis === 'Z' ? [size.x, size.y, size.z] : [size.x, size.z, size.y];
+  // How sure the class is: its share of the views' votes.
+  const sure = typeof item.confidence === 'number' ? `\nconfidence ${item.confidence.toFixed(2)}` : '';
   return `${item.label}${item.instanceId !== null ? `  #${item.instanceId}` : ''}\n${item.path}\n` +
-         `size ${(w * unit).toFixed(2)} × ${(d * unit).toFixed(2)} × ${(h * unit).toFixed(2)} m`;
+         `size ${(w * unit).toFixed(2)} × ${(d * unit).toFixed(2)} × ${(h * unit).toFixed(2)} m${sure}`;
 }
 
 function SetupPicking() {
@@ -549,6 +553,7 @@ async function Load() {
     unsupported: loaded.unsupported,
     objects: objects.map((i) => ({
       path: i.path, name: i.name, class: i.label, instanceId: i.instanceId, structure: i.structure,
+      confidence: i.confidence,
       vertices: i.object.geometry.getAttribute('position')?.count ?? 0,
       triangles: i.object.geometry.index ? i.object.geometry.index.count / 3 : 0,
       vertexColors: !!i.object.geometry.getAttribute('color'),
