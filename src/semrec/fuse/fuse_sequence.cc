@@ -65,12 +65,13 @@ double ClassConfidence(const SceneSegment& segment) {
   // The object's own class, which the map need not give the most votes: a
   // chair most views called wall is a chair of little confidence, not one as
   // sure as the wall's share.
-  const auto shares = SortedShares(segment);
-  if (shares.empty()) return 1.0;
-  for (const auto& [cls, share] : shares) {
-    if (cls == segment.class_id) return share;
-  }
-  return 0.0;
+  uint64_t total = 0;
+  for (const auto& [cls, n] : segment.class_votes) total += n;
+  if (total == 0) return 1.0;
+  const auto own = segment.class_votes.find(segment.class_id);
+  return own == segment.class_votes.end()
+             ? 0.0
+             : static_cast<double>(own->second) / static_cast<double>(total);
 }
 
 nlohmann::json FusionEventsJson(const SceneFusion& fusion,

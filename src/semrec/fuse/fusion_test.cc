@@ -397,6 +397,7 @@ TEST(Segments, BadLabelsGiveClearErrors) {
 }
 
 }  // namespace
+
 // The confidence written with an object is its own class's share of the
 // votes: the map may give a thing the class after structure (a chair most
 // views called wall), whose share is not the winner's.
