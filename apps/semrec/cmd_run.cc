@@ -273,6 +273,17 @@ void RegisterRun(CLI::App& app) {
                 "disagrees with the map's class (runs the semantic model on "
                 "every guided frame; fixes the map before the next full "
                 "frame)");
+  cmd->add_option_function<std::string>(
+         "--guidance-map",
+         [&pipe](const std::string& v) {
+           pipe.guidance.project_decided_map = v == "decided";
+         },
+         "Map guidance: what is projected. decided: the objects as decided "
+         "per map voxel (--merge voxel; each place once, with its object's "
+         "class); fusion: the fusion's objects as they are (they overlap "
+         "where views disagreed)")
+      ->check(CLI::IsMember({"decided", "fusion"}))
+      ->default_str("decided");
   cmd->add_option("--refresh-every", pipe.guidance.refresh_every,
                   "Map guidance: a full segmentation at least every n "
                   "segmented frames")

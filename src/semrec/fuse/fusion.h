@@ -217,6 +217,9 @@ class SceneFusion {
     std::vector<SceneSegment> segments;
   };
   MapPreview PreviewMap(MapContext context) const;
+  /// PreviewMap's resolution alone (no object clouds built): what map
+  /// guidance projects between segmented frames.
+  MapResolution PreviewResolution(MapContext context) const;
   /// The last ResolveMap() result, or nullptr.
   const MapResolution* map_resolution() const {
     return resolution_ ? &*resolution_ : nullptr;
@@ -321,6 +324,8 @@ class SceneFusion {
   void Rebuild(SceneSegment* s) const;
   /// ResolveMap's decision; new ids from `next_id` (advanced).
   MapPreview DecideMap(MapContext context, uint32_t* next_id) const;
+  /// Its resolution step (fills `context`'s objects).
+  MapResolution DecideResolution(MapContext* context, uint32_t* next_id) const;
   void UpdateClass(SceneSegment* s) const;
 
   FusionOptions options_;

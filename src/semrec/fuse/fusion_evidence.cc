@@ -292,19 +292,29 @@ SceneFusion::MapPreview SceneFusion::PreviewMap(MapContext context) const {
   return DecideMap(std::move(context), &next_id);
 }
 
-SceneFusion::MapPreview SceneFusion::DecideMap(MapContext context,
-                                               uint32_t* next_id) const {
+MapResolution SceneFusion::PreviewResolution(MapContext context) const {
+  uint32_t next_id = next_id_;
+  return DecideResolution(&context, &next_id);
+}
+
+MapResolution SceneFusion::DecideResolution(MapContext* context,
+                                            uint32_t* next_id) const {
   CheckArgument(voxel_map_.has_value(),
                 "SceneFusion::ResolveMap: only with merge 'voxel'");
-  std::map<uint32_t, const SceneSegment*> by_id;
   for (const SceneSegment& s : segments_) {
-    context.objects[s.id] = {s.class_id, s.kind};
-    by_id[s.id] = &s;
+    context->objects[s.id] = {s.class_id, s.kind};
   }
-  MapPreview decided;
-  decided.resolution = ResolveMapObjects(
-      *voxel_map_, context, options_.map_objects,
+  return ResolveMapObjects(
+      *voxel_map_, *context, options_.map_objects,
       [this](uint32_t id) { return ResolveId(id); }, next_id);
+}
+
+SceneFusion::MapPreview SceneFusion::DecideMap(MapContext context,
+                                               uint32_t* next_id) const {
+  MapPreview decided;
+  decided.resolution = DecideResolution(&context, next_id);
+  std::map<uint32_t, const SceneSegment*> by_id;
+  for (const SceneSegment& s : segments_) by_id[s.id] = &s;
   for (const MapObject& o : decided.resolution.objects) {
     SceneSegment s;
     s.id = o.id;

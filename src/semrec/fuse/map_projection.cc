@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <map>
+#include <utility>
 
 #include "semrec/core/error.h"
 
@@ -179,6 +181,46 @@ ProjectedMap ProjectMap(const std::vector<SceneSegment>& objects,
         ++out.contradicted_pixels;
       }
     }
+  }
+  return out;
+}
+
+std::vector<SceneSegment> DecidedMapForProjection(
+    const std::vector<SceneSegment>& segments, const MapResolution& resolution,
+    const VoxelEvidenceMap& evidence) {
+  std::map<std::pair<uint32_t, uint16_t>, SceneSegment> split;
+  const auto segment_for = [&](uint32_t id, uint16_t class_id,
+                               ClassKind kind) -> SceneSegment& {
+    SceneSegment& s = split[{id, class_id}];
+    s.id = id;
+    s.class_id = class_id;
+    s.kind = kind;
+    return s;
+  };
+  // Decided voxels, in key order within each object (deterministic).
+  for (const MapObject& o : resolution.objects) {
+    for (const uint64_t key : o.voxels) {
+      const auto owner = resolution.owners.find(key);
+      const auto voxel = evidence.voxels().find(key);
+      if (owner == resolution.owners.end() || owner->second.source == 0 ||
+          voxel == evidence.voxels().end()) {
+        continue;
+      }
+      segment_for(owner->second.source, o.class_id, o.kind)
+          .points.push_back(voxel->second.Centroid());
+    }
+  }
+  const float inv_voxel = evidence.inv_voxel_size();
+  for (const SceneSegment& s : segments) {
+    for (const Eigen::Vector3f& p : s.points) {
+      if (resolution.owners.count(VoxelKey(p, inv_voxel)) != 0) continue;
+      segment_for(s.id, s.class_id, s.kind).points.push_back(p);
+    }
+  }
+  std::vector<SceneSegment> out;
+  out.reserve(split.size());
+  for (auto& [key, s] : split) {
+    if (!s.points.empty()) out.push_back(std::move(s));
   }
   return out;
 }

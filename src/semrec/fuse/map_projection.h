@@ -83,4 +83,17 @@ ProjectedMap ProjectMap(const std::vector<SceneSegment>& objects,
                         const DepthImage& depth_m,
                         const MapProjectionOptions& options = {});
 
+/// The map as guidance projects it when objects are decided per voxel (merge
+/// 'voxel'). The fusion objects overlap where views disagreed (a furniture
+/// front fused once as wall, once as cabinet) and projected side by side they
+/// interleave in blobs; `resolution` gives each voxel one owner. Each decided
+/// voxel is splatted once, at its centroid, under the fusion object holding
+/// its surface (VoxelOwner::source: the id fusion attaches projected pixels
+/// to), with its decided object's class; stored points in no decided voxel
+/// (dropped fragments, surfaces only projection added) stay as they are. One
+/// segment per (fusion object, class), ordered by both.
+std::vector<SceneSegment> DecidedMapForProjection(
+    const std::vector<SceneSegment>& segments, const MapResolution& resolution,
+    const VoxelEvidenceMap& evidence);
+
 }  // namespace semrec::fuse

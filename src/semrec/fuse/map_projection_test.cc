@@ -1,10 +1,13 @@
 #include "semrec/fuse/map_projection.h"
 
 #include <cmath>
+#include <map>
+#include <set>
 
 #include <gtest/gtest.h>
 
 #include "semrec/core/error.h"
+#include "semrec/fuse/map_test_util.h"
 
 namespace semrec::fuse {
 namespace {
@@ -202,6 +205,110 @@ TEST(MapProjection, OneSurfaceFusedTwiceDoesNotSpeckle) {
       for (int u = 92; u < 99; ++u) EXPECT_EQ(p.object_id(u, v), 3u);
     }
   }
+}
+
+TEST(MapProjection, TheDecidedMapGivesAFrontOneClassAndEachVoxelOnce) {
+  // A shelf against the wall that two of four views called wall (their wall
+  // mask holds it): the fusion keeps it in the wall object and in a shelf
+  // object, and projected those interleave; the decided map (the wall vote is
+  // off the wall's plane) holds each voxel once, as shelf, under an id the
+  // fusion knows.
+  using namespace map_test;  // NOLINT(google-build-using-namespace)
+  const Cloud shelf = Box({0.05f, 1.0f, 0.0f}, {0.35f, 2.0f, 0.8f});
+  FusionOptions options;
+  options.merge = FusionOptions::Merge::kVoxel;
+  SceneFusion fusion(options);
+  const Eigen::Vector3d eye(2.5, 1.5, 0.6);
+  for (size_t i = 0; i < 4; ++i) {
+    std::vector<FrameSegment> segments;
+    if (i % 2 == 0) {
+      segments.push_back(Segment(kWall, 1, Join({WallPoints(), shelf})));
+    } else {
+      segments.push_back(Segment(kWall, 1, WallPoints()));
+      segments.push_back(Segment(kShelf, 2, shelf));
+    }
+    segments.push_back(Segment(kFloor, 3, FloorPoints()));
+    FrameObservation observation;
+    observation.camera_position_world = eye.cast<float>();
+    for (const FrameSegment& s : segments) {
+      observation.observed_world.insert(observation.observed_world.end(),
+                                        s.points_world.begin(),
+                                        s.points_world.end());
+    }
+    fusion.Integrate(segments, i, &observation);
+  }
+  const MapResolution resolution = fusion.PreviewResolution(Context());
+  const VoxelEvidenceMap& evidence = *fusion.voxel_evidence();
+  const std::vector<SceneSegment> decided =
+      DecidedMapForProjection(fusion.segments(), resolution, evidence);
+
+  // Each decided voxel once; every id one the fusion has.
+  std::set<uint32_t> fusion_ids;
+  for (const SceneSegment& s : fusion.segments()) fusion_ids.insert(s.id);
+  std::map<uint64_t, int> seen;
+  for (const SceneSegment& s : decided) {
+    EXPECT_EQ(fusion_ids.count(s.id), 1u) << s.id;
+    for (const Eigen::Vector3f& p : s.points) {
+      const uint64_t key = VoxelKey(p, evidence.inv_voxel_size());
+      if (resolution.owners.count(key) != 0) ++seen[key];
+    }
+  }
+  ASSERT_EQ(seen.size(), resolution.owners.size());
+  for (const auto& [key, n] : seen) ASSERT_EQ(n, 1) << key;
+  // Stored points in no decided voxel stay, with their object's id and class.
+  std::vector<SceneSegment> with_stray = fusion.segments();
+  with_stray.push_back({});
+  with_stray.back().id = 99;
+  with_stray.back().class_id = kLamp;
+  with_stray.back().points = {Eigen::Vector3f(3.0f, 3.0f, 1.0f)};
+  const std::vector<SceneSegment> stray =
+      DecidedMapForProjection(with_stray, resolution, evidence);
+  ASSERT_EQ(stray.size(), decided.size() + 1);
+  EXPECT_EQ(stray.back().id, 99u);
+  EXPECT_EQ(stray.back().class_id, kLamp);
+
+  // Seen from the room: the shelf's front face (x = 0.35 m) in front of the
+  // wall (x = 0).
+  const CameraIntrinsics k = Kinect();
+  const Transform T_world_camera = LookingAlongMinusX(eye);
+  DepthImage depth(k.width, k.height);
+  Image<uint8_t> on_front(k.width, k.height);
+  for (int v = 0; v < k.height; ++v) {
+    for (int u = 0; u < k.width; ++u) {
+      const Eigen::Vector3d ray =
+          T_world_camera.rotation() *
+          Eigen::Vector3d((u - k.cx) / k.fx, (v - k.cy) / k.fy, 1.0);
+      const double t_front = (0.35 - eye.x()) / ray.x();
+      const Eigen::Vector3d hit = eye + t_front * ray;
+      // Well inside the front (its rim is shared with the top and sides).
+      const bool front =
+          hit.y() > 1.1 && hit.y() < 1.9 && hit.z() > 0.1 && hit.z() < 0.7;
+      const double t = front ? t_front : -eye.x() / ray.x();
+      depth(u, v) = static_cast<float>(t);  // along the optical axis: z = t
+      on_front(u, v) = front ? 1 : 0;
+    }
+  }
+  const auto shelf_share = [&](const std::vector<SceneSegment>& map) {
+    const ProjectedMap p = ProjectMap(map, k, T_world_camera, depth);
+    size_t front_px = 0, shelf_px = 0;
+    for (size_t i = 0; i < on_front.values().size(); ++i) {
+      if (on_front.values()[i] == 0) continue;
+      ++front_px;
+      shelf_px += p.class_id.values()[i] == kShelf ? 1 : 0;
+    }
+    return static_cast<double>(shelf_px) / static_cast<double>(front_px);
+  };
+  std::vector<SceneSegment> raw;
+  for (const SceneSegment& s : fusion.segments()) {
+    raw.push_back({});
+    raw.back().id = s.id;
+    raw.back().class_id = s.class_id;
+    raw.back().points = s.points;
+  }
+  const double raw_share = shelf_share(raw);
+  const double decided_share = shelf_share(decided);
+  EXPECT_GT(decided_share, 0.99) << "raw " << raw_share;
+  EXPECT_LT(raw_share, 0.9) << "decided " << decided_share;  // before
 }
 
 TEST(MapProjection, NearerObjectsHideFartherOnesAndBadInputIsRefused) {

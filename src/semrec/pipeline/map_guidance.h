@@ -39,6 +39,11 @@ struct MapGuidanceOptions {
   /// next full frame, at the price of the semantic model on every guided
   /// frame (AddDisagreement).
   bool prompt_on_disagreement = false;
+  /// With objects decided per voxel (merge 'voxel'), project the decision
+  /// (each voxel once, with its object's class) instead of the fusion objects,
+  /// which overlap where views disagreed: a furniture front fused as wall and
+  /// as cabinet labelled guided frames in interleaved blobs of both.
+  bool project_decided_map = true;
   void Check() const;
 };
 

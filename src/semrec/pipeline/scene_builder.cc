@@ -9,6 +9,7 @@
 #include "semrec/core/error.h"
 #include "semrec/core/stopwatch.h"
 #include "semrec/fuse/fuse_sequence.h"
+#include "semrec/fuse/map_projection.h"
 #include "semrec/io/ply_io.h"
 #include "semrec/pipeline/object_surfaces.h"
 #include "semrec/usd/glb_writer.h"
@@ -221,6 +222,39 @@ void SceneBuilder::Finish() {
         r.fragments_dropped, r.stranded_voxels_claimed,
         r.enclosed_voxels_claimed, r.reclassed_by_size, r.objects_from_fronts);
   }
+}
+
+std::vector<fuse::SceneSegment> SceneBuilder::MapForGuidance(
+    bool decided, bool decide_again) {
+  const fuse::VoxelEvidenceMap* evidence =
+      decided ? fusion_.voxel_evidence() : nullptr;
+  if (decide_again && evidence != nullptr && evidence->labelled_voxels() > 0) {
+    Stopwatch watch;
+    const fuse::GravityEstimate gravity = fuse::EstimateSceneGravity(
+        fusion_, classes_, cameras_, options_.gravity);
+    const double gravity_s = watch.Elapsed();
+    guidance_resolution_ = fusion_.PreviewResolution(
+        fuse::MakeMapContext(classes_, gravity.up_world));
+    spdlog::debug(
+        "map guidance: objects decided again ({} voxels, {} objects) in "
+        "{:.3f} s (gravity {:.3f} s)",
+        evidence->labelled_voxels(), guidance_resolution_->objects.size(),
+        watch.Elapsed(), gravity_s);
+  }
+  if (guidance_resolution_ && evidence != nullptr) {
+    return fuse::DecidedMapForProjection(fusion_.segments(),
+                                         *guidance_resolution_, *evidence);
+  }
+  std::vector<fuse::SceneSegment> map;
+  for (const fuse::SceneSegment& s : fusion_.segments()) {
+    fuse::SceneSegment copy;
+    copy.id = s.id;
+    copy.class_id = s.class_id;
+    copy.kind = s.kind;
+    copy.points = s.points;
+    map.push_back(std::move(copy));
+  }
+  return map;
 }
 
 void SceneBuilder::RebuildVolumes(

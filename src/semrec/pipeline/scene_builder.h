@@ -149,6 +149,13 @@ class SceneBuilder {
 
   const fuse::SceneFusion& fusion() const { return fusion_; }
   const LabelSet& classes() const { return classes_; }
+  /// What map guidance projects (ids, classes and clouds only). `decided`
+  /// with objects decided per voxel: the decision
+  /// (fuse::DecidedMapForProjection), made again when `decide_again` (after a
+  /// frame that voted: nothing else changes a class) and kept for the frames
+  /// between; else the fusion objects as they are.
+  std::vector<fuse::SceneSegment> MapForGuidance(bool decided,
+                                                 bool decide_again);
   /// People as time-sampled tracks (world frame, not yet upright).
   std::vector<usd::PersonTrack> PeopleTracks() const {
     return people_.Tracks();
@@ -173,6 +180,8 @@ class SceneBuilder {
   People3d people_;
   std::optional<std::map<uint32_t, std::set<size_t>>> person_frames_;
   std::vector<Transform> cameras_;
+  /// MapForGuidance's last decision.
+  std::optional<fuse::MapResolution> guidance_resolution_;
   double first_timestamp_s_ = 0.0, last_timestamp_s_ = 0.0;
   size_t labelled_frames_ = 0;
   bool finished_ = false;

@@ -313,17 +313,19 @@ std::shared_ptr<const std::vector<fuse::SceneSegment>> ScenePipeline::MapFor(
   return map;
 }
 
-void ScenePipeline::PublishMap(size_t position) {
-  // Only what projection needs: ids, classes and stored clouds.
-  auto map = std::make_shared<std::vector<fuse::SceneSegment>>();
-  for (const fuse::SceneSegment& s : builder_->fusion().segments()) {
-    fuse::SceneSegment copy;
-    copy.id = s.id;
-    copy.class_id = s.class_id;
-    copy.kind = s.kind;
-    copy.points = s.points;
-    map->push_back(std::move(copy));
+void ScenePipeline::PublishMap(size_t position,
+                               const fuse::FrameLabels& labels) {
+  // A frame voted when it holds instances of its own (not the map's): only
+  // then can the decision change (projection casts no vote).
+  bool voted = false;
+  for (const uint16_t instance : labels.instance.values()) {
+    if (instance != 0 && labels.map_objects.count(instance) == 0) {
+      voted = true;
+      break;
+    }
   }
+  auto map = std::make_shared<std::vector<fuse::SceneSegment>>(
+      builder_->MapForGuidance(options_.guidance.project_decided_map, voted));
   std::lock_guard<std::mutex> lock(maps_mutex_);
   maps_.emplace_back(position, std::move(map));
 }
@@ -340,8 +342,12 @@ PipelineFrameResult ScenePipeline::Integrate(PreparedFrame prepared) {
   AddLap({stats.fusion_seconds, stats.fusion_cpu_seconds}, &StageSeconds::fuse);
   AddLap({stats.volume_seconds, stats.volume_cpu_seconds},
          &StageSeconds::volumes);
-  if (options_.map_guidance && labels) PublishMap(prepared.position);
-  watch.Next();
+  watch.Next();  // Add()'s own laps are above
+  if (options_.map_guidance && labels) {
+    // Deciding the map for guidance is fusion's work.
+    PublishMap(prepared.position, *labels);
+    AddLap(watch.Next(), &StageSeconds::fuse);
+  }
 
   if (options_.overlays && !prepared.replay) {
     const ColorImage base = labels ? segment::RenderLabelOverlay(

@@ -226,7 +226,7 @@ class ScenePipeline {
   /// The map frame `position` is guided by (after frame position - 2).
   std::shared_ptr<const std::vector<fuse::SceneSegment>> MapFor(
       size_t position);
-  void PublishMap(size_t position);
+  void PublishMap(size_t position, const fuse::FrameLabels& labels);
 
   ScenePipelineOptions options_;
   std::unique_ptr<segment::HybridSegmenter> segmenter_;
