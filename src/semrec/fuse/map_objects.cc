@@ -23,6 +23,9 @@ void MapObjectOptions::Check() const {
   CheckArgument(
       min_stranded_contact_share >= 0.0 && min_stranded_contact_share <= 1.0,
       "map objects: min_stranded_contact_share must be in [0, 1]");
+  CheckArgument(
+      min_structure_on_planes >= 0.0 && min_structure_on_planes <= 1.0,
+      "map objects: min_structure_on_planes must be in [0, 1]");
   CheckArgument(min_front_share >= 0.0 && min_front_share <= 1.0,
                 "map objects: min_front_share must be in [0, 1]");
   CheckArgument(
@@ -122,6 +125,23 @@ void MapResolver::CollectCells() {
   for (size_t i = 0; i < cells_.size(); ++i) index_[cells_[i].key] = i;
 }
 
+double MapResolver::ShareOnPlanes(
+    const Cloud& points, const std::vector<StructurePlane>& planes,
+    const std::vector<StructurePlane>& fronts) const {
+  if (points.empty() || (planes.empty() && fronts.empty())) return 1.0;
+  size_t on = 0;
+  for (const Eigen::Vector3f& p : points) {
+    const Eigen::Vector3d q = p.cast<double>();
+    const auto near = [&](const StructurePlane& plane) {
+      return std::abs(plane.normal.dot(q) - plane.offset) <=
+             1.5 * plane.Tolerance(options_.planes);
+    };
+    on += std::any_of(planes.begin(), planes.end(), near) ||
+          std::any_of(fronts.begin(), fronts.end(), near);
+  }
+  return static_cast<double>(on) / static_cast<double>(points.size());
+}
+
 void MapResolver::GateStructure() {
   std::set<uint16_t> stuff_classes;
   for (const Cell& c : cells_) {
@@ -164,9 +184,19 @@ void MapResolver::GateStructure() {
                              scene_seen_from)) {
       fronts.push_back(std::move(p));
     }
+    const double on_planes = ShareOnPlanes(points, found, fronts);
     spdlog::debug(
-        "structure class {}: {} voxels, {} planes, {} furniture fronts", cls,
-        points.size(), found.size(), fronts.size());
+        "structure class {}: {} voxels, {} planes, {} furniture fronts, "
+        "{:.0f}% "
+        "of the voxels on them",
+        cls, points.size(), found.size(), fronts.size(), 100.0 * on_planes);
+    if (on_planes < options_.min_structure_on_planes) {
+      spdlog::info(
+          "structure class {}: its planes hold only {:.0f}% of its {} voxels "
+          "(depth too noisy or bent for planes): not gated",
+          cls, 100.0 * on_planes, points.size());
+      continue;
+    }
     for (StructurePlane& p : fronts) p.class_id = cls;
     fronts_.insert(fronts_.end(), fronts.begin(), fronts.end());
     // Too little seen to tell: not gated; where every plane was a front,

@@ -87,6 +87,11 @@ class MapResolver {
 
   // Structure evidence off its planes is set aside; the next class wins.
   void GateStructure();
+  /// Share of `points` within 1.5 x the tolerance of any of `planes` or
+  /// `fronts` (1 without any).
+  double ShareOnPlanes(const Cloud& points,
+                       const std::vector<StructurePlane>& planes,
+                       const std::vector<StructurePlane>& fronts) const;
   // Structure voxels on their plane that many views gave a thing's class,
   // connected to voxels of that class: the thing's part flush with the wall
   // or the floor (a headboard, a shelf's back) that views near the wall
