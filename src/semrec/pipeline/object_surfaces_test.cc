@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <map>
+#include <set>
 #include <unordered_map>
 #include <utility>
 
@@ -338,6 +339,63 @@ TEST(ObjectSurfaces, SnapshotsShowTheObjectsTheEvidenceDecides) {
               expected.objects_json[k]["class"]);
     EXPECT_EQ(final_scene.objects_json[k]["vertices"],
               expected.objects_json[k]["vertices"]);
+  }
+}
+
+// Map guidance projects the decision (fuse::DecidedMapForProjection): the
+// fusion's objects overlap where a view painted the cabinet as wall (the
+// cabinet's place in the wall object and in the cabinet), the decided map
+// holds each place under one class, the cabinet's, with ids fusion knows.
+TEST(ObjectSurfaces, GuidanceProjectsEachPlaceOnceWithItsObjectsClass) {
+  testing::TempDir dir;
+  synth::WriteSyntheticSequence(testing::SmallScene("six-objects", 12),
+                                dir / "seq", testing::QuietProgress());
+  const io::SequenceReader reader = io::SequenceReader::Open(dir / "seq");
+  const PaintedAsWall source(fuse::SegmentationSource::Create("gt", reader),
+                             "cabinet", 4);
+  const uint16_t wall = *source.classes().FindByName("wall");
+  const uint16_t cabinet = *source.classes().FindByName("cabinet");
+  SceneBuilder builder(source.classes(), SceneBuilderOptions{});
+  for (size_t i = 0; i < reader.size(); ++i) {
+    const fuse::FrameLabels labels = source.Get(reader, i);
+    builder.Add(reader.Read(i), &labels);
+  }
+  const float inv_voxel = builder.fusion().voxel_evidence()->inv_voxel_size();
+  // Voxels holding points of both the wall and the cabinet.
+  const auto both = [&](const std::vector<fuse::SceneSegment>& map) {
+    std::unordered_map<uint64_t, int> classes;  // bit 1 wall, bit 2 cabinet
+    for (const fuse::SceneSegment& s : map) {
+      const int bit = s.class_id == wall ? 1 : s.class_id == cabinet ? 2 : 0;
+      for (const Eigen::Vector3f& p : s.points) {
+        classes[fuse::VoxelKey(p, inv_voxel)] |= bit;
+      }
+    }
+    return std::count_if(classes.begin(), classes.end(),
+                         [](const auto& kv) { return kv.second == 3; });
+  };
+  const std::vector<fuse::SceneSegment> fusion_map =
+      builder.MapForGuidance(false, false);
+  const std::vector<fuse::SceneSegment> decided =
+      builder.MapForGuidance(true, true);
+  EXPECT_GT(both(fusion_map), 20);
+  EXPECT_EQ(both(decided), 0);
+  std::set<uint32_t> ids;
+  for (const fuse::SceneSegment& s : builder.fusion().segments()) {
+    ids.insert(s.id);
+  }
+  size_t cabinet_points = 0;
+  for (const fuse::SceneSegment& s : decided) {
+    EXPECT_EQ(ids.count(s.id), 1u) << s.id;
+    if (s.class_id == cabinet) cabinet_points += s.points.size();
+  }
+  EXPECT_GT(cabinet_points, 50u);
+  // Between frames that voted, the last decision is kept.
+  const std::vector<fuse::SceneSegment> kept =
+      builder.MapForGuidance(true, false);
+  ASSERT_EQ(kept.size(), decided.size());
+  for (size_t k = 0; k < kept.size(); ++k) {
+    EXPECT_EQ(kept[k].id, decided[k].id);
+    EXPECT_EQ(kept[k].points.size(), decided[k].points.size());
   }
 }
 
