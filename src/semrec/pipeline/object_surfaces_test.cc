@@ -238,6 +238,29 @@ class PaintedAsWall : public fuse::SegmentationSource {
   size_t every_;
 };
 
+// The six-objects scene (12 frames) with its cabinet painted as wall in every
+// 4th frame.
+struct PaintedScene {
+  static io::SequenceReader WriteAndOpen(const std::filesystem::path& dir) {
+    synth::WriteSyntheticSequence(testing::SmallScene("six-objects", 12),
+                                  dir / "seq", testing::QuietProgress());
+    return io::SequenceReader::Open(dir / "seq");
+  }
+  PaintedScene()
+      : reader(WriteAndOpen(dir.path())),
+        source(fuse::SegmentationSource::Create("gt", reader), "cabinet", 4) {}
+  // Feeds every frame to `builder`.
+  void AddAll(SceneBuilder* builder) const {
+    for (size_t i = 0; i < reader.size(); ++i) {
+      const fuse::FrameLabels labels = source.Get(reader, i);
+      builder->Add(reader.Read(i), &labels);
+    }
+  }
+  testing::TempDir dir;
+  io::SequenceReader reader;
+  PaintedAsWall source;
+};
+
 // Vertices of the wall's mesh inside the (shrunk) box of the object of class
 // `name`, after `semrec mesh` with `merge`.
 size_t WallVerticesInside(const std::filesystem::path& out,
@@ -269,13 +292,11 @@ size_t WallVerticesInside(const std::filesystem::path& out,
 // voxel rule it ends one cabinet and the wall's mesh leaves it; with the
 // paper's rule the wall's volume keeps that view's cabinet surface.
 TEST(ObjectSurfaces, FurnitureCalledWallInOneViewLeavesTheWallsMesh) {
-  testing::TempDir dir;
+  const PaintedScene scene;
+  const io::SequenceReader& reader = scene.reader;
+  const PaintedAsWall& source = scene.source;
+  const std::filesystem::path& dir = scene.dir.path();
   const ProgressOptions quiet = testing::QuietProgress();
-  synth::WriteSyntheticSequence(testing::SmallScene("six-objects", 12),
-                                dir / "seq", quiet);
-  const io::SequenceReader reader = io::SequenceReader::Open(dir / "seq");
-  const PaintedAsWall source(fuse::SegmentationSource::Create("gt", reader),
-                             "cabinet", 4);
   ReconstructOptions options;
   Reconstruct(reader, source, options, dir / "voxel", quiet);
   options.scene.fusion.merge = fuse::FusionOptions::Merge::kPaper;
@@ -299,18 +320,11 @@ TEST(ObjectSurfaces, FurnitureCalledWallInOneViewLeavesTheWallsMesh) {
 // that the wall's mesh leaves (before, snapshots showed the fusion objects as
 // streamed, the cabinet's painted view inside the wall).
 TEST(ObjectSurfaces, SnapshotsShowTheObjectsTheEvidenceDecides) {
-  testing::TempDir dir;
-  synth::WriteSyntheticSequence(testing::SmallScene("six-objects", 12),
-                                dir / "seq", testing::QuietProgress());
-  const io::SequenceReader reader = io::SequenceReader::Open(dir / "seq");
-  const PaintedAsWall source(fuse::SegmentationSource::Create("gt", reader),
-                             "cabinet", 4);
+  const PaintedScene scene;
+  const std::filesystem::path& dir = scene.dir.path();
   SceneBuilderOptions options;
-  SceneBuilder builder(source.classes(), options);
-  for (size_t i = 0; i < reader.size(); ++i) {
-    const fuse::FrameLabels labels = source.Get(reader, i);
-    builder.Add(reader.Read(i), &labels);
-  }
+  SceneBuilder builder(scene.source.classes(), options);
+  scene.AddAll(&builder);
   const SceneWriteResult snapshot =
       builder.Write(dir / "snapshot", SceneWriteOptions{});
   size_t cabinets = 0;
@@ -323,11 +337,8 @@ TEST(ObjectSurfaces, SnapshotsShowTheObjectsTheEvidenceDecides) {
   builder.Finish();
   const SceneWriteResult final_scene =
       builder.Write(dir / "final", SceneWriteOptions{});
-  SceneBuilder plain(source.classes(), options);
-  for (size_t i = 0; i < reader.size(); ++i) {
-    const fuse::FrameLabels labels = source.Get(reader, i);
-    plain.Add(reader.Read(i), &labels);
-  }
+  SceneBuilder plain(scene.source.classes(), options);
+  scene.AddAll(&plain);
   plain.Finish();
   const SceneWriteResult expected =
       plain.Write(dir / "plain", SceneWriteOptions{});
@@ -347,19 +358,11 @@ TEST(ObjectSurfaces, SnapshotsShowTheObjectsTheEvidenceDecides) {
 // cabinet's place in the wall object and in the cabinet), the decided map
 // holds each place under one class, the cabinet's, with ids fusion knows.
 TEST(ObjectSurfaces, GuidanceProjectsEachPlaceOnceWithItsObjectsClass) {
-  testing::TempDir dir;
-  synth::WriteSyntheticSequence(testing::SmallScene("six-objects", 12),
-                                dir / "seq", testing::QuietProgress());
-  const io::SequenceReader reader = io::SequenceReader::Open(dir / "seq");
-  const PaintedAsWall source(fuse::SegmentationSource::Create("gt", reader),
-                             "cabinet", 4);
-  const uint16_t wall = *source.classes().FindByName("wall");
-  const uint16_t cabinet = *source.classes().FindByName("cabinet");
-  SceneBuilder builder(source.classes(), SceneBuilderOptions{});
-  for (size_t i = 0; i < reader.size(); ++i) {
-    const fuse::FrameLabels labels = source.Get(reader, i);
-    builder.Add(reader.Read(i), &labels);
-  }
+  const PaintedScene scene;
+  const uint16_t wall = *scene.source.classes().FindByName("wall");
+  const uint16_t cabinet = *scene.source.classes().FindByName("cabinet");
+  SceneBuilder builder(scene.source.classes(), SceneBuilderOptions{});
+  scene.AddAll(&builder);
   const float inv_voxel = builder.fusion().voxel_evidence()->inv_voxel_size();
   // Voxels holding points of both the wall and the cabinet.
   const auto both = [&](const std::vector<fuse::SceneSegment>& map) {
