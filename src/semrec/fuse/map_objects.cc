@@ -123,6 +123,20 @@ void MapResolver::CollectCells() {
   std::sort(cells_.begin(), cells_.end(),
             [](const Cell& a, const Cell& b) { return a.key < b.key; });
   for (size_t i = 0; i < cells_.size(); ++i) index_[cells_[i].key] = i;
+  NeighbourLists();
+}
+
+void MapResolver::NeighbourLists() {
+  std::vector<uint32_t> start, list;
+  start.reserve(cells_.size() + 1);
+  start.push_back(0);
+  for (size_t i = 0; i < cells_.size(); ++i) {
+    ForNeighbours(i,
+                  [&](size_t n) { list.push_back(static_cast<uint32_t>(n)); });
+    start.push_back(static_cast<uint32_t>(list.size()));
+  }
+  neighbour_start_ = std::move(start);
+  neighbours_ = std::move(list);
 }
 
 double MapResolver::ShareOnPlanes(

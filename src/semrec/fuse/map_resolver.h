@@ -113,11 +113,20 @@ class MapResolver {
   // unclaimed ones stay 0 (orphans) for now.
   void AssignOwners();
 
-  // Cells within `radius` voxels (Chebyshev; 0: touch_voxels) of cell i.
+  // Cells within `radius` voxels (Chebyshev; 0: touch_voxels) of cell i, in
+  // (dx, dy, dz) order.
   template <typename Visit>
   void ForNeighbours(size_t i, const Visit& visit, int radius = 0) const {
-    const Eigen::Vector3i v = UnpackVoxel(cells_[i].key);
     const int r = radius > 0 ? radius : options_.touch_voxels;
+    if (r == options_.touch_voxels && !neighbour_start_.empty()) {
+      // The touching cells, listed once (NeighbourLists): components and
+      // footprints walk them many times.
+      for (uint32_t k = neighbour_start_[i]; k < neighbour_start_[i + 1]; ++k) {
+        visit(static_cast<size_t>(neighbours_[k]));
+      }
+      return;
+    }
+    const Eigen::Vector3i v = UnpackVoxel(cells_[i].key);
     for (int dx = -r; dx <= r; ++dx) {
       for (int dy = -r; dy <= r; ++dy) {
         for (int dz = -r; dz <= r; ++dz) {
@@ -417,6 +426,10 @@ class MapResolver {
   uint32_t* next_id_;
   std::vector<Cell> cells_;
   std::unordered_map<uint64_t, size_t> index_;
+  // Per cell its cells within touch_voxels (ForNeighbours' order): cell i's
+  // are neighbours_[neighbour_start_[i] .. neighbour_start_[i + 1]).
+  std::vector<uint32_t> neighbour_start_, neighbours_;
+  void NeighbourLists();
   // Voxels the far views voted on: their evidence with those votes added
   // (VoxelEvidenceMap::FarVotes); the cells point here instead of the map.
   std::unordered_map<uint64_t, VoxelEvidence> amended_;
