@@ -201,8 +201,7 @@ void MapResolver::GateStructure() {
     const double on_planes = ShareOnPlanes(points, found, fronts);
     spdlog::debug(
         "structure class {}: {} voxels, {} planes, {} furniture fronts, "
-        "{:.0f}% "
-        "of the voxels on them",
+        "{:.0f}% of the voxels on them",
         cls, points.size(), found.size(), fronts.size(), 100.0 * on_planes);
     if (on_planes < options_.min_structure_on_planes) {
       spdlog::info(
