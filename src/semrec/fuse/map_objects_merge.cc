@@ -197,6 +197,15 @@ void MapResolver::MergeByMasks() {
     if (link.parts && !fits) continue;
     const bool nested = link.nested && Nested(members[x], members[y]);
     if (link.nested && !nested) continue;
+    if (same && link.views.one < options_.min_one_views && !link.attached &&
+        !link.nested &&
+        !FitsTogether(members[x], members[y], owner_class_[x])) {
+      spdlog::debug(
+          "objects {} and {}: not joined, {} view(s) saw them in one mask "
+          "and their groups ({} and {} voxels) are too large for one",
+          link.a, link.b, link.views.one, members[x].size(), members[y].size());
+      continue;
+    }
     // No chain of links joins two objects the views held apart (chairs round
     // a table, each touching a small piece that touches the next: six views
     // showed two of them in different masks, none in one). Where one object
@@ -230,6 +239,13 @@ void MapResolver::MergeByMasks() {
         continue;
       }
     }
+    spdlog::debug(
+        "objects {} and {} joined (groups {} and {}: {} and {} voxels; "
+        "{} views one, {} two, {} in contact{}{}{})",
+        link.a, link.b, x, y, members[x].size(), members[y].size(),
+        link.views.one, link.views.two, link.contact,
+        link.attached ? ", attached" : "", link.parts ? ", parts" : "",
+        link.nested ? ", nested" : "");
     const bool x_keeps = members[x].size() >= members[y].size();
     const uint32_t keep = x_keeps ? x : y, gone = x_keeps ? y : x;
     into[gone] = keep;
@@ -248,10 +264,13 @@ void MapResolver::MergeByMasks() {
       // Counted by views; by voxel evidence where the views tie.
       const std::map<uint16_t, double> views = ViewVotes(members[keep]);
       const double view_cg = ShareOf(views, cg), view_ck = ShareOf(views, ck);
+      // A piece too small to stand alone (a voxel or two a mask took into
+      // another class) never gives its class to the object it joins.
       const bool gone_wins =
-          view_cg != view_ck
-              ? view_cg > view_ck
-              : VoteShare(members[keep], cg) > VoteShare(members[keep], ck);
+          members[gone].size() >= options_.min_piece_voxels &&
+          (view_cg != view_ck
+               ? view_cg > view_ck
+               : VoteShare(members[keep], cg) > VoteShare(members[keep], ck));
       uint16_t winner = gone_wins ? cg : ck;
       const uint16_t other = gone_wins ? ck : cg;
       const double slack = options_.size_slack;

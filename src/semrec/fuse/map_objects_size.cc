@@ -161,6 +161,17 @@ bool MapResolver::FitsOne(const std::vector<size_t>& a,
   return FitsSize(size_m, class_id, 1.0);
 }
 
+bool MapResolver::FitsTogether(const std::vector<size_t>& a,
+                               const std::vector<size_t>& b,
+                               uint16_t class_id) const {
+  if (MaxFootprint(class_id).x() <= 0.0 || options_.size_slack <= 0.0) {
+    return true;
+  }
+  std::vector<size_t> both = a;
+  both.insert(both.end(), b.begin(), b.end());
+  return FitsSize(FootprintSize(both), class_id, options_.size_slack);
+}
+
 bool MapResolver::PartsOfOne(const std::vector<size_t>& a,
                              const std::vector<size_t>& b, uint16_t class_id,
                              size_t contact_voxels) const {

@@ -4,9 +4,11 @@
 #include <limits>
 #include <map>
 #include <set>
+#include <string>
 #include <tuple>
 #include <unordered_map>
 
+#include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
 #include "semrec/core/union_find.h"
@@ -217,11 +219,50 @@ void MapResolver::SplitDisconnected() {
         [](const auto& a, const auto& b) { return a.size() > b.size(); });
     std::vector<std::map<size_t, std::set<uint64_t>>> holders;
     for (const auto& piece : list) holders.push_back(Holders(piece));
+    // Pieces a view held in one mask stay one (a table whose middle a chair
+    // hides), when together they can be one object of the class: one mask
+    // over a row of chairs does not make the row a chair. Specks stay as
+    // they were (they do not count in a size, and alone they would be
+    // objects of a voxel or two), and so do the pieces of an object too small
+    // to stand alone (a fragment, judged as one later).
+    const uint16_t cls = owner_class_[owner];
+    size_t total = 0;
+    for (const auto& piece : list) total += piece.size();
+    const bool sized = MaxFootprint(cls).x() > 0.0 &&
+                       options_.size_slack > 0.0 &&
+                       total >= options_.min_piece_voxels;
+    std::vector<std::vector<size_t>> group_cells;  // by root, when sized
+    if (sized) group_cells = list;
+    const auto speck = [&](const std::vector<size_t>& cells) {
+      return static_cast<double>(cells.size()) <
+             kSpeckShare * static_cast<double>(total);
+    };
     UnionFind groups(list.size());
     for (size_t a = 0; a < list.size(); ++a) {
       for (size_t b = a + 1; b < list.size(); ++b) {
-        if (SaysOne(CoViews(holders[a], holders[b]), 1)) groups.Unite(a, b);
+        const size_t ra = groups.Find(a), rb = groups.Find(b);
+        if (ra == rb || !SaysOne(CoViews(holders[a], holders[b]), 1)) continue;
+        if (sized) {
+          if (!speck(group_cells[ra]) && !speck(group_cells[rb]) &&
+              !FitsTogether(group_cells[ra], group_cells[rb], cls)) {
+            continue;
+          }
+          const size_t keep = std::min(ra, rb), gone = std::max(ra, rb);
+          group_cells[keep].insert(group_cells[keep].end(),
+                                   group_cells[gone].begin(),
+                                   group_cells[gone].end());
+          group_cells[gone].clear();
+        }
+        groups.Unite(a, b);
       }
+    }
+    if (spdlog::should_log(spdlog::level::debug)) {
+      std::string sizes;
+      for (size_t k = 0; k < list.size(); ++k) {
+        sizes += fmt::format(" {}:{}", list[k].size(), groups.Find(k));
+      }
+      spdlog::debug("object {}: disconnected pieces (voxels:group){}", owner,
+                    sizes);
     }
     std::map<size_t, uint32_t> group_id{{groups.Find(0), owner}};
     for (size_t k = 1; k < list.size(); ++k) {

@@ -121,7 +121,9 @@ TEST(MapObjects, AFewVoxelsAMaskBledOntoAnotherChairDoNotCarryItsChairThere) {
 // Two chairs that three views held in separate masks, and between them a
 // small piece of chair class (a bag on the floor, a coat) that only a fourth
 // view saw, touching both: the piece may join either chair, but no chain of
-// merges through it joins the chairs. Without that rule: one chair.
+// merges through it joins the chairs. Without that rule (and without the
+// size rule, which also stops it: no view held the piece with either chair,
+// and the two chairs are too large for one): one chair.
 TEST(MapObjects, NoChainOfMergesJoinsTwoChairsTheViewsHeldApart) {
   const Cloud a = Box({1.0f, 1.0f, 0.1f}, {1.45f, 1.45f, 0.9f});
   const Cloud b = Box({1.75f, 1.0f, 0.1f}, {2.2f, 1.45f, 0.9f});
@@ -132,6 +134,7 @@ TEST(MapObjects, NoChainOfMergesJoinsTwoChairsTheViewsHeldApart) {
     views.push_back(ViewsOf(1, {Segment(kChair, 2, piece)})[0]);
     FusionOptions options;
     options.map_objects.min_apart_views = min_apart_views;
+    if (min_apart_views > 2) options.map_objects.size_slack = 0.0;
     const SceneFusion fusion = Fuse(views, options);
     const uint32_t in_a = TopObject(WhereItWent(fusion, a));
     const uint32_t in_b = TopObject(WhereItWent(fusion, b));
@@ -307,6 +310,70 @@ TEST(MapObjects, ASofaHeldWholeByOneViewAndCutByAnotherIsOneSofa) {
     const SceneFusion fusion = Fuse(views, options);
     EXPECT_EQ(Count(fusion, kSofa), tie_rule ? 1u : 2u) << tie_rule;
   }
+}
+
+// 3DMatch's lounge: chairs side by side, each seen in its own masks by
+// some views and never with the other. Touching and of one class used to be
+// enough to join them; together they are no chair (0.95 m, a chair at most
+// 0.75), so two chairs. A table seen in halves by different views is still
+// one table: together its halves fit one.
+TEST(MapObjects, ChairsSideBySideNoViewSawTogetherStayTwo) {
+  const Cloud a = Box({1.0f, 1.0f, 0.1f}, {1.45f, 1.45f, 0.9f});
+  const Cloud b = Box({1.5f, 1.0f, 0.1f}, {1.95f, 1.45f, 0.9f});
+  std::vector<View> views = ViewsOf(2, {Segment(kChair, 2, a)});
+  for (const View& v : ViewsOf(2, {Segment(kChair, 2, b)})) {
+    views.push_back(v);
+  }
+  for (const double slack : {1.25, 0.0}) {
+    FusionOptions options;
+    options.map_objects.size_slack = slack;
+    const SceneFusion fusion = Fuse(views, options);
+    if (slack > 0.0) {
+      EXPECT_EQ(Count(fusion, kChair), 2u);
+      ExpectTwoWholeObjects(fusion, a, b);
+    } else {
+      EXPECT_EQ(Count(fusion, kChair), 1u) << "joined without the size rule";
+    }
+  }
+  const Cloud left = Box({1.0f, 1.0f, 0.7f}, {1.9f, 1.8f, 0.75f});
+  const Cloud right = Box({1.95f, 1.0f, 0.7f}, {2.8f, 1.8f, 0.75f});
+  std::vector<View> table_views = ViewsOf(2, {Segment(kTable, 2, left)});
+  for (const View& v : ViewsOf(2, {Segment(kTable, 2, right)})) {
+    table_views.push_back(v);
+  }
+  const SceneFusion tables = Fuse(table_views);
+  EXPECT_EQ(Count(tables, kTable), 1u);
+}
+
+// One view's mask held two chairs 1 m apart (a mask over a row of chairs,
+// the chairs nearer the camera apart in depth), the others saw each alone:
+// pieces that do not touch stay one object when a view held them in one
+// mask, unless together they are too large for one of their class. A table
+// whose middle a box hid from every view stays one.
+TEST(MapObjects, PiecesOneMaskHeldStayOneOnlyWhenTheyFitOneObject) {
+  const Cloud a = Box({1.0f, 1.0f, 0.1f}, {1.45f, 1.45f, 0.9f});
+  const Cloud b = Box({2.5f, 1.0f, 0.1f}, {2.95f, 1.45f, 0.9f});
+  std::vector<View> views = ViewsOf(1, {Segment(kChair, 2, Join({a, b}))});
+  for (const View& v : ViewsOf(2, {Segment(kChair, 2, a)})) views.push_back(v);
+  for (const View& v : ViewsOf(2, {Segment(kChair, 2, b)})) views.push_back(v);
+  for (const double slack : {1.25, 0.0}) {
+    FusionOptions options;
+    options.map_objects.size_slack = slack;
+    const SceneFusion fusion = Fuse(views, options);
+    if (slack > 0.0) {
+      EXPECT_EQ(Count(fusion, kChair), 2u);
+      ExpectTwoWholeObjects(fusion, a, b);
+    } else {
+      EXPECT_EQ(Count(fusion, kChair), 1u) << "one without the size rule";
+    }
+  }
+  const Cloud left = Box({1.0f, 1.0f, 0.7f}, {1.6f, 1.8f, 0.75f});
+  const Cloud right = Box({2.2f, 1.0f, 0.7f}, {2.8f, 1.8f, 0.75f});
+  const SceneFusion table =
+      Fuse(ViewsOf(3, {Segment(kTable, 2, Join({left, right}))}));
+  EXPECT_EQ(Count(table, kTable), 1u);
+  const auto in_left = WhereItWent(table, left);
+  EXPECT_GT(ShareIn(WhereItWent(table, right), TopObject(in_left)), 0.9);
 }
 
 TEST(VoxelEvidence, EachViewKeepsTheMaskHoldingMostOfAVoxel) {

@@ -279,6 +279,10 @@ class MapResolver {
   // Objects too large for their class take the most voted class that fits
   // (MapObjectOptions::size_slack).
   void FitClassesToSizes();
+  // Whether `a` and `b` together (without specks) fit one object of the class
+  // with size_slack (true for classes of no known size, or size_slack 0).
+  bool FitsTogether(const std::vector<size_t>& a, const std::vector<size_t>& b,
+                    uint16_t class_id) const;
   // Touching pieces of one class that views held apart, joined along a seam
   // (min_part_contact_share of the smaller one) and fitting one object of the
   // class together (FitsOne): a mask generator's consistent cut (a sofa's
@@ -346,8 +350,12 @@ class MapResolver {
   // Touching objects that are one (MergeLinks) become one, unless that joins
   // objects held apart (HeldApart) that together neither fit one object of
   // their class (FitsOne) nor are nested (Nested), or joins groups of two
-  // classes that more views held apart than in one mask; the larger keeps
-  // its id.
+  // classes that more views held apart than in one mask, or joins groups of
+  // one class too large for one object of it (FitsTogether) on a link fewer
+  // than min_one_views views saw in one mask (touching, or one view, is all
+  // that joined it: sparse views each see a part of one object, but chairs
+  // side by side are also touching, and one mask may hold a row of them);
+  // the larger keeps its id.
   void MergeByMasks();
 
   // Thing voxels no object of their class claimed: each connected group joins
