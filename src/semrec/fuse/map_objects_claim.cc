@@ -33,6 +33,8 @@ MapResolver::Members MapResolver::ThingMembers() const {
 void MapResolver::ClaimFronts() {
   if (fronts_.empty()) return;
   std::map<uint32_t, size_t> size = ThingSizes();
+  // Each thing's cells with the fronts it takes (StillFits).
+  Members members = ThingMembers();
   // The cells on each front, and per thing its voxels on any front (an
   // L-shaped counter is one cabinet over two fronts).
   std::vector<std::vector<size_t>> on(fronts_.size());
@@ -54,6 +56,29 @@ void MapResolver::ClaimFronts() {
       on_any[i] = true;
     }
   }
+  // Whether a thing may spread over a front's stranded voxels (its class's
+  // size, StillFits), decided once per thing and front, the first front a
+  // voxel lies on.
+  std::map<std::pair<uint32_t, size_t>, bool> may_take;
+  std::vector<size_t> front_of(cells_.size(), fronts_.size());
+  for (size_t f = fronts_.size(); f-- > 0;) {
+    for (size_t i : on[f]) front_of[i] = f;
+  }
+  const auto allowed = [&](uint32_t id, size_t i) {
+    const size_t f = front_of[i];
+    if (f == fronts_.size()) return true;
+    const auto [it, fresh] = may_take.try_emplace({id, f}, false);
+    if (!fresh) return it->second;
+    std::vector<size_t> rest;
+    for (size_t k : on[f]) {
+      if (IsStranded(cells_[k])) rest.push_back(k);
+    }
+    it->second = StillFits(members[id], owner_class_[id], rest);
+    if (it->second) {
+      members[id].insert(members[id].end(), rest.begin(), rest.end());
+    }
+    return it->second;
+  };
   std::vector<size_t> frontier;
   std::vector<size_t> unclaimed;    // fronts no thing takes
   std::map<uint16_t, float> named;  // front class -> voxels of fronts taken
@@ -69,20 +94,34 @@ void MapResolver::ClaimFronts() {
     for (const auto& [id, n] : held) {
       if (n > best_held) best = id, best_held = n;
     }
-    const bool takes =
+    bool takes =
         best != 0 &&
         static_cast<double>(best_held) >=
             options_.min_front_share * static_cast<double>(on[f].size()) &&
         2 * on_fronts[best] >= size[best];
+    // A thing of a known size takes a front only while it still fits one
+    // object of its class (a table does not take a 3 m front).
+    std::vector<size_t> rest;
+    if (takes) {
+      for (size_t i : on[f]) {
+        if (IsStranded(cells_[i])) rest.push_back(i);
+      }
+      takes = StillFits(members[best], owner_class_[best], rest);
+    }
     spdlog::debug(
         "furniture front (class {}, {} voxels on it): object {} holds {} of "
         "them ({} on fronts, {} in all){}",
         fronts_[f].class_id, on[f].size(), best, best_held, on_fronts[best],
-        size[best], takes ? ": takes the stranded rest" : "");
+        size[best],
+        takes ? ": takes the stranded rest"
+              : (rest.empty() ? "" : ": would outgrow its class"));
     if (!takes) {
       unclaimed.push_back(f);
       continue;
     }
+    std::vector<size_t>& grown = members[best];
+    grown.insert(grown.end(), rest.begin(), rest.end());
+    may_take[{best, f}] = true;
     named[owner_class_[best]] += static_cast<float>(on[f].size());
     for (size_t i : on[f]) {
       if (cells_[i].owner == best && IsThingCell(cells_[i])) {
@@ -103,7 +142,9 @@ void MapResolver::ClaimFronts() {
     for (size_t f = from; f < frontier.size(); ++f) {
       const uint32_t id = cells_[frontier[f]].owner;
       ForNeighbours(frontier[f], [&](size_t n) {
-        if (on_any[n] && IsStranded(cells_[n])) take(n, id);
+        if (on_any[n] && IsStranded(cells_[n]) && allowed(id, n)) {
+          take(n, id);
+        }
       });
     }
   };
@@ -187,12 +228,17 @@ bool MapResolver::StillFits(const std::vector<size_t>& cells, uint16_t class_id,
                             const std::vector<size_t>& added) const {
   if (MaxFootprint(class_id).x() <= 0.0) return true;  // any size
   const double slack = options_.size_slack;
-  if (!FitsSize(CoreFootprintSize(cells, kSizeTrimShare), class_id, slack)) {
-    return true;  // too large already: FitClassesToSizes decides
-  }
+  const Eigen::Vector2d before = CoreFootprintSize(cells, kSizeTrimShare);
   std::vector<size_t> both = cells;
   both.insert(both.end(), added.begin(), added.end());
-  return FitsSize(CoreFootprintSize(both, kSizeTrimShare), class_id, slack);
+  const Eigen::Vector2d after = CoreFootprintSize(both, kSizeTrimShare);
+  if (!FitsSize(before, class_id, slack)) {
+    // Too large already (FitClassesToSizes found no class that fits): it
+    // may fill in its footprint, not grow (Bonn crowd: a 4 m "table" took
+    // 10k voxels of the wall's lower bands).
+    return (after - before).maxCoeff() <= map_.voxel_size_m() + 1e-6;
+  }
+  return FitsSize(after, class_id, slack);
 }
 
 void MapResolver::ClaimStranded() {

@@ -114,6 +114,8 @@ std::vector<StructurePlane> TakeFurnitureFronts(
   }
   constexpr double kDepthBinM = 0.1;
   constexpr double kMinFromAboveCos = 0.0;
+  constexpr double kAboveLowM = 0.25, kAboveHighM = 0.45;
+  constexpr int64_t kWallBehindBin = 5;  // 50 cm
   // Behind the plane by more than a wall's other face and the tolerance.
   const double min_behind_m = 2.0 * options.tolerance_m;
   std::erase_if(*planes, [&](const StructurePlane& plane) {
@@ -122,6 +124,27 @@ std::vector<StructurePlane> TakeFurnitureFronts(
       return false;
     }
     std::set<std::pair<int64_t, int64_t>> cells;  // (along bin, depth bin)
+    // Surface a little above the top band, behind the plane (a wall's
+    // continuation; over a worktop there is air up to the wall cabinets).
+    std::set<std::pair<int64_t, int64_t>> above;
+    for (const Eigen::Vector3f& p : scene) {
+      const Eigen::Vector3d q = p.cast<double>();
+      const double behind = plane.offset - plane.normal.dot(q);
+      const double h = up_world.dot(q) - plane.top_m;
+      if (behind < min_behind_m ||
+          behind > options.max_front_distance_m + 0.2 || h < kAboveLowM ||
+          h > kAboveHighM || !plane.Covers(q)) {
+        continue;
+      }
+      above.emplace(AlongBin(plane.along, q),
+                    static_cast<int64_t>(std::floor(behind / kDepthBinM)));
+    }
+    const auto goes_up = [&](int64_t along, int64_t depth) {
+      return above.count({along, depth - 1}) > 0 ||
+             above.count({along, depth}) > 0 ||
+             above.count({along, depth + 1}) > 0;
+    };
+    size_t wall_cells = 0;  // voxels left out as the wall itself
     for (size_t i = 0; i < scene.size(); ++i) {
       const Eigen::Vector3d q = scene[i].cast<double>();
       const double behind = plane.offset - plane.normal.dot(q);
@@ -137,8 +160,17 @@ std::vector<StructurePlane> TakeFurnitureFronts(
               kMinFromAboveCos) {
         continue;
       }
-      cells.emplace(AlongBin(plane.along, q),
-                    static_cast<int64_t>(std::floor(behind / kDepthBinM)));
+      const int64_t along = AlongBin(plane.along, q);
+      const auto depth = static_cast<int64_t>(std::floor(behind / kDepthBinM));
+      // A surface close behind the top that goes on above it is the wall
+      // itself (a wall far from the camera lies in depth-quantization layers
+      // 47 cm deep on Bonn crowd; each layer's lower band passed for a
+      // front); one further back is the wall behind a counter top.
+      if (depth < kWallBehindBin && goes_up(along, depth)) {
+        ++wall_cells;
+        continue;
+      }
+      cells.emplace(along, depth);
     }
     // Stretches along the plane with a surface at least two bins deep, and
     // some reaching 35 cm or more behind it: a worktop is 60 cm deep (seen
@@ -164,8 +196,9 @@ std::vector<StructurePlane> TakeFurnitureFronts(
                        static_cast<double>(deep) >= 0.5 * topped;
     spdlog::debug(
         "vertical plane ({} points, top {:.2f} along up): surface behind its "
-        "top along {:.0f}% of it ({} of {} stretches 35 cm deep){}",
-        plane.support, plane.top_m, 100.0 * share, deep, topped,
+        "top along {:.0f}% of it ({} of {} stretches 35 cm deep; {} voxels "
+        "left out, the wall going on above them){}",
+        plane.support, plane.top_m, 100.0 * share, deep, topped, wall_cells,
         front ? ": the front of furniture, not a wall" : "");
     if (front) fronts.push_back(plane);
     return front;
