@@ -312,6 +312,23 @@ TEST(MapObjects, ASofaHeldWholeByOneViewAndCutByAnotherIsOneSofa) {
   }
 }
 
+// Chairs `a` and `b` end as two whole chairs with the size rule (size_slack
+// 1.25), as one without it (size_slack 0).
+void ExpectTwoChairsByTheSizeRule(const std::vector<View>& views,
+                                  const Cloud& a, const Cloud& b) {
+  for (const double slack : {1.25, 0.0}) {
+    FusionOptions options;
+    options.map_objects.size_slack = slack;
+    const SceneFusion fusion = Fuse(views, options);
+    if (slack > 0.0) {
+      EXPECT_EQ(Count(fusion, kChair), 2u);
+      ExpectTwoWholeObjects(fusion, a, b);
+    } else {
+      EXPECT_EQ(Count(fusion, kChair), 1u) << "one without the size rule";
+    }
+  }
+}
+
 // 3DMatch's lounge: chairs side by side, each seen in its own masks by
 // some views and never with the other. Touching and of one class used to be
 // enough to join them; together they are no chair (0.95 m, a chair at most
@@ -324,17 +341,7 @@ TEST(MapObjects, ChairsSideBySideNoViewSawTogetherStayTwo) {
   for (const View& v : ViewsOf(2, {Segment(kChair, 2, b)})) {
     views.push_back(v);
   }
-  for (const double slack : {1.25, 0.0}) {
-    FusionOptions options;
-    options.map_objects.size_slack = slack;
-    const SceneFusion fusion = Fuse(views, options);
-    if (slack > 0.0) {
-      EXPECT_EQ(Count(fusion, kChair), 2u);
-      ExpectTwoWholeObjects(fusion, a, b);
-    } else {
-      EXPECT_EQ(Count(fusion, kChair), 1u) << "joined without the size rule";
-    }
-  }
+  ExpectTwoChairsByTheSizeRule(views, a, b);
   const Cloud left = Box({1.0f, 1.0f, 0.7f}, {1.9f, 1.8f, 0.75f});
   const Cloud right = Box({1.95f, 1.0f, 0.7f}, {2.8f, 1.8f, 0.75f});
   std::vector<View> table_views = ViewsOf(2, {Segment(kTable, 2, left)});
@@ -356,17 +363,7 @@ TEST(MapObjects, PiecesOneMaskHeldStayOneOnlyWhenTheyFitOneObject) {
   std::vector<View> views = ViewsOf(1, {Segment(kChair, 2, Join({a, b}))});
   for (const View& v : ViewsOf(2, {Segment(kChair, 2, a)})) views.push_back(v);
   for (const View& v : ViewsOf(2, {Segment(kChair, 2, b)})) views.push_back(v);
-  for (const double slack : {1.25, 0.0}) {
-    FusionOptions options;
-    options.map_objects.size_slack = slack;
-    const SceneFusion fusion = Fuse(views, options);
-    if (slack > 0.0) {
-      EXPECT_EQ(Count(fusion, kChair), 2u);
-      ExpectTwoWholeObjects(fusion, a, b);
-    } else {
-      EXPECT_EQ(Count(fusion, kChair), 1u) << "one without the size rule";
-    }
-  }
+  ExpectTwoChairsByTheSizeRule(views, a, b);
   const Cloud left = Box({1.0f, 1.0f, 0.7f}, {1.6f, 1.8f, 0.75f});
   const Cloud right = Box({2.2f, 1.0f, 0.7f}, {2.8f, 1.8f, 0.75f});
   const SceneFusion table =
