@@ -64,6 +64,8 @@ void MapResolver::ClaimFronts() {
   for (size_t f = fronts_.size(); f-- > 0;) {
     for (size_t i : on[f]) front_of[i] = f;
   }
+  // Objects made from fronts below have no members here: they take every
+  // front they reach (they are that furniture; front classes have no size).
   const auto allowed = [&](uint32_t id, size_t i) {
     const size_t f = front_of[i];
     if (f == fronts_.size()) return true;
@@ -234,8 +236,8 @@ uint32_t MapResolver::NewObjectFromFront(
 
 bool MapResolver::StillFits(const std::vector<size_t>& cells, uint16_t class_id,
                             const std::vector<size_t>& added) const {
-  if (MaxFootprint(class_id).x() <= 0.0) return true;  // any size
   const double slack = options_.size_slack;
+  if (MaxFootprint(class_id).x() <= 0.0 || slack <= 0.0) return true;
   const Eigen::Vector2d before = CoreFootprintSize(cells, kSizeTrimShare);
   std::vector<size_t> both = cells;
   both.insert(both.end(), added.begin(), added.end());

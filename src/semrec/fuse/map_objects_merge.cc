@@ -265,7 +265,8 @@ void MapResolver::MergeByMasks() {
       const std::map<uint16_t, double> views = ViewVotes(members[keep]);
       const double view_cg = ShareOf(views, cg), view_ck = ShareOf(views, ck);
       // A piece too small to stand alone (a voxel or two a mask took into
-      // another class) never gives its class to the object it joins.
+      // another class) does not give its class to the object it joins by
+      // votes (only by the size rule below).
       const bool gone_wins =
           members[gone].size() >= options_.min_piece_voxels &&
           (view_cg != view_ck

@@ -237,14 +237,20 @@ void MapResolver::SplitDisconnected() {
       return static_cast<double>(cells.size()) <
              kSpeckShare * static_cast<double>(total);
     };
+    // Groups found too large together stay so as they grow: asked once.
+    std::set<std::pair<size_t, size_t>> too_large;
     UnionFind groups(list.size());
     for (size_t a = 0; a < list.size(); ++a) {
       for (size_t b = a + 1; b < list.size(); ++b) {
         const size_t ra = groups.Find(a), rb = groups.Find(b);
-        if (ra == rb || !SaysOne(CoViews(holders[a], holders[b]), 1)) continue;
+        if (ra == rb || too_large.count(std::minmax(ra, rb)) ||
+            !SaysOne(CoViews(holders[a], holders[b]), 1)) {
+          continue;
+        }
         if (sized) {
           if (!speck(group_cells[ra]) && !speck(group_cells[rb]) &&
               !FitsTogether(group_cells[ra], group_cells[rb], cls)) {
+            too_large.insert(std::minmax(ra, rb));
             continue;
           }
           const size_t keep = std::min(ra, rb), gone = std::max(ra, rb);

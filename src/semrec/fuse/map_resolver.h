@@ -411,7 +411,9 @@ class MapResolver {
   Members ThingMembers() const;
   // Whether a thing of class `class_id` with cells `cells` and the cells
   // `added` still fits one object of its class (CoreFootprintSize within
-  // size_slack), or did not fit before either, or has no known size.
+  // size_slack); one that did not fit before may take cells within its
+  // footprint (a voxel of growth). True for classes of no known size, or
+  // size_slack 0.
   bool StillFits(const std::vector<size_t>& cells, uint16_t class_id,
                  const std::vector<size_t>& added) const;
 
