@@ -66,9 +66,7 @@ void MapResolver::ClaimFronts() {
   }
   // Objects made from fronts below have no members here: they take every
   // front they reach (they are that furniture; front classes have no size).
-  const auto allowed = [&](uint32_t id, size_t i) {
-    const size_t f = front_of[i];
-    if (f == fronts_.size()) return true;
+  const auto fits_front = [&](uint32_t id, size_t f) {
     const auto [it, fresh] = may_take.try_emplace({id, f}, false);
     if (!fresh) return it->second;
     std::vector<size_t> rest;
@@ -80,6 +78,9 @@ void MapResolver::ClaimFronts() {
       members[id].insert(members[id].end(), rest.begin(), rest.end());
     }
     return it->second;
+  };
+  const auto allowed = [&](uint32_t id, size_t i) {
+    return front_of[i] == fronts_.size() || fits_front(id, front_of[i]);
   };
   std::vector<size_t> frontier;
   std::vector<size_t> unclaimed;    // fronts no thing holds nor takes
@@ -96,27 +97,21 @@ void MapResolver::ClaimFronts() {
     for (const auto& [id, n] : held) {
       if (n > best_held) best = id, best_held = n;
     }
-    bool takes =
+    const bool holds_it =
         best != 0 &&
         static_cast<double>(best_held) >=
             options_.min_front_share * static_cast<double>(on[f].size()) &&
         2 * on_fronts[best] >= size[best];
     // A thing of a known size takes a front only while it still fits one
     // object of its class (a table does not take a 3 m front).
-    std::vector<size_t> rest;
-    if (takes) {
-      for (size_t i : on[f]) {
-        if (IsStranded(cells_[i])) rest.push_back(i);
-      }
-      takes = StillFits(members[best], owner_class_[best], rest);
-    }
+    const bool takes = holds_it && fits_front(best, f);
     spdlog::debug(
         "furniture front (class {}, {} voxels on it): object {} holds {} of "
         "them ({} on fronts, {} in all){}",
         fronts_[f].class_id, on[f].size(), best, best_held, on_fronts[best],
         size[best],
         takes ? ": takes the stranded rest"
-              : (rest.empty() ? "" : ": would outgrow its class"));
+              : (holds_it ? ": would outgrow its class" : ""));
     if (!takes) {
       // A front a thing holds a fair part of without taking it (a table
       // standing against it, or too large with it) is not furniture no view
@@ -129,9 +124,6 @@ void MapResolver::ClaimFronts() {
       }
       continue;
     }
-    std::vector<size_t>& grown = members[best];
-    grown.insert(grown.end(), rest.begin(), rest.end());
-    may_take[{best, f}] = true;
     named[owner_class_[best]] += static_cast<float>(on[f].size());
     for (size_t i : on[f]) {
       if (cells_[i].owner == best && IsThingCell(cells_[i])) {
