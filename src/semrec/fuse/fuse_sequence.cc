@@ -137,6 +137,7 @@ nlohmann::json MapResolutionJson(const SceneFusion& fusion,
           {"fragments_dropped", r->fragments_dropped},
           {"stranded_voxels_claimed", r->stranded_voxels_claimed},
           {"enclosed_voxels_claimed", r->enclosed_voxels_claimed},
+          {"far_specks_moved", r->far_specks_moved},
           {"reclassed_by_size", r->reclassed_by_size},
           {"objects_from_fronts", r->objects_from_fronts}};
 }

@@ -49,6 +49,8 @@ void MapObjectOptions::Check() const {
                 "map objects: size_slack must be 0 (off) or >= 1");
   CheckArgument(min_size_class_share >= 0.0 && min_size_class_share <= 1.0,
                 "map objects: min_size_class_share must be in [0, 1]");
+  CheckArgument(max_speck_gap_m >= 0.0,
+                "map objects: max_speck_gap_m must be >= 0");
   CheckArgument(touch_voxels >= 1 && touch_voxels <= 3,
                 "map objects: touch_voxels must be 1, 2 or 3");
 }
@@ -94,6 +96,7 @@ MapResolution MapResolver::Run() {
     ClaimStranded();
   }
   if (options_.structure_planes && options_.claim_enclosed) ClaimEnclosed();
+  if (options_.max_speck_gap_m > 0.0) ReleaseFarSpecks();
   return Build();
 }
 

@@ -51,6 +51,8 @@
 //     Those on a furniture front first join the thing that holds a fair part
 //     of the front and lies mostly on it (a view named part of the row of
 //     cabinets), across the fronts it touches.
+//  7. Specks (pieces under 5% of an object) far from the rest of their
+//     object leave it: they join what they touch, or are dropped.
 #pragma once
 
 #include <cstddef>
@@ -192,6 +194,16 @@ struct MapObjectOptions {
   /// are no sofa because a stray view said so). size_slack 0: never.
   double size_slack = 1.25;
   double min_size_class_share = 0.25;
+  /// A speck of an object (a piece with under 5% of its voxels, kept with it
+  /// because a mask held both or it was too small to stand alone) farther
+  /// than this from the object's other pieces, where the object with it is
+  /// larger than one of its class can be (size_slack; any size for classes
+  /// of no known size), leaves it: it joins the object it touches (a thing
+  /// only while it still fits its class), else it is dropped. One view's
+  /// mask over a chair and a bit of the table 1.5 m away stretched the
+  /// chair's mesh to 2.4 x 2.3 m (3DMatch); a chair's legs cut off from its
+  /// seat stay. 0: never.
+  double max_speck_gap_m = 0.3;
 
   void Check() const;
 };
@@ -269,6 +281,8 @@ struct MapResolution {
   size_t objects_from_fronts = 0;
   /// Wall voxels closed in by a thing at the wall that joined it.
   size_t enclosed_voxels_claimed = 0;
+  /// Specks far from the rest of their object that left it.
+  size_t far_specks_moved = 0;
 };
 
 /// Decides the objects. `resolve`: a fusion id's current id (0: dropped).

@@ -98,6 +98,16 @@ Eigen::Vector2d MapResolver::FootprintSize(
   return (box.hi - box.lo).head<2>();
 }
 
+Eigen::Vector2d MapResolver::FootprintWithSpecks(
+    const std::vector<size_t>& cells) const {
+  std::vector<Eigen::Vector3d> points;
+  points.reserve(cells.size());
+  for (size_t i : cells) points.push_back(cells_[i].p.cast<double>());
+  if (points.empty()) return Eigen::Vector2d::Zero();
+  const UprightBox box = BoxOf(points, context_.up_world, map_.voxel_size_m());
+  return (box.hi - box.lo).head<2>();
+}
+
 Eigen::Vector2d MapResolver::CoreFootprintSize(const std::vector<size_t>& cells,
                                                double trim_share) const {
   const std::vector<Eigen::Vector3d> points = SpecklessPoints(cells);

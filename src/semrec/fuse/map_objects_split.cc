@@ -286,4 +286,97 @@ void MapResolver::SplitDisconnected() {
   }
 }
 
+void MapResolver::ReleaseFarSpecks() {
+  // Each thing object's pieces (touch_voxels apart), largest first.
+  std::vector<bool> done(cells_.size(), false);
+  std::map<uint32_t, std::vector<std::vector<size_t>>> pieces;
+  for (size_t i = 0; i < cells_.size(); ++i) {
+    if (done[i] || cells_[i].owner == 0 || !IsThingCell(cells_[i])) continue;
+    const uint32_t owner = cells_[i].owner;
+    pieces[owner].push_back(Component(
+        i, &done, [&](size_t n) { return cells_[n].owner == owner; }));
+  }
+  const float max_gap2 =
+      static_cast<float>(options_.max_speck_gap_m * options_.max_speck_gap_m);
+  Members members;  // filled on first use (StillFits)
+  size_t released = 0, dropped = 0;
+  for (auto& [owner, list] : pieces) {
+    if (list.size() < 2) continue;
+    size_t total = 0;
+    for (const auto& piece : list) total += piece.size();
+    std::stable_sort(
+        list.begin(), list.end(),
+        [](const auto& a, const auto& b) { return a.size() > b.size(); });
+    const auto speck = [&](const std::vector<size_t>& piece) {
+      return static_cast<double>(piece.size()) <
+             kSpeckShare * static_cast<double>(total);
+    };
+    std::vector<size_t> rest;  // the object's pieces that are no specks
+    for (size_t k = 0; k < list.size(); ++k) {
+      if (k == 0 || !speck(list[k])) {
+        rest.insert(rest.end(), list[k].begin(), list[k].end());
+      }
+    }
+    for (size_t k = 1; k < list.size(); ++k) {
+      const std::vector<size_t>& piece = list[k];
+      if (!speck(piece)) continue;
+      float gap2 = std::numeric_limits<float>::max();
+      for (size_t a = 0; a < piece.size() && gap2 > max_gap2; ++a) {
+        for (size_t b : rest) {
+          gap2 =
+              std::min(gap2, (cells_[piece[a]].p - cells_[b].p).squaredNorm());
+        }
+      }
+      if (gap2 <= max_gap2) continue;
+      // A chair's legs, cut off from its seat where the depth missed them,
+      // lie within a chair's footprint: a speck that fits stays.
+      const uint16_t cls = owner_class_[owner];
+      if (MaxFootprint(cls).x() > 0.0 && options_.size_slack > 0.0) {
+        std::vector<size_t> with = rest;
+        with.insert(with.end(), piece.begin(), piece.end());
+        if (FitsSize(FootprintWithSpecks(with), cls, options_.size_slack)) {
+          continue;
+        }
+      }
+      // What it touches: structure as it stands, or a thing that still fits
+      // its class with it.
+      std::map<uint32_t, float> contacts;
+      for (size_t i : piece) {
+        ForNeighbours(i, [&](size_t n) {
+          const Cell& c = cells_[n];
+          if (c.owner != 0 && c.owner != owner && c.class_id != kNoClass) {
+            contacts[c.owner] += 1.0f;
+          }
+        });
+      }
+      if (members.empty()) members = ThingMembers();
+      uint32_t to = 0;
+      float most = 0.0f;
+      for (const auto& [id, n] : contacts) {
+        const bool thing = !IsStuff(owner_class_[id]);
+        if (n > most &&
+            (!thing || StillFits(members[id], owner_class_[id], piece))) {
+          to = id, most = n;
+        }
+      }
+      spdlog::debug(
+          "object {}: a speck of {} voxels {:.2f} m from the rest "
+          "-> object {}",
+          owner, piece.size(), std::sqrt(gap2), to);
+      for (size_t i : piece) {
+        if (to == 0) {
+          cells_[i].owner = 0;
+        } else {
+          JoinThing(i, to);
+          if (!IsStuff(owner_class_[to])) members[to].push_back(i);
+        }
+      }
+      ++(to == 0 ? dropped : released);
+    }
+  }
+  result_.far_specks_moved += released + dropped;
+  spdlog::debug("far specks: {} joined what they touch, {} dropped", released,
+                dropped);
+}
+
 }  // namespace semrec::fuse::internal

@@ -221,6 +221,11 @@ class MapResolver {
   // stay with the largest; other large groups become objects, small ones
   // orphans (joined below).
   void SplitDisconnected();
+  // Specks far from the rest of their object (max_speck_gap_m), where the
+  // object with them is too large for its class (or its class has no known
+  // size), leave it: each joins the object it touches most (a thing only
+  // while it still fits), else it is dropped.
+  void ReleaseFarSpecks();
 
   // Share of `cells`' class evidence that goes to `class_id`.
   double VoteShare(const std::vector<size_t>& cells, uint16_t class_id) const;
@@ -252,6 +257,8 @@ class MapResolver {
   // The sides of `cells`' footprint (without specks), longer first: the
   // smallest box around it, turned about the vertical (m).
   Eigen::Vector2d FootprintSize(const std::vector<size_t>& cells) const;
+  // ... with every voxel, specks included.
+  Eigen::Vector2d FootprintWithSpecks(const std::vector<size_t>& cells) const;
   // Whether `a` and `b` together (without specks) are no longer and no wider
   // than one object of the class can be (false for classes of no known
   // size).
