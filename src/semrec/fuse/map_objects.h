@@ -51,8 +51,9 @@
 //     Those on a furniture front first join the thing that holds a fair part
 //     of the front and lies mostly on it (a view named part of the row of
 //     cabinets), across the fronts it touches.
-//  7. Specks (pieces under 5% of an object) far from the rest of their
-//     object leave it: they join what they touch, or are dropped.
+//  7. Specks (pieces under 5% of a thing) far from the rest of it leave it
+//     where they make it too large for its class (any class of no known
+//     size): they join what they touch, or are dropped.
 #pragma once
 
 #include <cstddef>
@@ -194,12 +195,13 @@ struct MapObjectOptions {
   /// are no sofa because a stray view said so). size_slack 0: never.
   double size_slack = 1.25;
   double min_size_class_share = 0.25;
-  /// A speck of an object (a piece with under 5% of its voxels, kept with it
+  /// A speck of a thing (a piece with under 5% of its voxels, kept with it
   /// because a mask held both or it was too small to stand alone) farther
-  /// than this from the object's other pieces, where the object with it is
-  /// larger than one of its class can be (size_slack; any size for classes
-  /// of no known size), leaves it: it joins the object it touches (a thing
-  /// only while it still fits its class), else it is dropped. One view's
+  /// than this from the thing's pieces that are no specks, where the thing
+  /// with it is larger than one of its class can be (size_slack) and it
+  /// makes it larger (any size for classes of no known size), leaves it: it
+  /// joins the object it touches (a thing only while it still fits its
+  /// class), else it is dropped. One view's
   /// mask over a chair and a bit of the table 1.5 m away stretched the
   /// chair's mesh to 2.4 x 2.3 m (3DMatch); a chair's legs cut off from its
   /// seat stay. 0: never.

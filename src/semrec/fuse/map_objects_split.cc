@@ -1,6 +1,7 @@
 // Cuts of the map's objects: by the views' masks and by connectivity (see
 // map_resolver.h).
 #include <algorithm>
+#include <cmath>
 #include <limits>
 #include <map>
 #include <set>
@@ -296,87 +297,155 @@ void MapResolver::ReleaseFarSpecks() {
     pieces[owner].push_back(Component(
         i, &done, [&](size_t n) { return cells_[n].owner == owner; }));
   }
-  const float max_gap2 =
-      static_cast<float>(options_.max_speck_gap_m * options_.max_speck_gap_m);
-  Members members;  // filled on first use (StillFits)
-  size_t released = 0, dropped = 0;
+  // First every far speck, judged on the objects as they stand (one leaving
+  // its object changes no other's), then where each goes.
+  struct Far {
+    uint32_t owner;
+    std::vector<size_t> cells;
+  };
+  std::vector<Far> far;
+  std::vector<bool> leaving(cells_.size(), false);
   for (auto& [owner, list] : pieces) {
     if (list.size() < 2) continue;
-    size_t total = 0;
-    for (const auto& piece : list) total += piece.size();
     std::stable_sort(
         list.begin(), list.end(),
         [](const auto& a, const auto& b) { return a.size() > b.size(); });
-    const auto speck = [&](const std::vector<size_t>& piece) {
-      return static_cast<double>(piece.size()) <
-             kSpeckShare * static_cast<double>(total);
-    };
-    std::vector<size_t> rest;  // the object's pieces that are no specks
-    for (size_t k = 0; k < list.size(); ++k) {
-      if (k == 0 || !speck(list[k])) {
-        rest.insert(rest.end(), list[k].begin(), list[k].end());
+    for (std::vector<size_t>& piece : FarSpecks(owner, list)) {
+      for (size_t i : piece) leaving[i] = true;
+      far.push_back({owner, std::move(piece)});
+    }
+  }
+  if (far.empty()) return;
+  // What each touches (the other leaving specks aside): structure as it
+  // stands, or a thing that still fits its class with it.
+  Members members = ThingMembers();
+  size_t released = 0, dropped = 0;
+  for (const Far& f : far) {
+    std::map<uint32_t, float> contacts;
+    for (size_t i : f.cells) {
+      ForNeighbours(i, [&](size_t n) {
+        const Cell& c = cells_[n];
+        if (c.owner != 0 && c.owner != f.owner && c.class_id != kNoClass &&
+            !leaving[n]) {
+          contacts[c.owner] += 1.0f;
+        }
+      });
+    }
+    uint32_t to = 0;
+    float most = 0.0f;
+    for (const auto& [id, n] : contacts) {
+      const bool thing = !IsStuff(owner_class_[id]);
+      if (n > most &&
+          (!thing || StillFits(members[id], owner_class_[id], f.cells))) {
+        to = id, most = n;
       }
     }
-    for (size_t k = 1; k < list.size(); ++k) {
-      const std::vector<size_t>& piece = list[k];
-      if (!speck(piece)) continue;
-      float gap2 = std::numeric_limits<float>::max();
-      for (size_t a = 0; a < piece.size() && gap2 > max_gap2; ++a) {
-        for (size_t b : rest) {
-          gap2 =
-              std::min(gap2, (cells_[piece[a]].p - cells_[b].p).squaredNorm());
-        }
-      }
-      if (gap2 <= max_gap2) continue;
-      // A chair's legs, cut off from its seat where the depth missed them,
-      // lie within a chair's footprint: a speck that fits stays.
-      const uint16_t cls = owner_class_[owner];
-      if (MaxFootprint(cls).x() > 0.0 && options_.size_slack > 0.0) {
-        std::vector<size_t> with = rest;
-        with.insert(with.end(), piece.begin(), piece.end());
-        if (FitsSize(FootprintWithSpecks(with), cls, options_.size_slack)) {
-          continue;
-        }
-      }
-      // What it touches: structure as it stands, or a thing that still fits
-      // its class with it.
-      std::map<uint32_t, float> contacts;
-      for (size_t i : piece) {
-        ForNeighbours(i, [&](size_t n) {
-          const Cell& c = cells_[n];
-          if (c.owner != 0 && c.owner != owner && c.class_id != kNoClass) {
-            contacts[c.owner] += 1.0f;
-          }
-        });
-      }
-      if (members.empty()) members = ThingMembers();
-      uint32_t to = 0;
-      float most = 0.0f;
-      for (const auto& [id, n] : contacts) {
-        const bool thing = !IsStuff(owner_class_[id]);
-        if (n > most &&
-            (!thing || StillFits(members[id], owner_class_[id], piece))) {
-          to = id, most = n;
-        }
-      }
+    if (spdlog::should_log(spdlog::level::debug)) {
       spdlog::debug(
-          "object {}: a speck of {} voxels {:.2f} m from the rest "
-          "-> object {}",
-          owner, piece.size(), std::sqrt(gap2), to);
-      for (size_t i : piece) {
-        if (to == 0) {
-          cells_[i].owner = 0;
-        } else {
-          JoinThing(i, to);
-          if (!IsStuff(owner_class_[to])) members[to].push_back(i);
-        }
-      }
-      ++(to == 0 ? dropped : released);
+          "object {}: a speck of {} voxels {:.2f} m from the rest -> object "
+          "{}",
+          f.owner, f.cells.size(), SpeckGap(f.cells, pieces[f.owner]), to);
     }
+    std::vector<size_t>& from = members[f.owner];
+    std::erase_if(from, [&](size_t i) { return leaving[i]; });
+    for (size_t i : f.cells) {
+      if (to == 0) {
+        cells_[i].owner = 0;
+      } else {
+        JoinThing(i, to);
+        if (!IsStuff(owner_class_[to])) members[to].push_back(i);
+      }
+    }
+    ++(to == 0 ? dropped : released);
   }
   result_.far_specks_moved += released + dropped;
   spdlog::debug("far specks: {} joined what they touch, {} dropped", released,
                 dropped);
+}
+
+std::vector<std::vector<size_t>> MapResolver::FarSpecks(
+    uint32_t owner, const std::vector<std::vector<size_t>>& pieces) const {
+  size_t total = 0;
+  for (const auto& piece : pieces) total += piece.size();
+  const auto speck = [&](size_t k) {
+    return k > 0 && static_cast<double>(pieces[k].size()) <
+                        kSpeckShare * static_cast<double>(total);
+  };
+  // A class of known size at size_slack 0 is never too large.
+  const uint16_t cls = owner_class_.at(owner);
+  const bool sized = MaxFootprint(cls).x() > 0.0;
+  if (sized && options_.size_slack <= 0.0) return {};
+  std::vector<size_t> rest;  // the pieces that are no specks
+  for (size_t k = 0; k < pieces.size(); ++k) {
+    if (!speck(k)) rest.insert(rest.end(), pieces[k].begin(), pieces[k].end());
+  }
+  // `rest` bucketed in cubes of the gap: a speck within it of the rest has
+  // a rest voxel in one of the 27 cubes around its own.
+  const auto gap_m = static_cast<float>(options_.max_speck_gap_m);
+  const auto cube = [&](const Eigen::Vector3f& p) {
+    return (p / gap_m).array().floor().cast<int>().eval();
+  };
+  std::unordered_map<uint64_t, std::vector<size_t>> cubes;
+  for (size_t i : rest) {
+    const Eigen::Vector3i c = cube(cells_[i].p);
+    cubes[PackVoxel(c.x(), c.y(), c.z())].push_back(i);
+  }
+  const auto near_rest = [&](const std::vector<size_t>& piece) {
+    for (size_t a : piece) {
+      const Eigen::Vector3i c = cube(cells_[a].p);
+      for (int dx = -1; dx <= 1; ++dx) {
+        for (int dy = -1; dy <= 1; ++dy) {
+          for (int dz = -1; dz <= 1; ++dz) {
+            const auto it =
+                cubes.find(PackVoxel(c.x() + dx, c.y() + dy, c.z() + dz));
+            if (it == cubes.end()) continue;
+            for (size_t b : it->second) {
+              if ((cells_[a].p - cells_[b].p).squaredNorm() <= gap_m * gap_m) {
+                return true;
+              }
+            }
+          }
+        }
+      }
+    }
+    return false;
+  };
+  const Eigen::Vector2d rest_m =
+      sized ? FootprintWithSpecks(rest) : Eigen::Vector2d::Zero();
+  std::vector<std::vector<size_t>> far;
+  for (size_t k = 1; k < pieces.size(); ++k) {
+    if (!speck(k) || near_rest(pieces[k])) continue;
+    if (sized) {
+      // A chair's legs, cut off from its seat where the depth missed them,
+      // lie within a chair's footprint: a speck stays unless the object is
+      // too large with it and it is what makes it larger (by more than a
+      // voxel: an object already too large keeps the specks within it).
+      std::vector<size_t> with = rest;
+      with.insert(with.end(), pieces[k].begin(), pieces[k].end());
+      const Eigen::Vector2d with_m = FootprintWithSpecks(with);
+      if (FitsSize(with_m, cls, options_.size_slack) ||
+          (with_m - rest_m).maxCoeff() <= map_.voxel_size_m()) {
+        continue;
+      }
+    }
+    far.push_back(pieces[k]);
+  }
+  return far;
+}
+
+float MapResolver::SpeckGap(
+    const std::vector<size_t>& speck,
+    const std::vector<std::vector<size_t>>& pieces) const {
+  float gap2 = std::numeric_limits<float>::max();
+  for (const auto& piece : pieces) {
+    if (piece.size() <= speck.size()) continue;
+    for (size_t a : speck) {
+      for (size_t b : piece) {
+        gap2 = std::min(gap2, (cells_[a].p - cells_[b].p).squaredNorm());
+      }
+    }
+  }
+  return std::sqrt(gap2);
 }
 
 }  // namespace semrec::fuse::internal

@@ -418,6 +418,14 @@ TEST(MapObjects, FarSpecksLeaveTheirObject) {
   EXPECT_GT(ShareIn(WhereItWent(fusion, off_table),
                     TopObject(WhereItWent(fusion, table))),
             0.5);
+  EXPECT_EQ(fusion.map_resolution()->far_specks_moved, 0u);
+  // With the size rules off (size_slack 0) no object of a class of known
+  // size is too large: the chair keeps its far speck.
+  FusionOptions no_sizes;
+  no_sizes.map_objects.size_slack = 0.0;
+  const SceneFusion chairs = Fuse(
+      ViewsOf(3, {Segment(kChair, 2, Join({chair, far, near}))}), no_sizes);
+  EXPECT_EQ(chairs.map_resolution()->far_specks_moved, 0u);
 }
 
 TEST(VoxelEvidence, EachViewKeepsTheMaskHoldingMostOfAVoxel) {

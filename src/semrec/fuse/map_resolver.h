@@ -221,11 +221,17 @@ class MapResolver {
   // stay with the largest; other large groups become objects, small ones
   // orphans (joined below).
   void SplitDisconnected();
-  // Specks far from the rest of their object (max_speck_gap_m), where the
-  // object with them is too large for its class (or its class has no known
-  // size), leave it: each joins the object it touches most (a thing only
-  // while it still fits), else it is dropped.
+  // Specks of things far from the rest of their object (max_speck_gap_m),
+  // where the object with them is too large for its class and they make it
+  // larger (or its class has no known size), leave it: each joins the object
+  // it touches most (a thing only while it still fits), else it is dropped.
   void ReleaseFarSpecks();
+  // The specks of `owner` (its `pieces`, largest first) that leave it.
+  std::vector<std::vector<size_t>> FarSpecks(
+      uint32_t owner, const std::vector<std::vector<size_t>>& pieces) const;
+  // Distance from `speck` to the nearest larger piece of `pieces` (logs).
+  float SpeckGap(const std::vector<size_t>& speck,
+                 const std::vector<std::vector<size_t>>& pieces) const;
 
   // Share of `cells`' class evidence that goes to `class_id`.
   double VoteShare(const std::vector<size_t>& cells, uint16_t class_id) const;
