@@ -204,7 +204,8 @@ std::vector<size_t> MapResolver::GroupPieces(
   return group;
 }
 
-void MapResolver::SplitDisconnected() {
+std::map<uint32_t, std::vector<std::vector<size_t>>> MapResolver::ThingPieces()
+    const {
   std::vector<bool> done(cells_.size(), false);
   std::map<uint32_t, std::vector<std::vector<size_t>>> pieces;
   for (size_t i = 0; i < cells_.size(); ++i) {
@@ -213,6 +214,11 @@ void MapResolver::SplitDisconnected() {
     pieces[owner].push_back(Component(
         i, &done, [&](size_t n) { return cells_[n].owner == owner; }));
   }
+  return pieces;
+}
+
+void MapResolver::SplitDisconnected() {
+  std::map<uint32_t, std::vector<std::vector<size_t>>> pieces = ThingPieces();
   for (auto& [owner, list] : pieces) {
     if (list.size() < 2) continue;
     std::stable_sort(
@@ -288,15 +294,7 @@ void MapResolver::SplitDisconnected() {
 }
 
 void MapResolver::ReleaseFarSpecks() {
-  // Each thing object's pieces (touch_voxels apart), largest first.
-  std::vector<bool> done(cells_.size(), false);
-  std::map<uint32_t, std::vector<std::vector<size_t>>> pieces;
-  for (size_t i = 0; i < cells_.size(); ++i) {
-    if (done[i] || cells_[i].owner == 0 || !IsThingCell(cells_[i])) continue;
-    const uint32_t owner = cells_[i].owner;
-    pieces[owner].push_back(Component(
-        i, &done, [&](size_t n) { return cells_[n].owner == owner; }));
-  }
+  std::map<uint32_t, std::vector<std::vector<size_t>>> pieces = ThingPieces();
   // First every far speck, judged on the objects as they stand (one leaving
   // its object changes no other's), then where each goes.
   struct Far {
