@@ -179,6 +179,46 @@ TEST(MapObjects, APartOneFlippedViewSawWholeJoinsTheObjectViewsHeldItWith) {
   }
 }
 
+// A board on a shelf's side that only one view saw, in the one mask it put
+// over the board and much of the shelf and called sofa (the other views, from
+// the other side, called the shelf shelf): a piece of another class, small
+// and lying along the shelf, that every view seeing both held in one mask is
+// part of it (a 40-voxel "sofa" on a box in an office sweep scene). Off
+// (max_attached_size_ratio 0) it stays a sofa of its own.
+TEST(MapObjects, ASmallPieceOfAnotherClassHeldWithAnObjectIsPartOfIt) {
+  const Cloud shelf = Box({2.0f, 2.0f, 0.05f}, {3.0f, 2.4f, 1.2f});
+  const Cloud board = Box({2.3f, 1.96f, 0.4f}, {2.6f, 1.96f, 0.7f});
+  const Cloud front = Box({2.0f, 2.0f, 0.05f}, {3.0f, 2.0f, 1.2f});
+  std::vector<View> views;
+  View one;
+  one.camera = {2.5f, 0.5f, 1.0f};
+  one.segments = {Segment(kFloor, 1, FloorPoints()),
+                  Segment(kSofa, 2, Join({board, front}))};
+  views.push_back(one);
+  for (int i = 0; i < 2; ++i) {
+    View v;
+    v.camera = {2.5f + 0.3f * static_cast<float>(i), 4.0f, 1.0f};
+    v.segments = {Segment(kFloor, 1, FloorPoints()), Segment(kShelf, 2, shelf)};
+    views.push_back(v);
+  }
+  for (const double ratio : {0.25, 0.0}) {
+    FusionOptions options;
+    options.map_objects.max_attached_size_ratio = ratio;
+    const SceneFusion fusion = Fuse(views, options);
+    const auto in_board = WhereItWent(fusion, board);
+    const uint32_t shelf_id = TopObject(WhereItWent(fusion, shelf));
+    ASSERT_NE(Largest(fusion, kShelf), nullptr);
+    EXPECT_EQ(shelf_id, Largest(fusion, kShelf)->id);
+    if (ratio > 0.0) {
+      EXPECT_EQ(Count(fusion, kSofa), 0u);
+      EXPECT_GT(ShareIn(in_board, shelf_id), 0.5);
+    } else {
+      EXPECT_EQ(Count(fusion, kSofa), 1u) << "off: a sofa of its own";
+      EXPECT_EQ(ShareIn(in_board, shelf_id), 0.0);
+    }
+  }
+}
+
 // A 2.4 m long low unit (a shelf: no known size) that views call chair (at
 // most 0.75 m): one chair is not that long, so the object takes the voted
 // class that fits, when that class has a fair share of its votes.

@@ -146,7 +146,10 @@ struct MapObjectOptions {
   /// voxels in direct contact (26-neighbours) with it, is part of it whatever
   /// the masks said (7-Scenes chess: a chair's 29-voxel piece, 26 of them
   /// touching the chair, held apart by 14 of 20 views; a mask generator cuts
-  /// the same part off in every view). max_attached_size_ratio 0: never.
+  /// the same part off in every view). So is such a piece of another class
+  /// that every view seeing both held in one mask with it (a board one view
+  /// called sofa with the box it lies on), while it is still a piece of its
+  /// own. max_attached_size_ratio 0: never.
   double min_attached_contact_share = 0.5;
   double max_attached_size_ratio = 0.25;
   /// Touching pieces of one class that the views held apart (a mask

@@ -113,8 +113,8 @@ std::vector<MapResolver::MergeLink> MapResolver::MergeLinks(
     const size_t contact_voxels = it == contact.end() ? 0 : it->second;
     const uint16_t class_a = owner_class_.at(a);
     const bool same = class_a == owner_class_.at(b);
-    const bool attached =
-        same && Attached(ca.size(), cb.size(), contact_voxels);
+    const bool attached = (same || (v.one >= 1 && v.two == 0)) &&
+                          Attached(ca.size(), cb.size(), contact_voxels);
     if (attached || OneObject(ca, cb, a, b, v, contact_voxels)) {
       links.push_back({a, b, v, contact_voxels, attached, false, false, same});
     } else if (same && PartsOfOne(ca, cb, class_a, contact_voxels)) {
@@ -191,6 +191,19 @@ void MapResolver::MergeByMasks() {
     const uint32_t x = find(link.a), y = find(link.b);
     if (x == y) continue;
     const bool same = owner_class_[x] == owner_class_[y];
+    // A piece attached to an object of another class joins it only as
+    // itself: once joined to others (a table's piece), its group is no piece.
+    if (link.attached && !link.same_class) {
+      const uint32_t small = members[x].size() <= members[y].size() ? x : y;
+      const uint32_t large = small == x ? y : x;
+      if (parts[small].size() != 1 ||
+          !Attached(members[small].size(), members[large].size(),
+                    link.contact)) {
+        spdlog::debug("objects {} and {}: not joined, no longer a piece",
+                      link.a, link.b);
+        continue;
+      }
+    }
     const bool fits = same && FitsOne(members[x], members[y], owner_class_[x]);
     // Parts of one object must still fit one object together, or still be
     // nested.
