@@ -183,8 +183,9 @@ TEST(MapObjects, APartOneFlippedViewSawWholeJoinsTheObjectViewsHeldItWith) {
 // over the board and much of the shelf and called sofa (the other views, from
 // the other side, called the shelf shelf): a piece of another class, small
 // and lying along the shelf, that every view seeing both held in one mask is
-// part of it (a 40-voxel "sofa" on a box in an office sweep scene). Off
-// (max_attached_size_ratio 0) it stays a sofa of its own.
+// part of it (a 40-voxel "sofa" on a box in an office sweep scene), and the
+// shelf stays a shelf. Off (max_attached_size_ratio 0) it stays a sofa of its
+// own.
 TEST(MapObjects, ASmallPieceOfAnotherClassHeldWithAnObjectIsPartOfIt) {
   const Cloud shelf = Box({2.0f, 2.0f, 0.05f}, {3.0f, 2.4f, 1.2f});
   const Cloud board = Box({2.3f, 1.96f, 0.4f}, {2.6f, 1.96f, 0.7f});
@@ -201,6 +202,19 @@ TEST(MapObjects, ASmallPieceOfAnotherClassHeldWithAnObjectIsPartOfIt) {
     v.segments = {Segment(kFloor, 1, FloorPoints()), Segment(kShelf, 2, shelf)};
     views.push_back(v);
   }
+  // Two more views saw the board alone (and called it sofa): the board's
+  // class is not the shelf's, whatever the views counted over both.
+  std::vector<View> more = views;
+  for (int i = 0; i < 2; ++i) {
+    View v;
+    v.camera = {2.45f + 0.1f * static_cast<float>(i), 1.0f, 0.6f};
+    v.segments = {Segment(kFloor, 1, FloorPoints()), Segment(kSofa, 2, board)};
+    more.push_back(v);
+  }
+  const SceneFusion with_more = Fuse(more);
+  EXPECT_EQ(Count(with_more, kSofa), 0u);
+  EXPECT_EQ(Largest(with_more, kShelf)->id,
+            TopObject(WhereItWent(with_more, board)));
   for (const double ratio : {0.25, 0.0}) {
     FusionOptions options;
     options.map_objects.max_attached_size_ratio = ratio;

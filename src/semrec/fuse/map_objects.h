@@ -149,7 +149,7 @@ struct MapObjectOptions {
   /// the same part off in every view). So is such a piece of another class
   /// that every view seeing both held in one mask with it (a board one view
   /// called sofa with the box it lies on), while it is still a piece of its
-  /// own. max_attached_size_ratio 0: never.
+  /// own; the object keeps its class. max_attached_size_ratio 0: never.
   double min_attached_contact_share = 0.5;
   double max_attached_size_ratio = 0.25;
   /// Touching pieces of one class that the views held apart (a mask

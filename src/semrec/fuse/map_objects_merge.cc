@@ -113,10 +113,14 @@ std::vector<MapResolver::MergeLink> MapResolver::MergeLinks(
     const size_t contact_voxels = it == contact.end() ? 0 : it->second;
     const uint16_t class_a = owner_class_.at(a);
     const bool same = class_a == owner_class_.at(b);
-    const bool attached = (same || (v.one >= 1 && v.two == 0)) &&
-                          Attached(ca.size(), cb.size(), contact_voxels);
+    const bool attached =
+        same && Attached(ca.size(), cb.size(), contact_voxels);
     if (attached || OneObject(ca, cb, a, b, v, contact_voxels)) {
       links.push_back({a, b, v, contact_voxels, attached, false, false, same});
+    } else if (!same && v.one >= 1 && v.two == 0 &&
+               Attached(ca.size(), cb.size(), contact_voxels)) {
+      links.push_back({a, b, v, contact_voxels, true, false, false, false,
+                       ca.size() <= cb.size() ? a : b});
     } else if (same && PartsOfOne(ca, cb, class_a, contact_voxels)) {
       links.push_back({a, b, v, contact_voxels, true, true, false});
     } else if (same && !context_.max_length_m.count(class_a) &&
@@ -193,16 +197,10 @@ void MapResolver::MergeByMasks() {
     const bool same = owner_class_[x] == owner_class_[y];
     // A piece attached to an object of another class joins it only as
     // itself: once joined to others (a table's piece), its group is no piece.
-    if (link.attached && !link.same_class) {
-      const uint32_t small = members[x].size() <= members[y].size() ? x : y;
-      const uint32_t large = small == x ? y : x;
-      if (parts[small].size() != 1 ||
-          !Attached(members[small].size(), members[large].size(),
-                    link.contact)) {
-        spdlog::debug("objects {} and {}: not joined, no longer a piece",
-                      link.a, link.b);
-        continue;
-      }
+    if (link.piece != 0 && parts[find(link.piece)].size() != 1) {
+      spdlog::debug("objects {} and {}: not joined, {} is no longer a piece",
+                    link.a, link.b, link.piece);
+      continue;
     }
     const bool fits = same && FitsOne(members[x], members[y], owner_class_[x]);
     // Parts of one object must still fit one object together, or still be
@@ -261,6 +259,7 @@ void MapResolver::MergeByMasks() {
         link.nested ? ", nested" : "");
     const bool x_keeps = members[x].size() >= members[y].size();
     const uint32_t keep = x_keeps ? x : y, gone = x_keeps ? y : x;
+    const uint32_t piece_group = link.piece != 0 ? find(link.piece) : 0;
     into[gone] = keep;
     holders_of_group.erase(keep);
     holders_of_group.erase(gone);
@@ -286,7 +285,9 @@ void MapResolver::MergeByMasks() {
                ? view_cg > view_ck
                : VoteShare(members[keep], cg) > VoteShare(members[keep], ck));
       uint16_t winner = gone_wins ? cg : ck;
-      const uint16_t other = gone_wins ? ck : cg;
+      // An attached piece of another class takes the object's class.
+      if (piece_group != 0) winner = piece_group == keep ? cg : ck;
+      const uint16_t other = winner == ck ? cg : ck;
       const double slack = options_.size_slack;
       if (slack > 0.0 && MaxFootprint(winner).x() > 0.0) {
         const Eigen::Vector2d size_m =

@@ -349,6 +349,10 @@ class MapResolver {
     bool nested = false;
     // The pair was of one class (the groups it joins may not be).
     bool same_class = true;
+    // A piece of another class attached to the object (Attached, every view
+    // that saw both held them in one mask): its id; it joins only as itself,
+    // and the object keeps its class.
+    uint32_t piece = 0;
   };
   // Touching pairs that are one (OneObject, Attached, PartsOfOne or Nested),
   // judged on the objects as they were, surest first: the most views holding
