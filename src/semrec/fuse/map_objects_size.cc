@@ -88,14 +88,20 @@ UprightBox BoxOf(const std::vector<Eigen::Vector3d>& points,
   return box;
 }
 
+// The sides of the smallest upright box around `points` (zero when none).
+Eigen::Vector2d BoxSides(const std::vector<Eigen::Vector3d>& points,
+                         const Eigen::Vector3d& up_world, double voxel_size_m) {
+  if (points.empty()) return Eigen::Vector2d::Zero();
+  const UprightBox box = BoxOf(points, up_world, voxel_size_m);
+  return (box.hi - box.lo).head<2>();
+}
+
 }  // namespace
 
 Eigen::Vector2d MapResolver::FootprintSize(
     const std::vector<size_t>& cells) const {
-  const std::vector<Eigen::Vector3d> points = SpecklessPoints(cells);
-  if (points.empty()) return Eigen::Vector2d::Zero();
-  const UprightBox box = BoxOf(points, context_.up_world, map_.voxel_size_m());
-  return (box.hi - box.lo).head<2>();
+  return BoxSides(SpecklessPoints(cells), context_.up_world,
+                  map_.voxel_size_m());
 }
 
 Eigen::Vector2d MapResolver::FootprintWithSpecks(
@@ -103,9 +109,7 @@ Eigen::Vector2d MapResolver::FootprintWithSpecks(
   std::vector<Eigen::Vector3d> points;
   points.reserve(cells.size());
   for (size_t i : cells) points.push_back(cells_[i].p.cast<double>());
-  if (points.empty()) return Eigen::Vector2d::Zero();
-  const UprightBox box = BoxOf(points, context_.up_world, map_.voxel_size_m());
-  return (box.hi - box.lo).head<2>();
+  return BoxSides(points, context_.up_world, map_.voxel_size_m());
 }
 
 Eigen::Vector2d MapResolver::CoreFootprintSize(const std::vector<size_t>& cells,

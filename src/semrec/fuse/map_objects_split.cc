@@ -214,6 +214,11 @@ std::map<uint32_t, std::vector<std::vector<size_t>>> MapResolver::ThingPieces()
     pieces[owner].push_back(Component(
         i, &done, [&](size_t n) { return cells_[n].owner == owner; }));
   }
+  for (auto& [owner, list] : pieces) {
+    std::stable_sort(
+        list.begin(), list.end(),
+        [](const auto& a, const auto& b) { return a.size() > b.size(); });
+  }
   return pieces;
 }
 
@@ -221,9 +226,6 @@ void MapResolver::SplitDisconnected() {
   std::map<uint32_t, std::vector<std::vector<size_t>>> pieces = ThingPieces();
   for (auto& [owner, list] : pieces) {
     if (list.size() < 2) continue;
-    std::stable_sort(
-        list.begin(), list.end(),
-        [](const auto& a, const auto& b) { return a.size() > b.size(); });
     std::vector<std::map<size_t, std::set<uint64_t>>> holders;
     for (const auto& piece : list) holders.push_back(Holders(piece));
     // Pieces a view held in one mask stay one (a table whose middle a chair
@@ -305,9 +307,6 @@ void MapResolver::ReleaseFarSpecks() {
   std::vector<bool> leaving(cells_.size(), false);
   for (auto& [owner, list] : pieces) {
     if (list.size() < 2) continue;
-    std::stable_sort(
-        list.begin(), list.end(),
-        [](const auto& a, const auto& b) { return a.size() > b.size(); });
     for (std::vector<size_t>& piece : FarSpecks(owner, list)) {
       for (size_t i : piece) leaving[i] = true;
       far.push_back({owner, std::move(piece)});

@@ -221,7 +221,8 @@ class MapResolver {
   // stay with the largest; other large groups become objects, small ones
   // orphans (joined below).
   void SplitDisconnected();
-  // Each thing object's pieces: its cells' components (touch_voxels apart).
+  // Each thing object's pieces: its cells' components (touch_voxels apart),
+  // largest first.
   std::map<uint32_t, std::vector<std::vector<size_t>>> ThingPieces() const;
   // Specks of things far from the rest of their object (max_speck_gap_m),
   // where the object with them is too large for its class and they make it
