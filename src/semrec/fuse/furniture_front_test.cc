@@ -272,6 +272,47 @@ TEST(MapObjects, AFrontNoViewNamesTakesTheClassOfTheNamedFronts) {
   EXPECT_LT(wall != nullptr ? ShareIn(went, wall->id) : 0.0, 0.05);
 }
 
+// A straight counter every view calls wall but one, which calls a stretch of
+// its front chair (kitchen 5: plant, the others wall). A chair cannot take a
+// 2.8 m front; lying on the front, the misnamed piece is the furniture: it
+// takes the front class and the front with it. Off (objects_from_fronts
+// false), a chair on a wall.
+TEST(MapObjects, AThingLyingOnAFrontTooLargeForItTakesAFrontClass) {
+  const Cloud front = Box({0.6f, 0.6f, 0.0f}, {0.6f, 3.4f, 0.9f});
+  const Cloud top = Box({0.05f, 0.6f, 0.92f}, {0.58f, 3.4f, 0.92f});
+  const Cloud piece = Box({0.6f, 0.6f, 0.0f}, {0.6f, 1.4f, 0.9f});
+  std::vector<View> views;
+  for (int i = 0; i < 4; ++i) {
+    View v;
+    v.segments.push_back(Segment(kFloor, 1, FloorPoints()));
+    v.segments.push_back(Segment(kWall, 2, Join({front, top})));
+    if (i == 0) v.segments.push_back(Segment(kChair, 3, piece));
+    v.camera = {2.5f, 2.0f, 1.5f};
+    views.push_back(std::move(v));
+  }
+  MapContext context = Context();
+  context.front_classes = {kShelf};
+  for (const bool on : {true, false}) {
+    FusionOptions options;
+    options.map_objects.objects_from_fronts = on;
+    const SceneFusion fusion = Fuse(views, options, context);
+    const auto went = WhereItWent(fusion, front);
+    if (on) {
+      EXPECT_EQ(Count(fusion, kChair), 0u);
+      const SceneSegment* counter = Largest(fusion, kShelf);
+      ASSERT_NE(counter, nullptr);
+      EXPECT_GT(ShareIn(went, counter->id), 0.9);
+      EXPECT_EQ(Count(fusion, kShelf), 1u);
+    } else {
+      EXPECT_EQ(Count(fusion, kChair), 1u);
+      EXPECT_EQ(Count(fusion, kShelf), 0u);
+      const SceneSegment* wall = Largest(fusion, kWall);
+      ASSERT_NE(wall, nullptr);
+      EXPECT_GT(ShareIn(went, wall->id), 0.5);
+    }
+  }
+}
+
 // A front's top: behind it (not in front), near its top edge (not a shelf
 // above), within reach of a worktop's depth, along the stretch it covers.
 TEST(StructurePlanes, OnTopOfAFrontIsItsWorktop) {

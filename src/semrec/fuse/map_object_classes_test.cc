@@ -310,6 +310,38 @@ FusionOptions StreamingMergesOff() {
   return options;
 }
 
+// A chair standing at a 3.5 m unit views call table: two views saw each
+// alone, two held both in one mask (one calling it chair, one table). Joined
+// they would be a 3.5 m chair or table, and neither fits one object (kitchen
+// 5: a chair and the counter it stands at, a 2.2 m "chair"): they stay two.
+// With the size rules off they join.
+TEST(MapObjects, ConfusedPartsNeitherClassFitsStayApart) {
+  const Cloud unit = Box({1.0f, 0.4f, 0.05f}, {1.5f, 3.9f, 0.8f});
+  const Cloud chair = Box({1.55f, 1.5f, 0.05f}, {2.0f, 1.95f, 0.9f});
+  std::vector<View> views(4, RoomView());
+  views[0].segments.push_back(Segment(kChair, 3, chair));
+  views[1].segments.push_back(Segment(kTable, 3, unit));
+  views[2].segments.push_back(Segment(kChair, 3, Join({chair, unit})));
+  views[3].segments.push_back(Segment(kTable, 3, Join({chair, unit})));
+  for (const double slack : {1.25, 0.0}) {
+    FusionOptions options;
+    options.map_objects.size_slack = slack;
+    const SceneFusion fusion = Fuse(views, options);
+    const uint32_t chair_id = TopObject(WhereItWent(fusion, chair));
+    const uint32_t unit_id = TopObject(WhereItWent(fusion, unit));
+    if (slack > 0.0) {
+      ASSERT_NE(Largest(fusion, kChair), nullptr);
+      EXPECT_EQ(chair_id, Largest(fusion, kChair)->id);
+      EXPECT_GT(ShareIn(WhereItWent(fusion, chair), chair_id), 0.9);
+      EXPECT_LT(ShareIn(WhereItWent(fusion, unit), chair_id), 0.05);
+      ASSERT_NE(Largest(fusion, kTable), nullptr);
+      EXPECT_EQ(unit_id, Largest(fusion, kTable)->id);
+    } else {
+      EXPECT_EQ(chair_id, unit_id) << "off: one object";
+    }
+  }
+}
+
 // A chair beside a shelf, in two halves no view but two showed together: two
 // views call shelf and chair shelf in one mask; three show the shelf and the
 // chair's far half apart, one the shelf and the near half; two see the near

@@ -117,7 +117,10 @@ struct MapObjectOptions {
   /// (LabelClass::furniture_front) that things took the scene's other fronts
   /// with, else the one with the most votes on it, else the lowest id. A row
   /// of base cabinets every view called wall is furniture, not wall. Off, or
-  /// with no front class, it stays wall.
+  /// with no front class, it stays wall. Likewise a thing lying on a front
+  /// (three quarters of its voxels) whose class is too small to take the
+  /// front (StillFits) takes the most voted front class: a counter's front
+  /// one view called plant is a counter, not a 2.6 m plant.
   bool objects_from_fronts = true;
   /// Wall voxels a thing's voxels at the wall close in on the wall's plane
   /// join the thing (fuse/map_resolver.h: ClaimEnclosed).

@@ -30,16 +30,10 @@ MapResolver::Members MapResolver::ThingMembers() const {
   return members;
 }
 
-void MapResolver::ClaimFronts() {
-  if (fronts_.empty()) return;
-  std::map<uint32_t, size_t> size = ThingSizes();
-  // Each thing's cells with the fronts it takes (StillFits).
-  Members members = ThingMembers();
-  // The cells on each front, and per thing its voxels on any front (an
-  // L-shaped counter is one cabinet over two fronts).
-  std::vector<std::vector<size_t>> on(fronts_.size());
-  std::vector<bool> on_any(cells_.size(), false);
-  std::map<uint32_t, size_t> on_fronts;
+MapResolver::FrontCells MapResolver::CellsOnFronts() const {
+  FrontCells fc;
+  fc.on.resize(fronts_.size());
+  fc.on_any.assign(cells_.size(), false);
   for (size_t i = 0; i < cells_.size(); ++i) {
     const Eigen::Vector3d q = cells_[i].p.cast<double>();
     for (size_t f = 0; f < fronts_.size(); ++f) {
@@ -49,13 +43,25 @@ void MapResolver::ClaimFronts() {
           !front.Covers(q)) {
         continue;
       }
-      on[f].push_back(i);
-      if (!on_any[i] && cells_[i].owner != 0 && IsThingCell(cells_[i])) {
-        ++on_fronts[cells_[i].owner];
+      fc.on[f].push_back(i);
+      if (!fc.on_any[i] && cells_[i].owner != 0 && IsThingCell(cells_[i])) {
+        ++fc.on_fronts[cells_[i].owner];
       }
-      on_any[i] = true;
+      fc.on_any[i] = true;
     }
   }
+  return fc;
+}
+
+void MapResolver::ClaimFronts() {
+  if (fronts_.empty()) return;
+  std::map<uint32_t, size_t> size = ThingSizes();
+  // Each thing's cells with the fronts it takes (StillFits).
+  Members members = ThingMembers();
+  const FrontCells fc = CellsOnFronts();
+  const std::vector<std::vector<size_t>>& on = fc.on;
+  const std::vector<bool>& on_any = fc.on_any;
+  std::map<uint32_t, size_t> on_fronts = fc.on_fronts;
   // Whether a thing may spread over a front's stranded voxels (its class's
   // size, StillFits), decided once per thing and front, the first front a
   // voxel lies on.
@@ -104,7 +110,21 @@ void MapResolver::ClaimFronts() {
         2 * on_fronts[best] >= size[best];
     // A thing of a known size takes a front only while it still fits one
     // object of its class (a table does not take a 3 m front).
-    const bool takes = holds_it && fits_front(best, f);
+    bool takes = holds_it && fits_front(best, f);
+    // A thing lying on the front (three quarters of it) that its class is
+    // too small to take is that furniture misnamed (kitchen 5: a counter's
+    // front one view called plant, the others wall): it takes a front class
+    // that can.
+    if (holds_it && !takes && options_.objects_from_fronts &&
+        !context_.front_classes.empty() &&
+        4 * on_fronts[best] >= 3 * size[best]) {
+      if (TakeFrontClass(best, members[best], on[f])) {
+        std::erase_if(may_take, [&](const auto& e) {
+          return e.first.first == best && !e.second;
+        });
+        takes = fits_front(best, f);
+      }
+    }
     spdlog::debug(
         "furniture front (class {}, {} voxels on it): object {} holds {} of "
         "them ({} on fronts, {} in all){}",
@@ -188,6 +208,42 @@ void MapResolver::ClaimFronts() {
   result_.stranded_voxels_claimed += claimed;
 }
 
+bool MapResolver::TakeFrontClass(uint32_t id, const std::vector<size_t>& cells,
+                                 const std::vector<size_t>& on_front) {
+  const uint16_t was = owner_class_[id];
+  const uint16_t cls = FrontClassOf(cells);
+  std::vector<size_t> rest;
+  for (size_t k : on_front) {
+    if (IsStranded(cells_[k])) rest.push_back(k);
+  }
+  if (cls == was || !StillFits(cells, cls, rest)) return false;
+  spdlog::debug("object {} of class {} lies on a furniture front: class {}", id,
+                was, cls);
+  owner_class_[id] = cls;
+  for (size_t i : cells) {
+    // (Not the stranded rest of a front it took: still to be reached.)
+    if (cells_[i].owner == id && IsThingCell(cells_[i])) {
+      cells_[i].class_id = cls;
+    }
+  }
+  ++result_.reclassed_by_size;
+  return true;
+}
+
+uint16_t MapResolver::FrontClassOf(const std::vector<size_t>& cells) const {
+  // The front class with the most votes on them, else the label set's first.
+  const std::map<uint16_t, double> shares = ThingShares(cells);
+  uint16_t best = context_.front_classes.front();
+  double best_share = 0.0;
+  for (uint16_t c : context_.front_classes) {
+    const auto it = shares.find(c);
+    if (it != shares.end() && it->second > best_share) {
+      best = c, best_share = it->second;
+    }
+  }
+  return best;
+}
+
 uint32_t MapResolver::NewObjectFromFront(
     const std::vector<size_t>& on, const std::map<uint16_t, float>& named) {
   const auto stranded = static_cast<size_t>(std::count_if(
@@ -243,6 +299,38 @@ bool MapResolver::StillFits(const std::vector<size_t>& cells, uint16_t class_id,
   return FitsSize(after, class_id, slack);
 }
 
+std::map<uint32_t, std::vector<size_t>> MapResolver::SpreadStranded(
+    const std::vector<size_t>& touching,
+    const std::map<size_t, std::map<uint32_t, float>>& contacts_of,
+    const std::set<uint32_t>& refused) const {
+  // Each voxel joins the thing nearest to it (breadth first from the
+  // contacts), so a chair's top and the table beside it each take their own
+  // part.
+  std::vector<size_t> frontier;
+  std::map<size_t, uint32_t> owner;
+  for (size_t k : touching) {
+    if (const uint32_t id =
+            MostVoted(contacts_of.at(k),
+                      [&](uint32_t id) { return refused.count(id) == 0; });
+        id != 0) {
+      owner[k] = id;
+      frontier.push_back(k);
+    }
+  }
+  for (size_t f = 0; f < frontier.size(); ++f) {
+    const uint32_t id = owner[frontier[f]];
+    ForNeighbours(frontier[f], [&](size_t n) {
+      if (IsStranded(cells_[n]) && !owner.count(n)) {
+        owner[n] = id;
+        frontier.push_back(n);
+      }
+    });
+  }
+  std::map<uint32_t, std::vector<size_t>> shares;
+  for (const auto& [k, id] : owner) shares[id].push_back(k);
+  return shares;
+}
+
 void MapResolver::ClaimStranded() {
   std::map<uint32_t, size_t> size = ThingSizes();
   // Each thing's cells, kept current as it takes stranded voxels (StillFits).
@@ -256,8 +344,8 @@ void MapResolver::ClaimStranded() {
     // Where the group touches things, and which: each voxel joins the thing
     // nearest to it (breadth first from the contacts), so a chair's top and
     // the table beside it each take their own part.
-    std::vector<size_t> frontier;
-    std::map<size_t, uint32_t> owner;
+    std::vector<size_t> touching;
+    std::map<size_t, std::map<uint32_t, float>> contacts_of;
     size_t largest = 0;
     for (size_t k : group) {
       std::map<uint32_t, float> contacts;
@@ -269,47 +357,44 @@ void MapResolver::ClaimStranded() {
       for (const auto& [id, n] : contacts) {
         largest = std::max(largest, size[id]);
       }
-      if (const uint32_t id =
-              MostVoted(contacts, [](uint32_t) { return true; });
-          id != 0) {
-        owner[k] = id;
-        frontier.push_back(k);
+      if (!contacts.empty()) {
+        touching.push_back(k);
+        contacts_of[k] = std::move(contacts);
       }
     }
     spdlog::debug("stranded structure voxels: {} ({} touching things)",
-                  group.size(), frontier.size());
+                  group.size(), touching.size());
     // Larger than every thing it touches, or touching them only along a
     // small part of it: more likely structure no plane was fitted to (a floor
     // seen twice after drift) than a part of a thing.
-    if (frontier.empty() || group.size() > largest ||
-        static_cast<double>(frontier.size()) <
+    if (touching.empty() || group.size() > largest ||
+        static_cast<double>(touching.size()) <
             options_.min_stranded_contact_share *
                 static_cast<double>(group.size())) {
       continue;
     }
-    for (size_t f = 0; f < frontier.size(); ++f) {
-      const uint32_t id = owner[frontier[f]];
-      ForNeighbours(frontier[f], [&](size_t n) {
-        if (stranded(n) && !owner.count(n)) {
-          owner[n] = id;
-          frontier.push_back(n);
-        }
-      });
-    }
     // A thing of a known size takes its share only while it still fits one
     // object of its class: a counter every view called wall, stranded beside
-    // a plant, is no part of the plant (kitchen 2: a 2.5 m "plant").
+    // a plant, is no part of the plant (kitchen 2: a 2.5 m "plant"). Its
+    // share goes to the other things the group touches.
+    std::set<uint32_t> refused;
     std::map<uint32_t, std::vector<size_t>> shares;
-    for (const auto& [k, id] : owner) shares[id].push_back(k);
-    for (const auto& [id, share] : shares) {
-      std::vector<size_t>& cells = members[id];
-      if (!StillFits(cells, owner_class_[id], share)) {
-        spdlog::debug(
-            "  {} of them left out: object {} would outgrow its class",
-            share.size(), id);
-        continue;
+    for (bool again = true; again;) {
+      again = false;
+      shares = SpreadStranded(touching, contacts_of, refused);
+      for (const auto& [id, share] : shares) {
+        if (!StillFits(members[id], owner_class_[id], share)) {
+          spdlog::debug(
+              "  {} of them left out: object {} would outgrow its class",
+              share.size(), id);
+          refused.insert(id);
+          again = true;
+        }
       }
+    }
+    for (const auto& [id, share] : shares) {
       for (size_t k : share) JoinThing(k, id);
+      std::vector<size_t>& cells = members[id];
       cells.insert(cells.end(), share.begin(), share.end());
       claimed += share.size();
     }

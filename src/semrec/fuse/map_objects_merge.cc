@@ -167,6 +167,48 @@ bool MapResolver::HeldApart(const std::vector<uint32_t>& x_parts,
   return false;
 }
 
+uint16_t MapResolver::ConfusedWinner(const std::vector<size_t>& both,
+                                     uint16_t ck, uint16_t cg,
+                                     size_t gone_voxels, uint16_t attached_to,
+                                     bool* fits) const {
+  *fits = true;
+  uint16_t winner = attached_to;
+  if (winner == 0) {
+    // Counted by views; by voxel evidence where the views tie (not the
+    // larger part's class: sparse views tie voxel by voxel). A piece too
+    // small to stand alone (a voxel or two a mask took into another class)
+    // does not give its class to the object it joins by votes (only by the
+    // size rule below).
+    const std::map<uint16_t, double> views = ViewVotes(both);
+    const double view_cg = ShareOf(views, cg), view_ck = ShareOf(views, ck);
+    const bool gone_wins =
+        gone_voxels >= options_.min_piece_voxels &&
+        (view_cg != view_ck ? view_cg > view_ck
+                            : VoteShare(both, cg) > VoteShare(both, ck));
+    winner = gone_wins ? cg : ck;
+  }
+  const uint16_t other = winner == ck ? cg : ck;
+  const double slack = options_.size_slack;
+  if (slack <= 0.0 || MaxFootprint(winner).x() <= 0.0) return winner;
+  const Eigen::Vector2d size_m = CoreFootprintSize(both, kSizeTrimShare);
+  if (FitsSize(size_m, winner, slack)) return winner;
+  // A class too small for the whole gives way to one that fits it (a counter
+  // one view called plant) ...
+  if (ThingShares(both)[other] >= options_.min_size_class_share &&
+      FitsSize(size_m, other, slack)) {
+    spdlog::debug(
+        "  {:.2f} x {:.2f} m together: class {} does not fit, class "
+        "{} does",
+        size_m.x(), size_m.y(), winner, other);
+    return other;
+  }
+  // ... and when neither fits, they are two objects (kitchen 5: a chair and
+  // the counter it stands at, which views held in one mask: a 2.2 m chair).
+  // An attached piece joins as before (it barely changes the size).
+  *fits = attached_to != 0;
+  return winner;
+}
+
 void MapResolver::MergeByMasks() {
   Members members = ThingMembers();
   MaskHolders holders;
@@ -250,6 +292,28 @@ void MapResolver::MergeByMasks() {
         continue;
       }
     }
+    const bool x_keeps = members[x].size() >= members[y].size();
+    const uint32_t keep = x_keeps ? x : y, gone = x_keeps ? y : x;
+    const uint32_t piece_group = link.piece != 0 ? find(link.piece) : 0;
+    const uint16_t ck = owner_class_[keep], cg = owner_class_[gone];
+    uint16_t winner = ck;
+    if (ck != cg) {
+      std::vector<size_t> both = members[keep];
+      both.insert(both.end(), members[gone].begin(), members[gone].end());
+      // An attached piece of another class takes the object's class.
+      const uint16_t attached_to =
+          piece_group == 0 ? 0 : (piece_group == keep ? cg : ck);
+      bool fits = true;
+      winner = ConfusedWinner(both, ck, cg, members[gone].size(), attached_to,
+                              &fits);
+      if (!fits) {
+        spdlog::debug(
+            "objects {} and {}: not joined, neither class {} nor {} fits "
+            "their groups ({} and {} voxels) together",
+            link.a, link.b, ck, cg, members[x].size(), members[y].size());
+        continue;
+      }
+    }
     spdlog::debug(
         "objects {} and {} joined (groups {} and {}: {} and {} voxels; "
         "{} views one, {} two, {} in contact{}{}{})",
@@ -257,9 +321,6 @@ void MapResolver::MergeByMasks() {
         link.views.one, link.views.two, link.contact,
         link.attached ? ", attached" : "", link.parts ? ", parts" : "",
         link.nested ? ", nested" : "");
-    const bool x_keeps = members[x].size() >= members[y].size();
-    const uint32_t keep = x_keeps ? x : y, gone = x_keeps ? y : x;
-    const uint32_t piece_group = link.piece != 0 ? find(link.piece) : 0;
     into[gone] = keep;
     holders_of_group.erase(keep);
     holders_of_group.erase(gone);
@@ -267,42 +328,7 @@ void MapResolver::MergeByMasks() {
                          members[gone].end());
     parts[keep].insert(parts[keep].end(), parts[gone].begin(),
                        parts[gone].end());
-    // Confused classes: the one with more votes over both takes the whole
-    // (not the larger part's: sparse views tie voxel by voxel).
-    // A class too small for the whole gives way to one that fits it (a
-    // counter one view called plant).
-    const uint16_t ck = owner_class_[keep], cg = owner_class_[gone];
     if (ck != cg) {
-      // Counted by views; by voxel evidence where the views tie.
-      const std::map<uint16_t, double> views = ViewVotes(members[keep]);
-      const double view_cg = ShareOf(views, cg), view_ck = ShareOf(views, ck);
-      // A piece too small to stand alone (a voxel or two a mask took into
-      // another class) does not give its class to the object it joins by
-      // votes (only by the size rule below).
-      const bool gone_wins =
-          members[gone].size() >= options_.min_piece_voxels &&
-          (view_cg != view_ck
-               ? view_cg > view_ck
-               : VoteShare(members[keep], cg) > VoteShare(members[keep], ck));
-      uint16_t winner = gone_wins ? cg : ck;
-      // An attached piece of another class takes the object's class.
-      if (piece_group != 0) winner = piece_group == keep ? cg : ck;
-      const uint16_t other = winner == ck ? cg : ck;
-      const double slack = options_.size_slack;
-      if (slack > 0.0 && MaxFootprint(winner).x() > 0.0) {
-        const Eigen::Vector2d size_m =
-            CoreFootprintSize(members[keep], kSizeTrimShare);
-        if (!FitsSize(size_m, winner, slack) &&
-            ThingShares(members[keep])[other] >=
-                options_.min_size_class_share &&
-            FitsSize(size_m, other, slack)) {
-          spdlog::debug(
-              "objects {} and {} ({:.2f} x {:.2f} m together): class {} does "
-              "not fit, class {} does",
-              keep, gone, size_m.x(), size_m.y(), winner, other);
-          winner = other;
-        }
-      }
       owner_class_[keep] = winner;
       std::set<uint16_t>& joined = part_classes_[keep];
       joined.insert({ck, cg});

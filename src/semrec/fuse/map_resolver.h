@@ -377,6 +377,14 @@ class MapResolver {
   // side by side are also touching, and one mask may hold a row of them);
   // the larger keeps its id.
   void MergeByMasks();
+  // The class two groups of confused classes take together (`both`: their
+  // cells; ck the larger's class, cg the other's of `gone_voxels`;
+  // `attached_to`: the class an attached piece takes, else 0): the one more
+  // views gave over both, or the other when only it fits their size; `fits`
+  // false when neither does.
+  uint16_t ConfusedWinner(const std::vector<size_t>& both, uint16_t ck,
+                          uint16_t cg, size_t gone_voxels, uint16_t attached_to,
+                          bool* fits) const;
 
   // Thing voxels no object of their class claimed: each connected group joins
   // the object of its class it touches most, or becomes a new object.
@@ -395,6 +403,13 @@ class MapResolver {
   // thing it touches (then it is more likely structure no plane was fitted
   // to, e.g. a wall seen twice after drift).
   void ClaimStranded();
+  // Each stranded voxel reachable from `touching` (voxels of one stranded
+  // group touching things, with their contacts) joins the nearest thing not
+  // `refused`: the voxels each thing takes.
+  std::map<uint32_t, std::vector<size_t>> SpreadStranded(
+      const std::vector<size_t>& touching,
+      const std::map<size_t, std::map<uint32_t, float>>& contacts_of,
+      const std::set<uint32_t>& refused) const;
 
   // A furniture front (a row of cabinets under a counter) is one surface:
   // where views named part of it (a cabinet) and called the rest wall, the
@@ -403,6 +418,22 @@ class MapResolver {
   // touching the cabinets does not take them; an L-shaped counter's cabinet
   // lies on two).
   void ClaimFronts();
+  // The cells on each front, which lie on any, and per thing its voxels on
+  // any front (an L-shaped counter is one cabinet over two fronts).
+  struct FrontCells {
+    std::vector<std::vector<size_t>> on;
+    std::vector<bool> on_any;
+    std::map<uint32_t, size_t> on_fronts;
+  };
+  FrontCells CellsOnFronts() const;
+  // The front class (MapContext::front_classes, not empty) with the most
+  // votes over `cells`, else the first.
+  uint16_t FrontClassOf(const std::vector<size_t>& cells) const;
+  // Thing `id` (its `cells`) takes its front class (FrontClassOf) when that
+  // class differs and fits it with the stranded voxels of `on_front`: true
+  // when it did.
+  bool TakeFrontClass(uint32_t id, const std::vector<size_t>& cells,
+                      const std::vector<size_t>& on_front);
 
   // Wall voxels on a vertical plane that a thing's voxels at the wall close
   // in, in the plane (four-connected, within the box of those voxels), join

@@ -32,6 +32,8 @@ void StructurePlaneOptions::Check() const {
                 "structure planes: min_top_surface_share must be >= 0");
   CheckArgument(max_front_distance_m >= 0.0,
                 "structure planes: max_front_distance_m must be >= 0");
+  CheckArgument(max_furniture_depth_m >= 0.0,
+                "structure planes: max_furniture_depth_m must be >= 0");
   CheckArgument(max_surface_tilt_deg >= 0.0,
                 "structure planes: max_surface_tilt_deg must be >= 0");
   CheckArgument(min_normal_agreement > 1.0 / 3.0 && min_normal_agreement <= 1.0,
@@ -222,7 +224,7 @@ bool OnStructure(const Eigen::Vector3f& p,
       }
       const double d = wall.normal.dot(q) - wall.offset;
       return d > 1.5 * options.tolerance_m &&
-             d <= options.max_front_distance_m && wall.Covers(q);
+             d <= options.max_furniture_depth_m && wall.Covers(q);
     });
   };
   return std::any_of(planes.begin(), planes.end(), [&](const auto& plane) {

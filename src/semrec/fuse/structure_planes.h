@@ -45,10 +45,17 @@ struct StructurePlaneOptions {
   double min_wall_height_m = 0.7;
   /// Vertical planes: normals within this angle of horizontal.
   double max_wall_tilt_deg = 10.0;
-  /// A point more than 1.5 x tolerance_m and at most this far in front of a
-  /// larger wall is furniture, not wall (OnStructure); as far behind one it
-  /// is inside or on top of it (BehindWall). 0 turns both off.
+  /// A point more than a wall's tolerance and at most this far behind it is
+  /// inside or on top of it (BehindWall; 0: off); a furniture front's top
+  /// reaches this + 0.2 m behind the front (TakeFurnitureFronts,
+  /// OnTopOfFront). Further, on Bonn crowd's walls (depth layers 47 cm deep)
+  /// a wall's band passed for a front with a top.
   double max_front_distance_m = 0.6;
+  /// A point on a vertical plane more than 1.5 x tolerance_m and at most
+  /// this far in front of a larger parallel wall is furniture, not wall
+  /// (OnStructure), the front of a worktop (62-65 cm deep, kitchen 4's
+  /// counter front 0.65 m before the wall) included. 0 turns it off.
+  double max_furniture_depth_m = 0.75;
   /// A vertical plane with a horizontal surface behind it at its top (within
   /// max_front_distance_m + 0.2 m behind it, 30 cm deep or more) along at
   /// least this share of its length is the front of furniture, not a wall:

@@ -136,6 +136,34 @@ TEST(MapObjects, StrandedStructureDoesNotMakeAThingTooLargeForItsClass) {
   EXPECT_GT(ShareIn(legs_went, TopObject(WhereItWent(fusion, seat))), 0.8);
 }
 
+// A low unit every view calls wall, off the wall's plane, between a table
+// along its side and a shelf at its end: nearest to the table, most of it
+// would make the table too large for one, so that share goes to the shelf
+// (kitchen 2: a counter's top every view called wall, beside a table and a
+// counter) instead of staying wall.
+TEST(MapObjects, StrandedStructureATooSmallThingCannotTakeGoesToAnother) {
+  const Cloud unit = Box({0.6f, 1.0f, 0.05f}, {2.6f, 1.6f, 0.6f});
+  const Cloud table = Box({0.6f, 1.64f, 0.05f}, {2.6f, 2.9f, 0.75f});
+  const Cloud shelf = Box({2.64f, 1.0f, 0.05f}, {3.0f, 1.6f, 1.2f});
+  std::vector<View> views;
+  for (int i = 0; i < 3; ++i) {
+    View v = RoomView();
+    v.segments.push_back(Segment(kWall, 3, unit));
+    v.segments.push_back(Segment(kTable, 4, table));
+    v.segments.push_back(Segment(kShelf, 5, shelf));
+    views.push_back(std::move(v));
+  }
+  const SceneFusion fusion = Fuse(views);
+  const auto went = WhereItWent(fusion, unit);
+  const SceneSegment* s = Largest(fusion, kShelf);
+  const SceneSegment* t = Largest(fusion, kTable);
+  ASSERT_NE(s, nullptr);
+  ASSERT_NE(t, nullptr);
+  EXPECT_GT(ShareIn(went, s->id), 0.8);
+  EXPECT_LT(ShareIn(went, t->id), 0.05);
+  EXPECT_GT(ShareIn(WhereItWent(fusion, table), t->id), 0.9);
+}
+
 // A cabinet's front 15 cm before the wall, tall and wide enough to be a wall
 // plane of its own, called wall in three views of four: no wall stands a
 // hand's width in front of a larger one seen above it, so it is a cabinet.
@@ -161,7 +189,7 @@ TEST(MapObjects, FurnitureJustInFrontOfAWallIsNotWall) {
   // Without the rule the front is a wall plane and stays wall (the flush
   // rule, which would take it by its table vote, off too).
   FusionOptions without;
-  without.map_objects.planes.max_front_distance_m = 0.0;
+  without.map_objects.planes.max_furniture_depth_m = 0.0;
   without.map_objects.min_flush_share = 1.0;
   const SceneFusion old = Fuse(views, without);
   const SceneSegment* wall = Largest(old, kWall);
@@ -211,8 +239,9 @@ TEST(StructurePlanes, WallsAreLargeVerticalPlanesAndTheFloorTheLowest) {
 }
 
 // A plane just in front of a larger wall (furniture) does not hold its
-// points; one behind it (a recess), or in front of a stretch the wall does not
-// cover, does.
+// points, up to a worktop's depth (a counter's front 0.65 m before the wall,
+// kitchen 4); one further (0.9 m), behind it (a recess), or in front of a
+// stretch the wall does not cover, does.
 TEST(StructurePlanes, NoWallStandsJustInFrontOfALargerOne) {
   const auto plane = [](double x, double y0, double y1, size_t support) {
     StructurePlane p;
@@ -227,10 +256,12 @@ TEST(StructurePlanes, NoWallStandsJustInFrontOfALargerOne) {
     return p;
   };
   std::vector<StructurePlane> planes = {
-      plane(0.0, 0.0, 4.0, 4000),   // the wall
-      plane(0.15, 1.0, 2.0, 600),   // a cabinet's front
-      plane(-0.3, 2.5, 3.0, 300),   // a recess behind the wall
-      plane(0.15, 5.0, 6.0, 600)};  // beyond the wall's end
+      plane(0.0, 0.0, 4.0, 4000),  // the wall
+      plane(0.15, 1.0, 2.0, 600),  // a cabinet's front
+      plane(-0.3, 2.5, 3.0, 300),  // a recess behind the wall
+      plane(0.15, 5.0, 6.0, 600),  // beyond the wall's end
+      plane(0.65, 1.0, 2.0, 600),  // a worktop's front
+      plane(0.9, 1.0, 2.0, 600)};  // deeper than furniture
   // The room lies at x > 0.
   OrientToInterior(Box({0.5f, 0, 0}, {4, 4, 2.5f}, 0.1f), 0.06, &planes);
   EXPECT_GT(planes[0].normal.x(), 0.9);
@@ -241,6 +272,12 @@ TEST(StructurePlanes, NoWallStandsJustInFrontOfALargerOne) {
   EXPECT_TRUE(OnStructure({-0.3f, 2.7f, 1}, planes, o));
   EXPECT_TRUE(OnStructure({0.15f, 5.5f, 1}, planes, o));
   EXPECT_FALSE(OnStructure({1.0f, 1.5f, 1}, planes, o));
+  EXPECT_FALSE(OnStructure({0.65f, 1.5f, 0.5f}, planes, o));
+  EXPECT_TRUE(OnStructure({0.9f, 1.5f, 0.5f}, planes, o));
+  StructurePlaneOptions shallow = o;
+  shallow.max_furniture_depth_m = 0.6;
+  EXPECT_TRUE(OnStructure({0.65f, 1.5f, 0.5f}, planes, shallow));
+  EXPECT_FALSE(OnStructure({0.15f, 1.5f, 1}, planes, shallow));
 }
 
 // A sofa's back stands flush with the wall, 3-6 cm in front of it: within a
