@@ -310,14 +310,14 @@ FusionOptions StreamingMergesOff() {
   return options;
 }
 
-// A chair standing at a 3.5 m unit views call table: two views saw each
-// alone, two held both in one mask (one calling it chair, one table). Joined
-// they would be a 3.5 m chair or table, and neither fits one object (kitchen
-// 5: a chair and the counter it stands at, a 2.2 m "chair"): they stay two.
-// With the size rules off they join.
+// A chair standing at the end of a 3 m unit views call table (one table
+// fits it): two views saw each alone, two held both in one mask (one calling
+// it chair, one table). Joined they would be 3.5 m long, and neither a chair
+// nor a table fits that (kitchen 5: a chair and the counter it stands at, a
+// 2.2 m "chair"): they stay two. With the size rules off they join.
 TEST(MapObjects, ConfusedPartsNeitherClassFitsStayApart) {
-  const Cloud unit = Box({1.0f, 0.4f, 0.05f}, {1.5f, 3.9f, 0.8f});
-  const Cloud chair = Box({1.55f, 1.5f, 0.05f}, {2.0f, 1.95f, 0.9f});
+  const Cloud unit = Box({1.0f, 0.4f, 0.05f}, {1.5f, 3.4f, 0.8f});
+  const Cloud chair = Box({1.0f, 3.45f, 0.05f}, {1.45f, 3.9f, 0.9f});
   std::vector<View> views(4, RoomView());
   views[0].segments.push_back(Segment(kChair, 3, chair));
   views[1].segments.push_back(Segment(kTable, 3, unit));

@@ -118,7 +118,7 @@ void MapResolver::ClaimFronts() {
     if (holds_it && !takes && options_.objects_from_fronts &&
         !context_.front_classes.empty() &&
         4 * on_fronts[best] >= 3 * size[best]) {
-      if (TakeFrontClass(best, members[best], on[f])) {
+      if (TakeFrontClass(best, members[best], on[f], named)) {
         std::erase_if(may_take, [&](const auto& e) {
           return e.first.first == best && !e.second;
         });
@@ -209,9 +209,10 @@ void MapResolver::ClaimFronts() {
 }
 
 bool MapResolver::TakeFrontClass(uint32_t id, const std::vector<size_t>& cells,
-                                 const std::vector<size_t>& on_front) {
+                                 const std::vector<size_t>& on_front,
+                                 const std::map<uint16_t, float>& named) {
   const uint16_t was = owner_class_[id];
-  const uint16_t cls = FrontClassOf(cells);
+  const uint16_t cls = FrontClassOf(cells, named);
   std::vector<size_t> rest;
   for (size_t k : on_front) {
     if (IsStranded(cells_[k])) rest.push_back(k);
@@ -230,8 +231,11 @@ bool MapResolver::TakeFrontClass(uint32_t id, const std::vector<size_t>& cells,
   return true;
 }
 
-uint16_t MapResolver::FrontClassOf(const std::vector<size_t>& cells) const {
-  // The front class with the most votes on them, else the label set's first.
+uint16_t MapResolver::FrontClassOf(
+    const std::vector<size_t>& cells,
+    const std::map<uint16_t, float>& named) const {
+  // The front class with the most votes on them, else the one things took
+  // the scene's other fronts with, else the label set's first.
   const std::map<uint16_t, double> shares = ThingShares(cells);
   uint16_t best = context_.front_classes.front();
   double best_share = 0.0;
@@ -240,6 +244,11 @@ uint16_t MapResolver::FrontClassOf(const std::vector<size_t>& cells) const {
     if (it != shares.end() && it->second > best_share) {
       best = c, best_share = it->second;
     }
+  }
+  for (uint16_t c : context_.front_classes) {
+    if (best_share > 0.0) break;
+    const auto it = named.find(c);
+    if (it != named.end() && it->second > 0.0f) return c;
   }
   return best;
 }
@@ -299,23 +308,39 @@ bool MapResolver::StillFits(const std::vector<size_t>& cells, uint16_t class_id,
   return FitsSize(after, class_id, slack);
 }
 
+MapResolver::StrandedContacts MapResolver::ContactsOf(
+    const std::vector<size_t>& cells, const std::set<uint32_t>& refused,
+    const std::map<uint32_t, size_t>& size) const {
+  StrandedContacts c;
+  for (size_t k : cells) {
+    std::map<uint32_t, float> contacts;
+    ForNeighbours(k, [&](size_t n) {
+      if (cells_[n].owner != 0 && IsThingCell(cells_[n]) &&
+          refused.count(cells_[n].owner) == 0) {
+        contacts[cells_[n].owner] += 1.0f;
+      }
+    });
+    for (const auto& [id, n] : contacts) {
+      c.largest = std::max(c.largest, size.at(id));
+    }
+    if (!contacts.empty()) {
+      c.touching.push_back(k);
+      c.contacts_of[k] = std::move(contacts);
+    }
+  }
+  return c;
+}
+
 std::map<uint32_t, std::vector<size_t>> MapResolver::SpreadStranded(
-    const std::vector<size_t>& touching,
-    const std::map<size_t, std::map<uint32_t, float>>& contacts_of,
-    const std::set<uint32_t>& refused) const {
+    const StrandedContacts& c) const {
   // Each voxel joins the thing nearest to it (breadth first from the
   // contacts), so a chair's top and the table beside it each take their own
   // part.
   std::vector<size_t> frontier;
   std::map<size_t, uint32_t> owner;
-  for (size_t k : touching) {
-    if (const uint32_t id =
-            MostVoted(contacts_of.at(k),
-                      [&](uint32_t id) { return refused.count(id) == 0; });
-        id != 0) {
-      owner[k] = id;
-      frontier.push_back(k);
-    }
+  for (size_t k : c.touching) {
+    owner[k] = MostVoted(c.contacts_of.at(k), [](uint32_t) { return true; });
+    frontier.push_back(k);
   }
   for (size_t f = 0; f < frontier.size(); ++f) {
     const uint32_t id = owner[frontier[f]];
@@ -332,7 +357,7 @@ std::map<uint32_t, std::vector<size_t>> MapResolver::SpreadStranded(
 }
 
 void MapResolver::ClaimStranded() {
-  std::map<uint32_t, size_t> size = ThingSizes();
+  const std::map<uint32_t, size_t> size = ThingSizes();
   // Each thing's cells, kept current as it takes stranded voxels (StillFits).
   Members members = ThingMembers();
   auto stranded = [&](size_t n) { return IsStranded(cells_[n]); };
@@ -340,63 +365,46 @@ void MapResolver::ClaimStranded() {
   size_t claimed = 0;
   for (size_t i = 0; i < cells_.size(); ++i) {
     if (done[i] || !stranded(i)) continue;
-    const auto group = Component(i, &done, stranded);
-    // Where the group touches things, and which: each voxel joins the thing
-    // nearest to it (breadth first from the contacts), so a chair's top and
-    // the table beside it each take their own part.
-    std::vector<size_t> touching;
-    std::map<size_t, std::map<uint32_t, float>> contacts_of;
-    size_t largest = 0;
-    for (size_t k : group) {
-      std::map<uint32_t, float> contacts;
-      ForNeighbours(k, [&](size_t n) {
-        if (cells_[n].owner != 0 && IsThingCell(cells_[n])) {
-          contacts[cells_[n].owner] += 1.0f;
-        }
-      });
-      for (const auto& [id, n] : contacts) {
-        largest = std::max(largest, size[id]);
-      }
-      if (!contacts.empty()) {
-        touching.push_back(k);
-        contacts_of[k] = std::move(contacts);
-      }
-    }
-    spdlog::debug("stranded structure voxels: {} ({} touching things)",
-                  group.size(), touching.size());
-    // Larger than every thing it touches, or touching them only along a
-    // small part of it: more likely structure no plane was fitted to (a floor
-    // seen twice after drift) than a part of a thing.
-    if (touching.empty() || group.size() > largest ||
-        static_cast<double>(touching.size()) <
-            options_.min_stranded_contact_share *
-                static_cast<double>(group.size())) {
-      continue;
-    }
-    // A thing of a known size takes its share only while it still fits one
-    // object of its class: a counter every view called wall, stranded beside
-    // a plant, is no part of the plant (kitchen 2: a 2.5 m "plant"). Its
-    // share goes to the other things the group touches.
+    std::vector<size_t> left = Component(i, &done, stranded);
+    // In rounds: each voxel joins the thing nearest to it; a thing of a known
+    // size takes its share only while it still fits one object of its class
+    // (a counter every view called wall, stranded beside a plant, is no part
+    // of the plant: kitchen 2, a 2.5 m "plant"), and the shares refused go,
+    // in the next round, to the other things they touch, those that took a
+    // share included (kitchen 2: a counter's top every view called wall,
+    // nearest to a table that refused it, went to the counter beside it).
     std::set<uint32_t> refused;
-    std::map<uint32_t, std::vector<size_t>> shares;
-    for (bool again = true; again;) {
-      again = false;
-      shares = SpreadStranded(touching, contacts_of, refused);
-      for (const auto& [id, share] : shares) {
+    for (bool first = true; !left.empty(); first = false) {
+      const StrandedContacts c = ContactsOf(left, refused, size);
+      if (first) {
+        spdlog::debug("stranded structure voxels: {} ({} touching things)",
+                      left.size(), c.touching.size());
+      }
+      // Larger than every thing it touches, or touching them only along a
+      // small part of it: more likely structure no plane was fitted to (a
+      // floor seen twice after drift) than a part of a thing.
+      if (c.touching.empty() || left.size() > c.largest ||
+          (first && static_cast<double>(c.touching.size()) <
+                        options_.min_stranded_contact_share *
+                            static_cast<double>(left.size()))) {
+        break;
+      }
+      size_t joined = 0;
+      for (const auto& [id, share] : SpreadStranded(c)) {
         if (!StillFits(members[id], owner_class_[id], share)) {
           spdlog::debug(
               "  {} of them left out: object {} would outgrow its class",
               share.size(), id);
           refused.insert(id);
-          again = true;
+          continue;
         }
+        for (size_t k : share) JoinThing(k, id);
+        members[id].insert(members[id].end(), share.begin(), share.end());
+        joined += share.size();
       }
-    }
-    for (const auto& [id, share] : shares) {
-      for (size_t k : share) JoinThing(k, id);
-      std::vector<size_t>& cells = members[id];
-      cells.insert(cells.end(), share.begin(), share.end());
-      claimed += share.size();
+      claimed += joined;
+      if (joined == 0) break;
+      std::erase_if(left, [&](size_t k) { return !stranded(k); });
     }
   }
   result_.stranded_voxels_claimed += claimed;

@@ -167,13 +167,15 @@ bool MapResolver::HeldApart(const std::vector<uint32_t>& x_parts,
   return false;
 }
 
-uint16_t MapResolver::ConfusedWinner(const std::vector<size_t>& both,
+uint16_t MapResolver::ConfusedWinner(const std::vector<size_t>& keep,
+                                     const std::vector<size_t>& gone,
                                      uint16_t ck, uint16_t cg,
-                                     size_t gone_voxels, uint16_t attached_to,
-                                     bool* fits) const {
+                                     uint16_t attached_to, bool* fits) const {
   *fits = true;
+  std::vector<size_t> both = keep;
+  both.insert(both.end(), gone.begin(), gone.end());
   uint16_t winner = attached_to;
-  if (winner == 0) {
+  if (winner == kNoClass) {
     // Counted by views; by voxel evidence where the views tie (not the
     // larger part's class: sparse views tie voxel by voxel). A piece too
     // small to stand alone (a voxel or two a mask took into another class)
@@ -182,7 +184,7 @@ uint16_t MapResolver::ConfusedWinner(const std::vector<size_t>& both,
     const std::map<uint16_t, double> views = ViewVotes(both);
     const double view_cg = ShareOf(views, cg), view_ck = ShareOf(views, ck);
     const bool gone_wins =
-        gone_voxels >= options_.min_piece_voxels &&
+        gone.size() >= options_.min_piece_voxels &&
         (view_cg != view_ck ? view_cg > view_ck
                             : VoteShare(both, cg) > VoteShare(both, ck));
     winner = gone_wins ? cg : ck;
@@ -202,10 +204,13 @@ uint16_t MapResolver::ConfusedWinner(const std::vector<size_t>& both,
         size_m.x(), size_m.y(), winner, other);
     return other;
   }
-  // ... and when neither fits, they are two objects (kitchen 5: a chair and
-  // the counter it stands at, which views held in one mask: a 2.2 m chair).
-  // An attached piece joins as before (it barely changes the size).
-  *fits = attached_to != 0;
+  // ... and when neither can name the pair (the other too small too, or
+  // with too few votes), they are two objects (kitchen 5: a chair and the
+  // counter it stands at, which views held in one mask: a 2.2 m chair);
+  // unless the larger is too large already and the other does not make it
+  // larger (it fills in its footprint, as StillFits allows), or is an
+  // attached piece.
+  *fits = attached_to != kNoClass || StillFits(keep, winner, gone);
   return winner;
 }
 
@@ -298,13 +303,11 @@ void MapResolver::MergeByMasks() {
     const uint16_t ck = owner_class_[keep], cg = owner_class_[gone];
     uint16_t winner = ck;
     if (ck != cg) {
-      std::vector<size_t> both = members[keep];
-      both.insert(both.end(), members[gone].begin(), members[gone].end());
       // An attached piece of another class takes the object's class.
       const uint16_t attached_to =
-          piece_group == 0 ? 0 : (piece_group == keep ? cg : ck);
+          piece_group == 0 ? kNoClass : (piece_group == keep ? cg : ck);
       bool fits = true;
-      winner = ConfusedWinner(both, ck, cg, members[gone].size(), attached_to,
+      winner = ConfusedWinner(members[keep], members[gone], ck, cg, attached_to,
                               &fits);
       if (!fits) {
         spdlog::debug(

@@ -377,14 +377,15 @@ class MapResolver {
   // side by side are also touching, and one mask may hold a row of them);
   // the larger keeps its id.
   void MergeByMasks();
-  // The class two groups of confused classes take together (`both`: their
-  // cells; ck the larger's class, cg the other's of `gone_voxels`;
-  // `attached_to`: the class an attached piece takes, else 0): the one more
-  // views gave over both, or the other when only it fits their size; `fits`
-  // false when neither does.
-  uint16_t ConfusedWinner(const std::vector<size_t>& both, uint16_t ck,
-                          uint16_t cg, size_t gone_voxels, uint16_t attached_to,
-                          bool* fits) const;
+  // The class two groups of confused classes take together (`keep` the
+  // larger's cells, of class ck; `gone` the other's, of cg; `attached_to`:
+  // the class an attached piece takes, else kNoClass): the one more views
+  // gave over both, or the other when only it fits their size; `fits` false
+  // when neither can name them (and the larger is not already too large,
+  // the other filling in its footprint).
+  uint16_t ConfusedWinner(const std::vector<size_t>& keep,
+                          const std::vector<size_t>& gone, uint16_t ck,
+                          uint16_t cg, uint16_t attached_to, bool* fits) const;
 
   // Thing voxels no object of their class claimed: each connected group joins
   // the object of its class it touches most, or becomes a new object.
@@ -403,13 +404,20 @@ class MapResolver {
   // thing it touches (then it is more likely structure no plane was fitted
   // to, e.g. a wall seen twice after drift).
   void ClaimStranded();
-  // Each stranded voxel reachable from `touching` (voxels of one stranded
-  // group touching things, with their contacts) joins the nearest thing not
-  // `refused`: the voxels each thing takes.
+  // The cells of a stranded group that touch things (not `refused`), with
+  // their contacts, and the largest of those things (`size`: voxels).
+  struct StrandedContacts {
+    std::vector<size_t> touching;
+    std::map<size_t, std::map<uint32_t, float>> contacts_of;
+    size_t largest = 0;
+  };
+  StrandedContacts ContactsOf(const std::vector<size_t>& cells,
+                              const std::set<uint32_t>& refused,
+                              const std::map<uint32_t, size_t>& size) const;
+  // Each stranded voxel reachable from the contacts joins the nearest thing:
+  // the voxels each thing takes.
   std::map<uint32_t, std::vector<size_t>> SpreadStranded(
-      const std::vector<size_t>& touching,
-      const std::map<size_t, std::map<uint32_t, float>>& contacts_of,
-      const std::set<uint32_t>& refused) const;
+      const StrandedContacts& contacts) const;
 
   // A furniture front (a row of cabinets under a counter) is one surface:
   // where views named part of it (a cabinet) and called the rest wall, the
@@ -427,13 +435,16 @@ class MapResolver {
   };
   FrontCells CellsOnFronts() const;
   // The front class (MapContext::front_classes, not empty) with the most
-  // votes over `cells`, else the first.
-  uint16_t FrontClassOf(const std::vector<size_t>& cells) const;
+  // votes over `cells`, else the most `named` (front class -> voxels of the
+  // fronts things took with it), else the first.
+  uint16_t FrontClassOf(const std::vector<size_t>& cells,
+                        const std::map<uint16_t, float>& named) const;
   // Thing `id` (its `cells`) takes its front class (FrontClassOf) when that
   // class differs and fits it with the stranded voxels of `on_front`: true
   // when it did.
   bool TakeFrontClass(uint32_t id, const std::vector<size_t>& cells,
-                      const std::vector<size_t>& on_front);
+                      const std::vector<size_t>& on_front,
+                      const std::map<uint16_t, float>& named);
 
   // Wall voxels on a vertical plane that a thing's voxels at the wall close
   // in, in the plane (four-connected, within the box of those voxels), join

@@ -157,11 +157,11 @@ std::vector<StructurePlane> TakeFurnitureFronts(
 
 /// Like OnAnyPlane, but a point standing in front of a larger parallel wall
 /// (on the room's side, more than 1.5 x tolerance_m and at most
-/// max_front_distance_m from it, along a stretch of it seen at some height)
+/// max_furniture_depth_m from it, along a stretch of it seen at some height)
 /// is not on a wall, even where a smaller plane passes through it: RANSAC
 /// fits a plane through a chair's back that views called wall and a strip of
 /// the wall beyond it; no wall stands a hand's width in front of another. A
-/// pilaster or a wall that steps out by 9-60 cm is set aside too: its voxels
+/// pilaster or a wall that steps out by 9-75 cm is set aside too: its voxels
 /// stay wall where no other class has evidence and no thing claims them.
 /// Planes must be oriented (OrientToInterior). Within `near_scale` x a
 /// plane's tolerance (its own, else the options') counts as on it.

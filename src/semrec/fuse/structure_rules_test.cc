@@ -137,14 +137,16 @@ TEST(MapObjects, StrandedStructureDoesNotMakeAThingTooLargeForItsClass) {
 }
 
 // A low unit every view calls wall, off the wall's plane, between a table
-// along its side and a shelf at its end: nearest to the table, most of it
-// would make the table too large for one, so that share goes to the shelf
+// along its side and a tall shelf at its end: nearest to the table, most of
+// it would make the table too large for one, so that share goes to the shelf
 // (kitchen 2: a counter's top every view called wall, beside a table and a
-// counter) instead of staying wall.
+// counter) instead of staying wall. (A shelf smaller than the share would
+// not take it: larger than every thing left to take it, more likely
+// structure.)
 TEST(MapObjects, StrandedStructureATooSmallThingCannotTakeGoesToAnother) {
   const Cloud unit = Box({0.6f, 1.0f, 0.05f}, {2.6f, 1.6f, 0.6f});
   const Cloud table = Box({0.6f, 1.64f, 0.05f}, {2.6f, 2.9f, 0.75f});
-  const Cloud shelf = Box({2.64f, 1.0f, 0.05f}, {3.0f, 1.6f, 1.2f});
+  const Cloud shelf = Box({2.64f, 1.0f, 0.05f}, {3.4f, 1.6f, 1.8f});
   std::vector<View> views;
   for (int i = 0; i < 3; ++i) {
     View v = RoomView();
