@@ -164,6 +164,28 @@ TEST(MapObjects, StrandedStructureATooSmallThingCannotTakeGoesToAnother) {
   EXPECT_GT(ShareIn(went, s->id), 0.8);
   EXPECT_LT(ShareIn(went, t->id), 0.05);
   EXPECT_GT(ShareIn(WhereItWent(fusion, table), t->id), 0.9);
+  // A chair at the unit's end instead: it keeps the end nearest to it though
+  // it cannot take the table's share too (the claim goes in rounds, a share
+  // that fits is kept).
+  const Cloud chair = Box({2.64f, 1.0f, 0.05f}, {3.09f, 1.45f, 0.9f});
+  // The unit's top near its end, nearer the chair than the table.
+  const Cloud end = Box({2.35f, 1.0f, 0.6f}, {2.55f, 1.3f, 0.6f});
+  std::vector<View> with_chair;
+  for (int i = 0; i < 3; ++i) {
+    View v = RoomView();
+    v.segments.push_back(Segment(kWall, 3, unit));
+    v.segments.push_back(Segment(kTable, 4, table));
+    v.segments.push_back(Segment(kChair, 5, chair));
+    with_chair.push_back(std::move(v));
+  }
+  const SceneFusion chaired = Fuse(with_chair);
+  const SceneSegment* c = Largest(chaired, kChair);
+  const SceneSegment* t2 = Largest(chaired, kTable);
+  ASSERT_NE(c, nullptr);
+  ASSERT_NE(t2, nullptr);
+  EXPECT_GT(ShareIn(WhereItWent(chaired, end), c->id), 0.5);
+  EXPECT_LT(ShareIn(WhereItWent(chaired, unit), c->id), 0.3);
+  EXPECT_LT(ShareIn(WhereItWent(chaired, unit), t2->id), 0.05);
 }
 
 // A cabinet's front 15 cm before the wall, tall and wide enough to be a wall
