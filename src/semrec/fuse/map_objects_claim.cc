@@ -11,6 +11,25 @@
 #include "semrec/fuse/map_resolver.h"
 
 namespace semrec::fuse::internal {
+namespace {
+
+// The candidate with the largest positive weight (the first on ties);
+// kNoClass when none has any.
+template <typename Weight>
+uint16_t MostOf(const std::vector<uint16_t>& candidates,
+                const std::map<uint16_t, Weight>& weights) {
+  uint16_t best = kNoClass;
+  Weight best_weight = 0;
+  for (uint16_t c : candidates) {
+    const auto it = weights.find(c);
+    if (it != weights.end() && it->second > best_weight) {
+      best = c, best_weight = it->second;
+    }
+  }
+  return best;
+}
+
+}  // namespace
 
 std::map<uint32_t, size_t> MapResolver::ThingSizes() const {
   std::map<uint32_t, size_t> size;
@@ -237,20 +256,12 @@ uint16_t MapResolver::FrontClassOf(
   // The front class with the most votes on them, else the one things took
   // the scene's other fronts with, else the label set's first.
   const std::map<uint16_t, double> shares = ThingShares(cells);
-  uint16_t best = context_.front_classes.front();
-  double best_share = 0.0;
-  for (uint16_t c : context_.front_classes) {
-    const auto it = shares.find(c);
-    if (it != shares.end() && it->second > best_share) {
-      best = c, best_share = it->second;
-    }
+  if (const uint16_t c = MostOf(context_.front_classes, shares);
+      c != kNoClass) {
+    return c;
   }
-  for (uint16_t c : context_.front_classes) {
-    if (best_share > 0.0) break;
-    const auto it = named.find(c);
-    if (it != named.end() && it->second > 0.0f) return c;
-  }
-  return best;
+  const uint16_t c = MostOf(context_.front_classes, named);
+  return c != kNoClass ? c : context_.front_classes.front();
 }
 
 uint32_t MapResolver::NewObjectFromFront(
@@ -262,25 +273,19 @@ uint32_t MapResolver::NewObjectFromFront(
   if (stranded == 0 || 2 * stranded < on.size()) return 0;
   // The front class of the scene's other fronts (a kitchen's counters are
   // counters), else the one with the most votes on it, else the first.
-  uint16_t cls = context_.front_classes.front();
-  float best = 0.0f;
-  for (uint16_t candidate : context_.front_classes) {
-    const auto it = named.find(candidate);
-    if (it != named.end() && it->second > best) {
-      cls = candidate, best = it->second;
-    }
-  }
-  const bool from_named = best > 0.0f;
-  for (uint16_t candidate : context_.front_classes) {
-    if (from_named) break;
-    float weight = 0.0f;
-    for (size_t i : on) {
-      if (const ClassEvidence* e = cells_[i].evidence->Find(candidate)) {
-        weight += e->weight;
+  uint16_t cls = MostOf(context_.front_classes, named);
+  if (cls == kNoClass) {
+    std::map<uint16_t, float> votes;
+    for (uint16_t candidate : context_.front_classes) {
+      for (size_t i : on) {
+        if (const ClassEvidence* e = cells_[i].evidence->Find(candidate)) {
+          votes[candidate] += e->weight;
+        }
       }
     }
-    if (weight > best) cls = candidate, best = weight;
+    cls = MostOf(context_.front_classes, votes);
   }
+  if (cls == kNoClass) cls = context_.front_classes.front();
   const uint32_t id = (*next_id_)++;
   owner_class_[id] = cls;
   ++result_.objects_from_fronts;

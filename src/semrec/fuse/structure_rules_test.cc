@@ -147,15 +147,19 @@ TEST(MapObjects, StrandedStructureATooSmallThingCannotTakeGoesToAnother) {
   const Cloud unit = Box({0.6f, 1.0f, 0.05f}, {2.6f, 1.6f, 0.6f});
   const Cloud table = Box({0.6f, 1.64f, 0.05f}, {2.6f, 2.9f, 0.75f});
   const Cloud shelf = Box({2.64f, 1.0f, 0.05f}, {3.4f, 1.6f, 1.8f});
-  std::vector<View> views;
-  for (int i = 0; i < 3; ++i) {
-    View v = RoomView();
-    v.segments.push_back(Segment(kWall, 3, unit));
-    v.segments.push_back(Segment(kTable, 4, table));
-    v.segments.push_back(Segment(kShelf, 5, shelf));
-    views.push_back(std::move(v));
-  }
-  const SceneFusion fusion = Fuse(views);
+  // Three views: the unit called wall, the table, and `end_class` at its end.
+  const auto fuse = [&](uint16_t end_class, const Cloud& at_end) {
+    std::vector<View> views;
+    for (int i = 0; i < 3; ++i) {
+      View v = RoomView();
+      v.segments.push_back(Segment(kWall, 3, unit));
+      v.segments.push_back(Segment(kTable, 4, table));
+      v.segments.push_back(Segment(end_class, 5, at_end));
+      views.push_back(std::move(v));
+    }
+    return Fuse(views);
+  };
+  const SceneFusion fusion = fuse(kShelf, shelf);
   const auto went = WhereItWent(fusion, unit);
   const SceneSegment* s = Largest(fusion, kShelf);
   const SceneSegment* t = Largest(fusion, kTable);
@@ -170,15 +174,7 @@ TEST(MapObjects, StrandedStructureATooSmallThingCannotTakeGoesToAnother) {
   const Cloud chair = Box({2.64f, 1.0f, 0.05f}, {3.09f, 1.45f, 0.9f});
   // The unit's top near its end, nearer the chair than the table.
   const Cloud end = Box({2.35f, 1.0f, 0.6f}, {2.55f, 1.3f, 0.6f});
-  std::vector<View> with_chair;
-  for (int i = 0; i < 3; ++i) {
-    View v = RoomView();
-    v.segments.push_back(Segment(kWall, 3, unit));
-    v.segments.push_back(Segment(kTable, 4, table));
-    v.segments.push_back(Segment(kChair, 5, chair));
-    with_chair.push_back(std::move(v));
-  }
-  const SceneFusion chaired = Fuse(with_chair);
+  const SceneFusion chaired = fuse(kChair, chair);
   const SceneSegment* c = Largest(chaired, kChair);
   const SceneSegment* t2 = Largest(chaired, kTable);
   ASSERT_NE(c, nullptr);
