@@ -74,42 +74,75 @@ MapResolver::FrontCells MapResolver::CellsOnFronts() const {
 
 void MapResolver::ClaimFronts() {
   if (fronts_.empty()) return;
-  std::map<uint32_t, size_t> size = ThingSizes();
-  // Each thing's cells with the fronts it takes (StillFits).
-  Members members = ThingMembers();
-  const FrontCells fc = CellsOnFronts();
-  const std::vector<std::vector<size_t>>& on = fc.on;
-  const std::vector<bool>& on_any = fc.on_any;
-  std::map<uint32_t, size_t> on_fronts = fc.on_fronts;
-  // Whether a thing may spread over a front's stranded voxels (its class's
-  // size, StillFits), decided once per thing and front, the first front a
-  // voxel lies on.
-  std::map<std::pair<uint32_t, size_t>, bool> may_take;
-  std::vector<size_t> front_of(cells_.size(), fronts_.size());
+  FrontClaim s;
+  s.fc = CellsOnFronts();
+  s.front_of.assign(cells_.size(), fronts_.size());
   for (size_t f = fronts_.size(); f-- > 0;) {
-    for (size_t i : on[f]) front_of[i] = f;
+    for (size_t i : s.fc.on[f]) s.front_of[i] = f;
   }
-  // Objects made from fronts below have no members here: they take every
-  // front they reach (they are that furniture; front classes have no size).
-  const auto fits_front = [&](uint32_t id, size_t f) {
-    const auto [it, fresh] = may_take.try_emplace({id, f}, false);
-    if (!fresh) return it->second;
-    std::vector<size_t> rest;
-    for (size_t k : on[f]) {
-      if (IsStranded(cells_[k])) rest.push_back(k);
-    }
-    it->second = StillFits(members[id], owner_class_[id], rest);
-    if (it->second) {
-      members[id].insert(members[id].end(), rest.begin(), rest.end());
-    }
-    return it->second;
-  };
-  const auto allowed = [&](uint32_t id, size_t i) {
-    return front_of[i] == fronts_.size() || fits_front(id, front_of[i]);
-  };
-  std::vector<size_t> frontier;
-  std::vector<size_t> unclaimed;    // fronts no thing holds nor takes
+  s.members = ThingMembers();
   std::map<uint16_t, float> named;  // front class -> voxels of fronts taken
+  const std::vector<size_t> unclaimed = DecideFronts(&s, &named);
+  // Breadth first from the things over stranded voxels on fronts: the
+  // nearest thing takes each, across the corner of an L-shaped counter too.
+  SpreadOverFronts(&s, 0);
+  spdlog::debug("{} stranded voxels on furniture fronts joined things",
+                s.claimed);
+  if (options_.objects_from_fronts && !context_.front_classes.empty()) {
+    ObjectsFromFronts(&s, unclaimed, named);
+  }
+  result_.stranded_voxels_claimed += s.claimed;
+}
+
+bool MapResolver::FitsFront(FrontClaim* s, uint32_t id, size_t f) {
+  const auto [it, fresh] = s->may_take.try_emplace({id, f}, false);
+  if (!fresh) return it->second;
+  std::vector<size_t> rest;
+  for (size_t k : s->fc.on[f]) {
+    if (IsStranded(cells_[k])) rest.push_back(k);
+  }
+  // Objects made from fronts have no members yet: they take every front
+  // they reach (they are that furniture; front classes have no size).
+  it->second = StillFits(s->members[id], owner_class_[id], rest);
+  if (it->second) {
+    s->members[id].insert(s->members[id].end(), rest.begin(), rest.end());
+  }
+  return it->second;
+}
+
+void MapResolver::TakeFrontCell(FrontClaim* s, size_t i, uint32_t id) {
+  JoinThing(i, id);
+  cells_[i].stranded = false;
+  s->frontier.push_back(i);
+  ++s->claimed;
+}
+
+void MapResolver::SpreadOverFronts(FrontClaim* s, size_t from) {
+  for (size_t f = from; f < s->frontier.size(); ++f) {
+    const uint32_t id = cells_[s->frontier[f]].owner;
+    ForNeighbours(s->frontier[f], [&](size_t n) {
+      if (s->fc.on_any[n] && IsStranded(cells_[n]) &&
+          (s->front_of[n] == fronts_.size() ||
+           FitsFront(s, id, s->front_of[n]))) {
+        TakeFrontCell(s, n, id);
+      }
+    });
+  }
+}
+
+std::vector<size_t> MapResolver::DecideFronts(
+    FrontClaim* s, std::map<uint16_t, float>* named) {
+  const std::map<uint32_t, size_t> size = ThingSizes();
+  const auto& on = s->fc.on;
+  const auto on_fronts = [&](uint32_t id) {
+    const auto it = s->fc.on_fronts.find(id);
+    return it == s->fc.on_fronts.end() ? size_t{0} : it->second;
+  };
+  const auto size_of = [&](uint32_t id) {
+    const auto it = size.find(id);
+    return it == size.end() ? size_t{0} : it->second;
+  };
+  std::vector<size_t> unclaimed;  // fronts no thing holds nor takes
   for (size_t f = 0; f < fronts_.size(); ++f) {
     std::map<uint32_t, size_t> held;  // thing -> its voxels on this front
     for (size_t i : on[f]) {
@@ -126,29 +159,28 @@ void MapResolver::ClaimFronts() {
         best != 0 &&
         static_cast<double>(best_held) >=
             options_.min_front_share * static_cast<double>(on[f].size()) &&
-        2 * on_fronts[best] >= size[best];
+        2 * on_fronts(best) >= size_of(best);
     // A thing of a known size takes a front only while it still fits one
     // object of its class (a table does not take a 3 m front).
-    bool takes = holds_it && fits_front(best, f);
+    bool takes = holds_it && FitsFront(s, best, f);
     // A thing lying on the front (three quarters of it) that its class is
     // too small to take is that furniture misnamed (kitchen 5: a counter's
     // front one view called plant, the others wall): it takes a front class
     // that can.
     if (holds_it && !takes && options_.objects_from_fronts &&
         !context_.front_classes.empty() &&
-        4 * on_fronts[best] >= 3 * size[best]) {
-      if (TakeFrontClass(best, members[best], on[f], named)) {
-        std::erase_if(may_take, [&](const auto& e) {
-          return e.first.first == best && !e.second;
-        });
-        takes = fits_front(best, f);
-      }
+        4 * on_fronts(best) >= 3 * size_of(best) &&
+        TakeFrontClass(best, s->members[best], on[f], *named)) {
+      std::erase_if(s->may_take, [&](const auto& e) {
+        return e.first.first == best && !e.second;
+      });
+      takes = FitsFront(s, best, f);
     }
     spdlog::debug(
         "furniture front (class {}, {} voxels on it): object {} holds {} of "
         "them ({} on fronts, {} in all){}",
-        fronts_[f].class_id, on[f].size(), best, best_held, on_fronts[best],
-        size[best],
+        fronts_[f].class_id, on[f].size(), best, best_held, on_fronts(best),
+        size_of(best),
         takes ? ": takes the stranded rest"
               : (holds_it ? ": would outgrow its class" : ""));
     if (!takes) {
@@ -163,68 +195,49 @@ void MapResolver::ClaimFronts() {
       }
       continue;
     }
-    named[owner_class_[best]] += static_cast<float>(on[f].size());
+    (*named)[owner_class_[best]] += static_cast<float>(on[f].size());
     for (size_t i : on[f]) {
       if (cells_[i].owner == best && IsThingCell(cells_[i])) {
-        frontier.push_back(i);
+        s->frontier.push_back(i);
       }
     }
   }
-  // Breadth first from the things over stranded voxels on fronts: the
-  // nearest thing takes each, across the corner of an L-shaped counter too.
-  size_t claimed = 0;
-  const auto take = [&](size_t i, uint32_t id) {
-    JoinThing(i, id);
-    cells_[i].stranded = false;
-    frontier.push_back(i);
-    ++claimed;
-  };
-  const auto spread = [&](size_t from) {
-    for (size_t f = from; f < frontier.size(); ++f) {
-      const uint32_t id = cells_[frontier[f]].owner;
-      ForNeighbours(frontier[f], [&](size_t n) {
-        if (on_any[n] && IsStranded(cells_[n]) && allowed(id, n)) {
-          take(n, id);
-        }
-      });
+  return unclaimed;
+}
+
+void MapResolver::ObjectsFromFronts(FrontClaim* s,
+                                    const std::vector<size_t>& unclaimed,
+                                    const std::map<uint16_t, float>& named) {
+  std::set<uint32_t> made;
+  for (size_t f : unclaimed) {
+    const uint32_t id = NewObjectFromFront(s->fc.on[f], named);
+    if (id == 0) continue;
+    made.insert(id);
+    const size_t start = s->frontier.size();
+    for (size_t i : s->fc.on[f]) {
+      if (IsStranded(cells_[i])) TakeFrontCell(s, i, id);
     }
-  };
-  spread(0);
-  spdlog::debug("{} stranded voxels on furniture fronts joined things",
-                claimed);
-  if (options_.objects_from_fronts && !context_.front_classes.empty()) {
-    std::set<uint32_t> made;
-    for (size_t f : unclaimed) {
-      const uint32_t id = NewObjectFromFront(on[f], named);
-      if (id == 0) continue;
-      made.insert(id);
-      const size_t start = frontier.size();
-      for (size_t i : on[f]) {
-        if (IsStranded(cells_[i])) take(i, id);
-      }
-      spread(start);
-    }
-    // Their tops (a worktop every view called wall too: no front holds it),
-    // on each front a new object holds, the other leg of an L too.
-    for (size_t f : unclaimed) {
-      std::map<uint32_t, float> holders;
-      for (size_t i : on[f]) {
-        if (made.count(cells_[i].owner)) holders[cells_[i].owner] += 1.0f;
-      }
-      const uint32_t id = MostVoted(holders, [](uint32_t) { return true; });
-      if (id == 0) continue;
-      const size_t start = frontier.size();
-      for (size_t i = 0; i < cells_.size(); ++i) {
-        if (IsStranded(cells_[i]) &&
-            OnTopOfFront(cells_[i].p, fronts_[f], context_.up_world,
-                         options_.planes)) {
-          take(i, id);
-        }
-      }
-      spread(start);
-    }
+    SpreadOverFronts(s, start);
   }
-  result_.stranded_voxels_claimed += claimed;
+  // Their tops (a worktop every view called wall too: no front holds it),
+  // on each front a new object holds, the other leg of an L too.
+  for (size_t f : unclaimed) {
+    std::map<uint32_t, float> holders;
+    for (size_t i : s->fc.on[f]) {
+      if (made.count(cells_[i].owner)) holders[cells_[i].owner] += 1.0f;
+    }
+    const uint32_t id = MostVoted(holders, [](uint32_t) { return true; });
+    if (id == 0) continue;
+    const size_t start = s->frontier.size();
+    for (size_t i = 0; i < cells_.size(); ++i) {
+      if (IsStranded(cells_[i]) &&
+          OnTopOfFront(cells_[i].p, fronts_[f], context_.up_world,
+                       options_.planes)) {
+        TakeFrontCell(s, i, id);
+      }
+    }
+    SpreadOverFronts(s, start);
+  }
 }
 
 bool MapResolver::TakeFrontClass(uint32_t id, const std::vector<size_t>& cells,

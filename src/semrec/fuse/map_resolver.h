@@ -434,6 +434,32 @@ class MapResolver {
     std::map<uint32_t, size_t> on_fronts;
   };
   FrontCells CellsOnFronts() const;
+  // ClaimFronts' state: the cells on the fronts (and the first front each
+  // lies on), each thing's cells with the fronts it takes, whether a thing
+  // may spread over a front's stranded voxels (its class's size, StillFits;
+  // decided once per thing and front), the breadth-first frontier and the
+  // voxels claimed.
+  struct FrontClaim {
+    FrontCells fc;
+    std::vector<size_t> front_of;
+    Members members;
+    std::map<std::pair<uint32_t, size_t>, bool> may_take;
+    std::vector<size_t> frontier;
+    size_t claimed = 0;
+  };
+  bool FitsFront(FrontClaim* s, uint32_t id, size_t f);
+  void TakeFrontCell(FrontClaim* s, size_t i, uint32_t id);
+  // Breadth first from frontier[from...] over stranded voxels on fronts.
+  void SpreadOverFronts(FrontClaim* s, size_t from);
+  // Per front, the thing holding a fair part of it (and lying mostly on
+  // fronts) takes it, seeding the frontier (`named`: front class -> voxels
+  // of the fronts taken with it); returns the fronts no thing holds.
+  std::vector<size_t> DecideFronts(FrontClaim* s,
+                                   std::map<uint16_t, float>* named);
+  // Fronts no thing holds, mostly stranded, become objects of a front class
+  // (NewObjectFromFront), with the fronts they reach and their tops.
+  void ObjectsFromFronts(FrontClaim* s, const std::vector<size_t>& unclaimed,
+                         const std::map<uint16_t, float>& named);
   // The front class (MapContext::front_classes, not empty) with the most
   // votes over `cells`, else the most `named` (front class -> voxels of the
   // fronts things took with it), else the first.
