@@ -214,6 +214,15 @@ uint16_t MapResolver::ConfusedWinner(const std::vector<size_t>& keep,
   return winner;
 }
 
+void MapResolver::JoinClasses(uint32_t keep, uint32_t gone, uint16_t winner) {
+  std::set<uint16_t>& joined = part_classes_[keep];
+  joined.insert({owner_class_[keep], owner_class_[gone]});
+  if (const auto it = part_classes_.find(gone); it != part_classes_.end()) {
+    joined.insert(it->second.begin(), it->second.end());
+  }
+  owner_class_[keep] = winner;
+}
+
 void MapResolver::MergeByMasks() {
   Members members = ThingMembers();
   MaskHolders holders;
@@ -299,11 +308,11 @@ void MapResolver::MergeByMasks() {
     }
     const bool x_keeps = members[x].size() >= members[y].size();
     const uint32_t keep = x_keeps ? x : y, gone = x_keeps ? y : x;
-    const uint32_t piece_group = link.piece != 0 ? find(link.piece) : 0;
     const uint16_t ck = owner_class_[keep], cg = owner_class_[gone];
     uint16_t winner = ck;
     if (ck != cg) {
       // An attached piece of another class takes the object's class.
+      const uint32_t piece_group = link.piece != 0 ? find(link.piece) : 0;
       const uint16_t attached_to =
           piece_group == 0 ? kNoClass : (piece_group == keep ? cg : ck);
       bool fits = true;
@@ -331,14 +340,7 @@ void MapResolver::MergeByMasks() {
                          members[gone].end());
     parts[keep].insert(parts[keep].end(), parts[gone].begin(),
                        parts[gone].end());
-    if (ck != cg) {
-      owner_class_[keep] = winner;
-      std::set<uint16_t>& joined = part_classes_[keep];
-      joined.insert({ck, cg});
-      if (const auto it = part_classes_.find(gone); it != part_classes_.end()) {
-        joined.insert(it->second.begin(), it->second.end());
-      }
-    }
+    if (ck != cg) JoinClasses(keep, gone, winner);
     ++result_.merged_objects;
   }
   for (Cell& c : cells_) {

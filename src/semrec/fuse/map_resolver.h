@@ -377,6 +377,9 @@ class MapResolver {
   // side by side are also touching, and one mask may hold a row of them);
   // the larger keeps its id.
   void MergeByMasks();
+  // Group `gone` joins `keep` (of another class): `keep` takes `winner` and
+  // remembers the classes its parts had (part_classes_).
+  void JoinClasses(uint32_t keep, uint32_t gone, uint16_t winner);
   // The class two groups of confused classes take together (`keep` the
   // larger's cells, of class ck; `gone` the other's, of cg; `attached_to`:
   // the class an attached piece takes, else kNoClass): the one more views
