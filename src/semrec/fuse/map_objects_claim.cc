@@ -39,6 +39,15 @@ std::map<uint32_t, size_t> MapResolver::ThingSizes() const {
   return size;
 }
 
+std::vector<size_t> MapResolver::StrandedAmong(
+    const std::vector<size_t>& cells) const {
+  std::vector<size_t> stranded;
+  for (size_t k : cells) {
+    if (IsStranded(cells_[k])) stranded.push_back(k);
+  }
+  return stranded;
+}
+
 MapResolver::Members MapResolver::ThingMembers() const {
   Members members;
   for (size_t i = 0; i < cells_.size(); ++i) {
@@ -97,10 +106,7 @@ void MapResolver::ClaimFronts() {
 bool MapResolver::FitsFront(FrontClaim* s, uint32_t id, size_t f) {
   const auto [it, fresh] = s->may_take.try_emplace({id, f}, false);
   if (!fresh) return it->second;
-  std::vector<size_t> rest;
-  for (size_t k : s->fc.on[f]) {
-    if (IsStranded(cells_[k])) rest.push_back(k);
-  }
+  const std::vector<size_t> rest = StrandedAmong(s->fc.on[f]);
   // Objects made from fronts have no members yet: they take every front
   // they reach (they are that furniture; front classes have no size).
   it->second = StillFits(s->members[id], owner_class_[id], rest);
@@ -245,11 +251,9 @@ bool MapResolver::TakeFrontClass(uint32_t id, const std::vector<size_t>& cells,
                                  const std::map<uint16_t, float>& named) {
   const uint16_t was = owner_class_[id];
   const uint16_t cls = FrontClassOf(cells, named);
-  std::vector<size_t> rest;
-  for (size_t k : on_front) {
-    if (IsStranded(cells_[k])) rest.push_back(k);
+  if (cls == was || !StillFits(cells, cls, StrandedAmong(on_front))) {
+    return false;
   }
-  if (cls == was || !StillFits(cells, cls, rest)) return false;
   spdlog::debug("object {} of class {} lies on a furniture front: class {}", id,
                 was, cls);
   owner_class_[id] = cls;

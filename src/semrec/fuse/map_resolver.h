@@ -437,6 +437,8 @@ class MapResolver {
     std::map<uint32_t, size_t> on_fronts;
   };
   FrontCells CellsOnFronts() const;
+  // The stranded ones among `cells` (a front's rest a thing may take).
+  std::vector<size_t> StrandedAmong(const std::vector<size_t>& cells) const;
   // ClaimFronts' state: the cells on the fronts (and the first front each
   // lies on), each thing's cells with the fronts it takes, whether a thing
   // may spread over a front's stranded voxels (its class's size, StillFits;
