@@ -87,20 +87,16 @@ int Run(int argc, char** argv) {
          o->masks.dense_stride = 2;
          o->masks.covered_similarity = 0.8f;
          o->masks.model.mask_margin_logits = 0.0f;
-       }},
-      {"stride 4, covered 0.8",
-       [](auto* o) {
-         o->masks.covered_similarity = 0.8f;
-         o->masks.model.mask_margin_logits = 0.0f;
+         o->masks.model.decoder_kernel = false;
        }},
       {"stride 4, covered 0.6",
-       [](auto* o) { o->masks.model.mask_margin_logits = 0.0f; }},
-      {"+ mask margin 8 (default)", [](auto*) {}},
-      {"default, mask margin 4",
-       [](auto* o) { o->masks.model.mask_margin_logits = 4.0f; }},
-      {"default, mask margin 2",
-       [](auto* o) { o->masks.model.mask_margin_logits = 2.0f; }},
-      {"default, stride 8", [](auto* o) { o->masks.dense_stride = 8; }},
+       [](auto* o) {
+         o->masks.model.mask_margin_logits = 0.0f;
+         o->masks.model.decoder_kernel = false;
+       }},
+      {"+ mask margin 8",
+       [](auto* o) { o->masks.model.decoder_kernel = false; }},
+      {"+ decoder kernel (default)", [](auto*) {}},
       {"default + rejected sim. 0.6",
        [](auto* o) { o->masks.rejected_similarity = 0.6f; }},
       {"default + rejected sim. 0",

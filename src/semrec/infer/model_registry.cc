@@ -127,6 +127,7 @@ ModelEntry ParseEntry(const std::string& name, const YAML::Node& node) {
     e.split_image = Scalar<std::string>(split, "image");
     e.split_prompt = Scalar<std::string>(split, "prompt");
     e.split_masks = ScalarOr<std::string>(split, "masks", "");
+    e.split_kernel = ScalarOr<std::string>(split, "kernel", "");
   }
   if (const YAML::Node off = node["disable_optimizers"]) {
     if (!off.IsSequence()) {
@@ -194,7 +195,7 @@ ModelRegistry ModelRegistry::Load(const std::filesystem::path& path) {
   for (const std::string& name : registry.Names()) {
     const ModelEntry& e = registry.Get(name);
     for (const std::string* part :
-         {&e.split_image, &e.split_prompt, &e.split_masks}) {
+         {&e.split_image, &e.split_prompt, &e.split_masks, &e.split_kernel}) {
       if (part->empty()) continue;
       if (!registry.Contains(*part) ||
           registry.Get(*part).role != "mask_decoder_part") {

@@ -72,10 +72,14 @@ struct ModelEntry {
   /// Mask decoders: registry names of the parts made from this decoder by
   /// scripts/split_sam_decoder.py (role mask_decoder_part): `split_image`
   /// runs once per image, `split_prompt` per prompt, `split_masks` (optional)
-  /// the mask upscaling per prompt whose mask is worth it. Empty = not split.
+  /// the mask upscaling per prompt whose mask is worth it; `split_kernel`
+  /// (optional) the weights of semrec's own decoder kernel
+  /// (scripts/export_sam_kernel.py), which replaces the image and prompt
+  /// parts. Empty = not split.
   std::string split_image;
   std::string split_prompt;
   std::string split_masks;
+  std::string split_kernel;
   /// ONNX Runtime graph optimisers to switch off for this model (names as in
   /// ONNX Runtime's graph_transformer_utils.cc), where one makes it slower.
   std::vector<std::string> disabled_optimizers;

@@ -47,6 +47,13 @@ struct PromptableOptions {
   /// default 8 decodes full frames 1.16x faster than 0 with the same masks
   /// but one of 153 (4 gives 1.18x, the same; 2 loses one more).
   float mask_margin_logits = 8.0f;
+  /// With a split decoder whose mask part takes any tokens, run the image
+  /// and prompt parts as semrec's own kernel (segment/sam_kernel.h) when the
+  /// registry names its weights (`split: kernel:`, made by scripts/setup)
+  /// and they are installed: the same masks up to float rounding, each
+  /// prompt in one pass per block of image tokens instead of ONNX Runtime's
+  /// op-by-op passes over all of them. false = ONNX Runtime's parts.
+  bool decoder_kernel = true;
   void Check() const;
 
   /// The registry's `<prefix>_encoder` and `<prefix>_decoder` (backend as the

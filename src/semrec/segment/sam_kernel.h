@@ -1,0 +1,128 @@
+// SAM's mask decoder, per prompt, as semrec's own CPU kernel. ONNX Runtime
+// runs the prompt part op by op, each op one pass over the 4096 x 256 image
+// tokens (adds, layer norms, softmaxes: about a third of a prompt's time);
+// here each pass works on a block of 64 image tokens while it is in the
+// cache, the softmaxes over all tokens run online (a running maximum and
+// sum), and the products use the CPU's widest vectors (sam_kernel_ops.h).
+// Same arithmetic as the export up to float rounding: the outputs are the
+// split prompt part's (docs/models.md), for the mask part to upscale.
+// Weights: scripts/export_sam_kernel.py (run by scripts/setup).
+#pragma once
+
+#include <array>
+#include <filesystem>
+#include <map>
+#include <string>
+#include <vector>
+
+namespace semrec::segment {
+
+class SamKernel {
+ public:
+  /// Loads the weights `path` (written by scripts/export_sam_kernel.py).
+  /// Throws IoError when it cannot be read, FormatError (naming the file and
+  /// the tensor) when it is not such a file or a tensor has the wrong shape.
+  explicit SamKernel(const std::filesystem::path& path);
+
+  /// What the decoder needs of one image, computed once per image.
+  struct Image {
+    int tokens = 0;           // h x w of the embedding grid (SAM: 64 x 64)
+    std::vector<float> keys;  // [tokens x 256]: embedding + no-mask
+    std::vector<float> pe;    // [tokens x 256]: positional encoding
+    std::vector<float> t2i_keys_t;   // [128 x tokens]: layer 0's keys
+    std::vector<float> t2i_values;   // [tokens x 128]
+    std::vector<float> i2t_queries;  // [tokens x 128]
+  };
+  /// From the image encoder's output [1, 256, h, w] (values, shape).
+  Image Prepare(const std::vector<float>& embedding,
+                const std::vector<int64_t>& shape) const;
+
+  struct Output {
+    float predicted_iou = 0;              // of the chosen mask
+    std::vector<float> upscaling_tokens;  // [tokens x 256]
+    std::vector<float> mask_hyper;        // [32]
+    std::vector<float> preview;           // [tokens]: the chosen mask's
+  };
+  /// Decodes one prompt: points in the model frame (the encoder's input,
+  /// SAM: 1024 px) with SAM's labels (1 foreground, 0 background, 2 / 3 box
+  /// corners, -1 padding). The mask is chosen as SAM's export does.
+  /// `out`'s buffers are reused (a caller keeping one per thread saves the
+  /// allocations). Thread-safe.
+  void Decode(const Image& image,
+              const std::vector<std::array<float, 2>>& points,
+              const std::vector<float>& labels, Output* out) const;
+
+ private:
+  struct Linear {
+    std::vector<float> w;  // [in x out]
+    std::vector<float> b;  // [out]
+    int in = 0, out = 0;
+  };
+  struct Norm {
+    std::vector<float> g, b;
+  };
+  struct Attention {
+    Linear q, k, v, o;
+  };
+  struct Layer {
+    Attention self_attn, t2i, i2t;
+    Linear mlp1, mlp2;
+    Norm norm1, norm2, norm3, norm4;
+  };
+  struct Scratch;
+  struct State;  // one prompt's tokens
+
+  // Rows x in -> rows x out.
+  std::vector<float> Apply(const Linear& l, const std::vector<float>& x,
+                           int rows) const;
+  // SAM's attention among the prompt's tokens (q, k, v: rows x 256).
+  std::vector<float> TokenAttention(const Attention& a,
+                                    const std::vector<float>& q,
+                                    const std::vector<float>& k,
+                                    const std::vector<float>& v,
+                                    int rows) const;
+  void TokenMlpAndNorm(const Layer& l, std::vector<float>* queries,
+                       int rows) const;
+  std::vector<float> HeadColumns(const std::vector<float>& x, const State& s,
+                                 float scale) const;
+  std::vector<float> HeadRows(const std::vector<float>& x,
+                              const State& s) const;
+  std::vector<float> Fold(const Linear& l, const std::vector<float>& columns,
+                          const State& s) const;
+  std::vector<float> AttentionOutput(const Attention& a,
+                                     std::vector<float>* acc,
+                                     const std::vector<float>& sum,
+                                     const State& s) const;
+  void AttendBlock(const float* keys_pe, const float* values, int nb,
+                   const std::vector<float>& folded, float* scores, float* max,
+                   float* sum, float* rescale, float* acc,
+                   const State& s) const;
+  void FirstLayerImageSide(const Image& image,
+                           const std::vector<float>& layer0_tokens,
+                           State* s) const;
+  void SecondLayerImageSide(const Image& image, State* s,
+                            float* upscaling_tokens) const;
+
+  std::map<std::string, std::vector<float>> LoadTensors(
+      const std::filesystem::path& path);
+
+  Layer layers_[2];
+  Attention final_;
+  Norm final_norm_;
+  Linear hyper_[4][3];
+  Linear iou_[3];
+  std::vector<float> pe_gaussian_;       // [2 x 128]
+  std::vector<float> not_a_point_;       // [256]
+  std::vector<float> point_embeddings_;  // [4 x 256]
+  std::vector<float> output_tokens_;     // [5 x 256]
+  std::vector<float> no_mask_;           // [256]
+  Linear preview1_, preview2_;           // [256 x 64], [64 x 32]
+  Norm preview_norm_;
+  float norm_eps_ = 1e-5f, preview_eps_ = 1e-6f;
+  float points_offset_ = 2.5f, first_mask_reweight_ = 1000.0f;
+  float input_size_ = 1024.0f;
+  int heads_ = 8;
+  std::filesystem::path path_;
+};
+
+}  // namespace semrec::segment

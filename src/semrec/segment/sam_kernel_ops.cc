@@ -1,0 +1,518 @@
+#include "semrec/segment/sam_kernel_ops.h"
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+
+#include "semrec/core/error.h"
+
+// Each operation is one template over the vector width (GCC/Clang vector
+// extensions), forced inline into a wrapper per instruction set that carries
+// the target attribute: the wrapper's body is compiled for that set, and no
+// out-of-line copy of shared code is (which the linker could pick for a CPU
+// without it).
+#define SEMREC_INLINE [[gnu::always_inline]] inline
+
+namespace semrec::segment::kernel_ops {
+namespace {
+
+template <int W>
+struct Lanes;
+template <>
+struct Lanes<16> {
+  typedef float F __attribute__((vector_size(64)));
+  typedef int32_t I __attribute__((vector_size(64)));
+};
+template <>
+struct Lanes<8> {
+  typedef float F __attribute__((vector_size(32)));
+  typedef int32_t I __attribute__((vector_size(32)));
+};
+template <>
+struct Lanes<4> {
+  typedef float F __attribute__((vector_size(16)));
+  typedef int32_t I __attribute__((vector_size(16)));
+};
+
+template <int W>
+using F = typename Lanes<W>::F;
+template <int W>
+using I = typename Lanes<W>::I;
+
+template <int W>
+SEMREC_INLINE F<W> Load(const float* p) {
+  F<W> v;
+  std::memcpy(&v, p, sizeof v);
+  return v;
+}
+template <int W>
+SEMREC_INLINE void Store(float* p, F<W> v) {
+  std::memcpy(p, &v, sizeof v);
+}
+template <int W>
+SEMREC_INLINE F<W> Splat(float s) {
+  return F<W>{} + s;
+}
+template <int W>
+SEMREC_INLINE float Sum(F<W> v) {
+  float s = 0;
+  for (int i = 0; i < W; ++i) s += v[i];
+  return s;
+}
+template <int W>
+SEMREC_INLINE F<W> Max(F<W> a, F<W> b) {
+  return a > b ? a : b;
+}
+
+// exp(x) as Cephes' expf: x = n ln 2 + r, |r| <= ln 2 / 2, a degree-6
+// polynomial for exp(r), 2^n through the exponent bits.
+template <int W>
+SEMREC_INLINE F<W> ExpV(F<W> x) {
+  x = Max<W>(x, Splat<W>(-87.3f));
+  x = x < Splat<W>(88.3f) ? x : Splat<W>(88.3f);
+  const F<W> t = x * 1.44269504088896341f + 0.5f;
+  I<W> n = __builtin_convertvector(t, I<W>);
+  n += (t < __builtin_convertvector(n, F<W>));  // floor: -1 where true
+  const F<W> nf = __builtin_convertvector(n, F<W>);
+  const F<W> r = x - nf * 0.693359375f + nf * 2.12194440e-4f;
+  F<W> p = Splat<W>(1.9875691500e-4f);
+  p = p * r + 1.3981999507e-3f;
+  p = p * r + 8.3334519073e-3f;
+  p = p * r + 4.1665795894e-2f;
+  p = p * r + 1.6666665459e-1f;
+  p = p * r + 5.0000001201e-1f;
+  const F<W> y = p * r * r + r + 1.0f;
+  const I<W> bits = (n + 127) << 23;
+  F<W> scale;
+  std::memcpy(&scale, &bits, sizeof scale);
+  return y * scale;
+}
+
+// erf(x) after Abramowitz & Stegun 7.1.26 (absolute error <= 1.5e-7).
+template <int W>
+SEMREC_INLINE F<W> ErfV(F<W> x) {
+  const F<W> a = x < 0.0f ? -x : x;
+  const F<W> t = 1.0f / (1.0f + 0.3275911f * a);
+  F<W> p = Splat<W>(1.061405429f);
+  p = p * t - 1.453152027f;
+  p = p * t + 1.421413741f;
+  p = p * t - 0.284496736f;
+  p = p * t + 0.254829592f;
+  const F<W> y = 1.0f - p * t * ExpV<W>(-a * a);
+  return x < 0.0f ? -y : y;
+}
+
+// One MR x (NV * W) tile of C over the whole k.
+template <int W, int MR, int NV>
+SEMREC_INLINE void Tile(int k, const float* a, long a_row, long a_col,
+                        const float* b, long ldb, float* c, long ldc,
+                        bool accumulate) {
+  F<W> s[MR][NV];
+#pragma GCC unroll 8
+  for (int i = 0; i < MR; ++i) {
+#pragma GCC unroll 4
+    for (int j = 0; j < NV; ++j) {
+      s[i][j] = accumulate ? Load<W>(c + i * ldc + j * W) : F<W>{};
+    }
+  }
+  for (int p = 0; p < k; ++p) {
+    F<W> bv[NV];
+#pragma GCC unroll 4
+    for (int j = 0; j < NV; ++j) bv[j] = Load<W>(b + p * ldb + j * W);
+#pragma GCC unroll 8
+    for (int i = 0; i < MR; ++i) {
+      // A scalar times a vector broadcasts it (Splat's 0 + s would add).
+      const float av = a[i * a_row + p * a_col];
+#pragma GCC unroll 4
+      for (int j = 0; j < NV; ++j) s[i][j] += av * bv[j];
+    }
+  }
+#pragma GCC unroll 8
+  for (int i = 0; i < MR; ++i) {
+#pragma GCC unroll 4
+    for (int j = 0; j < NV; ++j) Store<W>(c + i * ldc + j * W, s[i][j]);
+  }
+}
+
+template <int W, int MR, int NV>
+SEMREC_INLINE void Columns(int m, int k, const float* a, long a_row, long a_col,
+                           const float* b, long ldb, float* c, long ldc,
+                           bool accumulate) {
+  static_assert(MR <= 8, "the remainder switch covers up to 7 rows");
+  int i = 0;
+  for (; i + MR <= m; i += MR) {
+    Tile<W, MR, NV>(k, a + i * a_row, a_row, a_col, b, ldb, c + i * ldc, ldc,
+                    accumulate);
+  }
+  // The rows left, as one shorter tile (a prompt's 7 tokens read each
+  // weight once, not 7 times).
+  const float* ar = a + i * a_row;
+  float* cr = c + i * ldc;
+  switch (m - i) {
+    case 0:
+      break;
+#define SEMREC_ROWS(R)                                                  \
+  case R:                                                               \
+    if constexpr (R < MR) {                                             \
+      Tile<W, R, NV>(k, ar, a_row, a_col, b, ldb, cr, ldc, accumulate); \
+    }                                                                   \
+    break;
+      SEMREC_ROWS(1)
+      SEMREC_ROWS(2)
+      SEMREC_ROWS(3)
+      SEMREC_ROWS(4)
+      SEMREC_ROWS(5)
+      SEMREC_ROWS(6)
+      SEMREC_ROWS(7)
+#undef SEMREC_ROWS
+    default:
+      break;
+  }
+}
+
+template <int W, int MR, int NV>
+SEMREC_INLINE void GemmT(int m, int n, int k, const float* a, long a_row,
+                         long a_col, const float* b, long ldb, float* c,
+                         long ldc, bool accumulate) {
+  int j = 0;
+  for (; j + NV * W <= n; j += NV * W) {
+    Columns<W, MR, NV>(m, k, a, a_row, a_col, b + j, ldb, c + j, ldc,
+                       accumulate);
+  }
+  for (; j + W <= n; j += W) {
+    Columns<W, MR, 1>(m, k, a, a_row, a_col, b + j, ldb, c + j, ldc,
+                      accumulate);
+  }
+  for (; j < n; ++j) {
+    for (int i = 0; i < m; ++i) {
+      float s = accumulate ? c[i * ldc + j] : 0.0f;
+      for (int p = 0; p < k; ++p)
+        s += a[i * a_row + p * a_col] * b[p * ldb + j];
+      c[i * ldc + j] = s;
+    }
+  }
+}
+
+template <int W>
+SEMREC_INLINE void AddT(float* out, const float* a, const float* b, size_t n) {
+  size_t i = 0;
+  for (; i + W <= n; i += W) Store<W>(out + i, Load<W>(a + i) + Load<W>(b + i));
+  for (; i < n; ++i) out[i] = a[i] + b[i];
+}
+
+template <int W>
+SEMREC_INLINE void SubT(float* out, const float* a, const float* b, size_t n) {
+  size_t i = 0;
+  for (; i + W <= n; i += W) Store<W>(out + i, Load<W>(a + i) - Load<W>(b + i));
+  for (; i < n; ++i) out[i] = a[i] - b[i];
+}
+
+template <int W>
+SEMREC_INLINE void LayerNormRowsT(float* x, int rows, int cols, long ld,
+                                  const float* g, const float* beta,
+                                  float eps) {
+  for (int r = 0; r < rows; ++r) {
+    float* row = x + r * ld;
+    F<W> acc{};
+    int c = 0;
+    float tail = 0;
+    for (; c + W <= cols; c += W) acc += Load<W>(row + c);
+    for (; c < cols; ++c) tail += row[c];
+    const float mean = (Sum<W>(acc) + tail) / static_cast<float>(cols);
+    F<W> sq{};
+    tail = 0;
+    for (c = 0; c + W <= cols; c += W) {
+      const F<W> d = Load<W>(row + c) - mean;
+      sq += d * d;
+    }
+    for (; c < cols; ++c) tail += (row[c] - mean) * (row[c] - mean);
+    const float inv =
+        1.0f / std::sqrt((Sum<W>(sq) + tail) / static_cast<float>(cols) + eps);
+    for (c = 0; c + W <= cols; c += W) {
+      Store<W>(row + c, (Load<W>(row + c) - mean) * inv * Load<W>(g + c) +
+                            Load<W>(beta + c));
+    }
+    for (; c < cols; ++c) row[c] = (row[c] - mean) * inv * g[c] + beta[c];
+  }
+}
+
+template <int W>
+SEMREC_INLINE void ExpT(float* x, size_t n) {
+  size_t i = 0;
+  for (; i + W <= n; i += W) Store<W>(x + i, ExpV<W>(Load<W>(x + i)));
+  if (i < n) {
+    float buf[W] = {};
+    std::copy(x + i, x + n, buf);
+    const F<W> v = ExpV<W>(Load<W>(buf));
+    Store<W>(buf, v);
+    std::copy(buf, buf + (n - i), x + i);
+  }
+}
+
+// (No lambdas here: they would be compiled without the target attribute.)
+template <int W>
+SEMREC_INLINE F<W> GeluV(F<W> v) {
+  return v * 0.5f * (1.0f + ErfV<W>(v * 0.70710678118654752f));
+}
+
+template <int W>
+SEMREC_INLINE void GeluT(float* x, size_t n) {
+  size_t i = 0;
+  for (; i + W <= n; i += W) Store<W>(x + i, GeluV<W>(Load<W>(x + i)));
+  if (i < n) {
+    float buf[W] = {};
+    std::copy(x + i, x + n, buf);
+    Store<W>(buf, GeluV<W>(Load<W>(buf)));
+    std::copy(buf, buf + (n - i), x + i);
+  }
+}
+
+template <int W>
+SEMREC_INLINE void SoftmaxRowsT(float* s, int rows, int cols, long ld) {
+  for (int r = 0; r < rows; ++r) {
+    float* row = s + r * ld;
+    F<W> mv = Splat<W>(-1e30f);
+    int c = 0;
+    for (; c + W <= cols; c += W) mv = Max<W>(mv, Load<W>(row + c));
+    float m = -1e30f;
+    for (int i = 0; i < W; ++i) m = std::max(m, mv[i]);
+    for (; c < cols; ++c) m = std::max(m, row[c]);
+    const F<W> msplat = Splat<W>(m);
+    for (c = 0; c + W <= cols; c += W)
+      Store<W>(row + c, Load<W>(row + c) - msplat);
+    for (; c < cols; ++c) row[c] -= m;
+    ExpT<W>(row, static_cast<size_t>(cols));
+    F<W> sv{};
+    float tail = 0;
+    for (c = 0; c + W <= cols; c += W) sv += Load<W>(row + c);
+    for (; c < cols; ++c) tail += row[c];
+    const float inv = 1.0f / (Sum<W>(sv) + tail);
+    for (c = 0; c + W <= cols; c += W)
+      Store<W>(row + c, Load<W>(row + c) * inv);
+    for (; c < cols; ++c) row[c] *= inv;
+  }
+}
+
+template <int W>
+SEMREC_INLINE void SoftmaxHeadsT(float* s, int rows, long ld, int tokens,
+                                 const float* bias) {
+  const size_t cols = static_cast<size_t>(tokens) * 8;
+  for (int r = 0; r < rows; ++r) {
+    float* row = s + r * ld;
+    if (bias != nullptr) AddT<W>(row, row, bias, cols);
+    F<8> m = Load<8>(row);
+    for (int t = 1; t < tokens; ++t) m = Max<8>(m, Load<8>(row + t * 8));
+    for (int t = 0; t < tokens; ++t) {
+      Store<8>(row + t * 8, Load<8>(row + t * 8) - m);
+    }
+    ExpT<W>(row, cols);
+    F<8> sum = Load<8>(row);
+    for (int t = 1; t < tokens; ++t) sum += Load<8>(row + t * 8);
+    const F<8> inv = 1.0f / sum;
+    for (int t = 0; t < tokens; ++t) {
+      Store<8>(row + t * 8, Load<8>(row + t * 8) * inv);
+    }
+  }
+}
+
+template <int W>
+SEMREC_INLINE void AddBiasT(float* out, const float* in, int rows, int cols,
+                            const float* bias) {
+  for (int r = 0; r < rows; ++r) {
+    const size_t at = static_cast<size_t>(r) * cols;
+    AddT<W>(out + at, in + at, bias, static_cast<size_t>(cols));
+  }
+}
+
+template <int W>
+SEMREC_INLINE bool OnlineSoftmaxColumnsT(float* s, int rows, int cols, long ld,
+                                         float* max, float* sum,
+                                         float* rescale) {
+  constexpr float kSlack = 16.0f;
+  bool moved = false;
+  float block[256];
+  for (int c0 = 0; c0 < cols; c0 += 256) {
+    const int n = std::min(256, cols - c0);
+    std::fill(block, block + n, -1e30f);
+    for (int r = 0; r < rows; ++r) {
+      const float* row = s + r * ld + c0;
+      for (int c = 0; c < n; ++c) block[c] = std::max(block[c], row[c]);
+    }
+    for (int c = 0; c < n; ++c) {
+      float& m = max[c0 + c];
+      if (block[c] > m + kSlack || m <= -1e29f) {
+        rescale[c0 + c] = m - block[c];
+        m = block[c];
+        moved = true;
+      } else {
+        rescale[c0 + c] = 0.0f;
+      }
+    }
+    if (moved) ExpT<W>(rescale + c0, static_cast<size_t>(n));
+    for (int r = 0; r < rows; ++r) {
+      float* row = s + r * ld + c0;
+      SubT<W>(row, row, max + c0, static_cast<size_t>(n));
+      ExpT<W>(row, static_cast<size_t>(n));
+    }
+    for (int c = 0; c < n; ++c) block[c] = 0.0f;
+    for (int r = 0; r < rows; ++r) {
+      AddT<W>(block, block, s + r * ld + c0, static_cast<size_t>(n));
+    }
+    for (int c = 0; c < n; ++c) {
+      sum[c0 + c] =
+          (moved ? sum[c0 + c] * rescale[c0 + c] : sum[c0 + c]) + block[c];
+    }
+  }
+  return moved;
+}
+
+// The operations of one instruction set.
+struct Ops {
+  const char* name;
+  void (*gemm)(int, int, int, const float*, long, long, const float*, long,
+               float*, long, bool);
+  void (*add)(float*, const float*, const float*, size_t);
+  void (*layer_norm)(float*, int, int, long, const float*, const float*, float);
+  void (*softmax_rows)(float*, int, int, long);
+  void (*softmax_heads)(float*, int, long, int, const float*);
+  void (*add_bias)(float*, const float*, int, int, const float*);
+  bool (*online_softmax)(float*, int, int, long, float*, float*, float*);
+  void (*gelu)(float*, size_t);
+  void (*exp)(float*, size_t);
+};
+
+#define SEMREC_OPS(SUFFIX, TARGET, W, MR, NV)                                  \
+  TARGET void Gemm##SUFFIX(int m, int n, int k, const float* a, long a_row,    \
+                           long a_col, const float* b, long ldb, float* c,     \
+                           long ldc, bool accumulate) {                        \
+    GemmT<W, MR, NV>(m, n, k, a, a_row, a_col, b, ldb, c, ldc, accumulate);    \
+  }                                                                            \
+  TARGET void Add##SUFFIX(float* out, const float* a, const float* b,          \
+                          size_t n) {                                          \
+    AddT<W>(out, a, b, n);                                                     \
+  }                                                                            \
+  TARGET void LayerNorm##SUFFIX(float* x, int rows, int cols, long ld,         \
+                                const float* g, const float* beta,             \
+                                float eps) {                                   \
+    LayerNormRowsT<W>(x, rows, cols, ld, g, beta, eps);                        \
+  }                                                                            \
+  TARGET void SoftmaxRows##SUFFIX(float* s, int rows, int cols, long ld) {     \
+    SoftmaxRowsT<W>(s, rows, cols, ld);                                        \
+  }                                                                            \
+  TARGET void SoftmaxHeads##SUFFIX(float* s, int rows, long ld, int tokens,    \
+                                   const float* bias) {                        \
+    SoftmaxHeadsT<W>(s, rows, ld, tokens, bias);                               \
+  }                                                                            \
+  TARGET void AddBias##SUFFIX(float* out, const float* in, int rows, int cols, \
+                              const float* bias) {                             \
+    AddBiasT<W>(out, in, rows, cols, bias);                                    \
+  }                                                                            \
+  TARGET bool OnlineSoftmax##SUFFIX(float* s, int rows, int cols, long ld,     \
+                                    float* max, float* sum, float* rescale) {  \
+    return OnlineSoftmaxColumnsT<W>(s, rows, cols, ld, max, sum, rescale);     \
+  }                                                                            \
+  TARGET void Gelu##SUFFIX(float* x, size_t n) { GeluT<W>(x, n); }             \
+  TARGET void Exp##SUFFIX(float* x, size_t n) { ExpT<W>(x, n); }               \
+  constexpr Ops kOps##SUFFIX = {                                               \
+      #SUFFIX,           Gemm##SUFFIX,          Add##SUFFIX,                   \
+      LayerNorm##SUFFIX, SoftmaxRows##SUFFIX,   SoftmaxHeads##SUFFIX,          \
+      AddBias##SUFFIX,   OnlineSoftmax##SUFFIX, Gelu##SUFFIX,                  \
+      Exp##SUFFIX};
+
+#if defined(__x86_64__)
+// AVX-512: 8 x 32 tiles (16 accumulators of 32 registers).
+SEMREC_OPS(avx512, __attribute__((target("avx512f,avx512vl,avx512dq,fma"))), 16,
+           8, 2)
+// AVX2: 4 x 16 tiles (8 accumulators of 16 registers).
+SEMREC_OPS(avx2, __attribute__((target("avx2,fma"))), 8, 4, 2)
+#endif
+SEMREC_OPS(baseline, , 4, 4, 2)
+
+std::vector<const Ops*> Supported() {
+  std::vector<const Ops*> levels;
+#if defined(__x86_64__)
+  __builtin_cpu_init();
+  if (__builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512vl") &&
+      __builtin_cpu_supports("avx512dq") && __builtin_cpu_supports("fma")) {
+    levels.push_back(&kOpsavx512);
+  }
+  if (__builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma")) {
+    levels.push_back(&kOpsavx2);
+  }
+#endif
+  levels.push_back(&kOpsbaseline);
+  return levels;
+}
+
+std::atomic<const Ops*> g_ops{nullptr};
+
+const Ops& Current() {
+  const Ops* ops = g_ops.load(std::memory_order_acquire);
+  if (ops == nullptr) {
+    ops = Supported().front();
+    g_ops.store(ops, std::memory_order_release);
+  }
+  return *ops;
+}
+
+}  // namespace
+
+const char* SimdLevel() { return Current().name; }
+
+std::vector<std::string> SupportedLevels() {
+  std::vector<std::string> names;
+  for (const Ops* ops : Supported()) names.emplace_back(ops->name);
+  return names;
+}
+
+void UseLevel(const std::string& level) {
+  for (const Ops* ops : Supported()) {
+    if (level.empty() || level == ops->name) {
+      g_ops.store(ops, std::memory_order_release);
+      return;
+    }
+  }
+  throw InvalidArgument("decoder kernel: instruction set '" + level +
+                        "' is not supported by this CPU");
+}
+
+void Gemm(int m, int n, int k, const float* a, long a_row, long a_col,
+          const float* b, long ldb, float* c, long ldc, bool accumulate) {
+  if (m <= 0 || n <= 0) return;
+  Current().gemm(m, n, k, a, a_row, a_col, b, ldb, c, ldc, accumulate);
+}
+
+void Add(float* out, const float* a, const float* b, size_t n) {
+  Current().add(out, a, b, n);
+}
+
+void LayerNormRows(float* x, int rows, int cols, long ld, const float* g,
+                   const float* beta, float eps) {
+  Current().layer_norm(x, rows, cols, ld, g, beta, eps);
+}
+
+void SoftmaxRows(float* s, int rows, int cols, long ld) {
+  Current().softmax_rows(s, rows, cols, ld);
+}
+
+void SoftmaxHeads(float* s, int rows, long ld, int tokens, const float* bias) {
+  Current().softmax_heads(s, rows, ld, tokens, bias);
+}
+
+void AddBias(float* out, const float* in, int rows, int cols,
+             const float* bias) {
+  Current().add_bias(out, in, rows, cols, bias);
+}
+
+bool OnlineSoftmaxColumns(float* s, int rows, int cols, long ld, float* max,
+                          float* sum, float* rescale) {
+  return Current().online_softmax(s, rows, cols, ld, max, sum, rescale);
+}
+
+void Gelu(float* x, size_t n) { Current().gelu(x, n); }
+
+void Exp(float* x, size_t n) { Current().exp(x, n); }
+
+}  // namespace semrec::segment::kernel_ops

@@ -1,0 +1,66 @@
+// The few dense float operations SAM's decoder kernel (sam_kernel.h) is made
+// of, each compiled for AVX-512, AVX2 + FMA and baseline x86-64 and chosen
+// once at run time for the CPU (the build targets baseline x86-64, where
+// they run several times slower). Row-major matrices with explicit strides.
+#pragma once
+
+#include <cstddef>
+#include <string>
+#include <vector>
+
+namespace semrec::segment::kernel_ops {
+
+/// The instruction set in use: "avx512", "avx2" or "baseline".
+const char* SimdLevel();
+/// The instruction sets this CPU runs, best first (of "avx512", "avx2",
+/// "baseline").
+std::vector<std::string> SupportedLevels();
+/// Uses `level` (one of SupportedLevels(): tests compare them), "" the best.
+/// Throws InvalidArgument for another.
+void UseLevel(const std::string& level);
+
+/// C[m x n] (row stride ldc) = (accumulate ? C : 0) + A B, where A(i, p) is
+/// a[i * a_row + p * a_col] (a transposed A: a_row = 1) and B is row-major
+/// [k x n] with row stride ldb.
+void Gemm(int m, int n, int k, const float* a, long a_row, long a_col,
+          const float* b, long ldb, float* c, long ldc, bool accumulate);
+
+/// out[i] = a[i] + b[i].
+void Add(float* out, const float* a, const float* b, size_t n);
+
+/// Each of `rows` rows of x (stride ld, `cols` values) becomes
+/// LayerNorm(x) * g + beta (biased variance, as PyTorch / ONNX).
+void LayerNormRows(float* x, int rows, int cols, long ld, const float* g,
+                   const float* beta, float eps);
+
+/// Each row of s (`cols` values, stride ld) becomes its softmax.
+void SoftmaxRows(float* s, int rows, int cols, long ld);
+
+/// Attention weights of 8 heads over a prompt's tokens: each row of s
+/// (stride ld) holds tokens x 8 scores, column t * 8 + h; with the bias
+/// (tokens x 8 values, or null) added, each head's scores become a softmax
+/// over the tokens.
+void SoftmaxHeads(float* s, int rows, long ld, int tokens, const float* bias);
+
+/// out (rows x cols, dense) = in (rows x cols, dense) + bias per row.
+void AddBias(float* out, const float* in, int rows, int cols,
+             const float* bias);
+
+/// One block of a softmax over many rows, column by column (a column per
+/// attention query): `max` and `sum` hold the running maximum and sum of
+/// exp(s - max) of each of the `cols` columns over the blocks so far (start
+/// with max -1e30, sum 0). s (rows x cols, stride ld) becomes exp(s - max).
+/// The maximum moves only when a score exceeds it by more than 16 (exp of
+/// up to e^16 stays far from float's range), so the caller seldom rescales:
+/// returns whether it must, by `rescale[c]` = exp(old max - new max), what it
+/// accumulated for column c.
+bool OnlineSoftmaxColumns(float* s, int rows, int cols, long ld, float* max,
+                          float* sum, float* rescale);
+
+/// x = GELU(x) = x / 2 (1 + erf(x / sqrt 2)) (erf to ~2e-7).
+void Gelu(float* x, size_t n);
+
+/// x = exp(x) (to ~2 ulp for the values softmax sees).
+void Exp(float* x, size_t n);
+
+}  // namespace semrec::segment::kernel_ops

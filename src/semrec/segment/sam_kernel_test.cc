@@ -1,0 +1,251 @@
+// The decoder kernel's operations against straightforward loops, on the
+// CPU's best instruction set and on the baseline one; the weights file's
+// errors. (The kernel against ONNX Runtime on the real decoder:
+// real_models_test.cc.)
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <random>
+#include <vector>
+
+#include "semrec/core/error.h"
+#include "semrec/segment/sam_kernel.h"
+#include "semrec/segment/sam_kernel_ops.h"
+#include "semrec/testing/test_util.h"
+
+namespace semrec::segment {
+namespace {
+
+namespace ops = kernel_ops;
+
+std::vector<float> Random(size_t n, unsigned seed, float scale = 1.0f) {
+  std::mt19937 rng(seed);
+  std::normal_distribution<float> d(0.0f, scale);
+  std::vector<float> v(n);
+  for (float& x : v) x = d(rng);
+  return v;
+}
+
+// Runs `test` on each instruction set this CPU has (the baseline on every
+// CPU), then goes back to the best.
+template <typename Test>
+void OnEachLevel(const Test& test) {
+  for (const std::string& level : ops::SupportedLevels()) {
+    SCOPED_TRACE("instruction set " + level);
+    ops::UseLevel(level);
+    test();
+  }
+  ops::UseLevel("");
+}
+
+TEST(KernelOps, GemmMatchesTheDefinition) {
+  OnEachLevel([] {
+    // Shapes as the kernel uses them (a prompt's 7 tokens, 56 head columns,
+    // blocks of 64 image tokens) and awkward ones (tails of every width).
+    const int shapes[][3] = {{64, 256, 56}, {7, 2048, 256}, {56, 256, 64},
+                             {64, 64, 128}, {5, 37, 19},    {1, 16, 4096},
+                             {9, 1, 32},    {13, 56, 7}};
+    for (const auto& [m, n, k] : shapes) {
+      for (const bool transposed : {false, true}) {
+        for (const bool accumulate : {false, true}) {
+          const std::vector<float> a = Random(static_cast<size_t>(m) * k, 1);
+          const std::vector<float> b = Random(static_cast<size_t>(k) * n, 2);
+          std::vector<float> c = Random(static_cast<size_t>(m) * n, 3);
+          std::vector<float> expected = c;
+          const long a_row = transposed ? 1 : k, a_col = transposed ? m : 1;
+          for (int i = 0; i < m; ++i) {
+            for (int j = 0; j < n; ++j) {
+              double s = accumulate ? expected[i * n + j] : 0.0;
+              for (int p = 0; p < k; ++p) {
+                s += static_cast<double>(a[i * a_row + p * a_col]) *
+                     b[p * n + j];
+              }
+              expected[i * n + j] = static_cast<float>(s);
+            }
+          }
+          ops::Gemm(m, n, k, a.data(), a_row, a_col, b.data(), n, c.data(), n,
+                    accumulate);
+          for (size_t i = 0; i < c.size(); ++i) {
+            ASSERT_NEAR(c[i], expected[i], 1e-4 * std::sqrt(k) + 1e-5)
+                << m << "x" << n << "x" << k << " transposed " << transposed
+                << " accumulate " << accumulate << " at " << i;
+          }
+        }
+      }
+    }
+  });
+}
+
+TEST(KernelOps, ElementWiseOperationsMatchTheDefinitions) {
+  OnEachLevel([] {
+    // exp over the range softmax sees, GELU with std::erf.
+    std::vector<float> x = Random(1003, 4, 6.0f);
+    std::vector<float> e = x;
+    ops::Exp(e.data(), e.size());
+    std::vector<float> g = x;
+    ops::Gelu(g.data(), g.size());
+    for (size_t i = 0; i < x.size(); ++i) {
+      const float v = std::min(x[i], 0.0f) - 20.0f * (i % 2);
+      float one = v;
+      ops::Exp(&one, 1);
+      ASSERT_NEAR(one, std::exp(v), 3e-7f * std::exp(v)) << v;
+      ASSERT_NEAR(e[i], std::exp(x[i]), 3e-7f * std::exp(x[i])) << x[i];
+      const double gelu = 0.5 * x[i] * (1.0 + std::erf(x[i] / std::sqrt(2.0)));
+      ASSERT_NEAR(g[i], gelu, 1e-6 * (1.0 + std::abs(x[i]))) << x[i];
+    }
+    // LayerNorm rows (a stride wider than the row).
+    const int rows = 5, cols = 70, ld = 80;
+    std::vector<float> ln = Random(static_cast<size_t>(rows) * ld, 5, 3.0f);
+    const std::vector<float> before = ln;
+    const std::vector<float> gamma = Random(cols, 6), beta = Random(cols, 7);
+    ops::LayerNormRows(ln.data(), rows, cols, ld, gamma.data(), beta.data(),
+                       1e-5f);
+    for (int r = 0; r < rows; ++r) {
+      double mean = 0, var = 0;
+      for (int c = 0; c < cols; ++c) mean += before[r * ld + c];
+      mean /= cols;
+      for (int c = 0; c < cols; ++c) {
+        var += (before[r * ld + c] - mean) * (before[r * ld + c] - mean);
+      }
+      var /= cols;
+      for (int c = 0; c < cols; ++c) {
+        const double y =
+            (before[r * ld + c] - mean) / std::sqrt(var + 1e-5) * gamma[c] +
+            beta[c];
+        ASSERT_NEAR(ln[r * ld + c], y, 1e-5 * (1 + std::abs(y)));
+      }
+      for (int c = cols; c < ld; ++c) {
+        ASSERT_EQ(ln[r * ld + c], before[r * ld + c]);  // beyond the row
+      }
+    }
+  });
+}
+
+TEST(KernelOps, SoftmaxesMatchTheDefinition) {
+  OnEachLevel([] {
+    // Rows.
+    const int rows = 3, cols = 4100;
+    std::vector<float> s = Random(static_cast<size_t>(rows) * cols, 8, 4.0f);
+    const std::vector<float> raw = s;
+    ops::SoftmaxRows(s.data(), rows, cols, cols);
+    for (int r = 0; r < rows; ++r) {
+      double z = 0;
+      for (int c = 0; c < cols; ++c) z += std::exp(raw[r * cols + c]);
+      for (int c = 0; c < cols; c += 97) {
+        ASSERT_NEAR(s[r * cols + c], std::exp(raw[r * cols + c]) / z, 1e-6);
+      }
+    }
+    // 8 heads over 7 tokens, column t * 8 + h, with a bias.
+    const int tokens = 7, ld = 64;
+    std::vector<float> h = Random(static_cast<size_t>(rows) * ld, 9, 3.0f);
+    const std::vector<float> bias = Random(tokens * 8, 10);
+    const std::vector<float> h_raw = h;
+    ops::SoftmaxHeads(h.data(), rows, ld, tokens, bias.data());
+    for (int r = 0; r < rows; ++r) {
+      for (int head = 0; head < 8; ++head) {
+        double z = 0;
+        for (int t = 0; t < tokens; ++t) {
+          z += std::exp(h_raw[r * ld + t * 8 + head] + bias[t * 8 + head]);
+        }
+        for (int t = 0; t < tokens; ++t) {
+          const double p =
+              std::exp(h_raw[r * ld + t * 8 + head] + bias[t * 8 + head]) / z;
+          ASSERT_NEAR(h[r * ld + t * 8 + head], p, 1e-6);
+        }
+      }
+    }
+  });
+}
+
+TEST(KernelOps, OnlineSoftmaxOverBlocksEqualsTheWholeSoftmax) {
+  OnEachLevel([] {
+    // A weighted sum over 300 rows in blocks of 64, with the running maximum,
+    // sum and rescaling, against the softmax over all rows at once. The scores
+    // grow along the rows so the maximum moves past its slack.
+    const int n = 300, cols = 5, channels = 3, block = 64;
+    std::vector<float> scores = Random(static_cast<size_t>(n) * cols, 11, 2.0f);
+    for (int i = 0; i < n; ++i)
+      scores[i * cols] += 0.2f * static_cast<float>(i);
+    const std::vector<float> values =
+        Random(static_cast<size_t>(n) * channels, 12);
+    std::vector<float> max(cols, -1e30f), sum(cols, 0.0f), rescale(cols);
+    std::vector<float> acc(static_cast<size_t>(cols) * channels, 0.0f);
+    int rescaled = 0;
+    for (int b0 = 0; b0 < n; b0 += block) {
+      const int nb = std::min(block, n - b0);
+      std::vector<float> s(scores.begin() + b0 * cols,
+                           scores.begin() + (b0 + nb) * cols);
+      if (ops::OnlineSoftmaxColumns(s.data(), nb, cols, cols, max.data(),
+                                    sum.data(), rescale.data())) {
+        ++rescaled;
+        for (int c = 0; c < cols; ++c) {
+          for (int k = 0; k < channels; ++k)
+            acc[c * channels + k] *= rescale[c];
+        }
+      }
+      ops::Gemm(cols, channels, nb, s.data(), 1, cols,
+                values.data() + b0 * channels, channels, acc.data(), channels,
+                true);
+    }
+    EXPECT_GE(rescaled, 2);  // the first block and the growing column
+    for (int c = 0; c < cols; ++c) {
+      double m = -1e30;
+      for (int i = 0; i < n; ++i) m = std::max<double>(m, scores[i * cols + c]);
+      double z = 0;
+      std::vector<double> w(channels, 0.0);
+      for (int i = 0; i < n; ++i) {
+        const double p = std::exp(scores[i * cols + c] - m);
+        z += p;
+        for (int k = 0; k < channels; ++k) w[k] += p * values[i * channels + k];
+      }
+      for (int k = 0; k < channels; ++k) {
+        ASSERT_NEAR(acc[c * channels + k] / sum[c], w[k] / z, 1e-5)
+            << "column " << c;
+      }
+    }
+  });
+}
+
+TEST(SamKernel, WeightFilesThatAreNotTheKernelsAreRefusedByName) {
+  semrec::testing::TempDir dir;
+  EXPECT_THROW(SamKernel(dir.path() / "missing.bin"), IoError);
+  const auto write = [&](const std::string& name, const std::string& text) {
+    std::ofstream(dir.path() / name, std::ios::binary) << text;
+    return dir.path() / name;
+  };
+  const auto expect_format_error = [](const std::filesystem::path& path,
+                                      const std::string& part) {
+    try {
+      SamKernel kernel(path);
+      ADD_FAILURE() << "accepted " << path;
+    } catch (const FormatError& e) {
+      EXPECT_NE(std::string(e.what()).find(path.string()), std::string::npos);
+      EXPECT_NE(std::string(e.what()).find(part), std::string::npos)
+          << e.what();
+    }
+  };
+  expect_format_error(write("onnx.bin", "\x08\x07garbage"), "JSON header");
+  expect_format_error(
+      write("other.bin", "{\"format\":\"other\",\"version\":1}\n"),
+      "semrec-sam-kernel");
+  const std::string scalars =
+      "\"scalars\":{\"heads\":8,\"norm_eps\":1e-5,\"preview_eps\":1e-6,"
+      "\"points_offset\":2.5,\"first_mask_reweight\":1000,"
+      "\"input_size\":1024}";
+  expect_format_error(write("empty.bin",
+                            "{\"format\":\"semrec-sam-kernel\",\"version\":1,"
+                            "\"tensors\":{}," +
+                                scalars + "}\n"),
+                      "layers.0.self_attn.q.w");
+  expect_format_error(
+      write("short.bin",
+            "{\"format\":\"semrec-sam-kernel\",\"version\":1,\"tensors\":{"
+            "\"no_mask\":{\"shape\":[256],\"offset\":0}}," +
+                scalars + "}\n" + std::string(100, '\0')),
+      "truncated");
+}
+
+}  // namespace
+}  // namespace semrec::segment
