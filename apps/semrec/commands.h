@@ -77,9 +77,11 @@ struct ModelArgs {
 };
 void AddModelArgs(CLI::App* cmd, ModelArgs* args);
 
-/// --mask-margin (segment, run): PromptableOptions::mask_margin_logits, set
-/// after the mask model's options come from the registry.
-void AddMaskMarginArg(CLI::App* cmd, float* margin_logits);
+/// --mask-margin and --no-decoder-kernel (segment, run):
+/// PromptableOptions::mask_margin_logits and decoder_kernel, set after the
+/// mask model's options come from the registry.
+void AddMaskMarginArg(CLI::App* cmd, float* margin_logits,
+                      bool* no_decoder_kernel);
 
 /// --object-detector (default yolox_nano) and its tuning options (segment,
 /// run).

@@ -27,14 +27,6 @@ constexpr int kPreviewDim = 32;  // the mask features per token
 // padded to whole vectors.
 int Padded(int columns) { return (columns + 15) / 16 * 16; }
 
-void AddBiasRows(float* x, int rows, int cols, const float* bias) {
-  for (int r = 0; r < rows; ++r) {
-    ops::Add(x + static_cast<size_t>(r) * cols,
-             x + static_cast<size_t>(r) * cols, bias,
-             static_cast<size_t>(cols));
-  }
-}
-
 std::vector<float> Sum(const std::vector<float>& a,
                        const std::vector<float>& b) {
   std::vector<float> out(a.size());
@@ -196,9 +188,8 @@ std::vector<float> SamKernel::Apply(const Linear& l,
                                     const std::vector<float>& x,
                                     int rows) const {
   std::vector<float> out(static_cast<size_t>(rows) * l.out);
-  ops::Gemm(rows, l.out, l.in, x.data(), l.in, 1, l.w.data(), l.out, out.data(),
-            l.out, false);
-  AddBiasRows(out.data(), rows, l.out, l.b.data());
+  ops::GemmOnto(rows, l.out, l.in, x.data(), l.in, 1, l.w.data(), l.out,
+                out.data(), l.out, nullptr, 0, l.b.data());
   return out;
 }
 
@@ -290,7 +281,17 @@ SamKernel::Image SamKernel::Prepare(const std::vector<float>& embedding,
       im.t2i_keys_t[static_cast<size_t>(c) * n + i] = k[i * kCrossDim + c];
     }
   }
-  im.t2i_values = Apply(l0.t2i.v, im.keys, n);
+  // Per head, [heads x tokens x 16]: each head's values are read in one
+  // stream.
+  const std::vector<float> v = Apply(l0.t2i.v, im.keys, n);
+  const int dh = kCrossDim / heads_;
+  im.t2i_values.resize(v.size());
+  for (int i = 0; i < n; ++i) {
+    for (int c = 0; c < kCrossDim; ++c) {
+      im.t2i_values[(static_cast<size_t>(c / dh) * n + i) * dh + c % dh] =
+          v[static_cast<size_t>(i) * kCrossDim + c];
+    }
+  }
   im.i2t_queries = Apply(l0.i2t.q, keys_pe, n);
   return im;
 }
@@ -426,13 +427,14 @@ void SamKernel::FirstLayerImageSide(const Image& im,
               kCrossDim, 1, kbd.data(), s->padded, x.scores.data(), s->padded,
               false);
     ops::SoftmaxHeads(x.scores.data(), nb, s->padded, T, nullptr);
-    ops::AddBias(keys, im.keys.data() + at, nb, kDim, l0.i2t.o.b.data());
-    ops::Gemm(nb, kDim, s->padded, x.scores.data(), s->padded, 1, u0.data(),
-              kDim, keys, kDim, true);
+    // keys + output bias + attention output, normalised; and + PE for the
+    // next attention's keys.
+    ops::GemmOnto(nb, kDim, s->cols, x.scores.data(), s->padded, 1, u0.data(),
+                  kDim, keys, kDim, im.keys.data() + at, kDim,
+                  l0.i2t.o.b.data());
     ops::LayerNormRows(keys, nb, kDim, kDim, l0.norm4.g.data(),
-                       l0.norm4.b.data(), norm_eps_);
-    ops::Add(x.keys_pe.data(), keys, im.pe.data() + at,
-             static_cast<size_t>(nb) * kDim);
+                       l0.norm4.b.data(), norm_eps_, im.pe.data() + at,
+                       x.keys_pe.data());
     AttendBlock(x.keys_pe.data(), keys, nb, qk1, x.scores.data(), max.data(),
                 sum.data(), rescale.data(), acc.data(), *s);
   }
@@ -477,27 +479,23 @@ void SamKernel::SecondLayerImageSide(const Image& im, State* s,
     ops::Gemm(nb, s->padded, kDim, x.keys_pe.data(), kDim, 1, m1.data(),
               s->padded, x.scores.data(), s->padded, false);
     ops::SoftmaxHeads(x.scores.data(), nb, s->padded, T, bias1.data());
-    ops::AddBias(up, keys, nb, kDim, l1.i2t.o.b.data());
-    ops::Gemm(nb, kDim, s->padded, x.scores.data(), s->padded, 1, u1.data(),
-              kDim, up, kDim, true);
+    ops::GemmOnto(nb, kDim, s->cols, x.scores.data(), s->padded, 1, u1.data(),
+                  kDim, up, kDim, keys, kDim, l1.i2t.o.b.data());
     ops::LayerNormRows(up, nb, kDim, kDim, l1.norm4.g.data(), l1.norm4.b.data(),
-                       norm_eps_);
+                       norm_eps_, im.pe.data() + at, x.keys_pe.data());
     // The final token-to-image attention.
-    ops::Add(x.keys_pe.data(), up, im.pe.data() + at,
-             static_cast<size_t>(nb) * kDim);
     AttendBlock(x.keys_pe.data(), up, nb, qkf, x.scores.data(), max.data(),
                 sum.data(), rescale.data(), acc.data(), *s);
     // The mask features: the upscaling's two steps at the preview's cell.
-    ops::Gemm(nb, 64, kDim, up, kDim, 1, preview1_.w.data(), 64,
-              x.hidden.data(), 64, false);
-    ops::AddBias(x.hidden.data(), x.hidden.data(), nb, 64, preview1_.b.data());
+    ops::GemmOnto(nb, 64, kDim, up, kDim, 1, preview1_.w.data(), 64,
+                  x.hidden.data(), 64, nullptr, 0, preview1_.b.data());
     ops::LayerNormRows(x.hidden.data(), nb, 64, 64, preview_norm_.g.data(),
                        preview_norm_.b.data(), preview_eps_);
     ops::Gelu(x.hidden.data(), static_cast<size_t>(nb) * 64);
     float* f = x.features.data() + static_cast<size_t>(b0) * kPreviewDim;
-    ops::Gemm(nb, kPreviewDim, 64, x.hidden.data(), 64, 1, preview2_.w.data(),
-              kPreviewDim, f, kPreviewDim, false);
-    ops::AddBias(f, f, nb, kPreviewDim, preview2_.b.data());
+    ops::GemmOnto(nb, kPreviewDim, 64, x.hidden.data(), 64, 1,
+                  preview2_.w.data(), kPreviewDim, f, kPreviewDim, nullptr, 0,
+                  preview2_.b.data());
     ops::Gelu(f, static_cast<size_t>(nb) * kPreviewDim);
   }
   const std::vector<float> out = AttentionOutput(final_, &acc, sum, *s);
@@ -573,8 +571,8 @@ void SamKernel::Decode(const Image& im,
                 im.tokens, p.data(), im.tokens, false);
       ops::SoftmaxRows(p.data(), T, im.tokens, im.tokens);
       ops::Gemm(T, dh, im.tokens, p.data(), im.tokens, 1,
-                im.t2i_values.data() + h * dh, kCrossDim, o.data() + h * dh,
-                kCrossDim, false);
+                im.t2i_values.data() + static_cast<size_t>(h) * im.tokens * dh,
+                dh, o.data() + h * dh, kCrossDim, false);
     }
     const std::vector<float> out = Apply(l0.t2i.o, o, T);
     ops::Add(s.queries.data(), s.queries.data(), out.data(), out.size());

@@ -30,7 +30,7 @@ class SamKernel {
     std::vector<float> keys;  // [tokens x 256]: embedding + no-mask
     std::vector<float> pe;    // [tokens x 256]: positional encoding
     std::vector<float> t2i_keys_t;   // [128 x tokens]: layer 0's keys
-    std::vector<float> t2i_values;   // [tokens x 128]
+    std::vector<float> t2i_values;   // [8 heads x tokens x 16]
     std::vector<float> i2t_queries;  // [tokens x 128]
   };
   /// From the image encoder's output [1, 256, h, w] (values, shape).

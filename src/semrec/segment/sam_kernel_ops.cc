@@ -105,16 +105,47 @@ SEMREC_INLINE F<W> ErfV(F<W> x) {
 }
 
 // One MR x (NV * W) tile of C over the whole k.
+// Where C starts: zero, C itself (accumulate) or init + bias (a residual
+// and a bias folded into the product).
+struct Start {
+  bool accumulate = false;
+  const float* init = nullptr;  // rows of ld_init, or null
+  long ld_init = 0;
+  const float* bias = nullptr;  // per column, or null
+};
+
 template <int W, int MR, int NV>
 SEMREC_INLINE void Tile(int k, const float* a, long a_row, long a_col,
                         const float* b, long ldb, float* c, long ldc,
-                        bool accumulate) {
+                        const Start& start, int col) {
   F<W> s[MR][NV];
+  // The start's kind once per tile, each a loop of its own (a branch per
+  // element would stay in the unrolled loop).
+  const float* init = start.init;
+  const float* bias = start.bias != nullptr ? start.bias + col : nullptr;
+  const float* from = init != nullptr    ? init + col
+                      : start.accumulate ? c
+                                         : nullptr;
+  const long ld_from = init != nullptr ? start.ld_init : ldc;
+  if (from != nullptr) {
 #pragma GCC unroll 8
-  for (int i = 0; i < MR; ++i) {
+    for (int i = 0; i < MR; ++i) {
 #pragma GCC unroll 4
-    for (int j = 0; j < NV; ++j) {
-      s[i][j] = accumulate ? Load<W>(c + i * ldc + j * W) : F<W>{};
+      for (int j = 0; j < NV; ++j)
+        s[i][j] = Load<W>(from + i * ld_from + j * W);
+    }
+  } else {
+#pragma GCC unroll 8
+    for (int i = 0; i < MR; ++i) {
+#pragma GCC unroll 4
+      for (int j = 0; j < NV; ++j) s[i][j] = F<W>{};
+    }
+  }
+  if (bias != nullptr) {
+#pragma GCC unroll 8
+    for (int i = 0; i < MR; ++i) {
+#pragma GCC unroll 4
+      for (int j = 0; j < NV; ++j) s[i][j] += Load<W>(bias + j * W);
     }
   }
   for (int p = 0; p < k; ++p) {
@@ -139,25 +170,28 @@ SEMREC_INLINE void Tile(int k, const float* a, long a_row, long a_col,
 template <int W, int MR, int NV>
 SEMREC_INLINE void Columns(int m, int k, const float* a, long a_row, long a_col,
                            const float* b, long ldb, float* c, long ldc,
-                           bool accumulate) {
+                           const Start& start, int col) {
   static_assert(MR <= 8, "the remainder switch covers up to 7 rows");
   int i = 0;
+  Start rows = start;
   for (; i + MR <= m; i += MR) {
+    rows.init = start.init ? start.init + i * start.ld_init : nullptr;
     Tile<W, MR, NV>(k, a + i * a_row, a_row, a_col, b, ldb, c + i * ldc, ldc,
-                    accumulate);
+                    rows, col);
   }
   // The rows left, as one shorter tile (a prompt's 7 tokens read each
   // weight once, not 7 times).
   const float* ar = a + i * a_row;
   float* cr = c + i * ldc;
+  rows.init = start.init ? start.init + i * start.ld_init : nullptr;
   switch (m - i) {
     case 0:
       break;
-#define SEMREC_ROWS(R)                                                  \
-  case R:                                                               \
-    if constexpr (R < MR) {                                             \
-      Tile<W, R, NV>(k, ar, a_row, a_col, b, ldb, cr, ldc, accumulate); \
-    }                                                                   \
+#define SEMREC_ROWS(R)                                                 \
+  case R:                                                              \
+    if constexpr (R < MR) {                                            \
+      Tile<W, R, NV>(k, ar, a_row, a_col, b, ldb, cr, ldc, rows, col); \
+    }                                                                  \
     break;
       SEMREC_ROWS(1)
       SEMREC_ROWS(2)
@@ -175,19 +209,29 @@ SEMREC_INLINE void Columns(int m, int k, const float* a, long a_row, long a_col,
 template <int W, int MR, int NV>
 SEMREC_INLINE void GemmT(int m, int n, int k, const float* a, long a_row,
                          long a_col, const float* b, long ldb, float* c,
-                         long ldc, bool accumulate) {
+                         long ldc, const Start& start) {
   int j = 0;
   for (; j + NV * W <= n; j += NV * W) {
-    Columns<W, MR, NV>(m, k, a, a_row, a_col, b + j, ldb, c + j, ldc,
-                       accumulate);
+    Columns<W, MR, NV>(m, k, a, a_row, a_col, b + j, ldb, c + j, ldc, start, j);
   }
   for (; j + W <= n; j += W) {
-    Columns<W, MR, 1>(m, k, a, a_row, a_col, b + j, ldb, c + j, ldc,
-                      accumulate);
+    Columns<W, MR, 1>(m, k, a, a_row, a_col, b + j, ldb, c + j, ldc, start, j);
+  }
+  // Half a vector (8 of AVX-512's 16: a prompt's 7 tokens x 8 heads = 56).
+  if constexpr (W >= 8) {
+    if (j + W / 2 <= n) {
+      Columns<W / 2, MR, 1>(m, k, a, a_row, a_col, b + j, ldb, c + j, ldc,
+                            start, j);
+      j += W / 2;
+    }
   }
   for (; j < n; ++j) {
     for (int i = 0; i < m; ++i) {
-      float s = accumulate ? c[i * ldc + j] : 0.0f;
+      float s = start.init != nullptr
+                    ? start.init[i * start.ld_init + j] + start.bias[j]
+                : start.bias != nullptr ? start.bias[j]
+                : start.accumulate      ? c[i * ldc + j]
+                                        : 0.0f;
       for (int p = 0; p < k; ++p)
         s += a[i * a_row + p * a_col] * b[p * ldb + j];
       c[i * ldc + j] = s;
@@ -211,8 +255,8 @@ SEMREC_INLINE void SubT(float* out, const float* a, const float* b, size_t n) {
 
 template <int W>
 SEMREC_INLINE void LayerNormRowsT(float* x, int rows, int cols, long ld,
-                                  const float* g, const float* beta,
-                                  float eps) {
+                                  const float* g, const float* beta, float eps,
+                                  const float* add, float* out_add) {
   for (int r = 0; r < rows; ++r) {
     float* row = x + r * ld;
     F<W> acc{};
@@ -230,11 +274,25 @@ SEMREC_INLINE void LayerNormRowsT(float* x, int rows, int cols, long ld,
     for (; c < cols; ++c) tail += (row[c] - mean) * (row[c] - mean);
     const float inv =
         1.0f / std::sqrt((Sum<W>(sq) + tail) / static_cast<float>(cols) + eps);
-    for (c = 0; c + W <= cols; c += W) {
-      Store<W>(row + c, (Load<W>(row + c) - mean) * inv * Load<W>(g + c) +
-                            Load<W>(beta + c));
+    if (add != nullptr) {
+      const float* in = add + r * ld;
+      float* out = out_add + r * ld;
+      for (c = 0; c + W <= cols; c += W) {
+        const F<W> y = (Load<W>(row + c) - mean) * inv * Load<W>(g + c) +
+                       Load<W>(beta + c);
+        Store<W>(row + c, y);
+        Store<W>(out + c, y + Load<W>(in + c));
+      }
+    } else {
+      for (c = 0; c + W <= cols; c += W) {
+        Store<W>(row + c, (Load<W>(row + c) - mean) * inv * Load<W>(g + c) +
+                              Load<W>(beta + c));
+      }
     }
-    for (; c < cols; ++c) row[c] = (row[c] - mean) * inv * g[c] + beta[c];
+    for (; c < cols; ++c) {
+      row[c] = (row[c] - mean) * inv * g[c] + beta[c];
+      if (add != nullptr) out_add[r * ld + c] = row[c] + add[r * ld + c];
+    }
   }
 }
 
@@ -372,9 +430,10 @@ SEMREC_INLINE bool OnlineSoftmaxColumnsT(float* s, int rows, int cols, long ld,
 struct Ops {
   const char* name;
   void (*gemm)(int, int, int, const float*, long, long, const float*, long,
-               float*, long, bool);
+               float*, long, const Start&);
   void (*add)(float*, const float*, const float*, size_t);
-  void (*layer_norm)(float*, int, int, long, const float*, const float*, float);
+  void (*layer_norm)(float*, int, int, long, const float*, const float*, float,
+                     const float*, float*);
   void (*softmax_rows)(float*, int, int, long);
   void (*softmax_heads)(float*, int, long, int, const float*);
   void (*add_bias)(float*, const float*, int, int, const float*);
@@ -386,17 +445,17 @@ struct Ops {
 #define SEMREC_OPS(SUFFIX, TARGET, W, MR, NV)                                  \
   TARGET void Gemm##SUFFIX(int m, int n, int k, const float* a, long a_row,    \
                            long a_col, const float* b, long ldb, float* c,     \
-                           long ldc, bool accumulate) {                        \
-    GemmT<W, MR, NV>(m, n, k, a, a_row, a_col, b, ldb, c, ldc, accumulate);    \
+                           long ldc, const Start& start) {                     \
+    GemmT<W, MR, NV>(m, n, k, a, a_row, a_col, b, ldb, c, ldc, start);         \
   }                                                                            \
   TARGET void Add##SUFFIX(float* out, const float* a, const float* b,          \
                           size_t n) {                                          \
     AddT<W>(out, a, b, n);                                                     \
   }                                                                            \
   TARGET void LayerNorm##SUFFIX(float* x, int rows, int cols, long ld,         \
-                                const float* g, const float* beta,             \
-                                float eps) {                                   \
-    LayerNormRowsT<W>(x, rows, cols, ld, g, beta, eps);                        \
+                                const float* g, const float* beta, float eps,  \
+                                const float* add, float* out_add) {            \
+    LayerNormRowsT<W>(x, rows, cols, ld, g, beta, eps, add, out_add);          \
   }                                                                            \
   TARGET void SoftmaxRows##SUFFIX(float* s, int rows, int cols, long ld) {     \
     SoftmaxRowsT<W>(s, rows, cols, ld);                                        \
@@ -481,7 +540,20 @@ void UseLevel(const std::string& level) {
 void Gemm(int m, int n, int k, const float* a, long a_row, long a_col,
           const float* b, long ldb, float* c, long ldc, bool accumulate) {
   if (m <= 0 || n <= 0) return;
-  Current().gemm(m, n, k, a, a_row, a_col, b, ldb, c, ldc, accumulate);
+  Start start;
+  start.accumulate = accumulate;
+  Current().gemm(m, n, k, a, a_row, a_col, b, ldb, c, ldc, start);
+}
+
+void GemmOnto(int m, int n, int k, const float* a, long a_row, long a_col,
+              const float* b, long ldb, float* c, long ldc, const float* init,
+              long ld_init, const float* bias) {
+  if (m <= 0 || n <= 0) return;
+  Start start;
+  start.init = init;
+  start.ld_init = ld_init;
+  start.bias = bias;
+  Current().gemm(m, n, k, a, a_row, a_col, b, ldb, c, ldc, start);
 }
 
 void Add(float* out, const float* a, const float* b, size_t n) {
@@ -489,8 +561,9 @@ void Add(float* out, const float* a, const float* b, size_t n) {
 }
 
 void LayerNormRows(float* x, int rows, int cols, long ld, const float* g,
-                   const float* beta, float eps) {
-  Current().layer_norm(x, rows, cols, ld, g, beta, eps);
+                   const float* beta, float eps, const float* add,
+                   float* out_add) {
+  Current().layer_norm(x, rows, cols, ld, g, beta, eps, add, out_add);
 }
 
 void SoftmaxRows(float* s, int rows, int cols, long ld) {

@@ -25,13 +25,21 @@ void UseLevel(const std::string& level);
 void Gemm(int m, int n, int k, const float* a, long a_row, long a_col,
           const float* b, long ldb, float* c, long ldc, bool accumulate);
 
+/// Gemm onto a residual and a bias: C = init (rows of stride ld_init; null:
+/// none) + bias (per column) + A B, in one pass.
+void GemmOnto(int m, int n, int k, const float* a, long a_row, long a_col,
+              const float* b, long ldb, float* c, long ldc, const float* init,
+              long ld_init, const float* bias);
+
 /// out[i] = a[i] + b[i].
 void Add(float* out, const float* a, const float* b, size_t n);
 
 /// Each of `rows` rows of x (stride ld, `cols` values) becomes
-/// LayerNorm(x) * g + beta (biased variance, as PyTorch / ONNX).
+/// LayerNorm(x) * g + beta (biased variance, as PyTorch / ONNX); with `add`,
+/// out_add (same layout) = that + add, in the same pass.
 void LayerNormRows(float* x, int rows, int cols, long ld, const float* g,
-                   const float* beta, float eps);
+                   const float* beta, float eps, const float* add = nullptr,
+                   float* out_add = nullptr);
 
 /// Each row of s (`cols` values, stride ld) becomes its softmax.
 void SoftmaxRows(float* s, int rows, int cols, long ld);
