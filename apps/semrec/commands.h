@@ -77,11 +77,13 @@ struct ModelArgs {
 };
 void AddModelArgs(CLI::App* cmd, ModelArgs* args);
 
-/// --mask-margin and --no-decoder-kernel (segment, run):
+/// --mask-margin and --decoder-kernel (segment, run):
 /// PromptableOptions::mask_margin_logits and decoder_kernel, set after the
 /// mask model's options come from the registry.
 void AddMaskMarginArg(CLI::App* cmd, float* margin_logits,
-                      bool* no_decoder_kernel);
+                      std::string* decoder_kernel);
+/// "auto", "on", "off" (checked by the option's validator).
+segment::PromptableOptions::Kernel DecoderKernelFromArg(const std::string& arg);
 
 /// --object-detector (default yolox_nano) and its tuning options (segment,
 /// run).

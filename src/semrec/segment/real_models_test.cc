@@ -188,8 +188,9 @@ TEST(RealModels, DecoderKernelGivesThePromptPartsMasks) {
   PromptableOptions options;
   options.runtime.model_dir = semrec::testing::ModelDir();
   const auto registry = infer::ModelRegistry::LoadDefault();
+  options.decoder_kernel = PromptableOptions::Kernel::kOn;  // any CPU
   auto kernel = PromptableSegmenter::Create(registry, options);
-  options.decoder_kernel = false;
+  options.decoder_kernel = PromptableOptions::Kernel::kOff;
   auto onnx = PromptableSegmenter::Create(registry, options);
   kernel->SetImage(rgb);
   onnx->SetImage(rgb);

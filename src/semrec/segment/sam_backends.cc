@@ -15,6 +15,7 @@
 #include "semrec/core/error.h"
 #include "semrec/segment/promptable.h"
 #include "semrec/segment/sam_kernel.h"
+#include "semrec/segment/sam_kernel_ops.h"
 
 namespace semrec::segment {
 
@@ -177,8 +178,11 @@ class SamSegmenter : public PromptableSegmenter {
   void LoadKernel(const infer::ModelRegistry& registry,
                   const infer::ModelEntry& entry,
                   const PromptableOptions& options) {
-    if (!options.decoder_kernel || !mask_part_blocks_ ||
-        entry.split_kernel.empty()) {
+    using Kernel = PromptableOptions::Kernel;
+    if (options.decoder_kernel == Kernel::kOff || !mask_part_blocks_ ||
+        entry.split_kernel.empty() ||
+        (options.decoder_kernel == Kernel::kAuto &&
+         std::string(kernel_ops::SimdLevel()) != "avx512")) {
       return;
     }
     const std::filesystem::path file =

@@ -4,6 +4,7 @@
 #include <atomic>
 #include <cmath>
 #include <cstdint>
+#include <cstdlib>
 #include <cstring>
 
 #include "semrec/core/error.h"
@@ -485,7 +486,7 @@ struct Ops {
 SEMREC_OPS(avx512, __attribute__((target("avx512f,avx512vl,avx512dq,fma"))), 16,
            8, 2)
 // AVX2: 4 x 16 tiles (8 accumulators of 16 registers).
-SEMREC_OPS(avx2, __attribute__((target("avx2,fma"))), 8, 4, 2)
+SEMREC_OPS(avx2, __attribute__((target("avx2,fma"))), 8, 6, 2)
 #endif
 SEMREC_OPS(baseline, , 4, 4, 2)
 
@@ -507,10 +508,22 @@ std::vector<const Ops*> Supported() {
 
 std::atomic<const Ops*> g_ops{nullptr};
 
+// The best set, or the one SEMREC_KERNEL_ISA names (for measuring one
+// against another; an unsupported name is ignored).
+const Ops* Initial() {
+  const std::vector<const Ops*> levels = Supported();
+  if (const char* wanted = std::getenv("SEMREC_KERNEL_ISA")) {
+    for (const Ops* ops : levels) {
+      if (std::strcmp(ops->name, wanted) == 0) return ops;
+    }
+  }
+  return levels.front();
+}
+
 const Ops& Current() {
   const Ops* ops = g_ops.load(std::memory_order_acquire);
   if (ops == nullptr) {
-    ops = Supported().front();
+    ops = Initial();
     g_ops.store(ops, std::memory_order_release);
   }
   return *ops;
