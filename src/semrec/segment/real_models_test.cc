@@ -26,6 +26,38 @@ namespace {
                          << ": run scripts/setup");        \
   }
 
+// One foreground point per cell of an nx x ny grid over the image.
+std::vector<Prompt> GridPrompts(const ColorImage& rgb, int nx, int ny) {
+  std::vector<Prompt> prompts;
+  for (int i = 0; i < nx; ++i) {
+    for (int j = 0; j < ny; ++j) {
+      Prompt p;
+      p.points = {{(static_cast<float>(i) + 0.5f) * rgb.width() / nx,
+                   (static_cast<float>(j) + 0.5f) * rgb.height() / ny}};
+      p.labels = {1};
+      prompts.push_back(p);
+    }
+  }
+  return prompts;
+}
+
+// Two decodes of one prompt that differ by float rounding only: logits
+// within `max_logit_diff`, a few cells' signs, the predicted IoU.
+void ExpectSameMask(const LowResMask& a, const LowResMask& b,
+                    float max_logit_diff, size_t prompt) {
+  ASSERT_EQ(a.logits.size(), b.logits.size()) << "prompt " << prompt;
+  float max_diff = 0;
+  size_t differ = 0, inside = 0;
+  for (size_t k = 0; k < a.logits.size(); ++k) {
+    max_diff = std::max(max_diff, std::abs(a.logits[k] - b.logits[k]));
+    differ += (a.logits[k] > 0) != (b.logits[k] > 0);
+    inside += b.logits[k] > 0;
+  }
+  EXPECT_LT(max_diff, max_logit_diff) << "prompt " << prompt;
+  EXPECT_LE(differ, inside / 1000 + 2) << "prompt " << prompt;
+  EXPECT_NEAR(a.predicted_iou, b.predicted_iou, 1e-4) << "prompt " << prompt;
+}
+
 TEST(RealModels, DeeplabLabelsARedwoodFrameWithVocClasses) {
   SEMREC_REQUIRE_MODEL("deeplab_v3.onnx");
   SEMREC_REQUIRE_SAMPLE_DATA(redwood, "redwood_livingroom1_5");
@@ -143,35 +175,15 @@ TEST(RealModels, MinisamSplitDecoderGivesTheExportsMasks) {
   auto whole = PromptableSegmenter::Create(registry, options);
   split->SetImage(rgb);
   whole->SetImage(rgb);
-  std::vector<Prompt> prompts;
-  for (int i = 0; i < 4; ++i) {
-    for (int j = 0; j < 4; ++j) {
-      Prompt p;
-      p.points = {
-          {(i + 0.5f) * rgb.width() / 4, (j + 0.5f) * rgb.height() / 4}};
-      p.labels = {1};
-      prompts.push_back(p);
-    }
-  }
+  std::vector<Prompt> prompts = GridPrompts(rgb, 4, 4);
   Prompt box;
   box.box =
       Box{rgb.width() / 4, rgb.height() / 4, rgb.width() / 2, rgb.height() / 2};
   prompts.push_back(box);
   for (size_t i = 0; i < prompts.size(); ++i) {
-    const LowResMask a = split->Decode(prompts[i]);
-    const LowResMask b = whole->Decode(prompts[i]);
-    ASSERT_EQ(a.logits.size(), b.logits.size());
-    float max_diff = 0;
-    size_t differ = 0, inside = 0;
-    for (size_t k = 0; k < a.logits.size(); ++k) {
-      max_diff = std::max(max_diff, std::abs(a.logits[k] - b.logits[k]));
-      differ += (a.logits[k] > 0) != (b.logits[k] > 0);
-      inside += b.logits[k] > 0;
-    }
     // Same operations in a different order: float rounding only.
-    EXPECT_LT(max_diff, 2e-3f) << "prompt " << i;
-    EXPECT_LE(differ, inside / 1000 + 2) << "prompt " << i;
-    EXPECT_NEAR(a.predicted_iou, b.predicted_iou, 1e-4) << "prompt " << i;
+    ExpectSameMask(split->Decode(prompts[i]), whole->Decode(prompts[i]), 2e-3f,
+                   i);
   }
 }
 
@@ -194,16 +206,7 @@ TEST(RealModels, DecoderKernelGivesThePromptPartsMasks) {
   auto onnx = PromptableSegmenter::Create(registry, options);
   kernel->SetImage(rgb);
   onnx->SetImage(rgb);
-  std::vector<Prompt> prompts;
-  for (int i = 0; i < 5; ++i) {
-    for (int j = 0; j < 4; ++j) {
-      Prompt p;
-      p.points = {
-          {(i + 0.5f) * rgb.width() / 5, (j + 0.5f) * rgb.height() / 4}};
-      p.labels = {1};
-      prompts.push_back(p);
-    }
-  }
+  std::vector<Prompt> prompts = GridPrompts(rgb, 5, 4);
   Prompt pair;
   pair.points = {{320, 300}, {330, 150}};
   pair.labels = {1, 0};
@@ -213,19 +216,8 @@ TEST(RealModels, DecoderKernelGivesThePromptPartsMasks) {
   prompts.push_back(box);
   const MaskFilter filter = MaskGeneratorOptions().Filter();
   for (size_t i = 0; i < prompts.size(); ++i) {
-    const LowResMask a = kernel->Decode(prompts[i]);
-    const LowResMask b = onnx->Decode(prompts[i]);
-    ASSERT_EQ(a.logits.size(), b.logits.size());
-    float max_diff = 0;
-    size_t differ = 0, inside = 0;
-    for (size_t k = 0; k < a.logits.size(); ++k) {
-      max_diff = std::max(max_diff, std::abs(a.logits[k] - b.logits[k]));
-      differ += (a.logits[k] > 0) != (b.logits[k] > 0);
-      inside += b.logits[k] > 0;
-    }
-    EXPECT_LT(max_diff, 5e-3f) << "prompt " << i;
-    EXPECT_LE(differ, inside / 1000 + 2) << "prompt " << i;
-    EXPECT_NEAR(a.predicted_iou, b.predicted_iou, 1e-4) << "prompt " << i;
+    ExpectSameMask(kernel->Decode(prompts[i]), onnx->Decode(prompts[i]), 5e-3f,
+                   i);
     // The early decision on the preview is the same.
     EXPECT_EQ(kernel->DecodeUnlessRejected(prompts[i], filter).rejected_early,
               onnx->DecodeUnlessRejected(prompts[i], filter).rejected_early)

@@ -46,6 +46,18 @@ struct SamKernel::Scratch {
   std::vector<float> hidden;    // [block x 64]
 };
 
+// One token-to-image attention computed block by block: per column (head x
+// prompt token) the running maximum and sum of its softmax, and the weighted
+// sum of image tokens [cols x 256].
+struct SamKernel::OnlineAttention {
+  explicit OnlineAttention(int cols)
+      : max(static_cast<size_t>(cols), -1e30f),
+        sum(max.size(), 0.0f),
+        rescale(max.size()),
+        acc(max.size() * kDim, 0.0f) {}
+  std::vector<float> max, sum, rescale, acc;
+};
+
 struct SamKernel::State {
   int tokens = 0;  // the prompt's tokens (output tokens + points)
   int cols = 0;    // heads x tokens, column t * heads + h
@@ -345,13 +357,13 @@ std::vector<float> SamKernel::Fold(const Linear& l,
 // projection after the sum (the weights sum to 1, so the value bias passes
 // as it is), then the output projection.
 std::vector<float> SamKernel::AttentionOutput(const Attention& a,
-                                              std::vector<float>* acc,
-                                              const std::vector<float>& sum,
+                                              OnlineAttention* online,
                                               const State& s) const {
   const int dh = kCrossDim / heads_;
+  std::vector<float>* acc = &online->acc;
   for (int c = 0; c < s.cols; ++c) {
     float* row = acc->data() + static_cast<size_t>(c) * kDim;
-    const float inv = 1.0f / sum[c];
+    const float inv = 1.0f / online->sum[c];
     for (int i = 0; i < kDim; ++i) row[i] *= inv;
   }
   std::vector<float> values(static_cast<size_t>(s.cols) * kCrossDim);
@@ -376,15 +388,16 @@ std::vector<float> SamKernel::AttentionOutput(const Attention& a,
 // running softmax, and the weighted sum of the block's `values` into acc.
 void SamKernel::AttendBlock(const float* keys_pe, const float* values, int nb,
                             const std::vector<float>& folded, float* scores,
-                            float* max, float* sum, float* rescale, float* acc,
-                            const State& s) const {
+                            OnlineAttention* online, const State& s) const {
+  float* acc = online->acc.data();
   ops::Gemm(nb, s.padded, kDim, keys_pe, kDim, 1, folded.data(), s.padded,
             scores, s.padded, false);
-  if (ops::OnlineSoftmaxColumns(scores, nb, s.cols, s.padded, max, sum,
-                                rescale)) {
+  if (ops::OnlineSoftmaxColumns(scores, nb, s.cols, s.padded,
+                                online->max.data(), online->sum.data(),
+                                online->rescale.data())) {
     for (int c = 0; c < s.cols; ++c) {
       float* row = acc + static_cast<size_t>(c) * kDim;
-      for (int i = 0; i < kDim; ++i) row[i] *= rescale[c];
+      for (int i = 0; i < kDim; ++i) row[i] *= online->rescale[c];
     }
   }
   ops::Gemm(s.cols, kDim, nb, scores, 1, s.padded, values, kDim, acc, kDim,
@@ -416,9 +429,7 @@ void SamKernel::FirstLayerImageSide(const Image& im,
       *s);
   Scratch& x = *s->scratch;
   x.scores.resize(static_cast<size_t>(kBlock) * s->padded);
-  std::vector<float> max(static_cast<size_t>(s->cols), -1e30f);
-  std::vector<float> sum(max.size(), 0.0f), rescale(max.size());
-  std::vector<float> acc(max.size() * kDim, 0.0f);
+  OnlineAttention online(s->cols);
   for (int b0 = 0; b0 < n; b0 += kBlock) {
     const int nb = std::min(kBlock, n - b0);
     const size_t at = static_cast<size_t>(b0) * kDim;
@@ -435,10 +446,9 @@ void SamKernel::FirstLayerImageSide(const Image& im,
     ops::LayerNormRows(keys, nb, kDim, kDim, l0.norm4.g.data(),
                        l0.norm4.b.data(), norm_eps_, im.pe.data() + at,
                        x.keys_pe.data());
-    AttendBlock(x.keys_pe.data(), keys, nb, qk1, x.scores.data(), max.data(),
-                sum.data(), rescale.data(), acc.data(), *s);
+    AttendBlock(x.keys_pe.data(), keys, nb, qk1, x.scores.data(), &online, *s);
   }
-  const std::vector<float> out = AttentionOutput(l1.t2i, &acc, sum, *s);
+  const std::vector<float> out = AttentionOutput(l1.t2i, &online, *s);
   ops::Add(s->queries.data(), s->queries.data(), out.data(), out.size());
   ops::LayerNormRows(s->queries.data(), T, kDim, kDim, l1.norm2.g.data(),
                      l1.norm2.b.data(), norm_eps_);
@@ -466,9 +476,7 @@ void SamKernel::SecondLayerImageSide(const Image& im, State* s,
   const std::vector<float> qkf =
       Fold(final_.k, HeadColumns(Apply(final_.q, qpe, T), *s, scale), *s);
   Scratch& x = *s->scratch;
-  std::vector<float> max(static_cast<size_t>(s->cols), -1e30f);
-  std::vector<float> sum(max.size(), 0.0f), rescale(max.size());
-  std::vector<float> acc(max.size() * kDim, 0.0f);
+  OnlineAttention online(s->cols);
   for (int b0 = 0; b0 < n; b0 += kBlock) {
     const int nb = std::min(kBlock, n - b0);
     const size_t at = static_cast<size_t>(b0) * kDim;
@@ -484,8 +492,7 @@ void SamKernel::SecondLayerImageSide(const Image& im, State* s,
     ops::LayerNormRows(up, nb, kDim, kDim, l1.norm4.g.data(), l1.norm4.b.data(),
                        norm_eps_, im.pe.data() + at, x.keys_pe.data());
     // The final token-to-image attention.
-    AttendBlock(x.keys_pe.data(), up, nb, qkf, x.scores.data(), max.data(),
-                sum.data(), rescale.data(), acc.data(), *s);
+    AttendBlock(x.keys_pe.data(), up, nb, qkf, x.scores.data(), &online, *s);
     // The mask features: the upscaling's two steps at the preview's cell.
     ops::GemmOnto(nb, 64, kDim, up, kDim, 1, preview1_.w.data(), 64,
                   x.hidden.data(), 64, nullptr, 0, preview1_.b.data());
@@ -498,7 +505,7 @@ void SamKernel::SecondLayerImageSide(const Image& im, State* s,
                   preview2_.b.data());
     ops::Gelu(f, static_cast<size_t>(nb) * kPreviewDim);
   }
-  const std::vector<float> out = AttentionOutput(final_, &acc, sum, *s);
+  const std::vector<float> out = AttentionOutput(final_, &online, *s);
   ops::Add(s->queries.data(), s->queries.data(), out.data(), out.size());
   ops::LayerNormRows(s->queries.data(), T, kDim, kDim, final_norm_.g.data(),
                      final_norm_.b.data(), norm_eps_);

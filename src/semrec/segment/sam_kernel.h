@@ -70,6 +70,7 @@ class SamKernel {
     Norm norm1, norm2, norm3, norm4;
   };
   struct Scratch;
+  struct OnlineAttention;
   struct State;  // one prompt's tokens
 
   // Rows x in -> rows x out.
@@ -90,13 +91,11 @@ class SamKernel {
   std::vector<float> Fold(const Linear& l, const std::vector<float>& columns,
                           const State& s) const;
   std::vector<float> AttentionOutput(const Attention& a,
-                                     std::vector<float>* acc,
-                                     const std::vector<float>& sum,
+                                     OnlineAttention* online,
                                      const State& s) const;
   void AttendBlock(const float* keys_pe, const float* values, int nb,
-                   const std::vector<float>& folded, float* scores, float* max,
-                   float* sum, float* rescale, float* acc,
-                   const State& s) const;
+                   const std::vector<float>& folded, float* scores,
+                   OnlineAttention* online, const State& s) const;
   void FirstLayerImageSide(const Image& image,
                            const std::vector<float>& layer0_tokens,
                            State* s) const;

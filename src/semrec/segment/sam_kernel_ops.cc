@@ -297,20 +297,26 @@ SEMREC_INLINE void LayerNormRowsT(float* x, int rows, int cols, long ld,
   }
 }
 
-template <int W>
-SEMREC_INLINE void ExpT(float* x, size_t n) {
+// x = op(x), whole vectors and the tail through a padded one. (The op is a
+// template argument, not a lambda: a lambda would be compiled without the
+// target attribute.)
+template <int W, F<W> (*Op)(F<W>)>
+SEMREC_INLINE void MapT(float* x, size_t n) {
   size_t i = 0;
-  for (; i + W <= n; i += W) Store<W>(x + i, ExpV<W>(Load<W>(x + i)));
+  for (; i + W <= n; i += W) Store<W>(x + i, Op(Load<W>(x + i)));
   if (i < n) {
     float buf[W] = {};
     std::copy(x + i, x + n, buf);
-    const F<W> v = ExpV<W>(Load<W>(buf));
-    Store<W>(buf, v);
+    Store<W>(buf, Op(Load<W>(buf)));
     std::copy(buf, buf + (n - i), x + i);
   }
 }
 
-// (No lambdas here: they would be compiled without the target attribute.)
+template <int W>
+SEMREC_INLINE void ExpT(float* x, size_t n) {
+  MapT<W, ExpV<W>>(x, n);
+}
+
 template <int W>
 SEMREC_INLINE F<W> GeluV(F<W> v) {
   return v * 0.5f * (1.0f + ErfV<W>(v * 0.70710678118654752f));
@@ -318,14 +324,7 @@ SEMREC_INLINE F<W> GeluV(F<W> v) {
 
 template <int W>
 SEMREC_INLINE void GeluT(float* x, size_t n) {
-  size_t i = 0;
-  for (; i + W <= n; i += W) Store<W>(x + i, GeluV<W>(Load<W>(x + i)));
-  if (i < n) {
-    float buf[W] = {};
-    std::copy(x + i, x + n, buf);
-    Store<W>(buf, GeluV<W>(Load<W>(buf)));
-    std::copy(buf, buf + (n - i), x + i);
-  }
+  MapT<W, GeluV<W>>(x, n);
 }
 
 template <int W>
