@@ -249,6 +249,17 @@ void SamKernel::TokenMlpAndNorm(const Layer& l, std::vector<float>* queries,
                      l.norm3.b.data(), norm_eps_);
 }
 
+// SAM's random Fourier positional encoding of (cx, cy) in [-1, 1]: 128
+// sines then 128 cosines (the image's tokens and the prompt's points alike).
+void SamKernel::EncodePosition(float cx, float cy, float* out) const {
+  for (int j = 0; j < kDim / 2; ++j) {
+    const float a = (cx * pe_gaussian_[j] + cy * pe_gaussian_[kDim / 2 + j]) *
+                    2.0f * std::numbers::pi_v<float>;
+    out[j] = std::sin(a);
+    out[kDim / 2 + j] = std::cos(a);
+  }
+}
+
 SamKernel::Image SamKernel::Prepare(const std::vector<float>& embedding,
                                     const std::vector<int64_t>& shape) const {
   if (shape.size() != 4 || shape[0] != 1 || shape[1] != kDim ||
@@ -274,14 +285,8 @@ SamKernel::Image SamKernel::Prepare(const std::vector<float>& embedding,
           (static_cast<float>(x) + 0.5f) / static_cast<float>(w) * 2.0f - 1.0f;
       const float cy =
           (static_cast<float>(y) + 0.5f) / static_cast<float>(h) * 2.0f - 1.0f;
-      float* pe = im.pe.data() + static_cast<size_t>(y * w + x) * kDim;
-      for (int j = 0; j < kDim / 2; ++j) {
-        const float a =
-            (cx * pe_gaussian_[j] + cy * pe_gaussian_[kDim / 2 + j]) * 2.0f *
-            std::numbers::pi_v<float>;
-        pe[j] = std::sin(a);
-        pe[kDim / 2 + j] = std::cos(a);
-      }
+      EncodePosition(cx, cy,
+                     im.pe.data() + static_cast<size_t>(y * w + x) * kDim);
     }
   }
   const std::vector<float> keys_pe = Sum(im.keys, im.pe);
@@ -547,15 +552,9 @@ void SamKernel::Decode(const Image& im,
       throw InvalidArgument(fmt::format(
           "SAM decoder kernel: point label {} (expected -1..3)", label));
     }
-    const float cx = (points[i][0] + 0.5f) / input_size_ * 2.0f - 1.0f;
-    const float cy = (points[i][1] + 0.5f) / input_size_ * 2.0f - 1.0f;
-    for (int j = 0; j < kDim / 2; ++j) {
-      const float a = (cx * pe_gaussian_[j] + cy * pe_gaussian_[kDim / 2 + j]) *
-                      2.0f * std::numbers::pi_v<float>;
-      e[j] = std::sin(a) + point_embeddings_[label * kDim + j];
-      e[kDim / 2 + j] =
-          std::cos(a) + point_embeddings_[label * kDim + kDim / 2 + j];
-    }
+    EncodePosition((points[i][0] + 0.5f) / input_size_ * 2.0f - 1.0f,
+                   (points[i][1] + 0.5f) / input_size_ * 2.0f - 1.0f, e);
+    ops::Add(e, e, point_embeddings_.data() + label * kDim, kDim);
   }
   const int dh = kCrossDim / heads_;
   const float scale = 1.0f / std::sqrt(static_cast<float>(dh));
@@ -599,7 +598,6 @@ void SamKernel::Decode(const Image& im,
                        l1.norm1.b.data(), norm_eps_);
   }
   FirstLayerImageSide(im, layer0_tokens, &s);
-  scratch.scores.resize(static_cast<size_t>(kBlock) * s.padded);
   SecondLayerImageSide(im, &s, out->upscaling_tokens.data());
   // The heads: IoU prediction and the mask tokens' hypernetworks.
   const auto mlp3 = [&](const Linear(&l)[3], const float* x) {

@@ -73,6 +73,7 @@ class SamKernel {
   struct OnlineAttention;
   struct State;  // one prompt's tokens
 
+  void EncodePosition(float cx, float cy, float* out) const;
   // Rows x in -> rows x out.
   std::vector<float> Apply(const Linear& l, const std::vector<float>& x,
                            int rows) const;

@@ -376,15 +376,6 @@ SEMREC_INLINE void SoftmaxHeadsT(float* s, int rows, long ld, int tokens,
 }
 
 template <int W>
-SEMREC_INLINE void AddBiasT(float* out, const float* in, int rows, int cols,
-                            const float* bias) {
-  for (int r = 0; r < rows; ++r) {
-    const size_t at = static_cast<size_t>(r) * cols;
-    AddT<W>(out + at, in + at, bias, static_cast<size_t>(cols));
-  }
-}
-
-template <int W>
 SEMREC_INLINE bool OnlineSoftmaxColumnsT(float* s, int rows, int cols, long ld,
                                          float* max, float* sum,
                                          float* rescale) {
@@ -436,49 +427,48 @@ struct Ops {
                      const float*, float*);
   void (*softmax_rows)(float*, int, int, long);
   void (*softmax_heads)(float*, int, long, int, const float*);
-  void (*add_bias)(float*, const float*, int, int, const float*);
   bool (*online_softmax)(float*, int, int, long, float*, float*, float*);
   void (*gelu)(float*, size_t);
   void (*exp)(float*, size_t);
 };
 
-#define SEMREC_OPS(SUFFIX, TARGET, W, MR, NV)                                  \
-  TARGET void Gemm##SUFFIX(int m, int n, int k, const float* a, long a_row,    \
-                           long a_col, const float* b, long ldb, float* c,     \
-                           long ldc, const Start& start) {                     \
-    GemmT<W, MR, NV>(m, n, k, a, a_row, a_col, b, ldb, c, ldc, start);         \
-  }                                                                            \
-  TARGET void Add##SUFFIX(float* out, const float* a, const float* b,          \
-                          size_t n) {                                          \
-    AddT<W>(out, a, b, n);                                                     \
-  }                                                                            \
-  TARGET void LayerNorm##SUFFIX(float* x, int rows, int cols, long ld,         \
-                                const float* g, const float* beta, float eps,  \
-                                const float* add, float* out_add) {            \
-    LayerNormRowsT<W>(x, rows, cols, ld, g, beta, eps, add, out_add);          \
-  }                                                                            \
-  TARGET void SoftmaxRows##SUFFIX(float* s, int rows, int cols, long ld) {     \
-    SoftmaxRowsT<W>(s, rows, cols, ld);                                        \
-  }                                                                            \
-  TARGET void SoftmaxHeads##SUFFIX(float* s, int rows, long ld, int tokens,    \
-                                   const float* bias) {                        \
-    SoftmaxHeadsT<W>(s, rows, ld, tokens, bias);                               \
-  }                                                                            \
-  TARGET void AddBias##SUFFIX(float* out, const float* in, int rows, int cols, \
-                              const float* bias) {                             \
-    AddBiasT<W>(out, in, rows, cols, bias);                                    \
-  }                                                                            \
-  TARGET bool OnlineSoftmax##SUFFIX(float* s, int rows, int cols, long ld,     \
-                                    float* max, float* sum, float* rescale) {  \
-    return OnlineSoftmaxColumnsT<W>(s, rows, cols, ld, max, sum, rescale);     \
-  }                                                                            \
-  TARGET void Gelu##SUFFIX(float* x, size_t n) { GeluT<W>(x, n); }             \
-  TARGET void Exp##SUFFIX(float* x, size_t n) { ExpT<W>(x, n); }               \
-  constexpr Ops kOps##SUFFIX = {                                               \
-      #SUFFIX,           Gemm##SUFFIX,          Add##SUFFIX,                   \
-      LayerNorm##SUFFIX, SoftmaxRows##SUFFIX,   SoftmaxHeads##SUFFIX,          \
-      AddBias##SUFFIX,   OnlineSoftmax##SUFFIX, Gelu##SUFFIX,                  \
-      Exp##SUFFIX};
+#define SEMREC_OPS(SUFFIX, TARGET, W, MR, NV)                                 \
+  TARGET void Gemm##SUFFIX(int m, int n, int k, const float* a, long a_row,   \
+                           long a_col, const float* b, long ldb, float* c,    \
+                           long ldc, const Start& start) {                    \
+    GemmT<W, MR, NV>(m, n, k, a, a_row, a_col, b, ldb, c, ldc, start);        \
+  }                                                                           \
+  TARGET void Add##SUFFIX(float* out, const float* a, const float* b,         \
+                          size_t n) {                                         \
+    AddT<W>(out, a, b, n);                                                    \
+  }                                                                           \
+  TARGET void LayerNorm##SUFFIX(float* x, int rows, int cols, long ld,        \
+                                const float* g, const float* beta, float eps, \
+                                const float* add, float* out_add) {           \
+    LayerNormRowsT<W>(x, rows, cols, ld, g, beta, eps, add, out_add);         \
+  }                                                                           \
+  TARGET void SoftmaxRows##SUFFIX(float* s, int rows, int cols, long ld) {    \
+    SoftmaxRowsT<W>(s, rows, cols, ld);                                       \
+  }                                                                           \
+  TARGET void SoftmaxHeads##SUFFIX(float* s, int rows, long ld, int tokens,   \
+                                   const float* bias) {                       \
+    SoftmaxHeadsT<W>(s, rows, ld, tokens, bias);                              \
+  }                                                                           \
+  TARGET bool OnlineSoftmax##SUFFIX(float* s, int rows, int cols, long ld,    \
+                                    float* max, float* sum, float* rescale) { \
+    return OnlineSoftmaxColumnsT<W>(s, rows, cols, ld, max, sum, rescale);    \
+  }                                                                           \
+  TARGET void Gelu##SUFFIX(float* x, size_t n) { GeluT<W>(x, n); }            \
+  TARGET void Exp##SUFFIX(float* x, size_t n) { ExpT<W>(x, n); }              \
+  constexpr Ops kOps##SUFFIX = {#SUFFIX,                                      \
+                                Gemm##SUFFIX,                                 \
+                                Add##SUFFIX,                                  \
+                                LayerNorm##SUFFIX,                            \
+                                SoftmaxRows##SUFFIX,                          \
+                                SoftmaxHeads##SUFFIX,                         \
+                                OnlineSoftmax##SUFFIX,                        \
+                                Gelu##SUFFIX,                                 \
+                                Exp##SUFFIX};
 
 #if defined(__x86_64__)
 // AVX-512: 8 x 32 tiles (16 accumulators of 32 registers).
@@ -584,11 +574,6 @@ void SoftmaxRows(float* s, int rows, int cols, long ld) {
 
 void SoftmaxHeads(float* s, int rows, long ld, int tokens, const float* bias) {
   Current().softmax_heads(s, rows, ld, tokens, bias);
-}
-
-void AddBias(float* out, const float* in, int rows, int cols,
-             const float* bias) {
-  Current().add_bias(out, in, rows, cols, bias);
 }
 
 bool OnlineSoftmaxColumns(float* s, int rows, int cols, long ld, float* max,

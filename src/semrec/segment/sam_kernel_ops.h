@@ -50,10 +50,6 @@ void SoftmaxRows(float* s, int rows, int cols, long ld);
 /// over the tokens.
 void SoftmaxHeads(float* s, int rows, long ld, int tokens, const float* bias);
 
-/// out (rows x cols, dense) = in (rows x cols, dense) + bias per row.
-void AddBias(float* out, const float* in, int rows, int cols,
-             const float* bias);
-
 /// One block of a softmax over many rows, column by column (a column per
 /// attention query): `max` and `sum` hold the running maximum and sum of
 /// exp(s - max) of each of the `cols` columns over the blocks so far (start

@@ -72,6 +72,24 @@ TEST(KernelOps, GemmMatchesTheDefinition) {
                 << m << "x" << n << "x" << k << " transposed " << transposed
                 << " accumulate " << accumulate << " at " << i;
           }
+          // Onto a residual and a bias per column, or onto the bias alone.
+          const std::vector<float> residual = Random(c.size(), 13);
+          const std::vector<float> bias = Random(static_cast<size_t>(n), 14);
+          std::vector<float> onto(c.size());
+          ops::GemmOnto(m, n, k, a.data(), a_row, a_col, b.data(), n,
+                        onto.data(), n, accumulate ? residual.data() : nullptr,
+                        n, bias.data());
+          for (int i = 0; i < m; ++i) {
+            for (int j = 0; j < n; ++j) {
+              double s = (accumulate ? residual[i * n + j] : 0.0) + bias[j];
+              for (int p = 0; p < k; ++p) {
+                s += static_cast<double>(a[i * a_row + p * a_col]) *
+                     b[p * n + j];
+              }
+              ASSERT_NEAR(onto[i * n + j], s, 1e-4 * std::sqrt(k) + 1e-5)
+                  << "onto " << m << "x" << n << "x" << k;
+            }
+          }
         }
       }
     }
