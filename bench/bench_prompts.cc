@@ -19,6 +19,7 @@
 #include "bench_util.h"
 #include "semrec/io/image_io.h"
 #include "semrec/segment/hybrid_segmenter.h"
+#include "semrec/segment/sam_kernel_ops.h"
 
 namespace fs = std::filesystem;
 using namespace semrec;
@@ -101,11 +102,14 @@ int Run(int argc, char** argv) {
          o->masks.model.decoder_kernel =
              segment::PromptableOptions::Kernel::kOff;
        }},
-      {"+ decoder kernel (default)",
+      {"+ decoder kernel (fp32)",
        [](auto* o) {
          o->masks.model.decoder_kernel =
              segment::PromptableOptions::Kernel::kOn;
        }},
+      {segment::kernel_ops::HasBf16() ? "+ bf16 products (default)"
+                                      : "default (no bf16 on this CPU)",
+       [](auto*) {}},
       {"default + rejected sim. 0.6",
        [](auto* o) { o->masks.rejected_similarity = 0.6f; }},
       {"default + rejected sim. 0",

@@ -98,19 +98,23 @@ void AddModelArgs(CLI::App* cmd, ModelArgs* args) {
 segment::PromptableOptions::Kernel DecoderKernelFromArg(
     const std::string& arg) {
   using Kernel = segment::PromptableOptions::Kernel;
-  return arg == "on"    ? Kernel::kOn
-         : arg == "off" ? Kernel::kOff
-                        : Kernel::kAuto;
+  return arg == "on"     ? Kernel::kOn
+         : arg == "bf16" ? Kernel::kBf16
+         : arg == "off"  ? Kernel::kOff
+                         : Kernel::kAuto;
 }
 
 void AddMaskMarginArg(CLI::App* cmd, float* margin_logits,
                       std::string* decoder_kernel) {
   cmd->add_option("--decoder-kernel", *decoder_kernel,
                   "Mask generation: decode prompts with semrec's own decoder "
-                  "kernel (the same masks up to float rounding): auto (on "
-                  "CPUs with AVX-512, where it was measured 1.2x faster per "
-                  "prompt), on, off (ONNX Runtime; docs/models.md)")
-      ->check(CLI::IsMember({"auto", "on", "off"}))
+                  "kernel: on (fp32, the same masks up to float rounding), "
+                  "bf16 (products on bf16 inputs, CPUs with AVX512_BF16; "
+                  "measured 1.2x faster than on, the same masks on the "
+                  "benchmark's frames), off (ONNX Runtime), auto (bf16 where "
+                  "the CPU has it, else on with AVX-512, else off; "
+                  "docs/models.md)")
+      ->check(CLI::IsMember({"auto", "on", "bf16", "off"}))
       ->capture_default_str();
   cmd->add_option("--mask-margin", *margin_logits,
                   "Mask generation: upscale a mask only near its edge, where "

@@ -194,7 +194,16 @@ class SamSegmenter : public PromptableSegmenter {
           entry.name, file.string());
       return;
     }
-    kernel_ = std::make_unique<SamKernel>(file);
+    const bool bf16 =
+        options.decoder_kernel == Kernel::kBf16 ||
+        (options.decoder_kernel == Kernel::kAuto && kernel_ops::HasBf16());
+    if (bf16 && !kernel_ops::HasBf16()) {
+      throw InvalidArgument(
+          "decoder kernel 'bf16' needs a CPU with AVX512_BF16 (this one has "
+          "not; use 'on' for fp32 products)");
+    }
+    kernel_ = std::make_unique<SamKernel>(
+        file, bf16 ? SamKernel::Precision::kBf16 : SamKernel::Precision::kFp32);
   }
 
   // Run() through the kernel: its outputs under the prompt part's names.

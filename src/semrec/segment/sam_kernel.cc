@@ -120,7 +120,12 @@ std::map<std::string, std::vector<float>> SamKernel::LoadTensors(
   return tensors;
 }
 
-SamKernel::SamKernel(const std::filesystem::path& path) : path_(path) {
+SamKernel::SamKernel(const std::filesystem::path& path, Precision precision)
+    : precision_(precision), path_(path) {
+  if (precision == Precision::kBf16 && !ops::HasBf16()) {
+    throw InvalidArgument(
+        "SAM decoder kernel: bf16 products need a CPU with AVX512_BF16");
+  }
   std::map<std::string, std::vector<float>> t = LoadTensors(path);
   const auto take = [&](const std::string& name, size_t size) {
     auto it = t.find(name);
@@ -194,6 +199,38 @@ SamKernel::SamKernel(const std::filesystem::path& path) : path_(path) {
   preview2_.in = 64;
   preview2_.out = kPreviewDim;
   preview_norm_ = Norm{take("preview.g", 64), take("preview.beta", 64)};
+  preview1_rhs_ = MakeRhs(preview1_.w.data(), kDim, 64);
+}
+
+SamKernel::Rhs SamKernel::MakeRhs(const float* w, int k, int n) const {
+  Rhs r;
+  r.w = w;
+  r.k = k;
+  r.n = n;
+  if (precision_ == Precision::kBf16) ops::PackBf16(k, n, w, n, &r.packed);
+  return r;
+}
+
+void SamKernel::Product(int m, const float* a, long a_row, long a_col,
+                        const Rhs& b, float* c, long ldc,
+                        bool accumulate) const {
+  if (precision_ == Precision::kBf16) {
+    ops::GemmBf16(m, a, a_row, a_col, b.packed, c, ldc, accumulate);
+  } else {
+    ops::Gemm(m, b.n, b.k, a, a_row, a_col, b.w, b.n, c, ldc, accumulate);
+  }
+}
+
+void SamKernel::ProductOnto(int m, const float* a, long a_row, long a_col,
+                            const Rhs& b, float* c, long ldc, const float* init,
+                            long ld_init, const float* bias) const {
+  if (precision_ == Precision::kBf16) {
+    ops::GemmOntoBf16(m, a, a_row, a_col, b.packed, c, ldc, init, ld_init,
+                      bias);
+  } else {
+    ops::GemmOnto(m, b.n, b.k, a, a_row, a_col, b.w, b.n, c, ldc, init, ld_init,
+                  bias);
+  }
 }
 
 std::vector<float> SamKernel::Apply(const Linear& l,
@@ -392,11 +429,10 @@ std::vector<float> SamKernel::AttentionOutput(const Attention& a,
 // the block's image tokens `keys_pe` against the folded queries, their
 // running softmax, and the weighted sum of the block's `values` into acc.
 void SamKernel::AttendBlock(const float* keys_pe, const float* values, int nb,
-                            const std::vector<float>& folded, float* scores,
+                            const Rhs& folded, float* scores,
                             OnlineAttention* online, const State& s) const {
   float* acc = online->acc.data();
-  ops::Gemm(nb, s.padded, kDim, keys_pe, kDim, 1, folded.data(), s.padded,
-            scores, s.padded, false);
+  Product(nb, keys_pe, kDim, 1, folded, scores, s.padded, false);
   if (ops::OnlineSoftmaxColumns(scores, nb, s.cols, s.padded,
                                 online->max.data(), online->sum.data(),
                                 online->rescale.data())) {
@@ -405,8 +441,15 @@ void SamKernel::AttendBlock(const float* keys_pe, const float* values, int nb,
       for (int i = 0; i < kDim; ++i) row[i] *= online->rescale[c];
     }
   }
-  ops::Gemm(s.cols, kDim, nb, scores, 1, s.padded, values, kDim, acc, kDim,
-            true);
+  // The values are this block's image tokens: packed here when bf16.
+  thread_local Rhs block;
+  block.w = values;
+  block.k = nb;
+  block.n = kDim;
+  if (precision_ == Precision::kBf16) {
+    ops::PackBf16(nb, kDim, values, kDim, &block.packed);
+  }
+  Product(s.cols, scores, 1, s.padded, block, acc, kDim, true);
 }
 
 // Layer 0's image side after its token side: the prompt's tokens update the
@@ -432,6 +475,9 @@ void SamKernel::FirstLayerImageSide(const Image& im,
       l1.t2i.k,
       HeadColumns(Apply(l1.t2i.q, Sum(s->queries, s->query_pe), T), *s, scale),
       *s);
+  const Rhs kbd_rhs = MakeRhs(kbd.data(), kCrossDim, s->padded);
+  const Rhs u0_rhs = MakeRhs(u0.data(), s->cols, kDim);
+  const Rhs qk1_rhs = MakeRhs(qk1.data(), kDim, s->padded);
   Scratch& x = *s->scratch;
   x.scores.resize(static_cast<size_t>(kBlock) * s->padded);
   OnlineAttention online(s->cols);
@@ -439,19 +485,18 @@ void SamKernel::FirstLayerImageSide(const Image& im,
     const int nb = std::min(kBlock, n - b0);
     const size_t at = static_cast<size_t>(b0) * kDim;
     float* keys = x.norm4.data() + at;
-    ops::Gemm(nb, s->padded, kCrossDim, im.i2t_queries.data() + b0 * kCrossDim,
-              kCrossDim, 1, kbd.data(), s->padded, x.scores.data(), s->padded,
-              false);
+    Product(nb, im.i2t_queries.data() + b0 * kCrossDim, kCrossDim, 1, kbd_rhs,
+            x.scores.data(), s->padded, false);
     ops::SoftmaxHeads(x.scores.data(), nb, s->padded, T, nullptr);
     // keys + output bias + attention output, normalised; and + PE for the
     // next attention's keys.
-    ops::GemmOnto(nb, kDim, s->cols, x.scores.data(), s->padded, 1, u0.data(),
-                  kDim, keys, kDim, im.keys.data() + at, kDim,
-                  l0.i2t.o.b.data());
+    ProductOnto(nb, x.scores.data(), s->padded, 1, u0_rhs, keys, kDim,
+                im.keys.data() + at, kDim, l0.i2t.o.b.data());
     ops::LayerNormRows(keys, nb, kDim, kDim, l0.norm4.g.data(),
                        l0.norm4.b.data(), norm_eps_, im.pe.data() + at,
                        x.keys_pe.data());
-    AttendBlock(x.keys_pe.data(), keys, nb, qk1, x.scores.data(), &online, *s);
+    AttendBlock(x.keys_pe.data(), keys, nb, qk1_rhs, x.scores.data(), &online,
+                *s);
   }
   const std::vector<float> out = AttentionOutput(l1.t2i, &online, *s);
   ops::Add(s->queries.data(), s->queries.data(), out.data(), out.size());
@@ -480,6 +525,9 @@ void SamKernel::SecondLayerImageSide(const Image& im, State* s,
             l1.i2t.o.w.data(), kDim, u1.data(), kDim, false);
   const std::vector<float> qkf =
       Fold(final_.k, HeadColumns(Apply(final_.q, qpe, T), *s, scale), *s);
+  const Rhs m1_rhs = MakeRhs(m1.data(), kDim, s->padded);
+  const Rhs u1_rhs = MakeRhs(u1.data(), s->cols, kDim);
+  const Rhs qkf_rhs = MakeRhs(qkf.data(), kDim, s->padded);
   Scratch& x = *s->scratch;
   OnlineAttention online(s->cols);
   for (int b0 = 0; b0 < n; b0 += kBlock) {
@@ -489,18 +537,19 @@ void SamKernel::SecondLayerImageSide(const Image& im, State* s,
     float* up = upscaling_tokens + at;
     ops::Add(x.keys_pe.data(), keys, im.pe.data() + at,
              static_cast<size_t>(nb) * kDim);
-    ops::Gemm(nb, s->padded, kDim, x.keys_pe.data(), kDim, 1, m1.data(),
-              s->padded, x.scores.data(), s->padded, false);
+    Product(nb, x.keys_pe.data(), kDim, 1, m1_rhs, x.scores.data(), s->padded,
+            false);
     ops::SoftmaxHeads(x.scores.data(), nb, s->padded, T, bias1.data());
-    ops::GemmOnto(nb, kDim, s->cols, x.scores.data(), s->padded, 1, u1.data(),
-                  kDim, up, kDim, keys, kDim, l1.i2t.o.b.data());
+    ProductOnto(nb, x.scores.data(), s->padded, 1, u1_rhs, up, kDim, keys, kDim,
+                l1.i2t.o.b.data());
     ops::LayerNormRows(up, nb, kDim, kDim, l1.norm4.g.data(), l1.norm4.b.data(),
                        norm_eps_, im.pe.data() + at, x.keys_pe.data());
     // The final token-to-image attention.
-    AttendBlock(x.keys_pe.data(), up, nb, qkf, x.scores.data(), &online, *s);
+    AttendBlock(x.keys_pe.data(), up, nb, qkf_rhs, x.scores.data(), &online,
+                *s);
     // The mask features: the upscaling's two steps at the preview's cell.
-    ops::GemmOnto(nb, 64, kDim, up, kDim, 1, preview1_.w.data(), 64,
-                  x.hidden.data(), 64, nullptr, 0, preview1_.b.data());
+    ProductOnto(nb, up, kDim, 1, preview1_rhs_, x.hidden.data(), 64, nullptr, 0,
+                preview1_.b.data());
     ops::LayerNormRows(x.hidden.data(), nb, 64, 64, preview_norm_.g.data(),
                        preview_norm_.b.data(), preview_eps_);
     ops::Gelu(x.hidden.data(), static_cast<size_t>(nb) * 64);

@@ -15,14 +15,26 @@
 #include <string>
 #include <vector>
 
+#include "semrec/segment/sam_kernel_ops.h"
+
 namespace semrec::segment {
 
 class SamKernel {
  public:
+  /// The large products' inputs: fp32, or rounded to bf16 (fp32 sums) where
+  /// the CPU multiplies bf16 pairs (AVX512_BF16: twice the multiply-adds per
+  /// instruction; kernel_ops::HasBf16()).
+  enum class Precision { kFp32, kBf16 };
+
   /// Loads the weights `path` (written by scripts/export_sam_kernel.py).
   /// Throws IoError when it cannot be read, FormatError (naming the file and
-  /// the tensor) when it is not such a file or a tensor has the wrong shape.
-  explicit SamKernel(const std::filesystem::path& path);
+  /// the tensor) when it is not such a file or a tensor has the wrong shape,
+  /// InvalidArgument for kBf16 on a CPU without bf16 products.
+  explicit SamKernel(const std::filesystem::path& path,
+                     Precision precision = Precision::kFp32);
+  SamKernel(const SamKernel&) = delete;  // holds pointers into itself
+  SamKernel& operator=(const SamKernel&) = delete;
+  Precision precision() const { return precision_; }
 
   /// What the decoder needs of one image, computed once per image.
   struct Image {
@@ -72,6 +84,21 @@ class SamKernel {
   struct Scratch;
   struct OnlineAttention;
   struct State;  // one prompt's tokens
+  // A product's right-hand side [k x n], packed for bf16 products when the
+  // kernel uses them.
+  struct Rhs {
+    const float* w = nullptr;
+    int k = 0, n = 0;
+    kernel_ops::PackedB packed;
+  };
+  Rhs MakeRhs(const float* w, int k, int n) const;
+  // C[m x n] = (accumulate ? C : 0) + A B, or init + bias + A B (Onto), at
+  // the kernel's precision.
+  void Product(int m, const float* a, long a_row, long a_col, const Rhs& b,
+               float* c, long ldc, bool accumulate) const;
+  void ProductOnto(int m, const float* a, long a_row, long a_col, const Rhs& b,
+                   float* c, long ldc, const float* init, long ld_init,
+                   const float* bias) const;
 
   void EncodePosition(float cx, float cy, float* out) const;
   // Rows x in -> rows x out.
@@ -95,8 +122,8 @@ class SamKernel {
                                      OnlineAttention* online,
                                      const State& s) const;
   void AttendBlock(const float* keys_pe, const float* values, int nb,
-                   const std::vector<float>& folded, float* scores,
-                   OnlineAttention* online, const State& s) const;
+                   const Rhs& folded, float* scores, OnlineAttention* online,
+                   const State& s) const;
   void FirstLayerImageSide(const Image& image,
                            const std::vector<float>& layer0_tokens,
                            State* s) const;
@@ -117,11 +144,13 @@ class SamKernel {
   std::vector<float> output_tokens_;     // [5 x 256]
   std::vector<float> no_mask_;           // [256]
   Linear preview1_, preview2_;           // [256 x 64], [64 x 32]
+  Rhs preview1_rhs_;
   Norm preview_norm_;
   float norm_eps_ = 1e-5f, preview_eps_ = 1e-6f;
   float points_offset_ = 2.5f, first_mask_reweight_ = 1000.0f;
   float input_size_ = 1024.0f;
   int heads_ = 8;
+  Precision precision_ = Precision::kFp32;
   std::filesystem::path path_;
 };
 

@@ -5,6 +5,7 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -66,5 +67,29 @@ void Gelu(float* x, size_t n);
 
 /// x = exp(x) (to ~2 ulp for the values softmax sees).
 void Exp(float* x, size_t n);
+
+/// Whether this CPU has bf16 dot products (AVX512_BF16), which the *Bf16
+/// products below need.
+bool HasBf16();
+
+/// B [k x n] rounded to bf16 (to nearest even) and packed for GemmBf16:
+/// rows in pairs, interleaved, so that one instruction multiplies two of A's
+/// values by two of B's rows.
+struct PackedB {
+  std::vector<uint16_t> data;
+  int k = 0, n = 0;
+};
+/// Packs b (row stride ldb). n must be a multiple of 16; throws
+/// InvalidArgument otherwise or without HasBf16().
+void PackBf16(int k, int n, const float* b, long ldb, PackedB* out);
+
+/// Gemm and GemmOnto with A and B rounded to bf16 (fp32 sums): twice the
+/// multiply-adds per instruction, at bf16's 8-bit mantissa in the inputs.
+/// b's k and n are the product's.
+void GemmBf16(int m, const float* a, long a_row, long a_col, const PackedB& b,
+              float* c, long ldc, bool accumulate);
+void GemmOntoBf16(int m, const float* a, long a_row, long a_col,
+                  const PackedB& b, float* c, long ldc, const float* init,
+                  long ld_init, const float* bias);
 
 }  // namespace semrec::segment::kernel_ops

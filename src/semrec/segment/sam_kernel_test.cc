@@ -6,6 +6,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <cstring>
 #include <fstream>
 #include <random>
 #include <vector>
@@ -94,6 +96,69 @@ TEST(KernelOps, GemmMatchesTheDefinition) {
       }
     }
   });
+}
+
+// x rounded to bf16 (nearest, ties to even), as a float.
+float RoundToBf16(float x) {
+  uint32_t u;
+  std::memcpy(&u, &x, sizeof u);
+  u = (u + 0x7fffu + ((u >> 16) & 1u)) & 0xffff0000u;
+  float r;
+  std::memcpy(&r, &u, sizeof r);
+  return r;
+}
+
+TEST(KernelOps, Bf16ProductsAreTheProductsOfTheRoundedInputs) {
+  std::vector<float> b16 = Random(16 * 16, 2);
+  ops::PackedB packed;
+  if (!ops::HasBf16()) {  // this CPU cannot: an error, not garbage
+    EXPECT_THROW(ops::PackBf16(16, 16, b16.data(), 16, &packed),
+                 InvalidArgument);
+    return;
+  }
+  EXPECT_THROW(ops::PackBf16(16, 8, b16.data(), 16, &packed), InvalidArgument);
+  // The kernel's shapes (k = 56 head columns, 64 block tokens, 128, 256),
+  // an odd k and row tails; A plain, transposed and with a stride.
+  const int shapes[][3] = {{64, 256, 56}, {56, 256, 64}, {64, 64, 128},
+                           {64, 64, 256}, {13, 48, 7},   {3, 16, 1}};
+  for (const auto& [m, n, k] : shapes) {
+    for (const bool transposed : {false, true}) {
+      for (const int kind : {0, 1, 2}) {  // zero, accumulate, onto + bias
+        const long lda = std::max(m, k) + 3;
+        const std::vector<float> a =
+            Random(static_cast<size_t>(transposed ? k : m) * lda, 1);
+        const std::vector<float> b = Random(static_cast<size_t>(k) * n, 2);
+        const std::vector<float> start = Random(static_cast<size_t>(m) * n, 3);
+        const std::vector<float> bias = Random(static_cast<size_t>(n), 4);
+        const long a_row = transposed ? 1 : lda, a_col = transposed ? lda : 1;
+        ops::PackBf16(k, n, b.data(), n, &packed);
+        std::vector<float> c = start;
+        if (kind == 2) {
+          ops::GemmOntoBf16(m, a.data(), a_row, a_col, packed, c.data(), n,
+                            start.data(), n, bias.data());
+        } else {
+          ops::GemmBf16(m, a.data(), a_row, a_col, packed, c.data(), n,
+                        kind == 1);
+        }
+        for (int i = 0; i < m; ++i) {
+          for (int j = 0; j < n; ++j) {
+            double s = kind == 0   ? 0.0
+                       : kind == 1 ? start[i * n + j]
+                                   : start[i * n + j] + bias[j];
+            for (int p = 0; p < k; ++p) {
+              s += static_cast<double>(RoundToBf16(a[i * a_row + p * a_col])) *
+                   RoundToBf16(b[p * n + j]);
+            }
+            // The products of bf16 values are exact in fp32: only the sums
+            // round (plain fp32 inputs would be off by ~1e-2 here).
+            ASSERT_NEAR(c[i * n + j], s, 1e-5 * std::sqrt(k) + 1e-5)
+                << m << "x" << n << "x" << k << " transposed " << transposed
+                << " kind " << kind << " at " << i << "," << j;
+          }
+        }
+      }
+    }
+  }
 }
 
 TEST(KernelOps, ElementWiseOperationsMatchTheDefinitions) {
