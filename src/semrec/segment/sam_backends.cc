@@ -214,13 +214,10 @@ class SamSegmenter : public PromptableSegmenter {
     for (size_t i = 0; i < points.size(); ++i) {
       points[i] = {coords.data[2 * i], coords.data[2 * i + 1]};
     }
-    // Per thread, so the 4 MB of upscaling tokens are not allocated anew.
+    // Per thread, so its 4 MB of image tokens are not allocated anew.
     thread_local SamKernel::Output result;
     kernel_->Decode(kernel_image_, points, labels.data, &result);
-    const auto n = static_cast<int64_t>(kernel_image_.tokens);
     std::map<std::string, infer::Tensor> out;
-    out["upscaling_tokens"] =
-        infer::Tensor{{1, n, 256}, std::move(result.upscaling_tokens)};
     out["mask_hyper"] =
         infer::Tensor{{1, 1, static_cast<int64_t>(result.mask_hyper.size())},
                       result.mask_hyper};
@@ -228,10 +225,8 @@ class SamSegmenter : public PromptableSegmenter {
     preview.height = static_cast<int>(embedding_.shape[2]);
     preview.width = static_cast<int>(embedding_.shape[3]);
     preview.logits = result.preview;
-    LowResMask mask =
-        FilterAndUpscale(out, preview, result.predicted_iou, filter);
-    result.upscaling_tokens = std::move(out["upscaling_tokens"].data);
-    return mask;
+    return FilterAndUpscale(out, preview, result.predicted_iou, filter,
+                            &result);
   }
 
   LowResMask Run(const Prompt& prompt, const MaskFilter* filter) const {
@@ -263,9 +258,12 @@ class SamSegmenter : public PromptableSegmenter {
   }
 
   // Rejected early when the preview cannot pass `filter`, else upscaled.
-  LowResMask FilterAndUpscale(const std::map<std::string, infer::Tensor>& out,
-                              const LowResMask& preview, float predicted_iou,
-                              const MaskFilter* filter) const {
+  // `decoded`: the kernel's result (it computes the upscaling tokens the
+  // mask part needs), or null (`out` holds them all).
+  LowResMask FilterAndUpscale(
+      const std::map<std::string, infer::Tensor>& out,
+      const LowResMask& preview, float predicted_iou, const MaskFilter* filter,
+      const SamKernel::Output* decoded = nullptr) const {
     if (filter != nullptr &&
         !MaskPreviewMayPass(preview, predicted_iou, *filter, transform_)) {
       LowResMask rejected;
@@ -273,7 +271,7 @@ class SamSegmenter : public PromptableSegmenter {
       rejected.rejected_early = true;
       return rejected;
     }
-    LowResMask mask = Upscale(out, preview, filter != nullptr);
+    LowResMask mask = Upscale(out, preview, filter != nullptr, decoded);
     mask.predicted_iou = predicted_iou;
     return mask;
   }
@@ -281,10 +279,12 @@ class SamSegmenter : public PromptableSegmenter {
   // The mask part's low-res mask from the prompt part's outputs `out`:
   // every token, or (`filtered`, with a margin) those near the mask's edge.
   LowResMask Upscale(const std::map<std::string, infer::Tensor>& out,
-                     const LowResMask& preview, bool filtered) const {
+                     const LowResMask& preview, bool filtered,
+                     const SamKernel::Output* decoded) const {
     const std::string& name = decoder_->entry().name;
     infer::TensorRefs mask_in;
     for (const infer::TensorInfo& info : mask_part_->session().inputs()) {
+      if (decoded != nullptr && info.name == "upscaling_tokens") continue;
       mask_in[info.name] = &Output(out, info.name, name);
     }
     const std::string& mask_name = mask_part_->entry().name;
@@ -293,17 +293,30 @@ class SamSegmenter : public PromptableSegmenter {
       return BestOf(Output(masks, "low_res_masks", mask_name),
                     Output(out, "iou_predictions", name), mask_name);
     }
-    const infer::Tensor& tokens = Output(out, "upscaling_tokens", name);
     const auto count = static_cast<int64_t>(preview.logits.size());
+    std::vector<int64_t> chosen;
+    if (filtered && mask_margin_logits_ > 0.0f) {
+      chosen = TokensNearMaskEdge(preview, mask_margin_logits_);
+    } else {
+      chosen.resize(static_cast<size_t>(count));
+      for (int64_t t = 0; t < count; ++t) chosen[t] = t;
+    }
+    infer::Tensor picked;
+    if (decoded != nullptr) {
+      picked.shape = {1, static_cast<int64_t>(chosen.size()), 256};
+      picked.data.resize(chosen.size() * 256);
+      kernel_->UpscalingTokens(kernel_image_, *decoded, chosen,
+                               picked.data.data());
+      mask_in["upscaling_tokens"] = &picked;
+      return UpscaleTokens(mask_in, preview, chosen);
+    }
+    const infer::Tensor& tokens = Output(out, "upscaling_tokens", name);
     if (tokens.shape.size() != 3 || tokens.shape[1] != count) {
       throw Error(fmt::format(
           "mask decoder '{}': upscaling_tokens do not match the preview",
           name));
     }
-    std::vector<int64_t> chosen;
-    infer::Tensor picked;
     if (filtered && mask_margin_logits_ > 0.0f) {
-      chosen = TokensNearMaskEdge(preview, mask_margin_logits_);
       const auto channels = static_cast<size_t>(tokens.shape[2]);
       picked.shape = {1, static_cast<int64_t>(chosen.size()), tokens.shape[2]};
       picked.data.resize(chosen.size() * channels);
@@ -312,10 +325,16 @@ class SamSegmenter : public PromptableSegmenter {
                     picked.data.begin() + k * channels);
       }
       mask_in["upscaling_tokens"] = &picked;
-    } else {
-      chosen.resize(static_cast<size_t>(count));
-      for (int64_t t = 0; t < count; ++t) chosen[t] = t;
     }
+    return UpscaleTokens(mask_in, preview, chosen);
+  }
+
+  // The mask part on the upscaling tokens of `chosen` (in `mask_in`), the
+  // other tokens' cells from the preview.
+  LowResMask UpscaleTokens(const infer::TensorRefs& mask_in,
+                           const LowResMask& preview,
+                           const std::vector<int64_t>& chosen) const {
+    const std::string& mask_name = mask_part_->entry().name;
     std::map<std::string, infer::Tensor> masks;
     if (!chosen.empty()) masks = mask_part_->RunRefs(mask_in);
     const std::vector<float>& blocks =

@@ -39,7 +39,7 @@ std::vector<float> Sum(const std::vector<float>& a,
 // Per-thread buffers, kept between prompts (fresh 4 MB buffers per prompt
 // cost page faults).
 struct SamKernel::Scratch {
-  std::vector<float> norm4;     // [image tokens x 256]: layer 0's norm4
+  std::vector<float> up;        // [block x 256]: layer 1's norm4
   std::vector<float> features;  // [image tokens x 32]
   std::vector<float> scores;    // [block x padded]
   std::vector<float> keys_pe;   // [block x 256]
@@ -458,7 +458,7 @@ void SamKernel::AttendBlock(const float* keys_pe, const float* values, int nb,
 // same blocks with an online softmax.
 void SamKernel::FirstLayerImageSide(const Image& im,
                                     const std::vector<float>& layer0_tokens,
-                                    State* s) const {
+                                    State* s, float* image_tokens) const {
   const Layer& l0 = layers_[0];
   const Layer& l1 = layers_[1];
   const int T = s->tokens, n = im.tokens;
@@ -484,7 +484,7 @@ void SamKernel::FirstLayerImageSide(const Image& im,
   for (int b0 = 0; b0 < n; b0 += kBlock) {
     const int nb = std::min(kBlock, n - b0);
     const size_t at = static_cast<size_t>(b0) * kDim;
-    float* keys = x.norm4.data() + at;
+    float* keys = image_tokens + at;
     Product(nb, im.i2t_queries.data() + b0 * kCrossDim, kCrossDim, 1, kbd_rhs,
             x.scores.data(), s->padded, false);
     ops::SoftmaxHeads(x.scores.data(), nb, s->padded, T, nullptr);
@@ -506,44 +506,39 @@ void SamKernel::FirstLayerImageSide(const Image& im,
 }
 
 // Layer 1's image side: image-to-token attention and norm4 (the mask
-// part's upscaling tokens), the final token-to-image attention online, and
-// each token's mask features (the preview before the mask is chosen).
+// part's upscaling tokens, kept only per block), the final token-to-image
+// attention online, and each token's mask features (the preview before the
+// mask is chosen).
 void SamKernel::SecondLayerImageSide(const Image& im, State* s,
-                                     float* upscaling_tokens) const {
+                                     Output::SecondLayer* second) const {
   const Layer& l1 = layers_[1];
   const int T = s->tokens, n = im.tokens;
   const float scale = 1.0f / std::sqrt(static_cast<float>(kCrossDim / heads_));
   const std::vector<float> qpe = Sum(s->queries, s->query_pe);
   const std::vector<float> k1 = HeadColumns(Apply(l1.i2t.k, qpe, T), *s, scale);
-  const std::vector<float> m1 = Fold(l1.i2t.q, k1, *s);
-  std::vector<float> bias1(static_cast<size_t>(s->padded));
+  second->prompt_tokens = T;
+  second->scores_w = Fold(l1.i2t.q, k1, *s);
+  second->bias.resize(static_cast<size_t>(s->padded));
   ops::Gemm(1, s->padded, kCrossDim, l1.i2t.q.b.data(), 0, 1, k1.data(),
-            s->padded, bias1.data(), s->padded, false);
-  std::vector<float> u1(static_cast<size_t>(s->padded) * kDim);
+            s->padded, second->bias.data(), s->padded, false);
+  second->values_w.resize(static_cast<size_t>(s->padded) * kDim);
   ops::Gemm(s->padded, kDim, kCrossDim,
             HeadRows(Apply(l1.i2t.v, s->queries, T), *s).data(), kCrossDim, 1,
-            l1.i2t.o.w.data(), kDim, u1.data(), kDim, false);
+            l1.i2t.o.w.data(), kDim, second->values_w.data(), kDim, false);
+  second->scores = MakeRhs(second->scores_w.data(), kDim, s->padded);
+  second->values = MakeRhs(second->values_w.data(), s->cols, kDim);
   const std::vector<float> qkf =
       Fold(final_.k, HeadColumns(Apply(final_.q, qpe, T), *s, scale), *s);
-  const Rhs m1_rhs = MakeRhs(m1.data(), kDim, s->padded);
-  const Rhs u1_rhs = MakeRhs(u1.data(), s->cols, kDim);
   const Rhs qkf_rhs = MakeRhs(qkf.data(), kDim, s->padded);
   Scratch& x = *s->scratch;
   OnlineAttention online(s->cols);
+  float* up = x.up.data();
   for (int b0 = 0; b0 < n; b0 += kBlock) {
     const int nb = std::min(kBlock, n - b0);
     const size_t at = static_cast<size_t>(b0) * kDim;
-    const float* keys = x.norm4.data() + at;
-    float* up = upscaling_tokens + at;
-    ops::Add(x.keys_pe.data(), keys, im.pe.data() + at,
-             static_cast<size_t>(nb) * kDim);
-    Product(nb, x.keys_pe.data(), kDim, 1, m1_rhs, x.scores.data(), s->padded,
-            false);
-    ops::SoftmaxHeads(x.scores.data(), nb, s->padded, T, bias1.data());
-    ProductOnto(nb, x.scores.data(), s->padded, 1, u1_rhs, up, kDim, keys, kDim,
-                l1.i2t.o.b.data());
-    ops::LayerNormRows(up, nb, kDim, kDim, l1.norm4.g.data(), l1.norm4.b.data(),
-                       norm_eps_, im.pe.data() + at, x.keys_pe.data());
+    SecondLayerTokens(*second, second->image_tokens.data() + at,
+                      im.pe.data() + at, nb, x.keys_pe.data(), x.scores.data(),
+                      up);
     // The final token-to-image attention.
     AttendBlock(x.keys_pe.data(), up, nb, qkf_rhs, x.scores.data(), &online,
                 *s);
@@ -565,6 +560,58 @@ void SamKernel::SecondLayerImageSide(const Image& im, State* s,
                      final_norm_.b.data(), norm_eps_);
 }
 
+void SamKernel::SecondLayerTokens(const Output::SecondLayer& second,
+                                  const float* keys, const float* pe, int nb,
+                                  float* keys_pe, float* scores,
+                                  float* up) const {
+  const Layer& l1 = layers_[1];
+  const int padded = second.scores.n;
+  ops::Add(keys_pe, keys, pe, static_cast<size_t>(nb) * kDim);
+  Product(nb, keys_pe, kDim, 1, second.scores, scores, padded, false);
+  ops::SoftmaxHeads(scores, nb, padded, second.prompt_tokens,
+                    second.bias.data());
+  ProductOnto(nb, scores, padded, 1, second.values, up, kDim, keys, kDim,
+              l1.i2t.o.b.data());
+  ops::LayerNormRows(up, nb, kDim, kDim, l1.norm4.g.data(), l1.norm4.b.data(),
+                     norm_eps_, pe, keys_pe);
+}
+
+void SamKernel::UpscalingTokens(const Image& im, const Output& decoded,
+                                const std::vector<int64_t>& tokens,
+                                float* out) const {
+  const Output::SecondLayer& second = decoded.second_layer;
+  if (second.image_tokens.size() != static_cast<size_t>(im.tokens) * kDim ||
+      second.scores.n == 0) {
+    throw InvalidArgument(
+        "SAM decoder kernel: UpscalingTokens needs a prompt decoded on this "
+        "image");
+  }
+  thread_local std::vector<float> keys, pe, keys_pe, scores;
+  keys.resize(static_cast<size_t>(kBlock) * kDim);
+  pe.resize(keys.size());
+  keys_pe.resize(keys.size());
+  scores.resize(static_cast<size_t>(kBlock) * second.scores.n);
+  for (size_t b0 = 0; b0 < tokens.size(); b0 += kBlock) {
+    const int nb =
+        static_cast<int>(std::min<size_t>(kBlock, tokens.size() - b0));
+    for (int i = 0; i < nb; ++i) {
+      const int64_t t = tokens[b0 + i];
+      if (t < 0 || t >= im.tokens) {
+        throw InvalidArgument(
+            fmt::format("SAM decoder kernel: token {} outside the image's {}",
+                        t, im.tokens));
+      }
+      const size_t from = static_cast<size_t>(t) * kDim;
+      std::copy_n(second.image_tokens.data() + from, kDim,
+                  keys.data() + static_cast<size_t>(i) * kDim);
+      std::copy_n(im.pe.data() + from, kDim,
+                  pe.data() + static_cast<size_t>(i) * kDim);
+    }
+    SecondLayerTokens(second, keys.data(), pe.data(), nb, keys_pe.data(),
+                      scores.data(), out + b0 * kDim);
+  }
+}
+
 void SamKernel::Decode(const Image& im,
                        const std::vector<std::array<float, 2>>& points,
                        const std::vector<float>& labels, Output* out) const {
@@ -575,11 +622,11 @@ void SamKernel::Decode(const Image& im,
   }
   const int count = static_cast<int>(points.size());
   thread_local Scratch scratch;
-  scratch.norm4.resize(static_cast<size_t>(im.tokens) * kDim);
+  out->second_layer.image_tokens.resize(static_cast<size_t>(im.tokens) * kDim);
+  scratch.up.resize(static_cast<size_t>(kBlock) * kDim);
   scratch.features.resize(static_cast<size_t>(im.tokens) * kPreviewDim);
   scratch.keys_pe.resize(static_cast<size_t>(kBlock) * kDim);
   scratch.hidden.resize(static_cast<size_t>(kBlock) * 64);
-  out->upscaling_tokens.resize(static_cast<size_t>(im.tokens) * kDim);
   State s;
   s.scratch = &scratch;
   s.tokens = 5 + count;
@@ -646,8 +693,9 @@ void SamKernel::Decode(const Image& im,
     ops::LayerNormRows(s.queries.data(), T, kDim, kDim, l1.norm1.g.data(),
                        l1.norm1.b.data(), norm_eps_);
   }
-  FirstLayerImageSide(im, layer0_tokens, &s);
-  SecondLayerImageSide(im, &s, out->upscaling_tokens.data());
+  FirstLayerImageSide(im, layer0_tokens, &s,
+                      out->second_layer.image_tokens.data());
+  SecondLayerImageSide(im, &s, &out->second_layer);
   // The heads: IoU prediction and the mask tokens' hypernetworks.
   const auto mlp3 = [&](const Linear(&l)[3], const float* x) {
     std::vector<float> h(x, x + kDim);

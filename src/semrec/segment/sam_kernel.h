@@ -49,11 +49,27 @@ class SamKernel {
   Image Prepare(const std::vector<float>& embedding,
                 const std::vector<int64_t>& shape) const;
 
+  /// A product's right-hand side [k x n] (w, not owned), packed for bf16
+  /// products when the kernel uses them.
+  struct Rhs {
+    const float* w = nullptr;
+    int k = 0, n = 0;
+    kernel_ops::PackedB packed;
+  };
+
   struct Output {
-    float predicted_iou = 0;              // of the chosen mask
-    std::vector<float> upscaling_tokens;  // [tokens x 256]
-    std::vector<float> mask_hyper;        // [32]
-    std::vector<float> preview;           // [tokens]: the chosen mask's
+    float predicted_iou = 0;        // of the chosen mask
+    std::vector<float> mask_hyper;  // [32]
+    std::vector<float> preview;     // [tokens]: the chosen mask's
+    /// What UpscalingTokens() needs of the prompt: layer 1's image tokens
+    /// before its image-to-token attention [tokens x 256], and that
+    /// attention's score matrix [256 x heads * prompt tokens], score bias and
+    /// per-head values through the output projection.
+    struct SecondLayer {
+      int prompt_tokens = 0;
+      std::vector<float> image_tokens, bias, scores_w, values_w;
+      Rhs scores, values;
+    } second_layer;
   };
   /// Decodes one prompt: points in the model frame (the encoder's input,
   /// SAM: 1024 px) with SAM's labels (1 foreground, 0 background, 2 / 3 box
@@ -63,6 +79,15 @@ class SamKernel {
   void Decode(const Image& image,
               const std::vector<std::array<float, 2>>& points,
               const std::vector<float>& labels, Output* out) const;
+
+  /// The mask part's input (the upscaling tokens) for the image tokens
+  /// `tokens` (indices into the grid) of the prompt `decoded` came from:
+  /// [tokens.size() x 256], each token's values the same whichever others
+  /// are asked with it. Only what the mask part will upscale is computed:
+  /// most prompts stop on their preview, the others upscale near the mask's
+  /// edge (writing all 4 MB per prompt cost ~7% of a prompt).
+  void UpscalingTokens(const Image& image, const Output& decoded,
+                       const std::vector<int64_t>& tokens, float* out) const;
 
  private:
   struct Linear {
@@ -84,13 +109,6 @@ class SamKernel {
   struct Scratch;
   struct OnlineAttention;
   struct State;  // one prompt's tokens
-  // A product's right-hand side [k x n], packed for bf16 products when the
-  // kernel uses them.
-  struct Rhs {
-    const float* w = nullptr;
-    int k = 0, n = 0;
-    kernel_ops::PackedB packed;
-  };
   Rhs MakeRhs(const float* w, int k, int n) const;
   // C[m x n] = (accumulate ? C : 0) + A B, or init + bias + A B (Onto), at
   // the kernel's precision.
@@ -124,11 +142,18 @@ class SamKernel {
   void AttendBlock(const float* keys_pe, const float* values, int nb,
                    const Rhs& folded, float* scores, OnlineAttention* online,
                    const State& s) const;
+  // Writes layer 1's image tokens into `image_tokens`.
   void FirstLayerImageSide(const Image& image,
-                           const std::vector<float>& layer0_tokens,
-                           State* s) const;
+                           const std::vector<float>& layer0_tokens, State* s,
+                           float* image_tokens) const;
   void SecondLayerImageSide(const Image& image, State* s,
-                            float* upscaling_tokens) const;
+                            Output::SecondLayer* second) const;
+  // Layer 1's image-to-token attention and norm4 for nb image tokens (keys:
+  // their layer-1 tokens [nb x 256], pe: their positional encoding): the
+  // upscaling tokens into up, up + pe into keys_pe; scores is scratch.
+  void SecondLayerTokens(const Output::SecondLayer& second, const float* keys,
+                         const float* pe, int nb, float* keys_pe, float* scores,
+                         float* up) const;
 
   std::map<std::string, std::vector<float>> LoadTensors(
       const std::filesystem::path& path);
