@@ -24,13 +24,55 @@ uint16_t ToBf16(float x) {
   return static_cast<uint16_t>((u + 0x7fffu + ((u >> 16) & 1u)) >> 16);
 }
 
-// A [m x k] as bf16 rows of kp = k rounded up to even (a zero pads an odd k),
-// so that a row's pair (p, p + 1) is one 32-bit word.
+// The interleaving of two rows' 16 bf16 values each ([row 0 | row 1], as
+// VCVTNE2PS2BF16 leaves them) into 16 pairs.
+SEMREC_BF16 __m512i Interleave(__m512bh both) {
+  const __m512i order = _mm512_set_epi16(31, 15, 30, 14, 29, 13, 28, 12, 27, 11,
+                                         26, 10, 25, 9, 24, 8, 23, 7, 22, 6, 21,
+                                         5, 20, 4, 19, 3, 18, 2, 17, 1, 16, 0);
+  return _mm512_permutexvar_epi16(order,
+                                  reinterpret_cast<const __m512i&>(both));
+}
+
+// A [m x k] in bf16, each row's pair (p, p + 1) one 32-bit word, at
+// data + i * row + (p / 2) * pair (in bf16 values). Row-major A: rows of kp
+// = k rounded up to even (a zero pads an odd k); a transposed A (a_row = 1:
+// the attention weights' columns) pair-major, [kp / 2 x m x 2], packed a
+// vector at a time from two of its rows.
+struct PackedA {
+  std::vector<uint16_t> data;
+  long row = 0, pair = 0;
+};
+
 SEMREC_BF16 void PackA(int m, int k, const float* a, long a_row, long a_col,
-                       std::vector<uint16_t>* out) {
+                       PackedA* out) {
   const int kp = (k + 1) & ~1;
-  out->resize(static_cast<size_t>(m) * kp);
-  uint16_t* o = out->data();
+  if (a_row == 1 && a_col != 1) {
+    const int mp = (m + 15) & ~15;
+    out->data.resize(static_cast<size_t>(mp) * kp);
+    out->row = 2;
+    out->pair = 2L * mp;
+    for (int q = 0; q < kp / 2; ++q) {
+      const float* r0 = a + (2 * q) * a_col;
+      const bool odd_tail = 2 * q + 1 >= k;
+      for (int i = 0; i < m; i += 16) {
+        const auto mask =
+            static_cast<__mmask16>(m - i >= 16 ? 0xffff : (1u << (m - i)) - 1);
+        const __m512 lo = _mm512_maskz_loadu_ps(mask, r0 + i);
+        const __m512 hi = odd_tail
+                              ? _mm512_setzero_ps()
+                              : _mm512_maskz_loadu_ps(mask, r0 + a_col + i);
+        _mm512_storeu_si512(
+            out->data.data() + (static_cast<size_t>(q) * mp + i) * 2,
+            Interleave(_mm512_cvtne2ps_pbh(hi, lo)));
+      }
+    }
+    return;
+  }
+  out->data.resize(static_cast<size_t>(m) * kp);
+  out->row = kp;
+  out->pair = 2;
+  uint16_t* o = out->data.data();
   for (int i = 0; i < m; ++i) {
     const float* row = a + i * a_row;
     uint16_t* orow = o + static_cast<size_t>(i) * kp;
@@ -49,8 +91,9 @@ SEMREC_BF16 void PackA(int m, int k, const float* a, long a_row, long a_col,
 
 template <int MR, int NV>
 SEMREC_BF16 [[gnu::always_inline]] inline void TileBf16(
-    int kp, const uint16_t* a, const uint16_t* b, int n, float* c, long ldc,
-    const float* init, long ld_init, const float* bias, bool accumulate) {
+    int kp, const uint16_t* a, long a_rs, long a_ps, const uint16_t* b, int n,
+    float* c, long ldc, const float* init, long ld_init, const float* bias,
+    bool accumulate) {
   __m512 s[MR][NV];
   const float* from = init != nullptr ? init : accumulate ? c : nullptr;
   const long ld_from = init != nullptr ? ld_init : ldc;
@@ -71,10 +114,11 @@ SEMREC_BF16 [[gnu::always_inline]] inline void TileBf16(
           _mm512_loadu_si512(b + (static_cast<size_t>(q) * n + j * 16) * 2);
       bv[j] = reinterpret_cast<const __m512bh&>(v);
     }
+    const uint16_t* aq = a + q * a_ps;
 #pragma GCC unroll 8
     for (int i = 0; i < MR; ++i) {
       uint32_t pair;
-      std::memcpy(&pair, a + static_cast<size_t>(i) * kp + 2 * q, 4);
+      std::memcpy(&pair, aq + i * a_rs, 4);
       const __m512i av = _mm512_set1_epi32(static_cast<int>(pair));
 #pragma GCC unroll 4
       for (int j = 0; j < NV; ++j) {
@@ -91,22 +135,23 @@ SEMREC_BF16 [[gnu::always_inline]] inline void TileBf16(
 
 template <int NV>
 SEMREC_BF16 [[gnu::always_inline]] inline void ColumnsBf16(
-    int m, int kp, const uint16_t* a, const uint16_t* b, int n, float* c,
+    int m, int kp, const PackedA& a, const uint16_t* b, int n, float* c,
     long ldc, const float* init, long ld_init, const float* bias,
     bool accumulate) {
   int i = 0;
   for (; i + 8 <= m; i += 8) {
-    TileBf16<8, NV>(kp, a + static_cast<size_t>(i) * kp, b, n, c + i * ldc, ldc,
-                    init ? init + i * ld_init : nullptr, ld_init, bias,
-                    accumulate);
+    TileBf16<8, NV>(kp, a.data.data() + i * a.row, a.row, a.pair, b, n,
+                    c + i * ldc, ldc, init ? init + i * ld_init : nullptr,
+                    ld_init, bias, accumulate);
   }
-  const uint16_t* ar = a + static_cast<size_t>(i) * kp;
+  const uint16_t* ar = a.data.data() + i * a.row;
   float* cr = c + i * ldc;
   const float* ir = init ? init + i * ld_init : nullptr;
   switch (m - i) {
-#define SEMREC_ROWS(R)                                                     \
-  case R:                                                                  \
-    TileBf16<R, NV>(kp, ar, b, n, cr, ldc, ir, ld_init, bias, accumulate); \
+#define SEMREC_ROWS(R)                                                       \
+  case R:                                                                    \
+    TileBf16<R, NV>(kp, ar, a.row, a.pair, b, n, cr, ldc, ir, ld_init, bias, \
+                    accumulate);                                             \
     break;
     SEMREC_ROWS(1)
     SEMREC_ROWS(2)
@@ -125,17 +170,17 @@ SEMREC_BF16 void GemmBf16Impl(int m, int n, int k, const float* a, long a_row,
                               long a_col, const PackedB& b, float* c, long ldc,
                               const float* init, long ld_init,
                               const float* bias, bool accumulate) {
-  thread_local std::vector<uint16_t> packed_a;
+  thread_local PackedA packed_a;
   PackA(m, k, a, a_row, a_col, &packed_a);
   const int kp = (k + 1) & ~1;
   int j = 0;
   for (; j + 32 <= n; j += 32) {
-    ColumnsBf16<2>(m, kp, packed_a.data(), b.data.data() + j * 2, n, c + j, ldc,
+    ColumnsBf16<2>(m, kp, packed_a, b.data.data() + j * 2, n, c + j, ldc,
                    init ? init + j : nullptr, ld_init,
                    bias ? bias + j : nullptr, accumulate);
   }
   for (; j < n; j += 16) {
-    ColumnsBf16<1>(m, kp, packed_a.data(), b.data.data() + j * 2, n, c + j, ldc,
+    ColumnsBf16<1>(m, kp, packed_a, b.data.data() + j * 2, n, c + j, ldc,
                    init ? init + j : nullptr, ld_init,
                    bias ? bias + j : nullptr, accumulate);
   }
@@ -149,9 +194,6 @@ SEMREC_BF16 void PackBImpl(int k, int n, const float* b, long ldb,
   out->data.resize(static_cast<size_t>(kp) * n);
   uint16_t* o = out->data.data();
   // Pair (2q, 2q + 1) of rows, interleaved: o[(q n + j) 2 + r] = B(2q + r, j).
-  const __m512i interleave = _mm512_set_epi16(
-      31, 15, 30, 14, 29, 13, 28, 12, 27, 11, 26, 10, 25, 9, 24, 8, 23, 7, 22,
-      6, 21, 5, 20, 4, 19, 3, 18, 2, 17, 1, 16, 0);
   for (int q = 0; q < kp / 2; ++q) {
     const float* r0 = b + (2 * q) * ldb;
     const bool odd_tail = 2 * q + 1 >= k;
@@ -159,10 +201,8 @@ SEMREC_BF16 void PackBImpl(int k, int n, const float* b, long ldb,
       const __m512 lo = _mm512_loadu_ps(r0 + j);
       const __m512 hi =
           odd_tail ? _mm512_setzero_ps() : _mm512_loadu_ps(r0 + ldb + j);
-      const __m512bh both = _mm512_cvtne2ps_pbh(hi, lo);
-      const __m512i v = _mm512_permutexvar_epi16(
-          interleave, reinterpret_cast<const __m512i&>(both));
-      _mm512_storeu_si512(o + (static_cast<size_t>(q) * n + j) * 2, v);
+      _mm512_storeu_si512(o + (static_cast<size_t>(q) * n + j) * 2,
+                          Interleave(_mm512_cvtne2ps_pbh(hi, lo)));
     }
   }
 }
