@@ -316,9 +316,9 @@ TEST(RealModels, Bf16DecoderKernelKeepsTheMasks) {
     worst_predicted =
         std::max(worst_predicted, std::abs(a.predicted_iou - b.predicted_iou));
   }
-  // Measured on these 30 prompts (Zen 5): IoU >= 0.983, predicted IoU
-  // within 2.6e-3.
-  EXPECT_GE(worst_iou, 0.97);
+  // Measured on these 30 prompts (Zen 5): IoU >= 0.976, predicted IoU
+  // within 3.3e-3 (a CPU rounding its bf16 sums otherwise may differ a bit).
+  EXPECT_GE(worst_iou, 0.95);
   EXPECT_LT(worst_predicted, 0.01f);
   std::printf(
       "bf16 kernel vs ONNX Runtime: worst mask IoU %.4f, predicted "

@@ -200,6 +200,34 @@ SamKernel::SamKernel(const std::filesystem::path& path, Precision precision)
   preview2_.out = kPreviewDim;
   preview_norm_ = Norm{take("preview.g", 64), take("preview.beta", 64)};
   preview1_rhs_ = MakeRhs(preview1_.w.data(), kDim, 64);
+  // (bf16 products take whole vectors of columns: the IoU head's 4 stay
+  // fp32.)
+  const auto pack = [&](Linear& l) {
+    if (l.out % 16 == 0) l.rhs = MakeRhs(l.w.data(), l.in, l.out);
+  };
+  const auto pack_attention = [&](Attention& a) {
+    for (Linear* l : {&a.q, &a.k, &a.v, &a.o}) pack(*l);
+  };
+  for (Layer& l : layers_) {
+    for (Attention* a : {&l.self_attn, &l.t2i, &l.i2t}) pack_attention(*a);
+    pack(l.mlp1);
+    pack(l.mlp2);
+  }
+  pack_attention(final_);
+  for (auto& h : hyper_) {
+    for (Linear& l : h) pack(l);
+  }
+  for (Linear& l : iou_) pack(l);
+}
+
+std::vector<float> SamKernel::ApplyTokens(const Linear& l,
+                                          const std::vector<float>& x,
+                                          int rows) const {
+  if (l.rhs.w == nullptr) return Apply(l, x, rows);
+  std::vector<float> out(static_cast<size_t>(rows) * l.out);
+  ProductOnto(rows, x.data(), l.in, 1, l.rhs, out.data(), l.out, nullptr, 0,
+              l.b.data());
+  return out;
 }
 
 SamKernel::Rhs SamKernel::MakeRhs(const float* w, int k, int n) const {
@@ -247,9 +275,9 @@ std::vector<float> SamKernel::TokenAttention(const Attention& a,
                                              const std::vector<float>& k_in,
                                              const std::vector<float>& v_in,
                                              int rows) const {
-  const std::vector<float> q = Apply(a.q, q_in, rows);
-  const std::vector<float> k = Apply(a.k, k_in, rows);
-  const std::vector<float> v = Apply(a.v, v_in, rows);
+  const std::vector<float> q = ApplyTokens(a.q, q_in, rows);
+  const std::vector<float> k = ApplyTokens(a.k, k_in, rows);
+  const std::vector<float> v = ApplyTokens(a.v, v_in, rows);
   const int inner = a.q.out, dh = inner / heads_;
   const float scale = 1.0f / std::sqrt(static_cast<float>(dh));
   std::vector<float> out(static_cast<size_t>(rows) * inner, 0.0f);
@@ -273,14 +301,14 @@ std::vector<float> SamKernel::TokenAttention(const Attention& a,
       }
     }
   }
-  return Apply(a.o, out, rows);
+  return ApplyTokens(a.o, out, rows);
 }
 
 void SamKernel::TokenMlpAndNorm(const Layer& l, std::vector<float>* queries,
                                 int rows) const {
-  std::vector<float> hidden = Apply(l.mlp1, *queries, rows);
+  std::vector<float> hidden = ApplyTokens(l.mlp1, *queries, rows);
   for (float& x : hidden) x = std::max(x, 0.0f);
-  const std::vector<float> mlp = Apply(l.mlp2, hidden, rows);
+  const std::vector<float> mlp = ApplyTokens(l.mlp2, hidden, rows);
   ops::Add(queries->data(), queries->data(), mlp.data(), queries->size());
   ops::LayerNormRows(queries->data(), rows, kDim, kDim, l.norm3.g.data(),
                      l.norm3.b.data(), norm_eps_);
@@ -422,7 +450,7 @@ std::vector<float> SamKernel::AttentionOutput(const Attention& a,
       }
     }
   }
-  return Apply(a.o, o, s.tokens);
+  return ApplyTokens(a.o, o, s.tokens);
 }
 
 // One block's share of a token-to-image attention, online: the scores of
@@ -464,17 +492,18 @@ void SamKernel::FirstLayerImageSide(const Image& im,
   const int T = s->tokens, n = im.tokens;
   const float scale = 1.0f / std::sqrt(static_cast<float>(kCrossDim / heads_));
   const std::vector<float> k0 =
-      Apply(l0.i2t.k, Sum(layer0_tokens, s->query_pe), T);
+      ApplyTokens(l0.i2t.k, Sum(layer0_tokens, s->query_pe), T);
   const std::vector<float> kbd = HeadColumns(k0, *s, scale);
   // Each token's value through its head's share of the output projection.
   std::vector<float> u0(static_cast<size_t>(s->padded) * kDim);
   ops::Gemm(s->padded, kDim, kCrossDim,
-            HeadRows(Apply(l0.i2t.v, layer0_tokens, T), *s).data(), kCrossDim,
-            1, l0.i2t.o.w.data(), kDim, u0.data(), kDim, false);
-  const std::vector<float> qk1 = Fold(
-      l1.t2i.k,
-      HeadColumns(Apply(l1.t2i.q, Sum(s->queries, s->query_pe), T), *s, scale),
-      *s);
+            HeadRows(ApplyTokens(l0.i2t.v, layer0_tokens, T), *s).data(),
+            kCrossDim, 1, l0.i2t.o.w.data(), kDim, u0.data(), kDim, false);
+  const std::vector<float> qk1 =
+      Fold(l1.t2i.k,
+           HeadColumns(ApplyTokens(l1.t2i.q, Sum(s->queries, s->query_pe), T),
+                       *s, scale),
+           *s);
   const Rhs kbd_rhs = MakeRhs(kbd.data(), kCrossDim, s->padded);
   const Rhs u0_rhs = MakeRhs(u0.data(), s->cols, kDim);
   const Rhs qk1_rhs = MakeRhs(qk1.data(), kDim, s->padded);
@@ -515,7 +544,8 @@ void SamKernel::SecondLayerImageSide(const Image& im, State* s,
   const int T = s->tokens, n = im.tokens;
   const float scale = 1.0f / std::sqrt(static_cast<float>(kCrossDim / heads_));
   const std::vector<float> qpe = Sum(s->queries, s->query_pe);
-  const std::vector<float> k1 = HeadColumns(Apply(l1.i2t.k, qpe, T), *s, scale);
+  const std::vector<float> k1 =
+      HeadColumns(ApplyTokens(l1.i2t.k, qpe, T), *s, scale);
   second->prompt_tokens = T;
   second->scores_w = Fold(l1.i2t.q, k1, *s);
   second->bias.resize(static_cast<size_t>(s->padded));
@@ -523,12 +553,13 @@ void SamKernel::SecondLayerImageSide(const Image& im, State* s,
             s->padded, second->bias.data(), s->padded, false);
   second->values_w.resize(static_cast<size_t>(s->padded) * kDim);
   ops::Gemm(s->padded, kDim, kCrossDim,
-            HeadRows(Apply(l1.i2t.v, s->queries, T), *s).data(), kCrossDim, 1,
-            l1.i2t.o.w.data(), kDim, second->values_w.data(), kDim, false);
+            HeadRows(ApplyTokens(l1.i2t.v, s->queries, T), *s).data(),
+            kCrossDim, 1, l1.i2t.o.w.data(), kDim, second->values_w.data(),
+            kDim, false);
   second->scores = MakeRhs(second->scores_w.data(), kDim, s->padded);
   second->values = MakeRhs(second->values_w.data(), s->cols, kDim);
   const std::vector<float> qkf =
-      Fold(final_.k, HeadColumns(Apply(final_.q, qpe, T), *s, scale), *s);
+      Fold(final_.k, HeadColumns(ApplyTokens(final_.q, qpe, T), *s, scale), *s);
   const Rhs qkf_rhs = MakeRhs(qkf.data(), kDim, s->padded);
   Scratch& x = *s->scratch;
   OnlineAttention online(s->cols);
@@ -663,7 +694,7 @@ void SamKernel::Decode(const Image& im,
   ops::LayerNormRows(s.queries.data(), T, kDim, kDim, l0.norm1.g.data(),
                      l0.norm1.b.data(), norm_eps_);
   {
-    std::vector<float> q = Apply(l0.t2i.q, Sum(s.queries, s.query_pe), T);
+    std::vector<float> q = ApplyTokens(l0.t2i.q, Sum(s.queries, s.query_pe), T);
     for (float& x : q) x *= scale;
     std::vector<float> p(static_cast<size_t>(T) * im.tokens);
     std::vector<float> o(static_cast<size_t>(T) * kCrossDim);
@@ -676,7 +707,7 @@ void SamKernel::Decode(const Image& im,
                 im.t2i_values.data() + static_cast<size_t>(h) * im.tokens * dh,
                 dh, o.data() + h * dh, kCrossDim, false);
     }
-    const std::vector<float> out = Apply(l0.t2i.o, o, T);
+    const std::vector<float> out = ApplyTokens(l0.t2i.o, o, T);
     ops::Add(s.queries.data(), s.queries.data(), out.data(), out.size());
     ops::LayerNormRows(s.queries.data(), T, kDim, kDim, l0.norm2.g.data(),
                        l0.norm2.b.data(), norm_eps_);
@@ -700,7 +731,7 @@ void SamKernel::Decode(const Image& im,
   const auto mlp3 = [&](const Linear(&l)[3], const float* x) {
     std::vector<float> h(x, x + kDim);
     for (int i = 0; i < 3; ++i) {
-      h = Apply(l[i], h, 1);
+      h = ApplyTokens(l[i], h, 1);
       if (i < 2) {
         for (float& v : h) v = std::max(v, 0.0f);
       }

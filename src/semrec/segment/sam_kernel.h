@@ -94,6 +94,7 @@ class SamKernel {
     std::vector<float> w;  // [in x out]
     std::vector<float> b;  // [out]
     int in = 0, out = 0;
+    Rhs rhs;  // w for Product()
   };
   struct Norm {
     std::vector<float> g, b;
@@ -119,9 +120,12 @@ class SamKernel {
                    const float* bias) const;
 
   void EncodePosition(float cx, float cy, float* out) const;
-  // Rows x in -> rows x out.
+  // Rows x in -> rows x out (fp32: the image's projections in Prepare()).
   std::vector<float> Apply(const Linear& l, const std::vector<float>& x,
                            int rows) const;
+  // The same at the kernel's precision (the prompt's tokens).
+  std::vector<float> ApplyTokens(const Linear& l, const std::vector<float>& x,
+                                 int rows) const;
   // SAM's attention among the prompt's tokens (q, k, v: rows x 256).
   std::vector<float> TokenAttention(const Attention& a,
                                     const std::vector<float>& q,
