@@ -76,15 +76,27 @@ SEMREC_BF16 void PackA(int m, int k, const float* a, long a_row, long a_col,
   for (int i = 0; i < m; ++i) {
     const float* row = a + i * a_row;
     uint16_t* orow = o + static_cast<size_t>(i) * kp;
-    int p = 0;
     if (a_col == 1) {
-      for (; p + 32 <= k; p += 32) {
-        const __m512bh v = _mm512_cvtne2ps_pbh(_mm512_loadu_ps(row + p + 16),
-                                               _mm512_loadu_ps(row + p));
-        _mm512_storeu_si512(orow + p, reinterpret_cast<const __m512i&>(v));
+      // 32 at a time, the tail through masks (a prompt's 56 head columns).
+      for (int p = 0; p < k; p += 32) {
+        const int left = k - p;
+        const auto lo_mask =
+            static_cast<__mmask16>(left >= 16 ? 0xffff : (1u << left) - 1);
+        const auto hi_mask =
+            static_cast<__mmask16>(left >= 32   ? 0xffff
+                                   : left <= 16 ? 0
+                                                : (1u << (left - 16)) - 1);
+        const __m512bh v =
+            _mm512_cvtne2ps_pbh(_mm512_maskz_loadu_ps(hi_mask, row + p + 16),
+                                _mm512_maskz_loadu_ps(lo_mask, row + p));
+        const auto store_mask =
+            static_cast<__mmask32>(left >= 32 ? 0xffffffffu : (1u << left) - 1);
+        _mm512_mask_storeu_epi16(orow + p, store_mask,
+                                 reinterpret_cast<const __m512i&>(v));
       }
+    } else {
+      for (int p = 0; p < k; ++p) orow[p] = ToBf16(row[p * a_col]);
     }
-    for (; p < k; ++p) orow[p] = ToBf16(row[p * a_col]);
     if (kp != k) orow[k] = 0;
   }
 }
