@@ -56,11 +56,17 @@ template <int W>
 SEMREC_INLINE F<W> Splat(float s) {
   return F<W>{} + s;
 }
+// Horizontal sum, halving the vector (not lane by lane).
 template <int W>
 SEMREC_INLINE float Sum(F<W> v) {
-  float s = 0;
-  for (int i = 0; i < W; ++i) s += v[i];
-  return s;
+  if constexpr (W > 4) {
+    F<W / 2> lo, hi;
+    std::memcpy(&lo, &v, sizeof lo);
+    std::memcpy(&hi, reinterpret_cast<const char*>(&v) + sizeof lo, sizeof hi);
+    return Sum<W / 2>(lo + hi);
+  } else {
+    return (v[0] + v[2]) + (v[1] + v[3]);
+  }
 }
 template <int W>
 SEMREC_INLINE F<W> Max(F<W> a, F<W> b) {
@@ -357,6 +363,10 @@ template <int W>
 SEMREC_INLINE void SoftmaxHeadsT(float* s, int rows, long ld, int tokens,
                                  const float* bias) {
   const size_t cols = static_cast<size_t>(tokens) * 8;
+  // exp over whole vectors where the row stride leaves room (the padding's
+  // values are overwritten): no tail.
+  const size_t whole = (cols + W - 1) / W * W;
+  const size_t exp_cols = whole <= static_cast<size_t>(ld) ? whole : cols;
   for (int r = 0; r < rows; ++r) {
     float* row = s + r * ld;
     if (bias != nullptr) AddT<W>(row, row, bias, cols);
@@ -365,7 +375,7 @@ SEMREC_INLINE void SoftmaxHeadsT(float* s, int rows, long ld, int tokens,
     for (int t = 0; t < tokens; ++t) {
       Store<8>(row + t * 8, Load<8>(row + t * 8) - m);
     }
-    ExpT<W>(row, cols);
+    ExpT<W>(row, exp_cols);
     F<8> sum = Load<8>(row);
     for (int t = 1; t < tokens; ++t) sum += Load<8>(row + t * 8);
     const F<8> inv = 1.0f / sum;
@@ -375,11 +385,71 @@ SEMREC_INLINE void SoftmaxHeadsT(float* s, int rows, long ld, int tokens,
   }
 }
 
+// OnlineSoftmaxColumns on whole vectors when the row stride leaves room for
+// the last one (the kernel's 56 head columns in rows of 64): the columns'
+// state in registers, no tails. Columns past `cols` are overwritten.
+template <int W>
+SEMREC_INLINE bool OnlineSoftmaxVectors(float* s, int rows, int cols, long ld,
+                                        float* max, float* sum,
+                                        float* rescale) {
+  constexpr float kSlack = 16.0f;
+  constexpr int kMaxVectors = 256 / W;
+  const int nv = (cols + W - 1) / W;
+  float m_pad[256], s_pad[256], r_pad[256];
+  std::copy(max, max + cols, m_pad);
+  std::copy(sum, sum + cols, s_pad);
+  std::fill(m_pad + cols, m_pad + nv * W, 0.0f);
+  std::fill(s_pad + cols, s_pad + nv * W, 0.0f);
+  F<W> block[kMaxVectors];
+  for (int v = 0; v < nv; ++v) block[v] = Splat<W>(-1e30f);
+  for (int r = 0; r < rows; ++r) {
+    const float* row = s + r * ld;
+    for (int v = 0; v < nv; ++v) {
+      block[v] = Max<W>(block[v], Load<W>(row + v * W));
+    }
+  }
+  // Padding lanes never move (their block maximum is below any slack).
+  for (int c = cols; c < nv * W; ++c) block[c / W][c % W] = -1e30f;
+  bool moved = false;
+  F<W> m[kMaxVectors];
+  for (int v = 0; v < nv; ++v) {
+    const F<W> old = Load<W>(m_pad + v * W);
+    const I<W> move = (block[v] > old + kSlack) | (old <= -1e29f);
+    for (int i = 0; i < W; ++i) moved = moved || move[i] != 0;
+    m[v] = move ? block[v] : old;
+    Store<W>(r_pad + v * W, move ? old - block[v] : Splat<W>(0.0f));
+  }
+  F<W> acc[kMaxVectors];
+  for (int v = 0; v < nv; ++v) acc[v] = F<W>{};
+  for (int r = 0; r < rows; ++r) {
+    float* row = s + r * ld;
+    for (int v = 0; v < nv; ++v) {
+      const F<W> e = ExpV<W>(Load<W>(row + v * W) - m[v]);
+      Store<W>(row + v * W, e);
+      acc[v] += e;
+    }
+  }
+  for (int v = 0; v < nv; ++v) {
+    const F<W> resc = ExpV<W>(Load<W>(r_pad + v * W));
+    const F<W> old_sum = Load<W>(s_pad + v * W);
+    Store<W>(s_pad + v * W, (moved ? old_sum * resc : old_sum) + acc[v]);
+    Store<W>(r_pad + v * W, resc);
+    Store<W>(m_pad + v * W, m[v]);
+  }
+  std::copy(m_pad, m_pad + cols, max);
+  std::copy(s_pad, s_pad + cols, sum);
+  if (moved) std::copy(r_pad, r_pad + cols, rescale);
+  return moved;
+}
+
 template <int W>
 SEMREC_INLINE bool OnlineSoftmaxColumnsT(float* s, int rows, int cols, long ld,
                                          float* max, float* sum,
                                          float* rescale) {
   constexpr float kSlack = 16.0f;
+  if (cols <= 256 && (cols + W - 1) / W * W <= ld) {
+    return OnlineSoftmaxVectors<W>(s, rows, cols, ld, max, sum, rescale);
+  }
   bool moved = false;
   float block[256];
   for (int c0 = 0; c0 < cols; c0 += 256) {

@@ -48,7 +48,8 @@ void SoftmaxRows(float* s, int rows, int cols, long ld);
 /// Attention weights of 8 heads over a prompt's tokens: each row of s
 /// (stride ld) holds tokens x 8 scores, column t * 8 + h; with the bias
 /// (tokens x 8 values, or null) added, each head's scores become a softmax
-/// over the tokens.
+/// over the tokens. Columns past tokens x 8, up to a whole vector, may be
+/// overwritten where ld leaves room.
 void SoftmaxHeads(float* s, int rows, long ld, int tokens, const float* bias);
 
 /// One block of a softmax over many rows, column by column (a column per
@@ -58,7 +59,8 @@ void SoftmaxHeads(float* s, int rows, long ld, int tokens, const float* bias);
 /// The maximum moves only when a score exceeds it by more than 16 (exp of
 /// up to e^16 stays far from float's range), so the caller seldom rescales:
 /// returns whether it must, by `rescale[c]` = exp(old max - new max), what it
-/// accumulated for column c.
+/// accumulated for column c. Columns past `cols`, up to a whole vector, may
+/// be overwritten where ld leaves room.
 bool OnlineSoftmaxColumns(float* s, int rows, int cols, long ld, float* max,
                           float* sum, float* rescale);
 

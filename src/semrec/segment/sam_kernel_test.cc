@@ -10,6 +10,7 @@
 #include <cstring>
 #include <fstream>
 #include <random>
+#include <utility>
 #include <vector>
 
 #include "semrec/core/error.h"
@@ -246,46 +247,57 @@ TEST(KernelOps, OnlineSoftmaxOverBlocksEqualsTheWholeSoftmax) {
   OnEachLevel([] {
     // A weighted sum over 300 rows in blocks of 64, with the running maximum,
     // sum and rescaling, against the softmax over all rows at once. The scores
-    // grow along the rows so the maximum moves past its slack.
-    const int n = 300, cols = 5, channels = 3, block = 64;
-    std::vector<float> scores = Random(static_cast<size_t>(n) * cols, 11, 2.0f);
-    for (int i = 0; i < n; ++i)
-      scores[i * cols] += 0.2f * static_cast<float>(i);
-    const std::vector<float> values =
-        Random(static_cast<size_t>(n) * channels, 12);
-    std::vector<float> max(cols, -1e30f), sum(cols, 0.0f), rescale(cols);
-    std::vector<float> acc(static_cast<size_t>(cols) * channels, 0.0f);
-    int rescaled = 0;
-    for (int b0 = 0; b0 < n; b0 += block) {
-      const int nb = std::min(block, n - b0);
-      std::vector<float> s(scores.begin() + b0 * cols,
-                           scores.begin() + (b0 + nb) * cols);
-      if (ops::OnlineSoftmaxColumns(s.data(), nb, cols, cols, max.data(),
-                                    sum.data(), rescale.data())) {
-        ++rescaled;
-        for (int c = 0; c < cols; ++c) {
-          for (int k = 0; k < channels; ++k)
-            acc[c * channels + k] *= rescale[c];
-        }
-      }
-      ops::Gemm(cols, channels, nb, s.data(), 1, cols,
-                values.data() + b0 * channels, channels, acc.data(), channels,
-                true);
-    }
-    EXPECT_GE(rescaled, 2);  // the first block and the growing column
-    for (int c = 0; c < cols; ++c) {
-      double m = -1e30;
-      for (int i = 0; i < n; ++i) m = std::max<double>(m, scores[i * cols + c]);
-      double z = 0;
-      std::vector<double> w(channels, 0.0);
+    // grow along the rows so the maximum moves past its slack. Rows of 5
+    // columns (no room to round up: tails), and the kernel's 56 columns in
+    // rows of 64 (whole vectors).
+    for (const auto& [cols, ld] : {std::pair{5, 5}, std::pair{56, 64}}) {
+      SCOPED_TRACE(cols);
+      const int n = 300, channels = 3, block = 64;
+      std::vector<float> scores = Random(static_cast<size_t>(n) * ld, 11, 2.0f);
       for (int i = 0; i < n; ++i) {
-        const double p = std::exp(scores[i * cols + c] - m);
-        z += p;
-        for (int k = 0; k < channels; ++k) w[k] += p * values[i * channels + k];
+        scores[i * ld] += 0.2f * static_cast<float>(i);
+        scores[i * ld + cols - 1] -= 0.3f * static_cast<float>(i);
       }
-      for (int k = 0; k < channels; ++k) {
-        ASSERT_NEAR(acc[c * channels + k] / sum[c], w[k] / z, 1e-5)
-            << "column " << c;
+      const std::vector<float> values =
+          Random(static_cast<size_t>(n) * channels, 12);
+      std::vector<float> max(cols, -1e30f), sum(cols, 0.0f), rescale(cols);
+      std::vector<float> acc(static_cast<size_t>(cols) * channels, 0.0f);
+      int rescaled = 0;
+      for (int b0 = 0; b0 < n; b0 += block) {
+        const int nb = std::min(block, n - b0);
+        std::vector<float> s(scores.begin() + b0 * ld,
+                             scores.begin() + (b0 + nb) * ld);
+        if (ops::OnlineSoftmaxColumns(s.data(), nb, cols, ld, max.data(),
+                                      sum.data(), rescale.data())) {
+          ++rescaled;
+          for (int c = 0; c < cols; ++c) {
+            for (int k = 0; k < channels; ++k)
+              acc[c * channels + k] *= rescale[c];
+          }
+        }
+        ops::Gemm(cols, channels, nb, s.data(), 1, ld,
+                  values.data() + b0 * channels, channels, acc.data(), channels,
+                  true);
+      }
+      EXPECT_GE(rescaled, 2);  // the first block and the growing column
+      for (int c = 0; c < cols; ++c) {
+        double m = -1e30;
+        for (int i = 0; i < n; ++i) {
+          m = std::max<double>(m, scores[i * ld + c]);
+        }
+        double z = 0;
+        std::vector<double> w(channels, 0.0);
+        for (int i = 0; i < n; ++i) {
+          const double p = std::exp(scores[i * ld + c] - m);
+          z += p;
+          for (int k = 0; k < channels; ++k) {
+            w[k] += p * values[i * channels + k];
+          }
+        }
+        for (int k = 0; k < channels; ++k) {
+          ASSERT_NEAR(acc[c * channels + k] / sum[c], w[k] / z, 1e-5)
+              << "column " << c;
+        }
       }
     }
   });
