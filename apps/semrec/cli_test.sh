@@ -190,6 +190,9 @@ if [ -f "$models/mosaic_r4_ade20k_top31.onnx" ]; then
   "$SEMREC" segment "$data/ade20k_val_3/images" --covered-similarity 1.5 --out "$tmp/s7" 2>"$tmp/err"; rc=$?
   [ "$rc" -ne 0 ] && grep -q "covered-similarity: Value 1.5 not in range" "$tmp/err" ||
     fail "segment: bad --covered-similarity: $(cat "$tmp/err")"
+  "$SEMREC" segment "$data/ade20k_val_3/images" --decoder-kernel fast --out "$tmp/s8" 2>"$tmp/err"; rc=$?
+  [ "$rc" -ne 0 ] && grep -q "decoder-kernel: fast not in {auto,on,bf16,off}" "$tmp/err" ||
+    fail "segment: bad --decoder-kernel: $(cat "$tmp/err")"
   "$SEMREC" eval seg "$tmp/seg" "$data/ade20k_val_3/annotations" --labels voc 2>"$tmp/err"; rc=$?
   [ "$rc" -eq 1 ] && grep -q "no prediction" "$tmp/err" || fail "eval seg: missing prediction: $(cat "$tmp/err")"
   # People: synthetic sequence, detector boxes replaced by the ground truth (YOLOX finds few of the
