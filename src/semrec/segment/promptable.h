@@ -53,12 +53,12 @@ struct PromptableOptions {
   /// and they are installed: the same masks up to float rounding, each
   /// prompt in one pass per block of image tokens instead of ONNX Runtime's
   /// op-by-op passes over all of them. kOn: fp32 products; kBf16: the large
-  /// products' inputs rounded to bf16 (needs AVX512_BF16; InvalidArgument
-  /// when loading on another CPU). kAuto uses the kernel where it was
-  /// measured faster: bf16 where the CPU has it (Zen 5: 7.4 vs 9.1 ms per
-  /// prompt fp32, 10.4 ONNX Runtime; bench_prompts: the same masks), fp32
-  /// on other CPUs with AVX-512 (with AVX2 only it took 14 ms there, ONNX
-  /// Runtime's AVX2 speed unmeasured), else ONNX Runtime.
+  /// products' inputs rounded to bf16 (needs AVX512_BF16: InvalidArgument
+  /// on another CPU, whether or not the kernel's weights are installed). kAuto
+  /// uses the kernel where it was measured faster: bf16 where the CPU has it
+  /// (Zen 5: 7.4 vs 9.1 ms per prompt fp32, 10.4 ONNX Runtime; bench_prompts:
+  /// the same masks), fp32 on other CPUs with AVX-512 (with AVX2 only it took
+  /// 14 ms there, ONNX Runtime's AVX2 speed unmeasured), else ONNX Runtime.
   enum class Kernel { kAuto, kOn, kBf16, kOff };
   Kernel decoder_kernel = Kernel::kAuto;
   void Check() const;

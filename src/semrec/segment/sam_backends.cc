@@ -179,6 +179,12 @@ class SamSegmenter : public PromptableSegmenter {
                   const infer::ModelEntry& entry,
                   const PromptableOptions& options) {
     using Kernel = PromptableOptions::Kernel;
+    // Asked for by name, bf16 products must be there (not a silent fallback).
+    if (options.decoder_kernel == Kernel::kBf16 && !kernel_ops::HasBf16()) {
+      throw InvalidArgument(
+          "decoder kernel 'bf16' needs a CPU with AVX512_BF16 (this one has "
+          "not; use 'on' for fp32 products)");
+    }
     if (options.decoder_kernel == Kernel::kOff || !mask_part_blocks_ ||
         entry.split_kernel.empty() ||
         (options.decoder_kernel == Kernel::kAuto &&
@@ -197,11 +203,6 @@ class SamSegmenter : public PromptableSegmenter {
     const bool bf16 =
         options.decoder_kernel == Kernel::kBf16 ||
         (options.decoder_kernel == Kernel::kAuto && kernel_ops::HasBf16());
-    if (bf16 && !kernel_ops::HasBf16()) {
-      throw InvalidArgument(
-          "decoder kernel 'bf16' needs a CPU with AVX512_BF16 (this one has "
-          "not; use 'on' for fp32 products)");
-    }
     kernel_ = std::make_unique<SamKernel>(
         file, bf16 ? SamKernel::Precision::kBf16 : SamKernel::Precision::kFp32);
   }

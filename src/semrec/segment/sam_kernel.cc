@@ -612,10 +612,11 @@ void SamKernel::UpscalingTokens(const Image& im, const Output& decoded,
                                 float* out) const {
   const Output::SecondLayer& second = decoded.second_layer;
   if (second.image_tokens.size() != static_cast<size_t>(im.tokens) * kDim ||
-      second.scores.n == 0) {
+      second.scores.n == 0 ||
+      (precision_ == Precision::kBf16) != (second.scores.packed.n != 0)) {
     throw InvalidArgument(
-        "SAM decoder kernel: UpscalingTokens needs a prompt decoded on this "
-        "image");
+        "SAM decoder kernel: UpscalingTokens needs a prompt this kernel "
+        "decoded on this image");
   }
   thread_local std::vector<float> keys, pe, keys_pe, scores;
   keys.resize(static_cast<size_t>(kBlock) * kDim);

@@ -66,6 +66,13 @@ class SamKernel {
     /// attention's score matrix [256 x heads * prompt tokens], score bias and
     /// per-head values through the output projection.
     struct SecondLayer {
+      SecondLayer() = default;
+      // scores and values point into scores_w and values_w: a copy's would
+      // point into the original's (a move keeps the buffers).
+      SecondLayer(const SecondLayer&) = delete;
+      SecondLayer& operator=(const SecondLayer&) = delete;
+      SecondLayer(SecondLayer&&) = default;
+      SecondLayer& operator=(SecondLayer&&) = default;
       int prompt_tokens = 0;
       std::vector<float> image_tokens, bias, scores_w, values_w;
       Rhs scores, values;

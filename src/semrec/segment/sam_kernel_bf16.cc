@@ -1,7 +1,9 @@
 // The decoder kernel's products with bf16 inputs (AVX512_BF16: VDPBF16PS
 // multiplies pairs of bf16 values and adds them to fp32 sums, twice the
 // multiply-adds per instruction of fp32 FMA). Compiled for that instruction
-// set only and used only where the CPU has it (HasBf16()).
+// set only and reachable only where the CPU has it: a PackedB comes only
+// from PackBf16, which checks HasBf16(), and the products of an empty one
+// return at once.
 #include <immintrin.h>
 
 #include <cstdint>
@@ -17,7 +19,8 @@
 namespace semrec::segment::kernel_ops {
 namespace {
 
-// fp32 -> bf16, round to nearest even (as VCVTNEPS2BF16; no NaNs here).
+// fp32 -> bf16, round to nearest even (as VCVTNEPS2BF16, except that it
+// keeps denormals; no NaNs here).
 uint16_t ToBf16(float x) {
   uint32_t u;
   std::memcpy(&u, &x, sizeof u);
@@ -37,8 +40,9 @@ SEMREC_BF16 __m512i Interleave(__m512bh both) {
 // A [m x k] in bf16, each row's pair (p, p + 1) one 32-bit word, at
 // data + i * row + (p / 2) * pair (in bf16 values). Row-major A: rows of kp
 // = k rounded up to even (a zero pads an odd k); a transposed A (a_row = 1:
-// the attention weights' columns) pair-major, [kp / 2 x m x 2], packed a
-// vector at a time from two of its rows.
+// the attention weights' columns) pair-major, [kp / 2 x mp x 2] with m
+// rounded up to mp, a multiple of 16, packed a vector at a time from two of
+// its rows.
 struct PackedA {
   std::vector<uint16_t> data;
   long row = 0, pair = 0;
