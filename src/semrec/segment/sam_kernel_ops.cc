@@ -385,16 +385,35 @@ SEMREC_INLINE void SoftmaxHeadsT(float* s, int rows, long ld, int tokens,
   }
 }
 
-// OnlineSoftmaxColumns on whole vectors when the row stride leaves room for
-// the last one (the kernel's 56 head columns in rows of 64): the columns'
-// state in registers, no tails. Columns past `cols` are overwritten.
+// The first n (< W) lanes through a zeroed buffer: a row's last vector where
+// the row stride leaves no room for a whole one.
 template <int W>
-SEMREC_INLINE bool OnlineSoftmaxVectors(float* s, int rows, int cols, long ld,
-                                        float* max, float* sum,
-                                        float* rescale) {
+SEMREC_INLINE F<W> LoadPart(const float* p, int n) {
+  float buf[W] = {};
+  std::copy(p, p + n, buf);
+  return Load<W>(buf);
+}
+template <int W>
+SEMREC_INLINE void StorePart(float* p, F<W> v, int n) {
+  float buf[W];
+  Store<W>(buf, v);
+  std::copy(buf, buf + n, p);
+}
+
+// OnlineSoftmaxColumns on up to 256 columns (`room` of them writable in each
+// row): the columns' state in registers; the last vector whole when the row
+// leaves room for it (the kernel's 56 head columns in rows of 64), else
+// through a buffer. rescale is written for every column (1 where the
+// maximum stayed).
+template <int W>
+SEMREC_INLINE bool OnlineSoftmaxChunk(float* s, int rows, int cols, long room,
+                                      long ld, float* max, float* sum,
+                                      float* rescale) {
   constexpr float kSlack = 16.0f;
   constexpr int kMaxVectors = 256 / W;
   const int nv = (cols + W - 1) / W;
+  // Lanes of the last vector read and written (all W where there is room).
+  const int last = nv * W <= room ? W : cols - (nv - 1) * W;
   float m_pad[256], s_pad[256], r_pad[256];
   std::copy(max, max + cols, m_pad);
   std::copy(sum, sum + cols, s_pad);
@@ -405,7 +424,9 @@ SEMREC_INLINE bool OnlineSoftmaxVectors(float* s, int rows, int cols, long ld,
   for (int r = 0; r < rows; ++r) {
     const float* row = s + r * ld;
     for (int v = 0; v < nv; ++v) {
-      block[v] = Max<W>(block[v], Load<W>(row + v * W));
+      const F<W> x = v + 1 < nv || last == W ? Load<W>(row + v * W)
+                                             : LoadPart<W>(row + v * W, last);
+      block[v] = Max<W>(block[v], x);
     }
   }
   // Padding lanes never move (their block maximum is below any slack).
@@ -424,21 +445,29 @@ SEMREC_INLINE bool OnlineSoftmaxVectors(float* s, int rows, int cols, long ld,
   for (int r = 0; r < rows; ++r) {
     float* row = s + r * ld;
     for (int v = 0; v < nv; ++v) {
-      const F<W> e = ExpV<W>(Load<W>(row + v * W) - m[v]);
-      Store<W>(row + v * W, e);
+      const bool whole = v + 1 < nv || last == W;
+      const F<W> x =
+          whole ? Load<W>(row + v * W) : LoadPart<W>(row + v * W, last);
+      // (Padding lanes sum into lanes past `cols`, which are not kept.)
+      const F<W> e = ExpV<W>(x - m[v]);
+      if (whole) {
+        Store<W>(row + v * W, e);
+      } else {
+        StorePart<W>(row + v * W, e, last);
+      }
       acc[v] += e;
     }
   }
+  // exp(0) = 1 exactly: where the maximum stayed the sum is unchanged.
   for (int v = 0; v < nv; ++v) {
     const F<W> resc = ExpV<W>(Load<W>(r_pad + v * W));
-    const F<W> old_sum = Load<W>(s_pad + v * W);
-    Store<W>(s_pad + v * W, (moved ? old_sum * resc : old_sum) + acc[v]);
+    Store<W>(s_pad + v * W, Load<W>(s_pad + v * W) * resc + acc[v]);
     Store<W>(r_pad + v * W, resc);
     Store<W>(m_pad + v * W, m[v]);
   }
   std::copy(m_pad, m_pad + cols, max);
   std::copy(s_pad, s_pad + cols, sum);
-  if (moved) std::copy(r_pad, r_pad + cols, rescale);
+  std::copy(r_pad, r_pad + cols, rescale);
   return moved;
 }
 
@@ -446,43 +475,11 @@ template <int W>
 SEMREC_INLINE bool OnlineSoftmaxColumnsT(float* s, int rows, int cols, long ld,
                                          float* max, float* sum,
                                          float* rescale) {
-  constexpr float kSlack = 16.0f;
-  if (cols <= 256 && (cols + W - 1) / W * W <= ld) {
-    return OnlineSoftmaxVectors<W>(s, rows, cols, ld, max, sum, rescale);
-  }
   bool moved = false;
-  float block[256];
   for (int c0 = 0; c0 < cols; c0 += 256) {
-    const int n = std::min(256, cols - c0);
-    std::fill(block, block + n, -1e30f);
-    for (int r = 0; r < rows; ++r) {
-      const float* row = s + r * ld + c0;
-      for (int c = 0; c < n; ++c) block[c] = std::max(block[c], row[c]);
-    }
-    for (int c = 0; c < n; ++c) {
-      float& m = max[c0 + c];
-      if (block[c] > m + kSlack || m <= -1e29f) {
-        rescale[c0 + c] = m - block[c];
-        m = block[c];
-        moved = true;
-      } else {
-        rescale[c0 + c] = 0.0f;
-      }
-    }
-    if (moved) ExpT<W>(rescale + c0, static_cast<size_t>(n));
-    for (int r = 0; r < rows; ++r) {
-      float* row = s + r * ld + c0;
-      SubT<W>(row, row, max + c0, static_cast<size_t>(n));
-      ExpT<W>(row, static_cast<size_t>(n));
-    }
-    for (int c = 0; c < n; ++c) block[c] = 0.0f;
-    for (int r = 0; r < rows; ++r) {
-      AddT<W>(block, block, s + r * ld + c0, static_cast<size_t>(n));
-    }
-    for (int c = 0; c < n; ++c) {
-      sum[c0 + c] =
-          (moved ? sum[c0 + c] * rescale[c0 + c] : sum[c0 + c]) + block[c];
-    }
+    moved |=
+        OnlineSoftmaxChunk<W>(s + c0, rows, std::min(256, cols - c0), ld - c0,
+                              ld, max + c0, sum + c0, rescale + c0);
   }
   return moved;
 }

@@ -248,9 +248,10 @@ TEST(KernelOps, OnlineSoftmaxOverBlocksEqualsTheWholeSoftmax) {
     // A weighted sum over 300 rows in blocks of 64, with the running maximum,
     // sum and rescaling, against the softmax over all rows at once. The scores
     // grow along the rows so the maximum moves past its slack. Rows of 5
-    // columns (no room to round up: tails), and the kernel's 56 columns in
-    // rows of 64 (whole vectors).
-    for (const auto& [cols, ld] : {std::pair{5, 5}, std::pair{56, 64}}) {
+    // columns (no room to round up: tails), the kernel's 56 columns in rows
+    // of 64 (whole vectors), and 300 (a chunk of 256 and one with a tail).
+    for (const auto& [cols, ld] :
+         {std::pair{5, 5}, std::pair{56, 64}, std::pair{300, 300}}) {
       SCOPED_TRACE(cols);
       const int n = 300, channels = 3, block = 64;
       std::vector<float> scores = Random(static_cast<size_t>(n) * ld, 11, 2.0f);
