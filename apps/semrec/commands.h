@@ -82,7 +82,7 @@ void AddModelArgs(CLI::App* cmd, ModelArgs* args);
 /// mask model's options come from the registry.
 void AddMaskMarginArg(CLI::App* cmd, float* margin_logits,
                       std::string* decoder_kernel);
-/// "auto", "on", "off" (checked by the option's validator).
+/// "auto", "on", "bf16", "off" (checked by the option's validator).
 segment::PromptableOptions::Kernel DecoderKernelFromArg(const std::string& arg);
 
 /// --object-detector (default yolox_nano) and its tuning options (segment,

@@ -199,7 +199,6 @@ SamKernel::SamKernel(const std::filesystem::path& path, Precision precision)
   preview2_.in = 64;
   preview2_.out = kPreviewDim;
   preview_norm_ = Norm{take("preview.g", 64), take("preview.beta", 64)};
-  preview1_rhs_ = MakeRhs(preview1_.w.data(), kDim, 64);
   // (bf16 products take whole vectors of columns: the IoU head's 4 stay
   // fp32.)
   const auto pack = [&](Linear& l) {
@@ -218,6 +217,7 @@ SamKernel::SamKernel(const std::filesystem::path& path, Precision precision)
     for (Linear& l : h) pack(l);
   }
   for (Linear& l : iou_) pack(l);
+  pack(preview1_);
 }
 
 std::vector<float> SamKernel::ApplyTokens(const Linear& l,
@@ -574,7 +574,7 @@ void SamKernel::SecondLayerImageSide(const Image& im, State* s,
     AttendBlock(x.keys_pe.data(), up, nb, qkf_rhs, x.scores.data(), &online,
                 *s);
     // The mask features: the upscaling's two steps at the preview's cell.
-    ProductOnto(nb, up, kDim, 1, preview1_rhs_, x.hidden.data(), 64, nullptr, 0,
+    ProductOnto(nb, up, kDim, 1, preview1_.rhs, x.hidden.data(), 64, nullptr, 0,
                 preview1_.b.data());
     ops::LayerNormRows(x.hidden.data(), nb, 64, 64, preview_norm_.g.data(),
                        preview_norm_.b.data(), preview_eps_);

@@ -180,7 +180,6 @@ class SamKernel {
   std::vector<float> output_tokens_;     // [5 x 256]
   std::vector<float> no_mask_;           // [256]
   Linear preview1_, preview2_;           // [256 x 64], [64 x 32]
-  Rhs preview1_rhs_;
   Norm preview_norm_;
   float norm_eps_ = 1e-5f, preview_eps_ = 1e-6f;
   float points_offset_ = 2.5f, first_mask_reweight_ = 1000.0f;
