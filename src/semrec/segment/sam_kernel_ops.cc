@@ -253,6 +253,26 @@ SEMREC_INLINE void AddT(float* out, const float* a, const float* b, size_t n) {
   for (; i < n; ++i) out[i] = a[i] + b[i];
 }
 
+// out[i] = a's row i . x: a row's vectors into four partial sums, so the
+// short rows (the mask features' 32) are not one chain of adds.
+template <int W>
+SEMREC_INLINE void RowDotsT(int m, int k, const float* a, long lda,
+                            const float* x, float* out) {
+  for (int i = 0; i < m; ++i) {
+    const float* row = a + i * lda;
+    F<W> s0{}, s1{};
+    int c = 0;
+    for (; c + 2 * W <= k; c += 2 * W) {
+      s0 += Load<W>(row + c) * Load<W>(x + c);
+      s1 += Load<W>(row + c + W) * Load<W>(x + c + W);
+    }
+    for (; c + W <= k; c += W) s0 += Load<W>(row + c) * Load<W>(x + c);
+    float tail = 0;
+    for (; c < k; ++c) tail += row[c] * x[c];
+    out[i] = Sum<W>(s0 + s1) + tail;
+  }
+}
+
 template <int W>
 SEMREC_INLINE void SubT(float* out, const float* a, const float* b, size_t n) {
   size_t i = 0;
@@ -264,35 +284,56 @@ template <int W>
 SEMREC_INLINE void LayerNormRowsT(float* x, int rows, int cols, long ld,
                                   const float* g, const float* beta, float eps,
                                   const float* add, float* out_add) {
+  // Four partial sums per pass: one would chain every vector's add on the
+  // last (the rows are short: latency, not throughput, bounds them).
   for (int r = 0; r < rows; ++r) {
     float* row = x + r * ld;
-    F<W> acc{};
+    F<W> a0{}, a1{}, a2{}, a3{};
     int c = 0;
     float tail = 0;
-    for (; c + W <= cols; c += W) acc += Load<W>(row + c);
+    for (; c + 4 * W <= cols; c += 4 * W) {
+      a0 += Load<W>(row + c);
+      a1 += Load<W>(row + c + W);
+      a2 += Load<W>(row + c + 2 * W);
+      a3 += Load<W>(row + c + 3 * W);
+    }
+    for (; c + W <= cols; c += W) a0 += Load<W>(row + c);
     for (; c < cols; ++c) tail += row[c];
-    const float mean = (Sum<W>(acc) + tail) / static_cast<float>(cols);
-    F<W> sq{};
+    const float mean =
+        (Sum<W>((a0 + a1) + (a2 + a3)) + tail) / static_cast<float>(cols);
+    const F<W> mv = Splat<W>(mean);
+    a0 = a1 = a2 = a3 = F<W>{};
     tail = 0;
-    for (c = 0; c + W <= cols; c += W) {
-      const F<W> d = Load<W>(row + c) - mean;
-      sq += d * d;
+    for (c = 0; c + 4 * W <= cols; c += 4 * W) {
+      const F<W> d0 = Load<W>(row + c) - mv, d1 = Load<W>(row + c + W) - mv;
+      const F<W> d2 = Load<W>(row + c + 2 * W) - mv;
+      const F<W> d3 = Load<W>(row + c + 3 * W) - mv;
+      a0 += d0 * d0;
+      a1 += d1 * d1;
+      a2 += d2 * d2;
+      a3 += d3 * d3;
+    }
+    for (; c + W <= cols; c += W) {
+      const F<W> d = Load<W>(row + c) - mv;
+      a0 += d * d;
     }
     for (; c < cols; ++c) tail += (row[c] - mean) * (row[c] - mean);
-    const float inv =
-        1.0f / std::sqrt((Sum<W>(sq) + tail) / static_cast<float>(cols) + eps);
+    const float inv = 1.0f / std::sqrt((Sum<W>((a0 + a1) + (a2 + a3)) + tail) /
+                                           static_cast<float>(cols) +
+                                       eps);
+    const F<W> iv = Splat<W>(inv);
     if (add != nullptr) {
       const float* in = add + r * ld;
       float* out = out_add + r * ld;
       for (c = 0; c + W <= cols; c += W) {
-        const F<W> y = (Load<W>(row + c) - mean) * inv * Load<W>(g + c) +
-                       Load<W>(beta + c);
+        const F<W> y =
+            (Load<W>(row + c) - mv) * iv * Load<W>(g + c) + Load<W>(beta + c);
         Store<W>(row + c, y);
         Store<W>(out + c, y + Load<W>(in + c));
       }
     } else {
       for (c = 0; c + W <= cols; c += W) {
-        Store<W>(row + c, (Load<W>(row + c) - mean) * inv * Load<W>(g + c) +
+        Store<W>(row + c, (Load<W>(row + c) - mv) * iv * Load<W>(g + c) +
                               Load<W>(beta + c));
       }
     }
@@ -497,6 +538,7 @@ struct Ops {
   bool (*online_softmax)(float*, int, int, long, float*, float*, float*);
   void (*gelu)(float*, size_t);
   void (*exp)(float*, size_t);
+  void (*row_dots)(int, int, const float*, long, const float*, float*);
 };
 
 #define SEMREC_OPS(SUFFIX, TARGET, W, MR, NV)                                 \
@@ -526,6 +568,10 @@ struct Ops {
     return OnlineSoftmaxColumnsT<W>(s, rows, cols, ld, max, sum, rescale);    \
   }                                                                           \
   TARGET void Gelu##SUFFIX(float* x, size_t n) { GeluT<W>(x, n); }            \
+  TARGET void RowDots##SUFFIX(int m, int k, const float* a, long lda,         \
+                              const float* x, float* out) {                   \
+    RowDotsT<W>(m, k, a, lda, x, out);                                        \
+  }                                                                           \
   TARGET void Exp##SUFFIX(float* x, size_t n) { ExpT<W>(x, n); }              \
   constexpr Ops kOps##SUFFIX = {#SUFFIX,                                      \
                                 Gemm##SUFFIX,                                 \
@@ -535,7 +581,8 @@ struct Ops {
                                 SoftmaxHeads##SUFFIX,                         \
                                 OnlineSoftmax##SUFFIX,                        \
                                 Gelu##SUFFIX,                                 \
-                                Exp##SUFFIX};
+                                Exp##SUFFIX,                                  \
+                                RowDots##SUFFIX};
 
 #if defined(__x86_64__)
 // AVX-512: 8 x 32 tiles (16 accumulators of 32 registers).
@@ -651,5 +698,10 @@ bool OnlineSoftmaxColumns(float* s, int rows, int cols, long ld, float* max,
 void Gelu(float* x, size_t n) { Current().gelu(x, n); }
 
 void Exp(float* x, size_t n) { Current().exp(x, n); }
+
+void RowDots(int m, int k, const float* a, long lda, const float* x,
+             float* out) {
+  Current().row_dots(m, k, a, lda, x, out);
+}
 
 }  // namespace semrec::segment::kernel_ops

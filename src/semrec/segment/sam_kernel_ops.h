@@ -70,6 +70,10 @@ void Gelu(float* x, size_t n);
 /// x = exp(x) (to ~2 ulp for the values softmax sees).
 void Exp(float* x, size_t n);
 
+/// out[i] = sum_c a[i * lda + c] x[c], i < m, c < k.
+void RowDots(int m, int k, const float* a, long lda, const float* x,
+             float* out);
+
 /// Whether this CPU has bf16 dot products (AVX512_BF16), which the *Bf16
 /// products below need.
 bool HasBf16();

@@ -179,29 +179,45 @@ TEST(KernelOps, ElementWiseOperationsMatchTheDefinitions) {
       const double gelu = 0.5 * x[i] * (1.0 + std::erf(x[i] / std::sqrt(2.0)));
       ASSERT_NEAR(g[i], gelu, 1e-6 * (1.0 + std::abs(x[i]))) << x[i];
     }
-    // LayerNorm rows (a stride wider than the row).
-    const int rows = 5, cols = 70, ld = 80;
-    std::vector<float> ln = Random(static_cast<size_t>(rows) * ld, 5, 3.0f);
-    const std::vector<float> before = ln;
-    const std::vector<float> gamma = Random(cols, 6), beta = Random(cols, 7);
-    ops::LayerNormRows(ln.data(), rows, cols, ld, gamma.data(), beta.data(),
-                       1e-5f);
-    for (int r = 0; r < rows; ++r) {
-      double mean = 0, var = 0;
-      for (int c = 0; c < cols; ++c) mean += before[r * ld + c];
-      mean /= cols;
-      for (int c = 0; c < cols; ++c) {
-        var += (before[r * ld + c] - mean) * (before[r * ld + c] - mean);
+    // LayerNorm rows (a stride wider than the row; four vectors at a time,
+    // then single vectors, then a tail).
+    for (const int cols : {70, 90}) {
+      const int rows = 5, ld = 100;
+      std::vector<float> ln = Random(static_cast<size_t>(rows) * ld, 5, 3.0f);
+      const std::vector<float> before = ln;
+      const std::vector<float> gamma = Random(cols, 6), beta = Random(cols, 7);
+      ops::LayerNormRows(ln.data(), rows, cols, ld, gamma.data(), beta.data(),
+                         1e-5f);
+      for (int r = 0; r < rows; ++r) {
+        double mean = 0, var = 0;
+        for (int c = 0; c < cols; ++c) mean += before[r * ld + c];
+        mean /= cols;
+        for (int c = 0; c < cols; ++c) {
+          var += (before[r * ld + c] - mean) * (before[r * ld + c] - mean);
+        }
+        var /= cols;
+        for (int c = 0; c < cols; ++c) {
+          const double y =
+              (before[r * ld + c] - mean) / std::sqrt(var + 1e-5) * gamma[c] +
+              beta[c];
+          ASSERT_NEAR(ln[r * ld + c], y, 1e-5 * (1 + std::abs(y)));
+        }
+        for (int c = cols; c < ld; ++c) {
+          ASSERT_EQ(ln[r * ld + c], before[r * ld + c]);  // beyond the row
+        }
       }
-      var /= cols;
-      for (int c = 0; c < cols; ++c) {
-        const double y =
-            (before[r * ld + c] - mean) / std::sqrt(var + 1e-5) * gamma[c] +
-            beta[c];
-        ASSERT_NEAR(ln[r * ld + c], y, 1e-5 * (1 + std::abs(y)));
-      }
-      for (int c = cols; c < ld; ++c) {
-        ASSERT_EQ(ln[r * ld + c], before[r * ld + c]);  // beyond the row
+    }
+    // Row dot products (the mask features' 32, and a k with a tail).
+    for (const int k : {32, 45}) {
+      const int m = 9, lda = 48;
+      const std::vector<float> a = Random(static_cast<size_t>(m) * lda, 8);
+      const std::vector<float> v = Random(static_cast<size_t>(k), 9);
+      std::vector<float> dots(m);
+      ops::RowDots(m, k, a.data(), lda, v.data(), dots.data());
+      for (int i = 0; i < m; ++i) {
+        double d = 0;
+        for (int c = 0; c < k; ++c) d += a[i * lda + c] * v[c];
+        ASSERT_NEAR(dots[i], d, 1e-5 * (1 + std::abs(d))) << "k " << k;
       }
     }
   });
