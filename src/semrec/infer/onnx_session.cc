@@ -5,6 +5,7 @@
 #include <onnxruntime_session_options_config_keys.h>
 
 #include <algorithm>
+#include <string>
 
 #include <fmt/format.h>
 #include <fmt/ranges.h>
@@ -85,8 +86,13 @@ OnnxSession::OnnxSession(const std::filesystem::path& model_path,
   session_options.SetGraphOptimizationLevel(
       options.optimize ? GraphOptimizationLevel::ORT_ENABLE_ALL
                        : GraphOptimizationLevel::ORT_DISABLE_ALL);
+  // SEMREC_ORT_SPIN=1: spinning everywhere (to measure against the former
+  // default).
+  const char* spin_env = std::getenv("SEMREC_ORT_SPIN");
+  const bool spin = options.spin_between_ops ||
+                    (spin_env != nullptr && std::string(spin_env) == "1");
   session_options.AddConfigEntry(kOrtSessionOptionsConfigAllowIntraOpSpinning,
-                                 options.spin_between_ops ? "1" : "0");
+                                 spin ? "1" : "0");
   if (const char* prefix = std::getenv("SEMREC_ORT_PROFILE")) {
     const std::string p = std::string(prefix) + model_path.stem().string();
     session_options.EnableProfiling(p.c_str());

@@ -13,6 +13,7 @@
 
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
+#include <tbb/task_group.h>
 
 #include "semrec/core/error.h"
 #include "semrec/core/file_util.h"
@@ -166,10 +167,12 @@ nlohmann::json TimingJson(const RunTiming& t, const StageSeconds& wall,
         {"write", stage(wall.write, cpu.write)}}},
       {"note",
        "main_thread's parts add up to run_wall. read runs on its own thread "
-       "ahead of the main thread (waiting_for_frames is what it cost); fuse, "
-       "volumes and overlay run on the integration thread while the next "
-       "frame is segmented, so their wall time overlaps segment's "
-       "(waiting_for_integration is what they cost the run). cpu is the "
+       "ahead of the main thread (waiting_for_frames is what it cost); fuse "
+       "and volumes run on the integration thread while the next frame is "
+       "segmented, so their wall time overlaps segment's "
+       "(waiting_for_integration is what they cost the run), and each "
+       "frame's overlay is drawn beside its fuse and volumes (on a worker "
+       "thread: its wall time overlaps theirs). cpu is the "
        "running thread's CPU time: ONNX Runtime's worker threads are in "
        "process_cpu only; wall well above cpu means the stage waited for the "
        "cores."}};
@@ -332,12 +335,16 @@ RunResult RunSequence(const io::SequenceReader& reader,
         ++result.resumed_frames;
         return;
       }
+      // The overlay's PNG and the checkpoint's, side by side.
+      tbb::task_group files;
       if (!frame.overlay.empty()) {
-        io::WritePng(out_dir / "overlay" / name, frame.overlay);
+        files.run(
+            [&] { io::WritePng(out_dir / "overlay" / name, frame.overlay); });
       }
       store.Record(
           i, {std::nullopt, models ? std::optional<ModelOutputs>(frame.outputs)
                                    : std::nullopt});
+      files.wait();
       if (options.checkpoint_every > 0 &&
           (i + 1) % options.checkpoint_every == 0) {
         store.Commit(i + 1);

@@ -4,6 +4,8 @@
 #include <map>
 #include <set>
 
+#include <tbb/task_group.h>
+
 #include "semrec/core/error.h"
 #include "semrec/core/stopwatch.h"
 #include "semrec/segment/mask.h"
@@ -335,6 +337,26 @@ PipelineFrameResult ScenePipeline::Integrate(PreparedFrame prepared) {
   const std::optional<fuse::FrameLabels>& labels = prepared.labels;
   const std::optional<LabelMap>& person_ids = prepared.person_ids;
   PipelineFrameResult result;
+  // The overlay needs only the frame's labels: drawn on another core while
+  // the frame is fused (its time overlaps fuse's and volumes').
+  tbb::task_group overlay_task;
+  StageWatch::Lap overlay_lap;
+  if (options_.overlays && !prepared.replay) {
+    overlay_task.run([&] {
+      StageWatch overlay_watch;
+      const ColorImage base =
+          labels ? segment::RenderLabelOverlay(prepared.frame.color,
+                                               labels->semantic,
+                                               labels->instance, classes())
+                 : prepared.frame.color;
+      result.overlay = RenderPeopleOverlay(base, prepared.people);
+      if (prepared.decision) {
+        result.overlay =
+            RenderGuidanceOverlay(result.overlay, *prepared.decision);
+      }
+      overlay_lap = overlay_watch.Next();
+    });
+  }
   StageWatch watch;
   const SceneFrameStats stats =
       builder_->Add(prepared.frame, labels ? &*labels : nullptr,
@@ -349,18 +371,8 @@ PipelineFrameResult ScenePipeline::Integrate(PreparedFrame prepared) {
     AddLap(watch.Next(), &StageSeconds::fuse);
   }
 
-  if (options_.overlays && !prepared.replay) {
-    const ColorImage base = labels ? segment::RenderLabelOverlay(
-                                         prepared.frame.color, labels->semantic,
-                                         labels->instance, classes())
-                                   : prepared.frame.color;
-    result.overlay = RenderPeopleOverlay(base, prepared.people);
-    if (prepared.decision) {
-      result.overlay =
-          RenderGuidanceOverlay(result.overlay, *prepared.decision);
-    }
-  }
-  AddLap(watch.Next(), &StageSeconds::overlay);
+  overlay_task.wait();
+  AddLap(overlay_lap, &StageSeconds::overlay);
 
   if (models) {
     result.outputs.tracker_input = std::move(prepared.tracker_input);

@@ -96,43 +96,74 @@ ColorImage RenderLabelOverlay(const ColorImage& rgb, const LabelMap& semantic,
                 "overlay: labels and image differ in size");
   ColorImage out = rgb;
   const int w = rgb.width(), h = rgb.height();
+  // Colours and regions in flat tables by label (the class table's maps,
+  // looked up per pixel, were most of an overlay's time).
+  constexpr size_t kLabels = size_t{1} << 16;
+  std::vector<std::array<uint8_t, 3>> colors;
+  std::vector<int32_t> color_of(kLabels, -1);
   // Names go where a region is widest: the pixel farthest from any instance
   // boundary (a centroid can fall outside a non-convex region).
   cv::Mat inside(h, w, CV_8UC1);
+  const uint16_t* inst_data = instance.data();
+  const uint16_t* sem_data = semantic.data();
+  const uint8_t* in = rgb.data();
+  uint8_t* o = out.data();
   for (int y = 0; y < h; ++y) {
+    const uint16_t* row = inst_data + static_cast<size_t>(y) * w;
+    uint8_t* inside_row = inside.ptr<uint8_t>(y);
     for (int x = 0; x < w; ++x) {
-      const uint16_t inst = instance(x, y);
-      const bool edge = (x + 1 < w && instance(x + 1, y) != inst) ||
-                        (y + 1 < h && instance(x, y + 1) != inst);
+      const uint16_t inst = row[x];
+      const bool edge = (x + 1 < w && row[x + 1] != inst) ||
+                        (y + 1 < h && row[x + w] != inst);
       const bool border = x == 0 || y == 0 || x + 1 == w || y + 1 == h;
-      inside.at<uint8_t>(y, x) = edge || border ? 0 : 255;
-      const uint16_t id = semantic(x, y);
-      const auto color =
-          labels.Contains(id) ? labels.Get(id).color : LabelColor(id);
+      inside_row[x] = edge || border ? 0 : 255;
+      const size_t at = static_cast<size_t>(y) * w + x;
+      const uint16_t id = sem_data[at];
+      if (color_of[id] < 0) {
+        color_of[id] = static_cast<int32_t>(colors.size());
+        colors.push_back(labels.Contains(id) ? labels.Get(id).color
+                                             : LabelColor(id));
+      }
+      const std::array<uint8_t, 3>& color = colors[color_of[id]];
       // Mask outlines in white.
       for (int c = 0; c < 3; ++c) {
-        out(x, y, c) =
-            edge ? 255 : static_cast<uint8_t>((rgb(x, y, c) + color[c]) / 2);
+        o[at * 3 + c] =
+            edge ? 255 : static_cast<uint8_t>((in[at * 3 + c] + color[c]) / 2);
       }
     }
   }
   cv::Mat distance;
   cv::distanceTransform(inside, distance, cv::DIST_L2, 3);
   struct Region {
+    uint16_t instance = 0;
     int64_t area = 0;
     float best = -1.0f;
     int bx = 0, by = 0;
-    std::map<uint16_t, int64_t> classes;
+    std::vector<std::pair<uint16_t, int64_t>> classes;  // few per region
   };
-  std::map<uint16_t, Region> regions;
+  std::vector<Region> found;
+  std::vector<int32_t> region_of(kLabels, -1);
   for (int y = 0; y < h; ++y) {
+    const float* d_row = distance.ptr<float>(y);
     for (int x = 0; x < w; ++x) {
-      const uint16_t inst = instance(x, y);
+      const size_t at = static_cast<size_t>(y) * w + x;
+      const uint16_t inst = inst_data[at];
       if (inst == 0) continue;
-      Region& r = regions[inst];
+      if (region_of[inst] < 0) {
+        region_of[inst] = static_cast<int32_t>(found.size());
+        found.emplace_back().instance = inst;
+      }
+      Region& r = found[region_of[inst]];
       ++r.area;
-      ++r.classes[semantic(x, y)];
-      const float d = distance.at<float>(y, x);
+      const uint16_t id = sem_data[at];
+      auto c = std::find_if(r.classes.begin(), r.classes.end(),
+                            [id](const auto& e) { return e.first == id; });
+      if (c == r.classes.end()) {
+        r.classes.emplace_back(id, 1);
+      } else {
+        ++c->second;
+      }
+      const float d = d_row[x];
       if (d > r.best) {
         r.best = d;
         r.bx = x;
@@ -140,9 +171,15 @@ ColorImage RenderLabelOverlay(const ColorImage& rgb, const LabelMap& semantic,
       }
     }
   }
+  // By instance, each region's classes by id: names drawn in the same order
+  // and ties decided as before.
+  std::sort(found.begin(), found.end(), [](const Region& a, const Region& b) {
+    return a.instance < b.instance;
+  });
+  for (Region& r : found) std::sort(r.classes.begin(), r.classes.end());
   cv::Mat canvas(h, w, CV_8UC3, out.data());
   const double scale = std::clamp(w / 1200.0, 0.35, 1.0);
-  for (const auto& [inst, r] : regions) {
+  for (const Region& r : found) {
     if (r.area < 400) continue;  // no room for a name
     const uint16_t id = std::max_element(r.classes.begin(), r.classes.end(),
                                          [](const auto& a, const auto& b) {

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include "semrec/core/error.h"
+#include "semrec/core/label_map.h"
 #include "semrec/io/sequence_reader.h"
 #include "semrec/io/test_bags.h"
 #include "semrec/testing/test_util.h"
@@ -80,6 +81,71 @@ TEST(ListSegmentInputs, ImageFolderFileAndErrors) {
   }
   EXPECT_THROW(ListSegmentInputs(dir.path(), 0), InvalidArgument);
   EXPECT_FALSE(io::SequenceReader::TryOpen(dir / "missing").has_value());
+}
+
+TEST(RenderLabelOverlay, BlendsClassColoursOutlinesMasksAndNamesLargeOnes) {
+  // A 120 x 90 image: instance 1 (class 3, in the table) on the left, 2 on the
+  // right (class 7, not in the table: its colour is LabelColor's), a small
+  // instance 3 (under 400 px: no room for a name) inside 2.
+  const int w = 120, h = 90;
+  ColorImage rgb(w, h, 3);
+  for (int y = 0; y < h; ++y) {
+    for (int x = 0; x < w; ++x) {
+      for (int c = 0; c < 3; ++c) {
+        rgb(x, y, c) = static_cast<uint8_t>((x * 2 + y + 40 * c) % 256);
+      }
+    }
+  }
+  LabelMap semantic(w, h), instance(w, h);
+  for (int y = 0; y < h; ++y) {
+    for (int x = 0; x < w; ++x) {
+      const bool left = x < 60;
+      const bool small = x >= 90 && x < 100 && y >= 10 && y < 20;
+      instance(x, y) = small ? 3 : left ? 1 : 2;
+      semantic(x, y) = left ? 3 : 7;
+    }
+  }
+  LabelSet labels("test");
+  LabelClass chair;
+  chair.id = 3;
+  chair.name = "chair";
+  chair.color = {200, 10, 100};
+  labels.Add(chair);
+  const ColorImage out = RenderLabelOverlay(rgb, semantic, instance, labels);
+  const auto blend = [&](int x, int y, int c, uint8_t color) {
+    return static_cast<uint8_t>((rgb(x, y, c) + color) / 2);
+  };
+  const std::array<uint8_t, 3> unknown = LabelColor(7);
+  // Mask edges are white; away from edges and names, the blend.
+  for (int y = 0; y < h; ++y) {
+    EXPECT_EQ(out(59, y, 0), 255);
+    EXPECT_EQ(out(59, y, 2), 255);
+  }
+  EXPECT_EQ(out(95, 9, 1), 255);  // above the small instance
+  for (int c = 0; c < 3; ++c) {
+    EXPECT_EQ(out(3, 3, c), blend(3, 3, c, chair.color[c]));
+    EXPECT_EQ(out(117, 86, c), blend(117, 86, c, unknown[c]));
+    EXPECT_EQ(out(95, 15, c), blend(95, 15, c, unknown[c]));
+  }
+  // A name in each large region, none in the small one.
+  const auto drawn = [&](int x0, int x1, int y0, int y1, uint16_t inst) {
+    int n = 0;
+    for (int y = y0; y < y1; ++y) {
+      for (int x = x0; x < x1; ++x) {
+        if (instance(x, y) != inst || out(x, y, 0) == 255) continue;
+        const uint16_t id = semantic(x, y);
+        const std::array<uint8_t, 3> color = id == 3 ? chair.color : unknown;
+        for (int c = 0; c < 3; ++c)
+          n += out(x, y, c) != blend(x, y, c, color[c]);
+      }
+    }
+    return n;
+  };
+  EXPECT_GT(drawn(1, 58, 1, h - 1, 1), 20);
+  EXPECT_GT(drawn(61, w - 1, 1, h - 1, 2), 20);
+  EXPECT_EQ(drawn(91, 99, 11, 19, 3), 0);
+  EXPECT_THROW(RenderLabelOverlay(rgb, LabelMap(w, h - 1), instance, labels),
+               InvalidArgument);
 }
 
 }  // namespace
