@@ -82,32 +82,42 @@ int Run(int argc, char** argv) {
   defaults.objects.model = "yolox_nano";  // as `semrec segment` runs
   // The first step is the reference (the former default); the others are
   // the default and variants of it, each compared with the reference.
+  using Kernel = segment::PromptableOptions::Kernel;
+  // The former default: ONNX Runtime's workers spinning between operators.
+  const auto before = [](segment::HybridSegmenterOptions* o) {
+    o->masks.dense_stride = 2;
+    o->masks.covered_similarity = 0.8f;
+    o->masks.model.mask_margin_logits = 0.0f;
+    o->masks.model.decoder_kernel = Kernel::kOff;
+  };
+  const auto spin = [](segment::HybridSegmenterOptions* o) {
+    o->semantic.runtime.spin_between_ops = true;
+    o->masks.model.runtime.spin_between_ops = true;
+    o->objects.runtime.spin_between_ops = true;
+  };
   const std::vector<Step> steps = {
       {"stride 2, covered 0.8 (before)",
-       [](auto* o) {
-         o->masks.dense_stride = 2;
-         o->masks.covered_similarity = 0.8f;
-         o->masks.model.mask_margin_logits = 0.0f;
-         o->masks.model.decoder_kernel =
-             segment::PromptableOptions::Kernel::kOff;
+       [&](auto* o) {
+         before(o);
+         spin(o);
        }},
-      {"stride 4, covered 0.6",
+      {"+ ONNX Runtime workers sleep", [&](auto* o) { before(o); }},
+      {"+ stride 4, covered 0.6",
        [](auto* o) {
          o->masks.model.mask_margin_logits = 0.0f;
-         o->masks.model.decoder_kernel =
-             segment::PromptableOptions::Kernel::kOff;
+         o->masks.model.decoder_kernel = Kernel::kOff;
        }},
       {"+ mask margin 8",
-       [](auto* o) {
-         o->masks.model.decoder_kernel =
-             segment::PromptableOptions::Kernel::kOff;
-       }},
+       [](auto* o) { o->masks.model.decoder_kernel = Kernel::kOff; }},
       {"+ decoder kernel (fp32)",
        [](auto* o) {
-         o->masks.model.decoder_kernel =
-             segment::PromptableOptions::Kernel::kOn;
+         o->masks.model.decoder_kernel = Kernel::kOn;
+         o->masks.model.kernel_upscales = false;
        }},
-      {segment::kernel_ops::HasBf16() ? "+ bf16 products (default)"
+      {segment::kernel_ops::HasBf16() ? "+ bf16 products"
+                                      : "default, ONNX Runtime upscales",
+       [](auto* o) { o->masks.model.kernel_upscales = false; }},
+      {segment::kernel_ops::HasBf16() ? "+ upscaling in kernel (default)"
                                       : "default (no bf16 on this CPU)",
        [](auto*) {}},
       {"default + rejected sim. 0.6",

@@ -129,6 +129,7 @@ void OnnxModel::Load(const OnnxModelOptions& options) {
   session_options.intra_op_threads = options.intra_op_threads;
   session_options.provider = options.provider;
   session_options.disabled_optimizers = entry_.disabled_optimizers;
+  session_options.spin_between_ops = options.spin_between_ops;
   session_ = std::make_unique<OnnxSession>(file_, session_options);
   CheckSignature(file_, *session_, entry_.inputs, entry_.outputs);
 }

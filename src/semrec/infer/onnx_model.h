@@ -23,6 +23,9 @@ struct OnnxModelOptions {
   /// The model cache; empty = DefaultModelDir() ($SEMREC_MODELS or
   /// .deps/models).
   std::filesystem::path model_dir;
+  /// ONNX Runtime's worker threads spin between operators (the former
+  /// default; OnnxSessionOptions::spin_between_ops).
+  bool spin_between_ops = false;
   void Check() const;
 };
 

@@ -61,6 +61,10 @@ struct PromptableOptions {
   /// 14 ms there, ONNX Runtime's AVX2 speed unmeasured), else ONNX Runtime.
   enum class Kernel { kAuto, kOn, kBf16, kOff };
   Kernel decoder_kernel = Kernel::kAuto;
+  /// With the kernel, upscale masks in it too (its weights hold the mask
+  /// part's, scripts/setup; the same logits up to float rounding) instead of
+  /// ONNX Runtime's mask part: bench_prompts measures the difference.
+  bool kernel_upscales = true;
   void Check() const;
 
   /// The registry's `<prefix>_encoder` and `<prefix>_decoder` (backend as the

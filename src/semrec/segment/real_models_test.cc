@@ -215,9 +215,13 @@ TEST(RealModels, DecoderKernelGivesThePromptPartsMasks) {
   const auto registry = infer::ModelRegistry::LoadDefault();
   options.decoder_kernel = PromptableOptions::Kernel::kOn;  // any CPU
   auto kernel = PromptableSegmenter::Create(registry, options);
+  // The kernel with ONNX Runtime's mask part.
+  options.kernel_upscales = false;
+  auto kernel_onnx_masks = PromptableSegmenter::Create(registry, options);
   options.decoder_kernel = PromptableOptions::Kernel::kOff;
   auto onnx = PromptableSegmenter::Create(registry, options);
   kernel->SetImage(rgb);
+  kernel_onnx_masks->SetImage(rgb);
   onnx->SetImage(rgb);
   std::vector<Prompt> prompts = GridPrompts(rgb, 5, 4);
   Prompt pair;
@@ -229,8 +233,9 @@ TEST(RealModels, DecoderKernelGivesThePromptPartsMasks) {
   prompts.push_back(box);
   const MaskFilter filter = MaskGeneratorOptions().Filter();
   for (size_t i = 0; i < prompts.size(); ++i) {
-    ExpectSameMask(kernel->Decode(prompts[i]), onnx->Decode(prompts[i]), 5e-3f,
-                   i);
+    const LowResMask reference = onnx->Decode(prompts[i]);
+    ExpectSameMask(kernel->Decode(prompts[i]), reference, 5e-3f, i);
+    ExpectSameMask(kernel_onnx_masks->Decode(prompts[i]), reference, 5e-3f, i);
     // The early decision on the preview is the same.
     EXPECT_EQ(kernel->DecodeUnlessRejected(prompts[i], filter).rejected_early,
               onnx->DecodeUnlessRejected(prompts[i], filter).rejected_early)

@@ -205,7 +205,8 @@ class SamSegmenter : public PromptableSegmenter {
         (options.decoder_kernel == Kernel::kAuto && kernel_ops::HasBf16());
     kernel_ = std::make_unique<SamKernel>(
         file, bf16 ? SamKernel::Precision::kBf16 : SamKernel::Precision::kFp32);
-    if (!kernel_->CanUpscale()) {
+    kernel_upscales_ = options.kernel_upscales && kernel_->CanUpscale();
+    if (options.kernel_upscales && !kernel_->CanUpscale()) {
       spdlog::warn(
           "mask decoder '{}': its kernel weights {} predate the kernel's mask "
           "part (run scripts/setup); upscaling with ONNX Runtime, slower",
@@ -309,7 +310,7 @@ class SamSegmenter : public PromptableSegmenter {
       for (int64_t t = 0; t < count; ++t) chosen[t] = t;
     }
     infer::Tensor picked;
-    if (decoded != nullptr && kernel_->CanUpscale()) {
+    if (decoded != nullptr && kernel_upscales_) {
       std::vector<float> blocks(chosen.size() * SamKernel::kCellsPerToken);
       kernel_->UpscaleBlocks(kernel_image_, *decoded, chosen, blocks.data());
       return ComposeMaskBlocks(preview, chosen, blocks);
@@ -395,6 +396,7 @@ class SamSegmenter : public PromptableSegmenter {
   float mask_margin_logits_ = 0.0f;
   // The mask part takes any tokens (block_logits).
   bool mask_part_blocks_ = false;
+  bool kernel_upscales_ = false;  // the kernel's own mask part
   static inline const std::vector<float> kNoBlocks{};
   std::map<std::string, infer::Tensor> image_features_;
   const infer::Tensor no_mask_ = infer::Tensor::Zeros({1, 1, 256, 256});
