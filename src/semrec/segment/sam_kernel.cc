@@ -32,11 +32,11 @@ std::vector<float> Sum(const std::vector<float>& a,
 // Per-thread buffers, kept between prompts (fresh 4 MB buffers per prompt
 // cost page faults).
 struct SamKernel::Scratch {
-  std::vector<float> up;        // [block x 256]: layer 1's norm4
-  std::vector<float> features;  // [image tokens x 32]
-  std::vector<float> scores;    // [block x padded]
-  std::vector<float> keys_pe;   // [block x 256]
-  std::vector<float> hidden;    // [block x 64]
+  std::vector<float> up;                     // [block x 256]: layer 1's norm4
+  std::vector<std::vector<float>> features;  // per prompt [tokens x 32]
+  std::vector<float> scores;                 // [block x padded]
+  std::vector<float> keys_pe;                // [block x 256]
+  std::vector<float> hidden;                 // [block x 64]
 };
 
 // One token-to-image attention computed block by block: per column (head x
@@ -322,51 +322,72 @@ void SamKernel::AttendBlock(const float* keys_pe, const float* values, int nb,
 // Layer 0's image side after its token side: the prompt's tokens update the
 // image tokens (image-to-token attention, norm4), and layer 1's
 // token-to-image attention, whose queries are known by then, runs over the
-// same blocks with an online softmax.
-void SamKernel::FirstLayerImageSide(const Image& im,
-                                    const std::vector<float>& layer0_tokens,
-                                    State* s, float* image_tokens) const {
-  const Layer& l0 = layers_[0];
-  const Layer& l1 = layers_[1];
-  const int T = s->tokens, n = im.tokens;
-  const float scale = 1.0f / std::sqrt(static_cast<float>(kCrossDim / heads_));
+// same blocks with an online softmax. One prompt's share: set up, then per
+// block (the prompts of a batch take each block in turn while it is in the
+// cache), then finished.
+struct SamKernel::FirstLayerWork {
+  FirstLayerWork(const SamKernel& k, const std::vector<float>& layer0_tokens,
+                 State* state, float* tokens_out);
+  State* s;
+  float* image_tokens;
+  std::vector<float> kbd, u0, qk1;
+  Rhs kbd_rhs, u0_rhs, qk1_rhs;
+  OnlineAttention online;
+};
+
+SamKernel::FirstLayerWork::FirstLayerWork(
+    const SamKernel& k, const std::vector<float>& layer0_tokens, State* state,
+    float* tokens_out)
+    : s(state), image_tokens(tokens_out), online(state->cols) {
+  const Layer& l0 = k.layers_[0];
+  const Layer& l1 = k.layers_[1];
+  const int T = s->tokens;
+  const float scale =
+      1.0f / std::sqrt(static_cast<float>(kCrossDim / k.heads_));
   const std::vector<float> k0 =
-      ApplyTokens(l0.i2t.k, Sum(layer0_tokens, s->query_pe), T);
-  const std::vector<float> kbd = HeadColumns(k0, *s, scale);
+      k.ApplyTokens(l0.i2t.k, Sum(layer0_tokens, s->query_pe), T);
+  kbd = k.HeadColumns(k0, *s, scale);
   // Each token's value through its head's share of the output projection.
-  std::vector<float> u0(static_cast<size_t>(s->padded) * kDim);
+  u0.resize(static_cast<size_t>(s->padded) * kDim);
   ops::Gemm(s->padded, kDim, kCrossDim,
-            HeadRows(ApplyTokens(l0.i2t.v, layer0_tokens, T), *s).data(),
+            k.HeadRows(k.ApplyTokens(l0.i2t.v, layer0_tokens, T), *s).data(),
             kCrossDim, 1, l0.i2t.o.w.data(), kDim, u0.data(), kDim, false);
-  const std::vector<float> qk1 =
-      Fold(l1.t2i.k,
-           HeadColumns(ApplyTokens(l1.t2i.q, Sum(s->queries, s->query_pe), T),
-                       *s, scale),
-           *s);
-  const Rhs kbd_rhs = MakeRhs(kbd.data(), kCrossDim, s->padded);
-  const Rhs u0_rhs = MakeRhs(u0.data(), s->cols, kDim);
-  const Rhs qk1_rhs = MakeRhs(qk1.data(), kDim, s->padded);
+  qk1 = k.Fold(
+      l1.t2i.k,
+      k.HeadColumns(k.ApplyTokens(l1.t2i.q, Sum(s->queries, s->query_pe), T),
+                    *s, scale),
+      *s);
+  kbd_rhs = k.MakeRhs(kbd.data(), kCrossDim, s->padded);
+  u0_rhs = k.MakeRhs(u0.data(), s->cols, kDim);
+  qk1_rhs = k.MakeRhs(qk1.data(), kDim, s->padded);
+}
+
+void SamKernel::FirstLayerBlock(const Image& im, int b0,
+                                FirstLayerWork* w) const {
+  const Layer& l0 = layers_[0];
+  State* s = w->s;
   Scratch& x = *s->scratch;
-  x.scores.resize(static_cast<size_t>(kBlock) * s->padded);
-  OnlineAttention online(s->cols);
-  for (int b0 = 0; b0 < n; b0 += kBlock) {
-    const int nb = std::min(kBlock, n - b0);
-    const size_t at = static_cast<size_t>(b0) * kDim;
-    float* keys = image_tokens + at;
-    Product(nb, im.i2t_queries.data() + b0 * kCrossDim, kCrossDim, 1, kbd_rhs,
-            x.scores.data(), s->padded, false);
-    ops::SoftmaxHeads(x.scores.data(), nb, s->padded, T, nullptr);
-    // keys + output bias + attention output, normalised; and + PE for the
-    // next attention's keys.
-    ProductOnto(nb, x.scores.data(), s->padded, 1, u0_rhs, keys, kDim,
-                im.keys.data() + at, kDim, l0.i2t.o.b.data());
-    ops::LayerNormRows(keys, nb, kDim, kDim, l0.norm4.g.data(),
-                       l0.norm4.b.data(), norm_eps_, im.pe.data() + at,
-                       x.keys_pe.data());
-    AttendBlock(x.keys_pe.data(), keys, nb, qk1_rhs, x.scores.data(), &online,
-                *s);
-  }
-  const std::vector<float> out = AttentionOutput(l1.t2i, &online, *s);
+  const int nb = std::min(kBlock, im.tokens - b0);
+  const size_t at = static_cast<size_t>(b0) * kDim;
+  float* keys = w->image_tokens + at;
+  Product(nb, im.i2t_queries.data() + b0 * kCrossDim, kCrossDim, 1, w->kbd_rhs,
+          x.scores.data(), s->padded, false);
+  ops::SoftmaxHeads(x.scores.data(), nb, s->padded, s->tokens, nullptr);
+  // keys + output bias + attention output, normalised; and + PE for the
+  // next attention's keys.
+  ProductOnto(nb, x.scores.data(), s->padded, 1, w->u0_rhs, keys, kDim,
+              im.keys.data() + at, kDim, l0.i2t.o.b.data());
+  ops::LayerNormRows(keys, nb, kDim, kDim, l0.norm4.g.data(), l0.norm4.b.data(),
+                     norm_eps_, im.pe.data() + at, x.keys_pe.data());
+  AttendBlock(x.keys_pe.data(), keys, nb, w->qk1_rhs, x.scores.data(),
+              &w->online, *s);
+}
+
+void SamKernel::FirstLayerFinish(FirstLayerWork* w) const {
+  const Layer& l1 = layers_[1];
+  State* s = w->s;
+  const int T = s->tokens;
+  const std::vector<float> out = AttentionOutput(l1.t2i, &w->online, *s);
   ops::Add(s->queries.data(), s->queries.data(), out.data(), out.size());
   ops::LayerNormRows(s->queries.data(), T, kDim, kDim, l1.norm2.g.data(),
                      l1.norm2.b.data(), norm_eps_);
@@ -376,57 +397,80 @@ void SamKernel::FirstLayerImageSide(const Image& im,
 // Layer 1's image side: image-to-token attention and norm4 (the mask
 // part's upscaling tokens, kept only per block), the final token-to-image
 // attention online, and each token's mask features (the preview before the
-// mask is chosen).
-void SamKernel::SecondLayerImageSide(const Image& im, State* s,
-                                     Output::SecondLayer* second) const {
-  const Layer& l1 = layers_[1];
-  const int T = s->tokens, n = im.tokens;
-  const float scale = 1.0f / std::sqrt(static_cast<float>(kCrossDim / heads_));
+// mask is chosen); by blocks as the first layer's.
+struct SamKernel::SecondLayerWork {
+  SecondLayerWork(const SamKernel& k, State* state,
+                  Output::SecondLayer* second_layer, float* features_out);
+  State* s;
+  Output::SecondLayer* second;
+  float* features;  // [image tokens x 32]
+  std::vector<float> qkf;
+  Rhs qkf_rhs;
+  OnlineAttention online;
+};
+
+SamKernel::SecondLayerWork::SecondLayerWork(const SamKernel& k, State* state,
+                                            Output::SecondLayer* second_layer,
+                                            float* features_out)
+    : s(state),
+      second(second_layer),
+      features(features_out),
+      online(state->cols) {
+  const Layer& l1 = k.layers_[1];
+  const int T = s->tokens;
+  const float scale =
+      1.0f / std::sqrt(static_cast<float>(kCrossDim / k.heads_));
   const std::vector<float> qpe = Sum(s->queries, s->query_pe);
   const std::vector<float> k1 =
-      HeadColumns(ApplyTokens(l1.i2t.k, qpe, T), *s, scale);
+      k.HeadColumns(k.ApplyTokens(l1.i2t.k, qpe, T), *s, scale);
   second->prompt_tokens = T;
-  second->scores_w = Fold(l1.i2t.q, k1, *s);
+  second->scores_w = k.Fold(l1.i2t.q, k1, *s);
   second->bias.resize(static_cast<size_t>(s->padded));
   ops::Gemm(1, s->padded, kCrossDim, l1.i2t.q.b.data(), 0, 1, k1.data(),
             s->padded, second->bias.data(), s->padded, false);
   second->values_w.resize(static_cast<size_t>(s->padded) * kDim);
   ops::Gemm(s->padded, kDim, kCrossDim,
-            HeadRows(ApplyTokens(l1.i2t.v, s->queries, T), *s).data(),
+            k.HeadRows(k.ApplyTokens(l1.i2t.v, s->queries, T), *s).data(),
             kCrossDim, 1, l1.i2t.o.w.data(), kDim, second->values_w.data(),
             kDim, false);
-  second->scores = MakeRhs(second->scores_w.data(), kDim, s->padded);
-  second->values = MakeRhs(second->values_w.data(), s->cols, kDim);
-  const std::vector<float> qkf =
-      Fold(final_.k, HeadColumns(ApplyTokens(final_.q, qpe, T), *s, scale), *s);
-  const Rhs qkf_rhs = MakeRhs(qkf.data(), kDim, s->padded);
+  second->scores = k.MakeRhs(second->scores_w.data(), kDim, s->padded);
+  second->values = k.MakeRhs(second->values_w.data(), s->cols, kDim);
+  qkf = k.Fold(k.final_.k,
+               k.HeadColumns(k.ApplyTokens(k.final_.q, qpe, T), *s, scale), *s);
+  qkf_rhs = k.MakeRhs(qkf.data(), kDim, s->padded);
+}
+
+void SamKernel::SecondLayerBlock(const Image& im, int b0,
+                                 SecondLayerWork* w) const {
+  State* s = w->s;
   Scratch& x = *s->scratch;
-  OnlineAttention online(s->cols);
+  const int nb = std::min(kBlock, im.tokens - b0);
+  const size_t at = static_cast<size_t>(b0) * kDim;
   float* up = x.up.data();
-  for (int b0 = 0; b0 < n; b0 += kBlock) {
-    const int nb = std::min(kBlock, n - b0);
-    const size_t at = static_cast<size_t>(b0) * kDim;
-    SecondLayerTokens(*second, second->image_tokens.data() + at,
-                      im.pe.data() + at, nb, x.keys_pe.data(), x.scores.data(),
-                      up);
-    // The final token-to-image attention.
-    AttendBlock(x.keys_pe.data(), up, nb, qkf_rhs, x.scores.data(), &online,
-                *s);
-    // The mask features: the upscaling's two steps at the preview's cell.
-    ProductOnto(nb, up, kDim, 1, preview1_.rhs, x.hidden.data(), 64, nullptr, 0,
-                preview1_.b.data());
-    ops::LayerNormRows(x.hidden.data(), nb, 64, 64, preview_norm_.g.data(),
-                       preview_norm_.b.data(), preview_eps_);
-    ops::Gelu(x.hidden.data(), static_cast<size_t>(nb) * 64);
-    float* f = x.features.data() + static_cast<size_t>(b0) * kPreviewDim;
-    ProductOnto(nb, x.hidden.data(), 64, 1, preview2_.rhs, f, kPreviewDim,
-                nullptr, 0, preview2_.b.data());
-    ops::Gelu(f, static_cast<size_t>(nb) * kPreviewDim);
-  }
-  const std::vector<float> out = AttentionOutput(final_, &online, *s);
+  SecondLayerTokens(*w->second, w->second->image_tokens.data() + at,
+                    im.pe.data() + at, nb, x.keys_pe.data(), x.scores.data(),
+                    up);
+  // The final token-to-image attention.
+  AttendBlock(x.keys_pe.data(), up, nb, w->qkf_rhs, x.scores.data(), &w->online,
+              *s);
+  // The mask features: the upscaling's two steps at the preview's cell.
+  ProductOnto(nb, up, kDim, 1, preview1_.rhs, x.hidden.data(), 64, nullptr, 0,
+              preview1_.b.data());
+  ops::LayerNormRows(x.hidden.data(), nb, 64, 64, preview_norm_.g.data(),
+                     preview_norm_.b.data(), preview_eps_);
+  ops::Gelu(x.hidden.data(), static_cast<size_t>(nb) * 64);
+  float* f = w->features + static_cast<size_t>(b0) * kPreviewDim;
+  ProductOnto(nb, x.hidden.data(), 64, 1, preview2_.rhs, f, kPreviewDim,
+              nullptr, 0, preview2_.b.data());
+  ops::Gelu(f, static_cast<size_t>(nb) * kPreviewDim);
+}
+
+void SamKernel::SecondLayerFinish(SecondLayerWork* w) const {
+  State* s = w->s;
+  const std::vector<float> out = AttentionOutput(final_, &w->online, *s);
   ops::Add(s->queries.data(), s->queries.data(), out.data(), out.size());
-  ops::LayerNormRows(s->queries.data(), T, kDim, kDim, final_norm_.g.data(),
-                     final_norm_.b.data(), norm_eps_);
+  ops::LayerNormRows(s->queries.data(), s->tokens, kDim, kDim,
+                     final_norm_.g.data(), final_norm_.b.data(), norm_eps_);
 }
 
 void SamKernel::SecondLayerTokens(const Output::SecondLayer& second,
@@ -448,30 +492,22 @@ void SamKernel::SecondLayerTokens(const Output::SecondLayer& second,
 void SamKernel::Decode(const Image& im,
                        const std::vector<std::array<float, 2>>& points,
                        const std::vector<float>& labels, Output* out) const {
-  if (points.empty() || points.size() != labels.size() || im.tokens == 0) {
-    throw InvalidArgument(
-        "SAM decoder kernel: one label per point, at least one point, and a "
-        "prepared image are required");
-  }
+  DecodeBatch(im, {Request{&points, &labels, out}});
+}
+
+// The prompt's tokens: the output tokens, then each point's positional
+// encoding plus its label's embedding (padding: not-a-point alone).
+void SamKernel::PromptTokens(const Request& r, State* s) const {
+  const std::vector<std::array<float, 2>>& points = *r.points;
+  const std::vector<float>& labels = *r.labels;
   const int count = static_cast<int>(points.size());
-  thread_local Scratch scratch;
-  out->second_layer.image_tokens.resize(static_cast<size_t>(im.tokens) * kDim);
-  scratch.up.resize(static_cast<size_t>(kBlock) * kDim);
-  scratch.features.resize(static_cast<size_t>(im.tokens) * kPreviewDim);
-  scratch.keys_pe.resize(static_cast<size_t>(kBlock) * kDim);
-  scratch.hidden.resize(static_cast<size_t>(kBlock) * 64);
-  State s;
-  s.scratch = &scratch;
-  s.tokens = 5 + count;
-  s.cols = heads_ * s.tokens;
-  s.padded = Padded(s.cols);
-  const int T = s.tokens;
-  // The prompt's tokens: the output tokens, then each point's positional
-  // encoding plus its label's embedding (padding: not-a-point alone).
-  s.query_pe = output_tokens_;
-  s.query_pe.resize(static_cast<size_t>(T) * kDim);
+  s->tokens = 5 + count;
+  s->cols = heads_ * s->tokens;
+  s->padded = Padded(s->cols);
+  s->query_pe = output_tokens_;
+  s->query_pe.resize(static_cast<size_t>(s->tokens) * kDim);
   for (int i = 0; i < count; ++i) {
-    float* e = s.query_pe.data() + static_cast<size_t>(5 + i) * kDim;
+    float* e = s->query_pe.data() + static_cast<size_t>(5 + i) * kDim;
     const int label = static_cast<int>(labels[i]);
     if (label == -1) {
       std::copy(not_a_point_.begin(), not_a_point_.end(), e);
@@ -485,50 +521,131 @@ void SamKernel::Decode(const Image& im,
                    (points[i][1] + 0.5f) / input_size_ * 2.0f - 1.0f, e);
     ops::Add(e, e, point_embeddings_.data() + label * kDim, kDim);
   }
+}
+
+void SamKernel::DecodeBatch(const Image& im,
+                            const std::vector<Request>& requests) const {
+  if (im.tokens == 0) {
+    throw InvalidArgument("SAM decoder kernel: the image is not prepared");
+  }
+  for (const Request& r : requests) {
+    if (r.points == nullptr || r.labels == nullptr || r.out == nullptr ||
+        r.points->empty() || r.points->size() != r.labels->size()) {
+      throw InvalidArgument(
+          "SAM decoder kernel: one label per point and at least one point "
+          "are required");
+    }
+  }
+  const size_t n = requests.size();
+  thread_local Scratch scratch;
+  scratch.up.resize(static_cast<size_t>(kBlock) * kDim);
+  scratch.keys_pe.resize(static_cast<size_t>(kBlock) * kDim);
+  scratch.hidden.resize(static_cast<size_t>(kBlock) * 64);
+  if (scratch.features.size() < n) scratch.features.resize(n);
+  std::vector<State> states(n);
+  for (size_t p = 0; p < n; ++p) {
+    states[p].scratch = &scratch;
+    PromptTokens(requests[p], &states[p]);
+    scratch.features[p].resize(static_cast<size_t>(im.tokens) * kPreviewDim);
+    requests[p].out->second_layer.image_tokens.resize(
+        static_cast<size_t>(im.tokens) * kDim);
+  }
+  size_t scores = 0;
+  for (const State& s : states) {
+    scores = std::max(scores, static_cast<size_t>(kBlock) * s.padded);
+  }
+  scratch.scores.resize(scores);
   const int dh = kCrossDim / heads_;
   const float scale = 1.0f / std::sqrt(static_cast<float>(dh));
   const Layer& l0 = layers_[0];
   const Layer& l1 = layers_[1];
   // Layer 0, token side (its first self-attention has no positional
   // encoding and no residual).
-  s.queries =
-      TokenAttention(l0.self_attn, s.query_pe, s.query_pe, s.query_pe, T);
-  ops::LayerNormRows(s.queries.data(), T, kDim, kDim, l0.norm1.g.data(),
-                     l0.norm1.b.data(), norm_eps_);
+  std::vector<int> first_row(n + 1, 0);
+  for (size_t p = 0; p < n; ++p) {
+    State& s = states[p];
+    s.queries = TokenAttention(l0.self_attn, s.query_pe, s.query_pe, s.query_pe,
+                               s.tokens);
+    ops::LayerNormRows(s.queries.data(), s.tokens, kDim, kDim,
+                       l0.norm1.g.data(), l0.norm1.b.data(), norm_eps_);
+    first_row[p + 1] = first_row[p] + s.tokens;
+  }
   {
-    std::vector<float> q = ApplyTokens(l0.t2i.q, Sum(s.queries, s.query_pe), T);
+    // The token-to-image attention of all the batch's tokens in one pass
+    // over the image's keys and values (each row as alone).
+    const int rows = first_row[n];
+    std::vector<float> q(static_cast<size_t>(rows) * kCrossDim);
+    for (size_t p = 0; p < n; ++p) {
+      const State& s = states[p];
+      const std::vector<float> qp =
+          ApplyTokens(l0.t2i.q, Sum(s.queries, s.query_pe), s.tokens);
+      std::copy(qp.begin(), qp.end(),
+                q.begin() + static_cast<size_t>(first_row[p]) * kCrossDim);
+    }
     for (float& x : q) x *= scale;
-    std::vector<float> p(static_cast<size_t>(T) * im.tokens);
-    std::vector<float> o(static_cast<size_t>(T) * kCrossDim);
+    std::vector<float> probs(static_cast<size_t>(rows) * im.tokens);
+    std::vector<float> o(static_cast<size_t>(rows) * kCrossDim);
     for (int h = 0; h < heads_; ++h) {
-      ops::Gemm(T, im.tokens, dh, q.data() + h * dh, kCrossDim, 1,
+      ops::Gemm(rows, im.tokens, dh, q.data() + h * dh, kCrossDim, 1,
                 im.t2i_keys_t.data() + static_cast<size_t>(h * dh) * im.tokens,
-                im.tokens, p.data(), im.tokens, false);
-      ops::SoftmaxRows(p.data(), T, im.tokens, im.tokens);
-      ops::Gemm(T, dh, im.tokens, p.data(), im.tokens, 1,
+                im.tokens, probs.data(), im.tokens, false);
+      ops::SoftmaxRows(probs.data(), rows, im.tokens, im.tokens);
+      ops::Gemm(rows, dh, im.tokens, probs.data(), im.tokens, 1,
                 im.t2i_values.data() + static_cast<size_t>(h) * im.tokens * dh,
                 dh, o.data() + h * dh, kCrossDim, false);
     }
-    const std::vector<float> out = ApplyTokens(l0.t2i.o, o, T);
-    ops::Add(s.queries.data(), s.queries.data(), out.data(), out.size());
-    ops::LayerNormRows(s.queries.data(), T, kDim, kDim, l0.norm2.g.data(),
-                       l0.norm2.b.data(), norm_eps_);
+    for (size_t p = 0; p < n; ++p) {
+      State& s = states[p];
+      const auto from =
+          o.begin() + static_cast<ptrdiff_t>(first_row[p]) * kCrossDim;
+      const std::vector<float> op(
+          from, from + static_cast<ptrdiff_t>(s.tokens * kCrossDim));
+      const std::vector<float> out = ApplyTokens(l0.t2i.o, op, s.tokens);
+      ops::Add(s.queries.data(), s.queries.data(), out.data(), out.size());
+      ops::LayerNormRows(s.queries.data(), s.tokens, kDim, kDim,
+                         l0.norm2.g.data(), l0.norm2.b.data(), norm_eps_);
+    }
   }
-  TokenMlpAndNorm(l0, &s.queries, T);
   // Layer 1's self-attention needs only the tokens: before the image side,
   // which takes layer 0's tokens and layer 1's.
-  const std::vector<float> layer0_tokens = s.queries;
-  {
+  std::vector<std::vector<float>> layer0_tokens(n);
+  for (size_t p = 0; p < n; ++p) {
+    State& s = states[p];
+    TokenMlpAndNorm(l0, &s.queries, s.tokens);
+    layer0_tokens[p] = s.queries;
     const std::vector<float> q = Sum(s.queries, s.query_pe);
     const std::vector<float> out =
-        TokenAttention(l1.self_attn, q, q, s.queries, T);
+        TokenAttention(l1.self_attn, q, q, s.queries, s.tokens);
     ops::Add(s.queries.data(), s.queries.data(), out.data(), out.size());
-    ops::LayerNormRows(s.queries.data(), T, kDim, kDim, l1.norm1.g.data(),
-                       l1.norm1.b.data(), norm_eps_);
+    ops::LayerNormRows(s.queries.data(), s.tokens, kDim, kDim,
+                       l1.norm1.g.data(), l1.norm1.b.data(), norm_eps_);
   }
-  FirstLayerImageSide(im, layer0_tokens, &s,
-                      out->second_layer.image_tokens.data());
-  SecondLayerImageSide(im, &s, &out->second_layer);
+  // The image sides: block by block, each block for every prompt in turn
+  // (the image's arrays read once per block for the batch).
+  {
+    std::vector<FirstLayerWork> work;
+    work.reserve(n);  // no moves: the right-hand sides point into them
+    for (size_t p = 0; p < n; ++p) {
+      work.emplace_back(*this, layer0_tokens[p], &states[p],
+                        requests[p].out->second_layer.image_tokens.data());
+    }
+    for (int b0 = 0; b0 < im.tokens; b0 += kBlock) {
+      for (FirstLayerWork& w : work) FirstLayerBlock(im, b0, &w);
+    }
+    for (FirstLayerWork& w : work) FirstLayerFinish(&w);
+  }
+  {
+    std::vector<SecondLayerWork> work;
+    work.reserve(n);
+    for (size_t p = 0; p < n; ++p) {
+      work.emplace_back(*this, &states[p], &requests[p].out->second_layer,
+                        scratch.features[p].data());
+    }
+    for (int b0 = 0; b0 < im.tokens; b0 += kBlock) {
+      for (SecondLayerWork& w : work) SecondLayerBlock(im, b0, &w);
+    }
+    for (SecondLayerWork& w : work) SecondLayerFinish(&w);
+  }
   // The heads: IoU prediction and the mask tokens' hypernetworks.
   const auto mlp3 = [&](const Linear(&l)[3], const float* x) {
     std::vector<float> h(x, x + kDim);
@@ -540,25 +657,29 @@ void SamKernel::Decode(const Image& im,
     }
     return h;
   };
-  const std::vector<float> iou = mlp3(iou_, s.queries.data());
-  int best = 0;
-  float best_score = -1e30f;
-  for (int j = 0; j < 4; ++j) {
-    const float score =
-        iou[j] + (j == 0 ? (static_cast<float>(count) - points_offset_) *
-                               first_mask_reweight_
-                         : 0.0f);
-    if (score > best_score) {
-      best_score = score;
-      best = j;
+  for (size_t p = 0; p < n; ++p) {
+    const State& s = states[p];
+    Output* out = requests[p].out;
+    const auto count = static_cast<float>(requests[p].points->size());
+    const std::vector<float> iou = mlp3(iou_, s.queries.data());
+    int best = 0;
+    float best_score = -1e30f;
+    for (int j = 0; j < 4; ++j) {
+      const float score =
+          iou[j] +
+          (j == 0 ? (count - points_offset_) * first_mask_reweight_ : 0.0f);
+      if (score > best_score) {
+        best_score = score;
+        best = j;
+      }
     }
+    out->predicted_iou = iou[best];
+    out->mask_hyper = mlp3(
+        hyper_[best], s.queries.data() + static_cast<size_t>(1 + best) * kDim);
+    out->preview.resize(static_cast<size_t>(im.tokens));
+    ops::RowDots(im.tokens, kPreviewDim, scratch.features[p].data(),
+                 kPreviewDim, out->mask_hyper.data(), out->preview.data());
   }
-  out->predicted_iou = iou[best];
-  out->mask_hyper = mlp3(
-      hyper_[best], s.queries.data() + static_cast<size_t>(1 + best) * kDim);
-  out->preview.resize(static_cast<size_t>(im.tokens));
-  ops::RowDots(im.tokens, kPreviewDim, scratch.features.data(), kPreviewDim,
-               out->mask_hyper.data(), out->preview.data());
 }
 
 }  // namespace semrec::segment

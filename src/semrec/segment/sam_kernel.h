@@ -94,6 +94,16 @@ class SamKernel {
               const std::vector<std::array<float, 2>>& points,
               const std::vector<float>& labels, Output* out) const;
 
+  /// Several prompts at once: each Output as Decode() writes it (the same
+  /// values), the image's arrays read once per block for all of them.
+  struct Request {
+    const std::vector<std::array<float, 2>>* points = nullptr;
+    const std::vector<float>* labels = nullptr;
+    Output* out = nullptr;
+  };
+  void DecodeBatch(const Image& image,
+                   const std::vector<Request>& requests) const;
+
   /// The mask part's input (the upscaling tokens) for the image tokens
   /// `tokens` (indices into the grid) of the prompt `decoded` came from:
   /// [tokens.size() x 256], each token's values the same whichever others
@@ -172,12 +182,15 @@ class SamKernel {
   void AttendBlock(const float* keys_pe, const float* values, int nb,
                    const Rhs& folded, float* scores, OnlineAttention* online,
                    const State& s) const;
-  // Writes layer 1's image tokens into `image_tokens`.
-  void FirstLayerImageSide(const Image& image,
-                           const std::vector<float>& layer0_tokens, State* s,
-                           float* image_tokens) const;
-  void SecondLayerImageSide(const Image& image, State* s,
-                            Output::SecondLayer* second) const;
+  void PromptTokens(const Request& r, State* s) const;
+  // A prompt's share of each layer's image side: set up, then per block of
+  // image tokens, then finished (the first writes layer 1's image tokens).
+  struct FirstLayerWork;
+  struct SecondLayerWork;
+  void FirstLayerBlock(const Image& image, int b0, FirstLayerWork* w) const;
+  void FirstLayerFinish(FirstLayerWork* w) const;
+  void SecondLayerBlock(const Image& image, int b0, SecondLayerWork* w) const;
+  void SecondLayerFinish(SecondLayerWork* w) const;
   // Layer 1's image-to-token attention and norm4 for nb image tokens (keys:
   // their layer-1 tokens [nb x 256], pe: their positional encoding): the
   // upscaling tokens into up, up + pe into keys_pe; scores is scratch.
