@@ -6,6 +6,7 @@
 #include <numbers>
 
 #include <fmt/format.h>
+#include <tbb/parallel_invoke.h>
 
 #include "semrec/core/error.h"
 #include "semrec/segment/sam_kernel_ops.h"
@@ -183,37 +184,57 @@ SamKernel::Image SamKernel::Prepare(const std::vector<float>& embedding,
           embedding[static_cast<size_t>(c) * n + i] + no_mask_[c];
     }
   }
-  for (int y = 0; y < h; ++y) {
-    for (int x = 0; x < w; ++x) {
-      const float cx =
-          (static_cast<float>(x) + 0.5f) / static_cast<float>(w) * 2.0f - 1.0f;
-      const float cy =
-          (static_cast<float>(y) + 0.5f) / static_cast<float>(h) * 2.0f - 1.0f;
-      EncodePosition(cx, cy,
-                     im.pe.data() + static_cast<size_t>(y * w + x) * kDim);
+  {
+    // The grid's encoding is the same for every image of its size: once.
+    std::lock_guard<std::mutex> lock(pe_mutex_);
+    auto& [grid, pe] = pe_cache_;
+    if (grid != std::make_pair(h, w)) {
+      pe.resize(im.pe.size());
+      for (int y = 0; y < h; ++y) {
+        for (int x = 0; x < w; ++x) {
+          const float cx =
+              (static_cast<float>(x) + 0.5f) / static_cast<float>(w) * 2.0f -
+              1.0f;
+          const float cy =
+              (static_cast<float>(y) + 0.5f) / static_cast<float>(h) * 2.0f -
+              1.0f;
+          EncodePosition(cx, cy,
+                         pe.data() + static_cast<size_t>(y * w + x) * kDim);
+        }
+      }
+      grid = {h, w};
     }
+    im.pe = pe;
   }
   const std::vector<float> keys_pe = Sum(im.keys, im.pe);
   const Layer& l0 = layers_[0];
-  const std::vector<float> k = Apply(l0.t2i.k, keys_pe, n);
-  im.t2i_keys_t.resize(k.size());
-  for (int i = 0; i < n; ++i) {
-    for (int c = 0; c < kCrossDim; ++c) {
-      im.t2i_keys_t[static_cast<size_t>(c) * n + i] = k[i * kCrossDim + c];
-    }
-  }
-  // Per head, [heads x tokens x 16]: each head's values are read in one
-  // stream.
-  const std::vector<float> v = Apply(l0.t2i.v, im.keys, n);
   const int dh = kCrossDim / heads_;
-  im.t2i_values.resize(v.size());
-  for (int i = 0; i < n; ++i) {
-    for (int c = 0; c < kCrossDim; ++c) {
-      im.t2i_values[(static_cast<size_t>(c / dh) * n + i) * dh + c % dh] =
-          v[static_cast<size_t>(i) * kCrossDim + c];
-    }
-  }
-  im.i2t_queries = Apply(l0.i2t.q, keys_pe, n);
+  // The three projections side by side (the cores are free between the
+  // encoder and the prompts).
+  tbb::parallel_invoke(
+      [&] {
+        const std::vector<float> k = Apply(l0.t2i.k, keys_pe, n);
+        im.t2i_keys_t.resize(k.size());
+        for (int i = 0; i < n; ++i) {
+          for (int c = 0; c < kCrossDim; ++c) {
+            im.t2i_keys_t[static_cast<size_t>(c) * n + i] =
+                k[i * kCrossDim + c];
+          }
+        }
+      },
+      [&] {
+        // Per head, [heads x tokens x 16]: each head's values are read in
+        // one stream.
+        const std::vector<float> v = Apply(l0.t2i.v, im.keys, n);
+        im.t2i_values.resize(v.size());
+        for (int i = 0; i < n; ++i) {
+          for (int c = 0; c < kCrossDim; ++c) {
+            im.t2i_values[(static_cast<size_t>(c / dh) * n + i) * dh + c % dh] =
+                v[static_cast<size_t>(i) * kCrossDim + c];
+          }
+        }
+      },
+      [&] { im.i2t_queries = Apply(l0.i2t.q, keys_pe, n); });
   return im;
 }
 
@@ -236,29 +257,34 @@ std::vector<float> SamKernel::HeadColumns(const std::vector<float>& x,
   return m;
 }
 
-std::vector<float> SamKernel::HeadRows(const std::vector<float>& x,
-                                       const State& s) const {
+// w [256 x 128] times the HeadColumns matrix of x (scaled): [256 x
+// padded], from each head's channels only (w transposed: each column a
+// HeadRowsProduct row).
+std::vector<float> SamKernel::Fold(const Linear& l, const std::vector<float>& x,
+                                   const State& s, float scale) const {
   const int dh = kCrossDim / heads_;
-  std::vector<float> m(static_cast<size_t>(s.padded) * kCrossDim, 0.0f);
-  for (int t = 0; t < s.tokens; ++t) {
-    for (int h = 0; h < heads_; ++h) {
-      for (int d = 0; d < dh; ++d) {
-        m[static_cast<size_t>(t * heads_ + h) * kCrossDim + h * dh + d] =
-            x[t * kCrossDim + h * dh + d];
-      }
+  std::vector<float> scaled(x.size());
+  for (size_t i = 0; i < x.size(); ++i) scaled[i] = x[i] * scale;
+  std::vector<float> rows(static_cast<size_t>(s.padded) * kDim, 0.0f);
+  ops::HeadRowsProduct(s.tokens, heads_, dh, scaled.data(), kCrossDim,
+                       l.wt.data(), kDim, kDim, rows.data(), kDim);
+  std::vector<float> out(static_cast<size_t>(kDim) * s.padded);
+  for (int c = 0; c < s.padded; ++c) {
+    for (int r = 0; r < kDim; ++r) {
+      out[static_cast<size_t>(r) * s.padded + c] =
+          rows[static_cast<size_t>(c) * kDim + r];
     }
   }
-  return m;
+  return out;
 }
 
-// w [256 x 128] times a HeadColumns matrix: [256 x padded].
-std::vector<float> SamKernel::Fold(const Linear& l,
-                                   const std::vector<float>& columns,
-                                   const State& s) const {
-  std::vector<float> out(static_cast<size_t>(kDim) * s.padded);
-  ops::Gemm(kDim, s.padded, kCrossDim, l.w.data(), kCrossDim, 1, columns.data(),
-            s.padded, out.data(), s.padded, false);
-  return out;
+// Each token's value through its head's share of the output projection o
+// [128 x 256]: HeadRows(v) o, [padded x 256] (padding rows zero).
+void SamKernel::HeadValues(const Linear& o, const std::vector<float>& v,
+                           const State& s, std::vector<float>* out) const {
+  out->assign(static_cast<size_t>(s.padded) * kDim, 0.0f);
+  ops::HeadRowsProduct(s.tokens, heads_, kCrossDim / heads_, v.data(),
+                       kCrossDim, o.w.data(), kDim, kDim, out->data(), kDim);
 }
 
 // The token-to-image attention's output from its accumulated weighted sums
@@ -275,19 +301,12 @@ std::vector<float> SamKernel::AttentionOutput(const Attention& a,
     const float inv = 1.0f / online->sum[c];
     for (int i = 0; i < kDim; ++i) row[i] *= inv;
   }
-  std::vector<float> values(static_cast<size_t>(s.cols) * kCrossDim);
-  ops::Gemm(s.cols, kCrossDim, kDim, acc->data(), kDim, 1, a.v.w.data(),
-            kCrossDim, values.data(), kCrossDim, false);
+  // Each column (token, head) keeps its own head's values only.
   std::vector<float> o(static_cast<size_t>(s.tokens) * kCrossDim);
+  ops::HeadColumnsProduct(s.tokens, heads_, dh, kDim, acc->data(), kDim,
+                          a.v.w.data(), kCrossDim, o.data(), kCrossDim);
   for (int t = 0; t < s.tokens; ++t) {
-    for (int h = 0; h < heads_; ++h) {
-      for (int d = 0; d < dh; ++d) {
-        o[t * kCrossDim + h * dh + d] =
-            values[static_cast<size_t>(t * heads_ + h) * kCrossDim + h * dh +
-                   d] +
-            a.v.b[h * dh + d];
-      }
-    }
+    for (int c = 0; c < kCrossDim; ++c) o[t * kCrossDim + c] += a.v.b[c];
   }
   return ApplyTokens(a.o, o, s.tokens);
 }
@@ -347,16 +366,10 @@ SamKernel::FirstLayerWork::FirstLayerWork(
   const std::vector<float> k0 =
       k.ApplyTokens(l0.i2t.k, Sum(layer0_tokens, s->query_pe), T);
   kbd = k.HeadColumns(k0, *s, scale);
-  // Each token's value through its head's share of the output projection.
-  u0.resize(static_cast<size_t>(s->padded) * kDim);
-  ops::Gemm(s->padded, kDim, kCrossDim,
-            k.HeadRows(k.ApplyTokens(l0.i2t.v, layer0_tokens, T), *s).data(),
-            kCrossDim, 1, l0.i2t.o.w.data(), kDim, u0.data(), kDim, false);
-  qk1 = k.Fold(
-      l1.t2i.k,
-      k.HeadColumns(k.ApplyTokens(l1.t2i.q, Sum(s->queries, s->query_pe), T),
-                    *s, scale),
-      *s);
+  k.HeadValues(l0.i2t.o, k.ApplyTokens(l0.i2t.v, layer0_tokens, T), *s, &u0);
+  qk1 =
+      k.Fold(l1.t2i.k, k.ApplyTokens(l1.t2i.q, Sum(s->queries, s->query_pe), T),
+             *s, scale);
   kbd_rhs = k.MakeRhs(kbd.data(), kCrossDim, s->padded);
   u0_rhs = k.MakeRhs(u0.data(), s->cols, kDim);
   qk1_rhs = k.MakeRhs(qk1.data(), kDim, s->padded);
@@ -421,22 +434,18 @@ SamKernel::SecondLayerWork::SecondLayerWork(const SamKernel& k, State* state,
   const float scale =
       1.0f / std::sqrt(static_cast<float>(kCrossDim / k.heads_));
   const std::vector<float> qpe = Sum(s->queries, s->query_pe);
-  const std::vector<float> k1 =
-      k.HeadColumns(k.ApplyTokens(l1.i2t.k, qpe, T), *s, scale);
+  const std::vector<float> k1 = k.ApplyTokens(l1.i2t.k, qpe, T);
   second->prompt_tokens = T;
-  second->scores_w = k.Fold(l1.i2t.q, k1, *s);
+  second->scores_w = k.Fold(l1.i2t.q, k1, *s, scale);
   second->bias.resize(static_cast<size_t>(s->padded));
-  ops::Gemm(1, s->padded, kCrossDim, l1.i2t.q.b.data(), 0, 1, k1.data(),
-            s->padded, second->bias.data(), s->padded, false);
-  second->values_w.resize(static_cast<size_t>(s->padded) * kDim);
-  ops::Gemm(s->padded, kDim, kCrossDim,
-            k.HeadRows(k.ApplyTokens(l1.i2t.v, s->queries, T), *s).data(),
-            kCrossDim, 1, l1.i2t.o.w.data(), kDim, second->values_w.data(),
-            kDim, false);
+  ops::Gemm(1, s->padded, kCrossDim, l1.i2t.q.b.data(), 0, 1,
+            k.HeadColumns(k1, *s, scale).data(), s->padded, second->bias.data(),
+            s->padded, false);
+  k.HeadValues(l1.i2t.o, k.ApplyTokens(l1.i2t.v, s->queries, T), *s,
+               &second->values_w);
   second->scores = k.MakeRhs(second->scores_w.data(), kDim, s->padded);
   second->values = k.MakeRhs(second->values_w.data(), s->cols, kDim);
-  qkf = k.Fold(k.final_.k,
-               k.HeadColumns(k.ApplyTokens(k.final_.q, qpe, T), *s, scale), *s);
+  qkf = k.Fold(k.final_.k, k.ApplyTokens(k.final_.q, qpe, T), *s, scale);
   qkf_rhs = k.MakeRhs(qkf.data(), kDim, s->padded);
 }
 

@@ -12,7 +12,9 @@
 #include <array>
 #include <filesystem>
 #include <map>
+#include <mutex>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "semrec/segment/sam_kernel_ops.h"
@@ -127,8 +129,9 @@ class SamKernel {
 
  private:
   struct Linear {
-    std::vector<float> w;  // [in x out]
-    std::vector<float> b;  // [out]
+    std::vector<float> w;   // [in x out]
+    std::vector<float> b;   // [out]
+    std::vector<float> wt;  // [out x in], for Fold's layers
     int in = 0, out = 0;
     Rhs rhs;  // w for Product()
   };
@@ -172,10 +175,10 @@ class SamKernel {
                        int rows) const;
   std::vector<float> HeadColumns(const std::vector<float>& x, const State& s,
                                  float scale) const;
-  std::vector<float> HeadRows(const std::vector<float>& x,
-                              const State& s) const;
-  std::vector<float> Fold(const Linear& l, const std::vector<float>& columns,
-                          const State& s) const;
+  std::vector<float> Fold(const Linear& l, const std::vector<float>& x,
+                          const State& s, float scale) const;
+  void HeadValues(const Linear& o, const std::vector<float>& v, const State& s,
+                  std::vector<float>* out) const;
   std::vector<float> AttentionOutput(const Attention& a,
                                      OnlineAttention* online,
                                      const State& s) const;
@@ -227,6 +230,9 @@ class SamKernel {
   int heads_ = 8;
   Precision precision_ = Precision::kFp32;
   std::filesystem::path path_;
+  // The positional encoding of the last grid size Prepare() saw.
+  mutable std::mutex pe_mutex_;
+  mutable std::pair<std::pair<int, int>, std::vector<float>> pe_cache_;
 };
 
 }  // namespace semrec::segment

@@ -273,6 +273,57 @@ SEMREC_INLINE void RowDotsT(int m, int k, const float* a, long lda,
   }
 }
 
+// The products with a prompt's block-diagonal head matrices without their
+// zeros (each head's dh channels only), each sum in the order a whole
+// product takes it (the zero terms add nothing).
+template <int W>
+SEMREC_INLINE void HeadRowsProductT(int tokens, int heads, int dh,
+                                    const float* x, long ldx, const float* w,
+                                    long ldw, int n, float* out, long ldo) {
+  for (int t = 0; t < tokens; ++t) {
+    for (int h = 0; h < heads; ++h) {
+      const float* xr = x + t * ldx + h * dh;
+      const float* wr = w + static_cast<long>(h) * dh * ldw;
+      float* o = out + static_cast<long>(t * heads + h) * ldo;
+      int j = 0;
+      for (; j + W <= n; j += W) {
+        F<W> acc{};
+        for (int d = 0; d < dh; ++d) acc += xr[d] * Load<W>(wr + d * ldw + j);
+        Store<W>(o + j, acc);
+      }
+      for (; j < n; ++j) {
+        float acc = 0;
+        for (int d = 0; d < dh; ++d) acc += xr[d] * wr[d * ldw + j];
+        o[j] = acc;
+      }
+    }
+  }
+}
+
+template <int W>
+SEMREC_INLINE void HeadColumnsProductT(int tokens, int heads, int dh, int k,
+                                       const float* a, long lda, const float* w,
+                                       long ldw, float* out, long ldo) {
+  for (int t = 0; t < tokens; ++t) {
+    for (int h = 0; h < heads; ++h) {
+      const float* ar = a + static_cast<long>(t * heads + h) * lda;
+      float* o = out + t * ldo + h * dh;
+      int d = 0;
+      for (; d + W <= dh; d += W) {
+        F<W> acc{};
+        const float* wc = w + h * dh + d;
+        for (int p = 0; p < k; ++p) acc += ar[p] * Load<W>(wc + p * ldw);
+        Store<W>(o + d, acc);
+      }
+      for (; d < dh; ++d) {
+        float acc = 0;
+        for (int p = 0; p < k; ++p) acc += ar[p] * w[p * ldw + h * dh + d];
+        o[d] = acc;
+      }
+    }
+  }
+}
+
 template <int W>
 SEMREC_INLINE void SubT(float* out, const float* a, const float* b, size_t n) {
   size_t i = 0;
@@ -539,6 +590,10 @@ struct Ops {
   void (*gelu)(float*, size_t);
   void (*exp)(float*, size_t);
   void (*row_dots)(int, int, const float*, long, const float*, float*);
+  void (*head_rows)(int, int, int, const float*, long, const float*, long, int,
+                    float*, long);
+  void (*head_columns)(int, int, int, int, const float*, long, const float*,
+                       long, float*, long);
 };
 
 #define SEMREC_OPS(SUFFIX, TARGET, W, MR, NV)                                 \
@@ -568,6 +623,16 @@ struct Ops {
     return OnlineSoftmaxColumnsT<W>(s, rows, cols, ld, max, sum, rescale);    \
   }                                                                           \
   TARGET void Gelu##SUFFIX(float* x, size_t n) { GeluT<W>(x, n); }            \
+  TARGET void HeadRows##SUFFIX(int tokens, int heads, int dh, const float* x, \
+                               long ldx, const float* w, long ldw, int n,     \
+                               float* out, long ldo) {                        \
+    HeadRowsProductT<W>(tokens, heads, dh, x, ldx, w, ldw, n, out, ldo);      \
+  }                                                                           \
+  TARGET void HeadColumns##SUFFIX(int tokens, int heads, int dh, int k,       \
+                                  const float* a, long lda, const float* w,   \
+                                  long ldw, float* out, long ldo) {           \
+    HeadColumnsProductT<W>(tokens, heads, dh, k, a, lda, w, ldw, out, ldo);   \
+  }                                                                           \
   TARGET void RowDots##SUFFIX(int m, int k, const float* a, long lda,         \
                               const float* x, float* out) {                   \
     RowDotsT<W>(m, k, a, lda, x, out);                                        \
@@ -582,7 +647,9 @@ struct Ops {
                                 OnlineSoftmax##SUFFIX,                        \
                                 Gelu##SUFFIX,                                 \
                                 Exp##SUFFIX,                                  \
-                                RowDots##SUFFIX};
+                                RowDots##SUFFIX,                              \
+                                HeadRows##SUFFIX,                             \
+                                HeadColumns##SUFFIX};
 
 #if defined(__x86_64__)
 // AVX-512: 8 x 32 tiles (16 accumulators of 32 registers).
@@ -702,6 +769,17 @@ void Exp(float* x, size_t n) { Current().exp(x, n); }
 void RowDots(int m, int k, const float* a, long lda, const float* x,
              float* out) {
   Current().row_dots(m, k, a, lda, x, out);
+}
+
+void HeadRowsProduct(int tokens, int heads, int dh, const float* x, long ldx,
+                     const float* w, long ldw, int n, float* out, long ldo) {
+  Current().head_rows(tokens, heads, dh, x, ldx, w, ldw, n, out, ldo);
+}
+
+void HeadColumnsProduct(int tokens, int heads, int dh, int k, const float* a,
+                        long lda, const float* w, long ldw, float* out,
+                        long ldo) {
+  Current().head_columns(tokens, heads, dh, k, a, lda, w, ldw, out, ldo);
 }
 
 }  // namespace semrec::segment::kernel_ops

@@ -74,6 +74,20 @@ void Exp(float* x, size_t n);
 void RowDots(int m, int k, const float* a, long lda, const float* x,
              float* out);
 
+/// The product of a prompt's per-head rows with w: row t * heads + h of out
+/// (j < n) = sum_{d < dh} x[t * ldx + h * dh + d] w[(h * dh + d) * ldw + j]
+/// (Gemm of the block-diagonal matrix whose row t * heads + h holds token
+/// t's head-h channels, without its zeros; the same sums).
+void HeadRowsProduct(int tokens, int heads, int dh, const float* x, long ldx,
+                     const float* w, long ldw, int n, float* out, long ldo);
+
+/// Each row's own head of a product: out[t * ldo + h * dh + d] = sum_{p <
+/// k} a[(t * heads + h) * lda + p] w[p * ldw + h * dh + d] (the columns of
+/// Gemm(a, w) that an attention's per-head values keep).
+void HeadColumnsProduct(int tokens, int heads, int dh, int k, const float* a,
+                        long lda, const float* w, long ldw, float* out,
+                        long ldo);
+
 /// Whether this CPU has bf16 dot products (AVX512_BF16), which the *Bf16
 /// products below need.
 bool HasBf16();

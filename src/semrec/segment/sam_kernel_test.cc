@@ -223,6 +223,53 @@ TEST(KernelOps, ElementWiseOperationsMatchTheDefinitions) {
   });
 }
 
+TEST(KernelOps, HeadProductsAreTheProductsWithTheBlockDiagonalMatrices) {
+  // A prompt's 7 tokens x 8 heads of 16 channels: the products skip the
+  // block-diagonal matrices' zeros and keep the whole products' sums.
+  OnEachLevel([] {
+    const int tokens = 7, heads = 8, dh = 16, inner = heads * dh, n = 256;
+    const int rows = tokens * heads, padded = 64;
+    const std::vector<float> x =
+        Random(static_cast<size_t>(tokens) * inner, 11);
+    const std::vector<float> w = Random(static_cast<size_t>(inner) * n, 12);
+    std::vector<float> block(static_cast<size_t>(padded) * inner, 0.0f);
+    for (int t = 0; t < tokens; ++t) {
+      for (int h = 0; h < heads; ++h) {
+        for (int d = 0; d < dh; ++d) {
+          block[static_cast<size_t>(t * heads + h) * inner + h * dh + d] =
+              x[t * inner + h * dh + d];
+        }
+      }
+    }
+    std::vector<float> whole(static_cast<size_t>(padded) * n), rows_out(whole);
+    ops::Gemm(padded, n, inner, block.data(), inner, 1, w.data(), n,
+              whole.data(), n, false);
+    std::fill(rows_out.begin(), rows_out.end(), 0.0f);
+    ops::HeadRowsProduct(tokens, heads, dh, x.data(), inner, w.data(), n, n,
+                         rows_out.data(), n);
+    for (size_t i = 0; i < whole.size(); ++i) {
+      ASSERT_NEAR(rows_out[i], whole[i], 1e-5f * (1 + std::abs(whole[i]))) << i;
+    }
+    // Each row's own head of a [rows x n] times [n x inner] product.
+    const std::vector<float> a = Random(static_cast<size_t>(rows) * n, 13);
+    const std::vector<float> v = Random(static_cast<size_t>(n) * inner, 14);
+    std::vector<float> full(static_cast<size_t>(rows) * inner);
+    ops::Gemm(rows, inner, n, a.data(), n, 1, v.data(), inner, full.data(),
+              inner, false);
+    std::vector<float> own(static_cast<size_t>(tokens) * inner);
+    ops::HeadColumnsProduct(tokens, heads, dh, n, a.data(), n, v.data(), inner,
+                            own.data(), inner);
+    for (int t = 0; t < tokens; ++t) {
+      for (int c = 0; c < inner; ++c) {
+        const float want =
+            full[static_cast<size_t>(t * heads + c / dh) * inner + c];
+        ASSERT_NEAR(own[t * inner + c], want, 1e-5f * (1 + std::abs(want)))
+            << t << " " << c;
+      }
+    }
+  });
+}
+
 TEST(KernelOps, SoftmaxesMatchTheDefinition) {
   OnEachLevel([] {
     // Rows.

@@ -172,6 +172,16 @@ SamKernel::SamKernel(const std::filesystem::path& path, Precision precision)
   for (Linear& l : iou_) pack(l);
   pack(preview1_);
   pack(preview2_);
+  // Fold()'s layers transposed.
+  for (Linear* l : {&layers_[1].t2i.k, &layers_[1].i2t.q, &final_.k}) {
+    l->wt.resize(l->w.size());
+    for (int r = 0; r < l->in; ++r) {
+      for (int c = 0; c < l->out; ++c) {
+        l->wt[static_cast<size_t>(c) * l->in + r] =
+            l->w[static_cast<size_t>(r) * l->out + c];
+      }
+    }
+  }
   if (CanUpscale()) {
     pack(upscale1_);
     pack(upscale2_);
