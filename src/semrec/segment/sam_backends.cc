@@ -175,25 +175,11 @@ class SamSegmenter : public PromptableSegmenter {
   std::vector<LowResMask> DecodeBatchUnlessRejected(
       const std::vector<Prompt>& prompts,
       const MaskFilter& filter) const override {
-    if (!kernel_ || prompts.size() < 2) {
+    if (!kernel_) {
       return PromptableSegmenter::DecodeBatchUnlessRejected(prompts, filter);
     }
     CheckArgument(!embedding_.shape.empty(), "SAM: SetImage() was not called");
-    const size_t n = prompts.size();
-    std::vector<std::vector<std::array<float, 2>>> points(n);
-    std::vector<std::vector<float>> labels(n);
-    // Per thread, so their 4 MB of image tokens are not allocated anew.
-    thread_local std::vector<SamKernel::Output> results;
-    if (results.size() < n) results.resize(n);
-    std::vector<SamKernel::Request> requests(n);
-    for (size_t i = 0; i < n; ++i) {
-      KernelPoints(prompts[i], &points[i], &labels[i]);
-      requests[i] = {&points[i], &labels[i], &results[i]};
-    }
-    kernel_->DecodeBatch(kernel_image_, requests);
-    std::vector<LowResMask> out(n);
-    for (size_t i = 0; i < n; ++i) out[i] = KernelResult(results[i], &filter);
-    return out;
+    return RunKernel(prompts, &filter);
   }
 
  private:
@@ -267,20 +253,29 @@ class SamSegmenter : public PromptableSegmenter {
                             &result);
   }
 
-  // Run() through the kernel.
-  LowResMask RunKernel(const Prompt& prompt, const MaskFilter* filter) const {
-    std::vector<std::array<float, 2>> points;
-    std::vector<float> labels;
-    KernelPoints(prompt, &points, &labels);
-    // Per thread, so its 4 MB of image tokens are not allocated anew.
-    thread_local SamKernel::Output result;
-    kernel_->Decode(kernel_image_, points, labels, &result);
-    return KernelResult(result, filter);
+  // Run() through the kernel, for any number of prompts (decoded together).
+  std::vector<LowResMask> RunKernel(const std::vector<Prompt>& prompts,
+                                    const MaskFilter* filter) const {
+    const size_t n = prompts.size();
+    std::vector<std::vector<std::array<float, 2>>> points(n);
+    std::vector<std::vector<float>> labels(n);
+    // Per thread, so their 4 MB of image tokens are not allocated anew.
+    thread_local std::vector<SamKernel::Output> results;
+    if (results.size() < n) results.resize(n);
+    std::vector<SamKernel::Request> requests(n);
+    for (size_t i = 0; i < n; ++i) {
+      KernelPoints(prompts[i], &points[i], &labels[i]);
+      requests[i] = {&points[i], &labels[i], &results[i]};
+    }
+    kernel_->DecodeBatch(kernel_image_, requests);
+    std::vector<LowResMask> out(n);
+    for (size_t i = 0; i < n; ++i) out[i] = KernelResult(results[i], filter);
+    return out;
   }
 
   LowResMask Run(const Prompt& prompt, const MaskFilter* filter) const {
     CheckArgument(!embedding_.shape.empty(), "SAM: SetImage() was not called");
-    if (kernel_) return RunKernel(prompt, filter);
+    if (kernel_) return RunKernel({prompt}, filter).front();
     infer::Tensor coords, labels;
     EncodePrompt(prompt, transform_, &coords, &labels);
     infer::TensorRefs in = ImageSide(*decoder_);

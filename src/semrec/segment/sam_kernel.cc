@@ -263,7 +263,7 @@ void SamKernel::DecodeBatch(const Image& im,
   }
   scratch.scores.resize(scores);
   const int dh = kCrossDim / heads_;
-  const float scale = 1.0f / std::sqrt(static_cast<float>(dh));
+  const float scale = CrossScale();
   const Layer& l0 = layers_[0];
   const Layer& l1 = layers_[1];
   // Layer 0, token side (its first self-attention has no positional

@@ -10,6 +10,7 @@
 #pragma once
 
 #include <array>
+#include <cmath>
 #include <filesystem>
 #include <map>
 #include <mutex>
@@ -200,6 +201,13 @@ class SamKernel {
   void SecondLayerTokens(const Output::SecondLayer& second, const float* keys,
                          const float* pe, int nb, float* keys_pe, float* scores,
                          float* up) const;
+  void UpscalingFeatures(const float* up, int nb, const Linear& first,
+                         const Linear& second, float* hidden,
+                         float* features) const;
+  // The cross attentions' score scale, 1 / sqrt(channels per head).
+  float CrossScale() const {
+    return 1.0f / std::sqrt(static_cast<float>(kCrossDim / heads_));
+  }
   // Throws unless `decoded` is a prompt this kernel decoded on `image`.
   void CheckDecoded(const Image& image, const Output& decoded) const;
   // UpscalingTokens for up to kBlock tokens.

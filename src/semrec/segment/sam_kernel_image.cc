@@ -126,8 +126,7 @@ SamKernel::FirstLayerWork::FirstLayerWork(
   const Layer& l0 = k.layers_[0];
   const Layer& l1 = k.layers_[1];
   const int T = s->tokens;
-  const float scale =
-      1.0f / std::sqrt(static_cast<float>(kCrossDim / k.heads_));
+  const float scale = k.CrossScale();
   const std::vector<float> k0 =
       k.ApplyTokens(l0.i2t.k, Sum(layer0_tokens, s->query_pe), T);
   kbd = k.HeadColumns(k0, *s, scale);
@@ -186,8 +185,7 @@ SamKernel::SecondLayerWork::SecondLayerWork(const SamKernel& k, State* state,
       online(state->cols) {
   const Layer& l1 = k.layers_[1];
   const int T = s->tokens;
-  const float scale =
-      1.0f / std::sqrt(static_cast<float>(kCrossDim / k.heads_));
+  const float scale = k.CrossScale();
   const std::vector<float> qpe = Sum(s->queries, s->query_pe);
   const std::vector<float> k1 = k.ApplyTokens(l1.i2t.k, qpe, T);
   second->prompt_tokens = T;
@@ -218,15 +216,8 @@ void SamKernel::SecondLayerBlock(const Image& im, int b0,
   AttendBlock(x.keys_pe.data(), up, nb, w->qkf_rhs, x.scores.data(), &w->online,
               *s);
   // The mask features: the upscaling's two steps at the preview's cell.
-  ProductOnto(nb, up, kDim, 1, preview1_.rhs, x.hidden.data(), 64, nullptr, 0,
-              preview1_.b.data());
-  ops::LayerNormRows(x.hidden.data(), nb, 64, 64, preview_norm_.g.data(),
-                     preview_norm_.b.data(), preview_eps_);
-  ops::Gelu(x.hidden.data(), static_cast<size_t>(nb) * 64);
-  float* f = w->features + static_cast<size_t>(b0) * kPreviewDim;
-  ProductOnto(nb, x.hidden.data(), 64, 1, preview2_.rhs, f, kPreviewDim,
-              nullptr, 0, preview2_.b.data());
-  ops::Gelu(f, static_cast<size_t>(nb) * kPreviewDim);
+  UpscalingFeatures(up, nb, preview1_, preview2_, x.hidden.data(),
+                    w->features + static_cast<size_t>(b0) * kPreviewDim);
 }
 
 void SamKernel::SecondLayerFinish(SecondLayerWork* w) const {
@@ -235,6 +226,25 @@ void SamKernel::SecondLayerFinish(SecondLayerWork* w) const {
   ops::Add(s->queries.data(), s->queries.data(), out.data(), out.size());
   ops::LayerNormRows(s->queries.data(), s->tokens, kDim, kDim,
                      final_norm_.g.data(), final_norm_.b.data(), norm_eps_);
+}
+
+// The upscaling's two transposed convolutions on nb upscaling tokens `up`
+// (all four sub-pixels, or the preview's one): `first`'s columns are
+// sub-pixels of 64 channels, each layer-normed and through GELU, then
+// `second` on each sub-pixel and GELU: [nb * sub-pixels x second.out] into
+// features (hidden: [nb x first.out] scratch).
+void SamKernel::UpscalingFeatures(const float* up, int nb, const Linear& first,
+                                  const Linear& second, float* hidden,
+                                  float* features) const {
+  const int mid = second.in, sub = first.out / mid;
+  ProductOnto(nb, up, kDim, 1, first.rhs, hidden, first.out, nullptr, 0,
+              first.b.data());
+  ops::LayerNormRows(hidden, nb * sub, mid, mid, preview_norm_.g.data(),
+                     preview_norm_.b.data(), preview_eps_);
+  ops::Gelu(hidden, static_cast<size_t>(nb) * first.out);
+  ProductOnto(nb * sub, hidden, mid, 1, second.rhs, features, second.out,
+              nullptr, 0, second.b.data());
+  ops::Gelu(features, static_cast<size_t>(nb) * sub * second.out);
 }
 
 void SamKernel::SecondLayerTokens(const Output::SecondLayer& second,

@@ -54,7 +54,6 @@ struct SamKernel::State {
   Scratch* scratch = nullptr;
 };
 
-
 struct SamKernel::FirstLayerWork {
   FirstLayerWork(const SamKernel& k, const std::vector<float>& layer0_tokens,
                  State* state, float* tokens_out);

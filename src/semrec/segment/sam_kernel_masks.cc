@@ -59,10 +59,9 @@ void SamKernel::UpscalingTokens(const Image& im, const Output& decoded,
   }
 }
 
-// Per block of tokens: the first transposed convolution (each token's four
-// sub-pixels' 64 channels), a layer norm and GELU per sub-pixel, the second
-// (each sub-pixel's four), GELU, and the mask's hypernetwork row: the same
-// operations as the mask part, in the order of its block_logits.
+// Per block of tokens: the upscaling's features at all 16 cells
+// (UpscalingFeatures, in the order of the mask part's block_logits) and the
+// mask's hypernetwork row.
 void SamKernel::UpscaleBlocks(const Image& im, const Output& decoded,
                               const std::vector<int64_t>& tokens,
                               float* out) const {
@@ -76,26 +75,17 @@ void SamKernel::UpscaleBlocks(const Image& im, const Output& decoded,
   if (decoded.mask_hyper.size() != static_cast<size_t>(kPreviewDim)) {
     throw InvalidArgument("SAM decoder kernel: the prompt has no mask chosen");
   }
-  const int mid = upscale2_.in, sub = upscale1_.out / mid;
   thread_local std::vector<float> up, hidden, features;
   up.resize(static_cast<size_t>(kBlock) * kDim);
   hidden.resize(static_cast<size_t>(kBlock) * upscale1_.out);
-  features.resize(static_cast<size_t>(kBlock) * sub * upscale2_.out);
+  features.resize(static_cast<size_t>(kBlock) * kCellsPerToken * kPreviewDim);
   for (size_t b0 = 0; b0 < tokens.size(); b0 += kBlock) {
     const int nb =
         static_cast<int>(std::min<size_t>(kBlock, tokens.size() - b0));
     UpscalingTokenBlock(im, decoded, tokens.data() + b0, nb, up.data());
-    ProductOnto(nb, up.data(), kDim, 1, upscale1_.rhs, hidden.data(),
-                upscale1_.out, nullptr, 0, upscale1_.b.data());
-    // [nb x sub x mid] as nb * sub rows of mid channels.
-    ops::LayerNormRows(hidden.data(), nb * sub, mid, mid,
-                       preview_norm_.g.data(), preview_norm_.b.data(),
-                       preview_eps_);
-    ops::Gelu(hidden.data(), static_cast<size_t>(nb) * upscale1_.out);
-    ProductOnto(nb * sub, hidden.data(), mid, 1, upscale2_.rhs, features.data(),
-                upscale2_.out, nullptr, 0, upscale2_.b.data());
+    UpscalingFeatures(up.data(), nb, upscale1_, upscale2_, hidden.data(),
+                      features.data());
     const size_t cells = static_cast<size_t>(nb) * kCellsPerToken;
-    ops::Gelu(features.data(), cells * kPreviewDim);
     ops::RowDots(static_cast<int>(cells), kPreviewDim, features.data(),
                  kPreviewDim, decoded.mask_hyper.data(),
                  out + b0 * kCellsPerToken);
