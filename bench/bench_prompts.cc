@@ -85,6 +85,7 @@ int Run(int argc, char** argv) {
   using Kernel = segment::PromptableOptions::Kernel;
   // The former default: ONNX Runtime's workers spinning between operators.
   const auto before = [](segment::HybridSegmenterOptions* o) {
+    o->masks.rejected_inside_similarity = 1.0f;
     o->masks.dense_stride = 2;
     o->masks.covered_similarity = 0.8f;
     o->masks.model.mask_margin_logits = 0.0f;
@@ -104,22 +105,36 @@ int Run(int argc, char** argv) {
       {"+ ONNX Runtime workers sleep", [&](auto* o) { before(o); }},
       {"+ stride 4, covered 0.6",
        [](auto* o) {
+         o->masks.rejected_inside_similarity = 1.0f;
          o->masks.model.mask_margin_logits = 0.0f;
          o->masks.model.decoder_kernel = Kernel::kOff;
        }},
       {"+ mask margin 8",
-       [](auto* o) { o->masks.model.decoder_kernel = Kernel::kOff; }},
+       [](auto* o) {
+         o->masks.rejected_inside_similarity = 1.0f;
+         o->masks.model.decoder_kernel = Kernel::kOff;
+       }},
       {"+ decoder kernel (fp32)",
        [](auto* o) {
+         o->masks.rejected_inside_similarity = 1.0f;
          o->masks.model.decoder_kernel = Kernel::kOn;
          o->masks.model.kernel_upscales = false;
        }},
       {segment::kernel_ops::HasBf16() ? "+ bf16 products"
-                                      : "default, ONNX Runtime upscales",
-       [](auto* o) { o->masks.model.kernel_upscales = false; }},
-      {segment::kernel_ops::HasBf16() ? "+ upscaling in kernel (default)"
-                                      : "default (no bf16 on this CPU)",
-       [](auto*) {}},
+                                      : "ONNX Runtime upscales",
+       [](auto* o) {
+         o->masks.rejected_inside_similarity = 1.0f;
+         o->masks.model.kernel_upscales = false;
+       }},
+      {segment::kernel_ops::HasBf16() ? "+ upscaling in kernel"
+                                      : "kernel upscales (no bf16 here)",
+       [](auto* o) { o->masks.rejected_inside_similarity = 1.0f; }},
+      {"+ skip inside rejected (default)", [](auto*) {}},
+      {"default, inside sim. 0.6 logit 0",
+       [](auto* o) {
+         o->masks.rejected_inside_similarity = 0.6f;
+         o->masks.rejected_inside_logit = 0.0f;
+       }},
       {"default + rejected sim. 0.6",
        [](auto* o) { o->masks.rejected_similarity = 0.6f; }},
       {"default + rejected sim. 0",

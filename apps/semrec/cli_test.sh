@@ -190,6 +190,12 @@ if [ -f "$models/mosaic_r4_ade20k_top31.onnx" ]; then
   "$SEMREC" segment "$data/ade20k_val_3/images" --covered-similarity 1.5 --out "$tmp/s7" 2>"$tmp/err"; rc=$?
   [ "$rc" -ne 0 ] && grep -q "covered-similarity: Value 1.5 not in range" "$tmp/err" ||
     fail "segment: bad --covered-similarity: $(cat "$tmp/err")"
+  "$SEMREC" segment "$data/ade20k_val_3/images" --rejected-inside-similarity -0.1 --out "$tmp/s7" 2>"$tmp/err"; rc=$?
+  [ "$rc" -ne 0 ] && grep -q "rejected-inside-similarity: Value -0.1 not in range" "$tmp/err" ||
+    fail "segment: bad --rejected-inside-similarity: $(cat "$tmp/err")"
+  "$SEMREC" segment "$data/ade20k_val_3/images" --rejected-inside-logit inf --out "$tmp/s7" 2>"$tmp/err"; rc=$?
+  [ "$rc" -ne 0 ] && grep -q "rejected_inside_logit must be finite" "$tmp/err" ||
+    fail "segment: bad --rejected-inside-logit: $(cat "$tmp/err")"
   "$SEMREC" segment "$data/ade20k_val_3/images" --decoder-kernel fast --out "$tmp/s8" 2>"$tmp/err"; rc=$?
   [ "$rc" -ne 0 ] && grep -q "decoder-kernel: fast not in {auto,on,bf16,off}" "$tmp/err" ||
     fail "segment: bad --decoder-kernel: $(cat "$tmp/err")"

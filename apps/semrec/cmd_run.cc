@@ -255,6 +255,19 @@ void RegisterRun(CLI::App& app) {
                   "always)")
       ->check(CLI::Range(0.0, 1.0))
       ->capture_default_str();
+  cmd->add_option(
+         "--rejected-inside-similarity",
+         args->run.pipeline.segmenter.masks.rejected_inside_similarity,
+         "Mask generation: also skip a prompt between rejected ones where it "
+         "lies inside each of their masks (logit above "
+         "--rejected-inside-logit) and the embedding is this similar (1 = "
+         "off: 1.1x slower full frames)")
+      ->check(CLI::Range(0.0, 1.0))
+      ->capture_default_str();
+  cmd->add_option("--rejected-inside-logit",
+                  args->run.pipeline.segmenter.masks.rejected_inside_logit,
+                  "See --rejected-inside-similarity")
+      ->capture_default_str();
   pipeline::ScenePipelineOptions& pipe = args->run.pipeline;
   AddObjectDetectorArgs(cmd, &pipe.segmenter.objects);
   cmd->add_flag("--map-guidance", pipe.map_guidance,

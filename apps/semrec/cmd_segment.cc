@@ -122,6 +122,17 @@ void RegisterSegment(CLI::App& app) {
                   "loses masks; bench/bench_prompts)")
       ->check(CLI::Range(0.0, 1.0))
       ->capture_default_str();
+  cmd->add_option("--rejected-inside-similarity",
+                  args->amg.rejected_inside_similarity,
+                  "Also skip a prompt between rejected ones where it lies "
+                  "inside each of their masks (logit above "
+                  "--rejected-inside-logit) and the embedding is this similar "
+                  "(1 = off: 1.1x slower full frames; bench/bench_prompts)")
+      ->check(CLI::Range(0.0, 1.0))
+      ->capture_default_str();
+  cmd->add_option("--rejected-inside-logit", args->amg.rejected_inside_logit,
+                  "See --rejected-inside-similarity")
+      ->capture_default_str();
   AddMaskMarginArg(cmd, &args->mask_margin, &args->decoder_kernel);
   cmd->add_option("--dense-stride", args->amg.dense_stride,
                   "Prompts on every n-th grid row and column are always "

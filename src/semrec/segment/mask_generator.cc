@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <numeric>
 #include <string_view>
 
@@ -32,6 +33,11 @@ void MaskGeneratorOptions::Check() const {
                 "mask generator: covered_similarity must be in [0, 1]");
   CheckArgument(rejected_similarity >= 0 && rejected_similarity <= 1,
                 "mask generator: rejected_similarity must be in [0, 1]");
+  CheckArgument(
+      rejected_inside_similarity >= 0 && rejected_inside_similarity <= 1,
+      "mask generator: rejected_inside_similarity must be in [0, 1]");
+  CheckArgument(std::isfinite(rejected_inside_logit),
+                "mask generator: rejected_inside_logit must be finite");
   CheckArgument(crop_layers >= 0 && crop_layers <= 4,
                 "mask generator: crop_layers must be in 0..4");
   CheckArgument(crop_overlap_ratio >= 0 && crop_overlap_ratio < 1,
@@ -449,6 +455,23 @@ class AutomaticMaskGenerator : public MaskGenerator {
       return static_cast<size_t>(cells_[p][1]) * n + cells_[p][0];
     };
     for (size_t p = 0; p < cells_.size(); ++p) point_of_cell[cell_of(p)] = p;
+    // Per rejected cell whose points have finer neighbours: its mask's logit
+    // (or preview's) at every grid point.
+    const bool inside_test = options_.rejected_inside_similarity < 1.0f;
+    std::vector<std::vector<float>> rejected_logits(outcome.size());
+    const auto logits_at_points = [&](const LowResMask& m) {
+      std::vector<float> at(outcome.size(), 0.0f);
+      for (size_t q = 0; q < points.size(); ++q) {
+        const auto [u, v] = ImageToLowRes(
+            model_->transform(), m, points[q][0] - 0.5, points[q][1] - 0.5);
+        const int iu =
+            std::clamp(static_cast<int>(std::lround(u)), 0, m.width - 1);
+        const int iv =
+            std::clamp(static_cast<int>(std::lround(v)), 0, m.height - 1);
+        at[cell_of(q)] = m.logits[static_cast<size_t>(iv) * m.width + iu];
+      }
+      return at;
+    };
     const auto between_rejected = [&](size_t p) {
       if (!options_.skip_between_rejected) return false;
       const auto [i, j] = cells_[p];
@@ -465,14 +488,21 @@ class AutomaticMaskGenerator : public MaskGenerator {
         for (int v : neighbours(j)) {
           const size_t cell = static_cast<size_t>(v) * n + u;
           if (outcome[cell] != 1) return false;
-          // Only where the image looks the same as at the rejected points.
+          // Only where the image looks the same as at the rejected points,
+          // or a little less alike inside their masks.
           if (options_.rejected_similarity > 0) {
             if (here.empty()) {
               here = model_->EmbeddingAt(points[p][0], points[p][1]);
             }
             const auto& q = points[point_of_cell[cell]];
-            if (Cosine(here, model_->EmbeddingAt(q[0], q[1])) <
-                options_.rejected_similarity) {
+            const double similarity =
+                Cosine(here, model_->EmbeddingAt(q[0], q[1]));
+            const std::vector<float>& logits = rejected_logits[cell];
+            const bool inside =
+                inside_test && !logits.empty() &&
+                logits[cell_of(p)] > options_.rejected_inside_logit &&
+                similarity >= options_.rejected_inside_similarity;
+            if (similarity < options_.rejected_similarity && !inside) {
               return false;
             }
           }
@@ -510,6 +540,7 @@ class AutomaticMaskGenerator : public MaskGenerator {
       std::vector<Mask> upsampled(wave.size());
       std::vector<int> low_res_area(wave.size(), 0);
       std::vector<std::vector<float>> pooled(wave.size());
+      std::vector<std::vector<float>> logits_at(wave.size());
       // In pairs: the decoder kernel decodes two prompts in one pass over
       // the image's arrays (bench_prompts).
       constexpr size_t kBatch = 2;
@@ -525,10 +556,19 @@ class AutomaticMaskGenerator : public MaskGenerator {
             model_->DecodeBatchUnlessRejected(prompts, filter);
         for (size_t k = first; k < end; ++k) {
           const LowResMask& m = decoded[k] = std::move(batch[k - first]);
-          if (m.rejected_early) continue;
+          const bool finer = levels[wave[k]] > 0;
+          if (m.rejected_early) {
+            if (inside_test && finer && !m.logits.empty()) {
+              logits_at[k] = logits_at_points(m);
+            }
+            continue;
+          }
           stability[k] =
               model_->StabilityScore(m, 0.0f, options_.stability_offset);
-          if (!Passes(m, stability[k])) continue;
+          if (!Passes(m, stability[k])) {
+            if (inside_test && finer) logits_at[k] = logits_at_points(m);
+            continue;
+          }
           upsampled[k] = model_->Upsample(m);
           for (float logit : m.logits) low_res_area[k] += logit > 0.0f;
           if (options_.covered_similarity > 0) {
@@ -542,7 +582,10 @@ class AutomaticMaskGenerator : public MaskGenerator {
         stats_.prompts_rejected_early += m.rejected_early;
         const bool passes = Passes(m, stability[k]);
         outcome[cell_of(wave[k])] = passes ? 2 : 1;
-        if (!passes) continue;
+        if (!passes) {
+          rejected_logits[cell_of(wave[k])] = std::move(logits_at[k]);
+          continue;
+        }
         if (covered.empty()) {
           cw = m.width;
           ch = m.height;

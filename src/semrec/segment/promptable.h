@@ -93,7 +93,9 @@ struct LowResMask {
   /// SAM2's object pointer; empty for SAM.
   std::vector<float> object_pointer;
   /// DecodeUnlessRejected() stopped before the mask upscaling: the mask
-  /// cannot pass the filter. Logits empty, predicted_iou set.
+  /// cannot pass the filter. predicted_iou set; logits hold the preview it
+  /// was judged on (one per image token, width x height of the embedding
+  /// grid), not the low-res mask.
   bool rejected_early = false;
 };
 
@@ -136,10 +138,10 @@ class PromptableSegmenter {
   /// proposes several masks the one with the highest predicted IoU is kept.
   virtual LowResMask Decode(const Prompt& prompt) const = 0;
   /// Decode(), except that a mask that cannot pass `filter` may come back
-  /// rejected_early without logits, at a fraction of the cost: a SAM decoder
-  /// split with a mask part (docs/models.md) decides on the predicted IoU and
-  /// a preview of the mask (MaskPreviewMayPass) before the mask upscaling.
-  /// Masks it returns with logits are exactly Decode()'s (with
+  /// rejected_early with only its preview, at a fraction of the cost: a SAM
+  /// decoder split with a mask part (docs/models.md) decides on the predicted
+  /// IoU and a preview of the mask (MaskPreviewMayPass) before the mask
+  /// upscaling. Masks it returns not rejected are exactly Decode()'s (with
   /// mask_margin_logits > 0: where the preview leaves the mask's edge).
   virtual LowResMask DecodeUnlessRejected(const Prompt& prompt,
                                           const MaskFilter& filter) const {

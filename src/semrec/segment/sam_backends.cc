@@ -310,7 +310,7 @@ class SamSegmenter : public PromptableSegmenter {
       const SamKernel::Output* decoded = nullptr) const {
     if (filter != nullptr &&
         !MaskPreviewMayPass(preview, predicted_iou, *filter, transform_)) {
-      LowResMask rejected;
+      LowResMask rejected = preview;
       rejected.predicted_iou = predicted_iou;
       rejected.rejected_early = true;
       return rejected;

@@ -262,6 +262,59 @@ TEST(TinyModels, CoarserDenseGridsDecodeFewerPromptsAndFindTheSameRegions) {
   }
 }
 
+// A point between rejected ones is skipped where it lies inside each of
+// their rejected masks; a small object there lies outside them and is still
+// prompted, where skipping between rejected points blindly loses it. Scene:
+// a colour ramp (every mask a band, unstable: rejected) and a small square
+// around one finest-level grid point only.
+TEST(TinyModels, PointsInsideRejectedMasksAreSkippedOthersNot) {
+  ASSERT_FALSE(semrec::testing::TinyModelDir().empty());
+  ColorImage rgb(320, 240, 3);
+  // Around grid point (30, 22.5) (column 1, row 1) and no other.
+  const Box square{14, 10, 46, 35};
+  for (int y = 0; y < 240; ++y) {
+    for (int x = 0; x < 320; ++x) {
+      const bool in =
+          x >= square.x0 && x < square.x1 && y >= square.y0 && y < square.y1;
+      const auto ramp = static_cast<uint8_t>(60 + 2 * x / 5);
+      rgb(x, y, 0) = in ? 230 : ramp;
+      rgb(x, y, 1) = in ? 30 : 100;
+      rgb(x, y, 2) = in ? 30 : static_cast<uint8_t>(300 - ramp);
+    }
+  }
+  const auto run = [&](float rejected_similarity, float inside_similarity,
+                       float inside_logit, bool skip = true) {
+    MaskGeneratorOptions options = TinySamOptions();
+    options.rejected_similarity = rejected_similarity;
+    options.rejected_inside_similarity = inside_similarity;
+    options.rejected_inside_logit = inside_logit;
+    options.skip_between_rejected = skip;
+    auto generator = MaskGenerator::Create(TinyRegistry(), options);
+    const std::vector<Mask> masks = generator->Generate(rgb);
+    return std::make_pair(BestIou(BoxMask(320, 240, square), masks),
+                          generator->stats().prompts_decoded);
+  };
+  // Nothing skipped between rejected points: every prompt, the square found,
+  // the ramp's bands all rejected.
+  const auto [every_iou, every] = run(0.0f, 1.0f, 0.0f, false);
+  EXPECT_EQ(every, 256);
+  EXPECT_GT(every_iou, 0.7);  // 1-pixel edges of the low-res mask
+  // Inside the rejected masks only (the embedding test all but off: no two
+  // points of the ramp look exactly alike): half the ramp's prompts skipped,
+  // the square (outside every band) still prompted.
+  const auto [inside_iou, inside] = run(0.9999f, 0.0f, 0.0f);
+  EXPECT_GT(inside_iou, 0.7);
+  EXPECT_LT(inside, every * 2 / 3);
+  // Inside only where the mask is surer than any logit here: as without it.
+  const auto [none_iou, none] = run(0.9999f, 0.0f, 100.0f);
+  EXPECT_GT(none_iou, 0.7);
+  EXPECT_GT(none, inside);
+  // The embedding's test alone, blind: the square's point is skipped too.
+  const auto [blind_iou, blind] = run(0.0f, 1.0f, 0.0f);
+  EXPECT_LT(blind_iou, 0.1);
+  EXPECT_LE(blind, inside);
+}
+
 TEST(TinyModels, CropLayersStillFindEveryRegionOnce) {
   ASSERT_FALSE(semrec::testing::TinyModelDir().empty());
   MaskGeneratorOptions options = TinySamOptions();
