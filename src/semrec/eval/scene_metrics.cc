@@ -139,7 +139,7 @@ std::vector<uint16_t> ObservedViews(const std::vector<Eigen::Vector3f>& points,
       const Eigen::Vector3d p = T_camera_world * points[i].cast<double>();
       if (p.z() <= 0.0) return;
       const Eigen::Vector2d uv = k.Project(p);
-      const long u = std::lround(uv.x()), v = std::lround(uv.y());
+      const int64_t u = std::lround(uv.x()), v = std::lround(uv.y());
       if (u < 0 || v < 0 || u >= frame.depth.width() ||
           v >= frame.depth.height()) {
         return;

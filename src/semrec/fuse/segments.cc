@@ -72,7 +72,7 @@ void ReadConfidence(const fs::path& file, FrameLabels* labels) {
   }
   for (const auto& [key, value] : it->items()) {
     char* end = nullptr;
-    const long id = std::strtol(key.c_str(), &end, 10);
+    const int64_t id = std::strtol(key.c_str(), &end, 10);
     if (end == key.c_str() || *end != '\0' || id < 1 || id > 65535 ||
         !value.is_number() || value.get<double>() < 0.0 ||
         value.get<double>() > 1.0) {

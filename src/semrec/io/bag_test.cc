@@ -257,7 +257,7 @@ TEST(Mcap, DamagedFilesAreClearErrors) {
   }
   auto write = [&](const fs::path& p, const std::vector<char>& b) {
     std::ofstream(p, std::ios::binary)
-        .write(b.data(), static_cast<long>(b.size()));
+        .write(b.data(), static_cast<std::streamsize>(b.size()));
   };
   auto scan = [](const fs::path& p) {
     McapReader r(p);
@@ -612,7 +612,7 @@ TEST(Sens, DamagedFilesAreClearErrors) {
   auto expect_error = [&](const std::vector<char>& b, const std::string& what) {
     const fs::path p = dir.path() / "bad.sens";
     std::ofstream(p, std::ios::binary)
-        .write(b.data(), static_cast<long>(b.size()));
+        .write(b.data(), static_cast<std::streamsize>(b.size()));
     try {
       SequenceReader::Open(p).Read(0);
       FAIL() << "no error for " << what;

@@ -226,7 +226,7 @@ DepthImage Register(const DepthImage& d, const Registration& r) {
             v_c < r.color.height - 0.5)) {
         continue;  // outside the colour image (or not finite)
       }
-      const long x = std::lround(u_c), y = std::lround(v_c);
+      const int64_t x = std::lround(u_c), y = std::lround(v_c);
       float& dst = out(static_cast<int>(x), static_cast<int>(y));
       const auto zc = static_cast<float>(p.z());
       if (dst == 0.0f || zc < dst) dst = zc;

@@ -155,8 +155,9 @@ class PromptableSegmenter {
       const std::vector<Prompt>& prompts, const MaskFilter& filter) const {
     std::vector<LowResMask> out;
     out.reserve(prompts.size());
-    for (const Prompt& p : prompts)
+    for (const Prompt& p : prompts) {
       out.push_back(DecodeUnlessRejected(p, filter));
+    }
     return out;
   }
 

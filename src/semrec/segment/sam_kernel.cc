@@ -37,8 +37,8 @@ SamKernel::Rhs SamKernel::MakeRhs(const float* w, int k, int n) const {
   return r;
 }
 
-void SamKernel::Product(int m, const float* a, long a_row, long a_col,
-                        const Rhs& b, float* c, long ldc,
+void SamKernel::Product(int m, const float* a, int64_t a_row, int64_t a_col,
+                        const Rhs& b, float* c, int64_t ldc,
                         bool accumulate) const {
   if (precision_ == Precision::kBf16) {
     ops::GemmBf16(m, a, a_row, a_col, b.packed, c, ldc, accumulate);
@@ -47,9 +47,10 @@ void SamKernel::Product(int m, const float* a, long a_row, long a_col,
   }
 }
 
-void SamKernel::ProductOnto(int m, const float* a, long a_row, long a_col,
-                            const Rhs& b, float* c, long ldc, const float* init,
-                            long ld_init, const float* bias) const {
+void SamKernel::ProductOnto(int m, const float* a, int64_t a_row, int64_t a_col,
+                            const Rhs& b, float* c, int64_t ldc,
+                            const float* init, int64_t ld_init,
+                            const float* bias) const {
   if (precision_ == Precision::kBf16) {
     ops::GemmOntoBf16(m, a, a_row, a_col, b.packed, c, ldc, init, ld_init,
                       bias);
@@ -226,7 +227,9 @@ void SamKernel::PromptTokens(const Request& r, State* s) const {
     }
     EncodePosition((points[i][0] + 0.5f) / input_size_ * 2.0f - 1.0f,
                    (points[i][1] + 0.5f) / input_size_ * 2.0f - 1.0f, e);
-    ops::Add(e, e, point_embeddings_.data() + label * kDim, kDim);
+    ops::Add(e, e,
+             point_embeddings_.data() + static_cast<int64_t>(label) * kDim,
+             kDim);
   }
 }
 
@@ -293,20 +296,21 @@ void SamKernel::DecodeBatch(const Image& im,
     std::vector<float> probs(static_cast<size_t>(rows) * im.tokens);
     std::vector<float> o(static_cast<size_t>(rows) * kCrossDim);
     for (int h = 0; h < heads_; ++h) {
-      ops::Gemm(rows, im.tokens, dh, q.data() + h * dh, kCrossDim, 1,
+      ops::Gemm(rows, im.tokens, dh, q.data() + static_cast<int64_t>(h) * dh,
+                kCrossDim, 1,
                 im.t2i_keys_t.data() + static_cast<size_t>(h * dh) * im.tokens,
                 im.tokens, probs.data(), im.tokens, false);
       ops::SoftmaxRows(probs.data(), rows, im.tokens, im.tokens);
       ops::Gemm(rows, dh, im.tokens, probs.data(), im.tokens, 1,
                 im.t2i_values.data() + static_cast<size_t>(h) * im.tokens * dh,
-                dh, o.data() + h * dh, kCrossDim, false);
+                dh, o.data() + static_cast<int64_t>(h) * dh, kCrossDim, false);
     }
     for (size_t p = 0; p < n; ++p) {
       State& s = states[p];
       const auto from =
           o.begin() + static_cast<ptrdiff_t>(first_row[p]) * kCrossDim;
       const std::vector<float> op(
-          from, from + static_cast<ptrdiff_t>(s.tokens * kCrossDim));
+          from, from + static_cast<ptrdiff_t>(s.tokens) * kCrossDim);
       const std::vector<float> out = ApplyTokens(l0.t2i.o, op, s.tokens);
       ops::Add(s.queries.data(), s.queries.data(), out.data(), out.size());
       ops::LayerNormRows(s.queries.data(), s.tokens, kDim, kDim,

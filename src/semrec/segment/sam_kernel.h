@@ -153,11 +153,11 @@ class SamKernel {
   Rhs MakeRhs(const float* w, int k, int n) const;
   // C[m x n] = (accumulate ? C : 0) + A B, or init + bias + A B (Onto), at
   // the kernel's precision.
-  void Product(int m, const float* a, long a_row, long a_col, const Rhs& b,
-               float* c, long ldc, bool accumulate) const;
-  void ProductOnto(int m, const float* a, long a_row, long a_col, const Rhs& b,
-                   float* c, long ldc, const float* init, long ld_init,
-                   const float* bias) const;
+  void Product(int m, const float* a, int64_t a_row, int64_t a_col,
+               const Rhs& b, float* c, int64_t ldc, bool accumulate) const;
+  void ProductOnto(int m, const float* a, int64_t a_row, int64_t a_col,
+                   const Rhs& b, float* c, int64_t ldc, const float* init,
+                   int64_t ld_init, const float* bias) const;
 
   void EncodePosition(float cx, float cy, float* out) const;
   // Rows x in -> rows x out (fp32: the image's projections in Prepare()).
@@ -206,7 +206,8 @@ class SamKernel {
                          float* features) const;
   // The cross attentions' score scale, 1 / sqrt(channels per head).
   float CrossScale() const {
-    return 1.0f / std::sqrt(static_cast<float>(kCrossDim / heads_));
+    return 1.0f / std::sqrt(static_cast<float>(kCrossDim) /
+                            static_cast<float>(heads_));
   }
   // Throws unless `decoded` is a prompt this kernel decoded on `image`.
   void CheckDecoded(const Image& image, const Output& decoded) const;

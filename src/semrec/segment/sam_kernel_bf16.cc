@@ -45,11 +45,11 @@ SEMREC_BF16 __m512i Interleave(__m512bh both) {
 // its rows.
 struct PackedA {
   std::vector<uint16_t> data;
-  long row = 0, pair = 0;
+  int64_t row = 0, pair = 0;
 };
 
-SEMREC_BF16 void PackA(int m, int k, const float* a, long a_row, long a_col,
-                       PackedA* out) {
+SEMREC_BF16 void PackA(int m, int k, const float* a, int64_t a_row,
+                       int64_t a_col, PackedA* out) {
   const int kp = (k + 1) & ~1;
   if (a_row == 1 && a_col != 1) {
     const int mp = (m + 15) & ~15;
@@ -57,7 +57,7 @@ SEMREC_BF16 void PackA(int m, int k, const float* a, long a_row, long a_col,
     out->row = 2;
     out->pair = 2L * mp;
     for (int q = 0; q < kp / 2; ++q) {
-      const float* r0 = a + (2 * q) * a_col;
+      const float* r0 = a + (2 * static_cast<int64_t>(q)) * a_col;
       const bool odd_tail = 2 * q + 1 >= k;
       for (int i = 0; i < m; i += 16) {
         const auto mask =
@@ -107,14 +107,14 @@ SEMREC_BF16 void PackA(int m, int k, const float* a, long a_row, long a_col,
 
 template <int MR, int NV>
 SEMREC_BF16 [[gnu::always_inline]] inline void TileBf16(
-    int kp, const uint16_t* a, long a_rs, long a_ps, const uint16_t* b, int n,
-    float* c, long ldc, const float* init, long ld_init, const float* bias,
-    bool accumulate) {
+    int kp, const uint16_t* a, int64_t a_rs, int64_t a_ps, const uint16_t* b,
+    int n, float* c, int64_t ldc, const float* init, int64_t ld_init,
+    const float* bias, bool accumulate) {
   __m512 s[MR][NV];
   const float* from = init != nullptr ? init : accumulate ? c : nullptr;
-  const long ld_from = init != nullptr ? ld_init : ldc;
+  const int64_t ld_from = init != nullptr ? ld_init : ldc;
   for (int i = 0; i < MR; ++i) {
-    for (int j = 0; j < NV; ++j) {
+    for (int64_t j = 0; j < NV; ++j) {
       s[i][j] = from != nullptr ? _mm512_loadu_ps(from + i * ld_from + j * 16)
                                 : _mm512_setzero_ps();
       if (bias != nullptr) {
@@ -125,9 +125,9 @@ SEMREC_BF16 [[gnu::always_inline]] inline void TileBf16(
   for (int q = 0; q < kp / 2; ++q) {
     __m512bh bv[NV];
 #pragma GCC unroll 4
-    for (int j = 0; j < NV; ++j) {
+    for (int64_t j = 0; j < NV; ++j) {
       const __m512i v =
-          _mm512_loadu_si512(b + (static_cast<size_t>(q) * n + j * 16) * 2);
+          _mm512_loadu_si512(b + (static_cast<int64_t>(q) * n + j * 16) * 2);
       bv[j] = reinterpret_cast<const __m512bh&>(v);
     }
     const uint16_t* aq = a + q * a_ps;
@@ -137,22 +137,23 @@ SEMREC_BF16 [[gnu::always_inline]] inline void TileBf16(
       std::memcpy(&pair, aq + i * a_rs, 4);
       const __m512i av = _mm512_set1_epi32(static_cast<int>(pair));
 #pragma GCC unroll 4
-      for (int j = 0; j < NV; ++j) {
+      for (int64_t j = 0; j < NV; ++j) {
         s[i][j] = _mm512_dpbf16_ps(
             s[i][j], reinterpret_cast<const __m512bh&>(av), bv[j]);
       }
     }
   }
   for (int i = 0; i < MR; ++i) {
-    for (int j = 0; j < NV; ++j)
+    for (int64_t j = 0; j < NV; ++j) {
       _mm512_storeu_ps(c + i * ldc + j * 16, s[i][j]);
+    }
   }
 }
 
 template <int NV>
 SEMREC_BF16 [[gnu::always_inline]] inline void ColumnsBf16(
     int m, int kp, const PackedA& a, const uint16_t* b, int n, float* c,
-    long ldc, const float* init, long ld_init, const float* bias,
+    int64_t ldc, const float* init, int64_t ld_init, const float* bias,
     bool accumulate) {
   int i = 0;
   for (; i + 8 <= m; i += 8) {
@@ -164,10 +165,10 @@ SEMREC_BF16 [[gnu::always_inline]] inline void ColumnsBf16(
   float* cr = c + i * ldc;
   const float* ir = init ? init + i * ld_init : nullptr;
   switch (m - i) {
-#define SEMREC_ROWS(R)                                                       \
-  case R:                                                                    \
-    TileBf16<R, NV>(kp, ar, a.row, a.pair, b, n, cr, ldc, ir, ld_init, bias, \
-                    accumulate);                                             \
+#define SEMREC_ROWS(R)                                                         \
+  case R:                                                                      \
+    TileBf16<(R), NV>(kp, ar, a.row, a.pair, b, n, cr, ldc, ir, ld_init, bias, \
+                      accumulate);                                             \
     break;
     SEMREC_ROWS(1)
     SEMREC_ROWS(2)
@@ -182,27 +183,28 @@ SEMREC_BF16 [[gnu::always_inline]] inline void ColumnsBf16(
   }
 }
 
-SEMREC_BF16 void GemmBf16Impl(int m, int n, int k, const float* a, long a_row,
-                              long a_col, const PackedB& b, float* c, long ldc,
-                              const float* init, long ld_init,
-                              const float* bias, bool accumulate) {
+SEMREC_BF16 void GemmBf16Impl(int m, int n, int k, const float* a,
+                              int64_t a_row, int64_t a_col, const PackedB& b,
+                              float* c, int64_t ldc, const float* init,
+                              int64_t ld_init, const float* bias,
+                              bool accumulate) {
   thread_local PackedA packed_a;
   PackA(m, k, a, a_row, a_col, &packed_a);
   const int kp = (k + 1) & ~1;
   int j = 0;
   for (; j + 32 <= n; j += 32) {
-    ColumnsBf16<2>(m, kp, packed_a, b.data.data() + j * 2, n, c + j, ldc,
-                   init ? init + j : nullptr, ld_init,
+    ColumnsBf16<2>(m, kp, packed_a, b.data.data() + static_cast<int64_t>(j) * 2,
+                   n, c + j, ldc, init ? init + j : nullptr, ld_init,
                    bias ? bias + j : nullptr, accumulate);
   }
   for (; j < n; j += 16) {
-    ColumnsBf16<1>(m, kp, packed_a, b.data.data() + j * 2, n, c + j, ldc,
-                   init ? init + j : nullptr, ld_init,
+    ColumnsBf16<1>(m, kp, packed_a, b.data.data() + static_cast<int64_t>(j) * 2,
+                   n, c + j, ldc, init ? init + j : nullptr, ld_init,
                    bias ? bias + j : nullptr, accumulate);
   }
 }
 
-SEMREC_BF16 void PackBImpl(int k, int n, const float* b, long ldb,
+SEMREC_BF16 void PackBImpl(int k, int n, const float* b, int64_t ldb,
                            PackedB* out) {
   const int kp = (k + 1) & ~1;
   out->k = k;
@@ -211,7 +213,7 @@ SEMREC_BF16 void PackBImpl(int k, int n, const float* b, long ldb,
   uint16_t* o = out->data.data();
   // Pair (2q, 2q + 1) of rows, interleaved: o[(q n + j) 2 + r] = B(2q + r, j).
   for (int q = 0; q < kp / 2; ++q) {
-    const float* r0 = b + (2 * q) * ldb;
+    const float* r0 = b + (2 * static_cast<int64_t>(q)) * ldb;
     const bool odd_tail = 2 * q + 1 >= k;
     for (int j = 0; j < n; j += 16) {
       const __m512 lo = _mm512_loadu_ps(r0 + j);
@@ -241,7 +243,7 @@ bool HasBf16() {
 #endif
 }
 
-void PackBf16(int k, int n, const float* b, long ldb, PackedB* out) {
+void PackBf16(int k, int n, const float* b, int64_t ldb, PackedB* out) {
   if (!HasBf16()) throw InvalidArgument("bf16 products need AVX512_BF16");
   if (n % 16 != 0) {
     throw InvalidArgument("bf16 products: columns must be a multiple of 16");
@@ -249,16 +251,16 @@ void PackBf16(int k, int n, const float* b, long ldb, PackedB* out) {
   PackBImpl(k, n, b, ldb, out);
 }
 
-void GemmBf16(int m, const float* a, long a_row, long a_col, const PackedB& b,
-              float* c, long ldc, bool accumulate) {
+void GemmBf16(int m, const float* a, int64_t a_row, int64_t a_col,
+              const PackedB& b, float* c, int64_t ldc, bool accumulate) {
   if (m <= 0 || b.n <= 0) return;
   GemmBf16Impl(m, b.n, b.k, a, a_row, a_col, b, c, ldc, nullptr, 0, nullptr,
                accumulate);
 }
 
-void GemmOntoBf16(int m, const float* a, long a_row, long a_col,
-                  const PackedB& b, float* c, long ldc, const float* init,
-                  long ld_init, const float* bias) {
+void GemmOntoBf16(int m, const float* a, int64_t a_row, int64_t a_col,
+                  const PackedB& b, float* c, int64_t ldc, const float* init,
+                  int64_t ld_init, const float* bias) {
   if (m <= 0 || b.n <= 0) return;
   GemmBf16Impl(m, b.n, b.k, a, a_row, a_col, b, c, ldc, init, ld_init, bias,
                false);

@@ -23,7 +23,8 @@ std::vector<float> SamKernel::HeadColumns(const std::vector<float>& x,
   for (int t = 0; t < s.tokens; ++t) {
     for (int h = 0; h < heads_; ++h) {
       for (int d = 0; d < dh; ++d) {
-        m[static_cast<size_t>(h * dh + d) * s.padded + t * heads_ + h] =
+        m[static_cast<size_t>(h * dh + d) * s.padded +
+          static_cast<size_t>(t * heads_ + h)] =
             x[t * kCrossDim + h * dh + d] * scale;
       }
     }
@@ -147,8 +148,8 @@ void SamKernel::FirstLayerBlock(const Image& im, int b0,
   const int nb = std::min(kBlock, im.tokens - b0);
   const size_t at = static_cast<size_t>(b0) * kDim;
   float* keys = w->image_tokens + at;
-  Product(nb, im.i2t_queries.data() + b0 * kCrossDim, kCrossDim, 1, w->kbd_rhs,
-          x.scores.data(), s->padded, false);
+  Product(nb, im.i2t_queries.data() + static_cast<int64_t>(b0) * kCrossDim,
+          kCrossDim, 1, w->kbd_rhs, x.scores.data(), s->padded, false);
   ops::SoftmaxHeads(x.scores.data(), nb, s->padded, s->tokens, nullptr);
   // keys + output bias + attention output, normalised; and + PE for the
   // next attention's keys.

@@ -20,13 +20,13 @@ namespace {
 struct Start {
   bool accumulate = false;
   const float* init = nullptr;  // rows of ld_init, or null
-  long ld_init = 0;
+  int64_t ld_init = 0;
   const float* bias = nullptr;  // per column, or null
 };
 
 template <int W, int MR, int NV>
-SEMREC_INLINE void Tile(int k, const float* a, long a_row, long a_col,
-                        const float* b, long ldb, float* c, long ldc,
+SEMREC_INLINE void Tile(int k, const float* a, int64_t a_row, int64_t a_col,
+                        const float* b, int64_t ldb, float* c, int64_t ldc,
                         const Start& start, int col) {
   F<W> s[MR][NV];
   // The start's kind once per tile, each a loop of its own (a branch per
@@ -36,51 +36,52 @@ SEMREC_INLINE void Tile(int k, const float* a, long a_row, long a_col,
   const float* from = init != nullptr    ? init + col
                       : start.accumulate ? c
                                          : nullptr;
-  const long ld_from = init != nullptr ? start.ld_init : ldc;
+  const int64_t ld_from = init != nullptr ? start.ld_init : ldc;
   if (from != nullptr) {
 #pragma GCC unroll 8
     for (int i = 0; i < MR; ++i) {
 #pragma GCC unroll 4
-      for (int j = 0; j < NV; ++j)
+      for (int64_t j = 0; j < NV; ++j) {
         s[i][j] = Load<W>(from + i * ld_from + j * W);
+      }
     }
   } else {
 #pragma GCC unroll 8
     for (int i = 0; i < MR; ++i) {
 #pragma GCC unroll 4
-      for (int j = 0; j < NV; ++j) s[i][j] = F<W>{};
+      for (int64_t j = 0; j < NV; ++j) s[i][j] = F<W>{};
     }
   }
   if (bias != nullptr) {
 #pragma GCC unroll 8
     for (int i = 0; i < MR; ++i) {
 #pragma GCC unroll 4
-      for (int j = 0; j < NV; ++j) s[i][j] += Load<W>(bias + j * W);
+      for (int64_t j = 0; j < NV; ++j) s[i][j] += Load<W>(bias + j * W);
     }
   }
   for (int p = 0; p < k; ++p) {
     F<W> bv[NV];
 #pragma GCC unroll 4
-    for (int j = 0; j < NV; ++j) bv[j] = Load<W>(b + p * ldb + j * W);
+    for (int64_t j = 0; j < NV; ++j) bv[j] = Load<W>(b + p * ldb + j * W);
 #pragma GCC unroll 8
     for (int i = 0; i < MR; ++i) {
       // A scalar times a vector broadcasts it (Splat's 0 + s would add).
       const float av = a[i * a_row + p * a_col];
 #pragma GCC unroll 4
-      for (int j = 0; j < NV; ++j) s[i][j] += av * bv[j];
+      for (int64_t j = 0; j < NV; ++j) s[i][j] += av * bv[j];
     }
   }
 #pragma GCC unroll 8
   for (int i = 0; i < MR; ++i) {
 #pragma GCC unroll 4
-    for (int j = 0; j < NV; ++j) Store<W>(c + i * ldc + j * W, s[i][j]);
+    for (int64_t j = 0; j < NV; ++j) Store<W>(c + i * ldc + j * W, s[i][j]);
   }
 }
 
 template <int W, int MR, int NV>
-SEMREC_INLINE void Columns(int m, int k, const float* a, long a_row, long a_col,
-                           const float* b, long ldb, float* c, long ldc,
-                           const Start& start, int col) {
+SEMREC_INLINE void Columns(int m, int k, const float* a, int64_t a_row,
+                           int64_t a_col, const float* b, int64_t ldb, float* c,
+                           int64_t ldc, const Start& start, int col) {
   static_assert(MR <= 8, "the remainder switch covers up to 7 rows");
   int i = 0;
   Start rows = start;
@@ -97,11 +98,11 @@ SEMREC_INLINE void Columns(int m, int k, const float* a, long a_row, long a_col,
   switch (m - i) {
     case 0:
       break;
-#define SEMREC_ROWS(R)                                                 \
-  case R:                                                              \
-    if constexpr (R < MR) {                                            \
-      Tile<W, R, NV>(k, ar, a_row, a_col, b, ldb, cr, ldc, rows, col); \
-    }                                                                  \
+#define SEMREC_ROWS(R)                                                   \
+  case R:                                                                \
+    if constexpr ((R) < MR) {                                            \
+      Tile<W, (R), NV>(k, ar, a_row, a_col, b, ldb, cr, ldc, rows, col); \
+    }                                                                    \
     break;
       SEMREC_ROWS(1)
       SEMREC_ROWS(2)
@@ -117,9 +118,9 @@ SEMREC_INLINE void Columns(int m, int k, const float* a, long a_row, long a_col,
 }
 
 template <int W, int MR, int NV>
-SEMREC_INLINE void GemmT(int m, int n, int k, const float* a, long a_row,
-                         long a_col, const float* b, long ldb, float* c,
-                         long ldc, const Start& start) {
+SEMREC_INLINE void GemmT(int m, int n, int k, const float* a, int64_t a_row,
+                         int64_t a_col, const float* b, int64_t ldb, float* c,
+                         int64_t ldc, const Start& start) {
   int j = 0;
   for (; j + NV * W <= n; j += NV * W) {
     Columns<W, MR, NV>(m, k, a, a_row, a_col, b + j, ldb, c + j, ldc, start, j);
@@ -142,8 +143,9 @@ SEMREC_INLINE void GemmT(int m, int n, int k, const float* a, long a_row,
                 : start.bias != nullptr ? start.bias[j]
                 : start.accumulate      ? c[i * ldc + j]
                                         : 0.0f;
-      for (int p = 0; p < k; ++p)
+      for (int p = 0; p < k; ++p) {
         s += a[i * a_row + p * a_col] * b[p * ldb + j];
+      }
       c[i * ldc + j] = s;
     }
   }
@@ -151,77 +153,80 @@ SEMREC_INLINE void GemmT(int m, int n, int k, const float* a, long a_row,
 
 struct Ops {
   const char* name;
-  void (*gemm)(int, int, int, const float*, long, long, const float*, long,
-               float*, long, const Start&);
+  void (*gemm)(int, int, int, const float*, int64_t, int64_t, const float*,
+               int64_t, float*, int64_t, const Start&);
   void (*add)(float*, const float*, const float*, size_t);
-  void (*layer_norm)(float*, int, int, long, const float*, const float*, float,
-                     const float*, float*);
-  void (*softmax_rows)(float*, int, int, long);
-  void (*softmax_heads)(float*, int, long, int, const float*);
-  bool (*online_softmax)(float*, int, int, long, float*, float*, float*);
+  void (*layer_norm)(float*, int, int, int64_t, const float*, const float*,
+                     float, const float*, float*);
+  void (*softmax_rows)(float*, int, int, int64_t);
+  void (*softmax_heads)(float*, int, int64_t, int, const float*);
+  bool (*online_softmax)(float*, int, int, int64_t, float*, float*, float*);
   void (*gelu)(float*, size_t);
   void (*exp)(float*, size_t);
-  void (*row_dots)(int, int, const float*, long, const float*, float*);
-  void (*head_rows)(int, int, int, const float*, long, const float*, long, int,
-                    float*, long);
-  void (*head_columns)(int, int, int, int, const float*, long, const float*,
-                       long, float*, long);
+  void (*row_dots)(int, int, const float*, int64_t, const float*, float*);
+  void (*head_rows)(int, int, int, const float*, int64_t, const float*, int64_t,
+                    int, float*, int64_t);
+  void (*head_columns)(int, int, int, int, const float*, int64_t, const float*,
+                       int64_t, float*, int64_t);
 };
 
-#define SEMREC_OPS(SUFFIX, TARGET, W, MR, NV)                                 \
-  TARGET void Gemm##SUFFIX(int m, int n, int k, const float* a, long a_row,   \
-                           long a_col, const float* b, long ldb, float* c,    \
-                           long ldc, const Start& start) {                    \
-    GemmT<W, MR, NV>(m, n, k, a, a_row, a_col, b, ldb, c, ldc, start);        \
-  }                                                                           \
-  TARGET void Add##SUFFIX(float* out, const float* a, const float* b,         \
-                          size_t n) {                                         \
-    AddT<W>(out, a, b, n);                                                    \
-  }                                                                           \
-  TARGET void LayerNorm##SUFFIX(float* x, int rows, int cols, long ld,        \
-                                const float* g, const float* beta, float eps, \
-                                const float* add, float* out_add) {           \
-    LayerNormRowsT<W>(x, rows, cols, ld, g, beta, eps, add, out_add);         \
-  }                                                                           \
-  TARGET void SoftmaxRows##SUFFIX(float* s, int rows, int cols, long ld) {    \
-    SoftmaxRowsT<W>(s, rows, cols, ld);                                       \
-  }                                                                           \
-  TARGET void SoftmaxHeads##SUFFIX(float* s, int rows, long ld, int tokens,   \
-                                   const float* bias) {                       \
-    SoftmaxHeadsT<W>(s, rows, ld, tokens, bias);                              \
-  }                                                                           \
-  TARGET bool OnlineSoftmax##SUFFIX(float* s, int rows, int cols, long ld,    \
-                                    float* max, float* sum, float* rescale) { \
-    return OnlineSoftmaxColumnsT<W>(s, rows, cols, ld, max, sum, rescale);    \
-  }                                                                           \
-  TARGET void Gelu##SUFFIX(float* x, size_t n) { GeluT<W>(x, n); }            \
-  TARGET void HeadRows##SUFFIX(int tokens, int heads, int dh, const float* x, \
-                               long ldx, const float* w, long ldw, int n,     \
-                               float* out, long ldo) {                        \
-    HeadRowsProductT<W>(tokens, heads, dh, x, ldx, w, ldw, n, out, ldo);      \
-  }                                                                           \
-  TARGET void HeadColumns##SUFFIX(int tokens, int heads, int dh, int k,       \
-                                  const float* a, long lda, const float* w,   \
-                                  long ldw, float* out, long ldo) {           \
-    HeadColumnsProductT<W>(tokens, heads, dh, k, a, lda, w, ldw, out, ldo);   \
-  }                                                                           \
-  TARGET void RowDots##SUFFIX(int m, int k, const float* a, long lda,         \
-                              const float* x, float* out) {                   \
-    RowDotsT<W>(m, k, a, lda, x, out);                                        \
-  }                                                                           \
-  TARGET void Exp##SUFFIX(float* x, size_t n) { ExpT<W>(x, n); }              \
-  constexpr Ops kOps##SUFFIX = {#SUFFIX,                                      \
-                                Gemm##SUFFIX,                                 \
-                                Add##SUFFIX,                                  \
-                                LayerNorm##SUFFIX,                            \
-                                SoftmaxRows##SUFFIX,                          \
-                                SoftmaxHeads##SUFFIX,                         \
-                                OnlineSoftmax##SUFFIX,                        \
-                                Gelu##SUFFIX,                                 \
-                                Exp##SUFFIX,                                  \
-                                RowDots##SUFFIX,                              \
-                                HeadRows##SUFFIX,                             \
+// TARGET is an attribute: it cannot be parenthesised.
+// NOLINTBEGIN(bugprone-macro-parentheses)
+#define SEMREC_OPS(SUFFIX, TARGET, W, MR, NV)                                  \
+  TARGET void Gemm##SUFFIX(int m, int n, int k, const float* a, int64_t a_row, \
+                           int64_t a_col, const float* b, int64_t ldb,         \
+                           float* c, int64_t ldc, const Start& start) {        \
+    GemmT<(W), (MR), (NV)>(m, n, k, a, a_row, a_col, b, ldb, c, ldc, start);   \
+  }                                                                            \
+  TARGET void Add##SUFFIX(float* out, const float* a, const float* b,          \
+                          size_t n) {                                          \
+    AddT<(W)>(out, a, b, n);                                                   \
+  }                                                                            \
+  TARGET void LayerNorm##SUFFIX(float* x, int rows, int cols, int64_t ld,      \
+                                const float* g, const float* beta, float eps,  \
+                                const float* add, float* out_add) {            \
+    LayerNormRowsT<(W)>(x, rows, cols, ld, g, beta, eps, add, out_add);        \
+  }                                                                            \
+  TARGET void SoftmaxRows##SUFFIX(float* s, int rows, int cols, int64_t ld) {  \
+    SoftmaxRowsT<(W)>(s, rows, cols, ld);                                      \
+  }                                                                            \
+  TARGET void SoftmaxHeads##SUFFIX(float* s, int rows, int64_t ld, int tokens, \
+                                   const float* bias) {                        \
+    SoftmaxHeadsT<(W)>(s, rows, ld, tokens, bias);                             \
+  }                                                                            \
+  TARGET bool OnlineSoftmax##SUFFIX(float* s, int rows, int cols, int64_t ld,  \
+                                    float* max, float* sum, float* rescale) {  \
+    return OnlineSoftmaxColumnsT<(W)>(s, rows, cols, ld, max, sum, rescale);   \
+  }                                                                            \
+  TARGET void Gelu##SUFFIX(float* x, size_t n) { GeluT<(W)>(x, n); }           \
+  TARGET void HeadRows##SUFFIX(int tokens, int heads, int dh, const float* x,  \
+                               int64_t ldx, const float* w, int64_t ldw,       \
+                               int n, float* out, int64_t ldo) {               \
+    HeadRowsProductT<(W)>(tokens, heads, dh, x, ldx, w, ldw, n, out, ldo);     \
+  }                                                                            \
+  TARGET void HeadColumns##SUFFIX(int tokens, int heads, int dh, int k,        \
+                                  const float* a, int64_t lda, const float* w, \
+                                  int64_t ldw, float* out, int64_t ldo) {      \
+    HeadColumnsProductT<(W)>(tokens, heads, dh, k, a, lda, w, ldw, out, ldo);  \
+  }                                                                            \
+  TARGET void RowDots##SUFFIX(int m, int k, const float* a, int64_t lda,       \
+                              const float* x, float* out) {                    \
+    RowDotsT<(W)>(m, k, a, lda, x, out);                                       \
+  }                                                                            \
+  TARGET void Exp##SUFFIX(float* x, size_t n) { ExpT<(W)>(x, n); }             \
+  constexpr Ops kOps##SUFFIX = {#SUFFIX,                                       \
+                                Gemm##SUFFIX,                                  \
+                                Add##SUFFIX,                                   \
+                                LayerNorm##SUFFIX,                             \
+                                SoftmaxRows##SUFFIX,                           \
+                                SoftmaxHeads##SUFFIX,                          \
+                                OnlineSoftmax##SUFFIX,                         \
+                                Gelu##SUFFIX,                                  \
+                                Exp##SUFFIX,                                   \
+                                RowDots##SUFFIX,                               \
+                                HeadRows##SUFFIX,                              \
                                 HeadColumns##SUFFIX};
+// NOLINTEND(bugprone-macro-parentheses)
 
 #if defined(__x86_64__)
 // AVX-512: 8 x 32 tiles (16 accumulators of 32 registers).
@@ -299,17 +304,17 @@ void UseLevel(const std::string& level) {
                         "' is not supported by this CPU");
 }
 
-void Gemm(int m, int n, int k, const float* a, long a_row, long a_col,
-          const float* b, long ldb, float* c, long ldc, bool accumulate) {
+void Gemm(int m, int n, int k, const float* a, int64_t a_row, int64_t a_col,
+          const float* b, int64_t ldb, float* c, int64_t ldc, bool accumulate) {
   if (m <= 0 || n <= 0) return;
   Start start;
   start.accumulate = accumulate;
   Current().gemm(m, n, k, a, a_row, a_col, b, ldb, c, ldc, start);
 }
 
-void GemmOnto(int m, int n, int k, const float* a, long a_row, long a_col,
-              const float* b, long ldb, float* c, long ldc, const float* init,
-              long ld_init, const float* bias) {
+void GemmOnto(int m, int n, int k, const float* a, int64_t a_row, int64_t a_col,
+              const float* b, int64_t ldb, float* c, int64_t ldc,
+              const float* init, int64_t ld_init, const float* bias) {
   if (m <= 0 || n <= 0) return;
   Start start;
   start.init = init;
@@ -322,21 +327,22 @@ void Add(float* out, const float* a, const float* b, size_t n) {
   Current().add(out, a, b, n);
 }
 
-void LayerNormRows(float* x, int rows, int cols, long ld, const float* g,
+void LayerNormRows(float* x, int rows, int cols, int64_t ld, const float* g,
                    const float* beta, float eps, const float* add,
                    float* out_add) {
   Current().layer_norm(x, rows, cols, ld, g, beta, eps, add, out_add);
 }
 
-void SoftmaxRows(float* s, int rows, int cols, long ld) {
+void SoftmaxRows(float* s, int rows, int cols, int64_t ld) {
   Current().softmax_rows(s, rows, cols, ld);
 }
 
-void SoftmaxHeads(float* s, int rows, long ld, int tokens, const float* bias) {
+void SoftmaxHeads(float* s, int rows, int64_t ld, int tokens,
+                  const float* bias) {
   Current().softmax_heads(s, rows, ld, tokens, bias);
 }
 
-bool OnlineSoftmaxColumns(float* s, int rows, int cols, long ld, float* max,
+bool OnlineSoftmaxColumns(float* s, int rows, int cols, int64_t ld, float* max,
                           float* sum, float* rescale) {
   return Current().online_softmax(s, rows, cols, ld, max, sum, rescale);
 }
@@ -345,19 +351,20 @@ void Gelu(float* x, size_t n) { Current().gelu(x, n); }
 
 void Exp(float* x, size_t n) { Current().exp(x, n); }
 
-void RowDots(int m, int k, const float* a, long lda, const float* x,
+void RowDots(int m, int k, const float* a, int64_t lda, const float* x,
              float* out) {
   Current().row_dots(m, k, a, lda, x, out);
 }
 
-void HeadRowsProduct(int tokens, int heads, int dh, const float* x, long ldx,
-                     const float* w, long ldw, int n, float* out, long ldo) {
+void HeadRowsProduct(int tokens, int heads, int dh, const float* x, int64_t ldx,
+                     const float* w, int64_t ldw, int n, float* out,
+                     int64_t ldo) {
   Current().head_rows(tokens, heads, dh, x, ldx, w, ldw, n, out, ldo);
 }
 
 void HeadColumnsProduct(int tokens, int heads, int dh, int k, const float* a,
-                        long lda, const float* w, long ldw, float* out,
-                        long ldo) {
+                        int64_t lda, const float* w, int64_t ldw, float* out,
+                        int64_t ldo) {
   Current().head_columns(tokens, heads, dh, k, a, lda, w, ldw, out, ldo);
 }
 

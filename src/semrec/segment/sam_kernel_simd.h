@@ -16,7 +16,6 @@
 
 namespace semrec::segment::kernel_ops::simd {
 
-
 template <int W>
 struct Lanes;
 template <>
@@ -48,6 +47,9 @@ SEMREC_INLINE F<W> Load(const float* p) {
 }
 template <int W>
 SEMREC_INLINE void Store(float* p, F<W> v) {
+  // The analyzer follows the products from the dispatch table, whose callers
+  // it cannot see, into a null output; none passes one.
+  // NOLINTNEXTLINE(clang-analyzer-core.NonNullParamChecker)
   std::memcpy(p, &v, sizeof v);
 }
 template <int W>
@@ -118,7 +120,7 @@ SEMREC_INLINE void AddT(float* out, const float* a, const float* b, size_t n) {
 // out[i] = a's row i . x: a row's vectors into four partial sums, so the
 // short rows (the mask features' 32) are not one chain of adds.
 template <int W>
-SEMREC_INLINE void RowDotsT(int m, int k, const float* a, long lda,
+SEMREC_INLINE void RowDotsT(int m, int k, const float* a, int64_t lda,
                             const float* x, float* out) {
   for (int i = 0; i < m; ++i) {
     const float* row = a + i * lda;
@@ -140,13 +142,14 @@ SEMREC_INLINE void RowDotsT(int m, int k, const float* a, long lda,
 // product takes it (the zero terms add nothing).
 template <int W>
 SEMREC_INLINE void HeadRowsProductT(int tokens, int heads, int dh,
-                                    const float* x, long ldx, const float* w,
-                                    long ldw, int n, float* out, long ldo) {
-  for (int t = 0; t < tokens; ++t) {
-    for (int h = 0; h < heads; ++h) {
+                                    const float* x, int64_t ldx, const float* w,
+                                    int64_t ldw, int n, float* out,
+                                    int64_t ldo) {
+  for (int64_t t = 0; t < tokens; ++t) {
+    for (int64_t h = 0; h < heads; ++h) {
       const float* xr = x + t * ldx + h * dh;
-      const float* wr = w + static_cast<long>(h) * dh * ldw;
-      float* o = out + static_cast<long>(t * heads + h) * ldo;
+      const float* wr = w + h * dh * ldw;
+      float* o = out + (t * heads + h) * ldo;
       int j = 0;
       for (; j + W <= n; j += W) {
         F<W> acc{};
@@ -164,11 +167,12 @@ SEMREC_INLINE void HeadRowsProductT(int tokens, int heads, int dh,
 
 template <int W>
 SEMREC_INLINE void HeadColumnsProductT(int tokens, int heads, int dh, int k,
-                                       const float* a, long lda, const float* w,
-                                       long ldw, float* out, long ldo) {
-  for (int t = 0; t < tokens; ++t) {
-    for (int h = 0; h < heads; ++h) {
-      const float* ar = a + static_cast<long>(t * heads + h) * lda;
+                                       const float* a, int64_t lda,
+                                       const float* w, int64_t ldw, float* out,
+                                       int64_t ldo) {
+  for (int64_t t = 0; t < tokens; ++t) {
+    for (int64_t h = 0; h < heads; ++h) {
+      const float* ar = a + (t * heads + h) * lda;
       float* o = out + t * ldo + h * dh;
       int d = 0;
       for (; d + W <= dh; d += W) {
@@ -194,11 +198,12 @@ SEMREC_INLINE void SubT(float* out, const float* a, const float* b, size_t n) {
 }
 
 template <int W>
-SEMREC_INLINE void LayerNormRowsT(float* x, int rows, int cols, long ld,
+SEMREC_INLINE void LayerNormRowsT(float* x, int rows, int cols, int64_t ld,
                                   const float* g, const float* beta, float eps,
                                   const float* add, float* out_add) {
   // Four partial sums per pass: one would chain every vector's add on the
   // last (the rows are short: latency, not throughput, bounds them).
+  constexpr int64_t w = W;
   for (int r = 0; r < rows; ++r) {
     float* row = x + r * ld;
     F<W> a0{}, a1{}, a2{}, a3{};
@@ -207,8 +212,8 @@ SEMREC_INLINE void LayerNormRowsT(float* x, int rows, int cols, long ld,
     for (; c + 4 * W <= cols; c += 4 * W) {
       a0 += Load<W>(row + c);
       a1 += Load<W>(row + c + W);
-      a2 += Load<W>(row + c + 2 * W);
-      a3 += Load<W>(row + c + 3 * W);
+      a2 += Load<W>(row + c + 2 * w);
+      a3 += Load<W>(row + c + 3 * w);
     }
     for (; c + W <= cols; c += W) a0 += Load<W>(row + c);
     for (; c < cols; ++c) tail += row[c];
@@ -219,8 +224,8 @@ SEMREC_INLINE void LayerNormRowsT(float* x, int rows, int cols, long ld,
     tail = 0;
     for (c = 0; c + 4 * W <= cols; c += 4 * W) {
       const F<W> d0 = Load<W>(row + c) - mv, d1 = Load<W>(row + c + W) - mv;
-      const F<W> d2 = Load<W>(row + c + 2 * W) - mv;
-      const F<W> d3 = Load<W>(row + c + 3 * W) - mv;
+      const F<W> d2 = Load<W>(row + c + 2 * w) - mv;
+      const F<W> d3 = Load<W>(row + c + 3 * w) - mv;
       a0 += d0 * d0;
       a1 += d1 * d1;
       a2 += d2 * d2;
@@ -288,7 +293,7 @@ SEMREC_INLINE void GeluT(float* x, size_t n) {
 }
 
 template <int W>
-SEMREC_INLINE void SoftmaxRowsT(float* s, int rows, int cols, long ld) {
+SEMREC_INLINE void SoftmaxRowsT(float* s, int rows, int cols, int64_t ld) {
   for (int r = 0; r < rows; ++r) {
     float* row = s + r * ld;
     F<W> mv = Splat<W>(-1e30f);
@@ -298,8 +303,9 @@ SEMREC_INLINE void SoftmaxRowsT(float* s, int rows, int cols, long ld) {
     for (int i = 0; i < W; ++i) m = std::max(m, mv[i]);
     for (; c < cols; ++c) m = std::max(m, row[c]);
     const F<W> msplat = Splat<W>(m);
-    for (c = 0; c + W <= cols; c += W)
+    for (c = 0; c + W <= cols; c += W) {
       Store<W>(row + c, Load<W>(row + c) - msplat);
+    }
     for (; c < cols; ++c) row[c] -= m;
     ExpT<W>(row, static_cast<size_t>(cols));
     F<W> sv{};
@@ -307,14 +313,15 @@ SEMREC_INLINE void SoftmaxRowsT(float* s, int rows, int cols, long ld) {
     for (c = 0; c + W <= cols; c += W) sv += Load<W>(row + c);
     for (; c < cols; ++c) tail += row[c];
     const float inv = 1.0f / (Sum<W>(sv) + tail);
-    for (c = 0; c + W <= cols; c += W)
+    for (c = 0; c + W <= cols; c += W) {
       Store<W>(row + c, Load<W>(row + c) * inv);
+    }
     for (; c < cols; ++c) row[c] *= inv;
   }
 }
 
 template <int W>
-SEMREC_INLINE void SoftmaxHeadsT(float* s, int rows, long ld, int tokens,
+SEMREC_INLINE void SoftmaxHeadsT(float* s, int rows, int64_t ld, int tokens,
                                  const float* bias) {
   const size_t cols = static_cast<size_t>(tokens) * 8;
   // exp over whole vectors where the row stride leaves room (the padding's
@@ -325,15 +332,15 @@ SEMREC_INLINE void SoftmaxHeadsT(float* s, int rows, long ld, int tokens,
     float* row = s + r * ld;
     if (bias != nullptr) AddT<W>(row, row, bias, cols);
     F<8> m = Load<8>(row);
-    for (int t = 1; t < tokens; ++t) m = Max<8>(m, Load<8>(row + t * 8));
-    for (int t = 0; t < tokens; ++t) {
+    for (int64_t t = 1; t < tokens; ++t) m = Max<8>(m, Load<8>(row + t * 8));
+    for (int64_t t = 0; t < tokens; ++t) {
       Store<8>(row + t * 8, Load<8>(row + t * 8) - m);
     }
     ExpT<W>(row, exp_cols);
     F<8> sum = Load<8>(row);
-    for (int t = 1; t < tokens; ++t) sum += Load<8>(row + t * 8);
+    for (int64_t t = 1; t < tokens; ++t) sum += Load<8>(row + t * 8);
     const F<8> inv = 1.0f / sum;
-    for (int t = 0; t < tokens; ++t) {
+    for (int64_t t = 0; t < tokens; ++t) {
       Store<8>(row + t * 8, Load<8>(row + t * 8) * inv);
     }
   }
@@ -360,34 +367,34 @@ SEMREC_INLINE void StorePart(float* p, F<W> v, int n) {
 // through a buffer. rescale is written for every column (1 where the
 // maximum stayed).
 template <int W>
-SEMREC_INLINE bool OnlineSoftmaxChunk(float* s, int rows, int cols, long room,
-                                      long ld, float* max, float* sum,
-                                      float* rescale) {
+SEMREC_INLINE bool OnlineSoftmaxChunk(float* s, int rows, int cols,
+                                      int64_t room, int64_t ld, float* max,
+                                      float* sum, float* rescale) {
   constexpr float kSlack = 16.0f;
   constexpr int kMaxVectors = 256 / W;
-  const int nv = (cols + W - 1) / W;
+  const int64_t nv = (cols + W - 1) / W;
   // Lanes of the last vector read and written (all W where there is room).
-  const int last = nv * W <= room ? W : cols - (nv - 1) * W;
+  const int last = static_cast<int>(nv * W <= room ? W : cols - (nv - 1) * W);
   float m_pad[256], s_pad[256], r_pad[256];
   std::copy(max, max + cols, m_pad);
   std::copy(sum, sum + cols, s_pad);
   std::fill(m_pad + cols, m_pad + nv * W, 0.0f);
   std::fill(s_pad + cols, s_pad + nv * W, 0.0f);
   F<W> block[kMaxVectors];
-  for (int v = 0; v < nv; ++v) block[v] = Splat<W>(-1e30f);
+  for (int64_t v = 0; v < nv; ++v) block[v] = Splat<W>(-1e30f);
   for (int r = 0; r < rows; ++r) {
     const float* row = s + r * ld;
-    for (int v = 0; v < nv; ++v) {
+    for (int64_t v = 0; v < nv; ++v) {
       const F<W> x = v + 1 < nv || last == W ? Load<W>(row + v * W)
                                              : LoadPart<W>(row + v * W, last);
       block[v] = Max<W>(block[v], x);
     }
   }
   // Padding lanes never move (their block maximum is below any slack).
-  for (int c = cols; c < nv * W; ++c) block[c / W][c % W] = -1e30f;
+  for (int64_t c = cols; c < nv * W; ++c) block[c / W][c % W] = -1e30f;
   bool moved = false;
   F<W> m[kMaxVectors];
-  for (int v = 0; v < nv; ++v) {
+  for (int64_t v = 0; v < nv; ++v) {
     const F<W> old = Load<W>(m_pad + v * W);
     const I<W> move = (block[v] > old + kSlack) | (old <= -1e29f);
     for (int i = 0; i < W; ++i) moved = moved || move[i] != 0;
@@ -395,10 +402,10 @@ SEMREC_INLINE bool OnlineSoftmaxChunk(float* s, int rows, int cols, long room,
     Store<W>(r_pad + v * W, move ? old - block[v] : Splat<W>(0.0f));
   }
   F<W> acc[kMaxVectors];
-  for (int v = 0; v < nv; ++v) acc[v] = F<W>{};
+  for (int64_t v = 0; v < nv; ++v) acc[v] = F<W>{};
   for (int r = 0; r < rows; ++r) {
     float* row = s + r * ld;
-    for (int v = 0; v < nv; ++v) {
+    for (int64_t v = 0; v < nv; ++v) {
       const bool whole = v + 1 < nv || last == W;
       const F<W> x =
           whole ? Load<W>(row + v * W) : LoadPart<W>(row + v * W, last);
@@ -413,7 +420,7 @@ SEMREC_INLINE bool OnlineSoftmaxChunk(float* s, int rows, int cols, long room,
     }
   }
   // exp(0) = 1 exactly: where the maximum stayed the sum is unchanged.
-  for (int v = 0; v < nv; ++v) {
+  for (int64_t v = 0; v < nv; ++v) {
     const F<W> resc = ExpV<W>(Load<W>(r_pad + v * W));
     Store<W>(s_pad + v * W, Load<W>(s_pad + v * W) * resc + acc[v]);
     Store<W>(r_pad + v * W, resc);
@@ -426,8 +433,8 @@ SEMREC_INLINE bool OnlineSoftmaxChunk(float* s, int rows, int cols, long room,
 }
 
 template <int W>
-SEMREC_INLINE bool OnlineSoftmaxColumnsT(float* s, int rows, int cols, long ld,
-                                         float* max, float* sum,
+SEMREC_INLINE bool OnlineSoftmaxColumnsT(float* s, int rows, int cols,
+                                         int64_t ld, float* max, float* sum,
                                          float* rescale) {
   bool moved = false;
   for (int c0 = 0; c0 < cols; c0 += 256) {

@@ -57,7 +57,7 @@ TEST(KernelOps, GemmMatchesTheDefinition) {
           const std::vector<float> b = Random(static_cast<size_t>(k) * n, 2);
           std::vector<float> c = Random(static_cast<size_t>(m) * n, 3);
           std::vector<float> expected = c;
-          const long a_row = transposed ? 1 : k, a_col = transposed ? m : 1;
+          const int64_t a_row = transposed ? 1 : k, a_col = transposed ? m : 1;
           for (int i = 0; i < m; ++i) {
             for (int j = 0; j < n; ++j) {
               double s = accumulate ? expected[i * n + j] : 0.0;
@@ -110,7 +110,7 @@ float RoundToBf16(float x) {
 }
 
 TEST(KernelOps, Bf16ProductsAreTheProductsOfTheRoundedInputs) {
-  std::vector<float> b16 = Random(16 * 16, 2);
+  std::vector<float> b16 = Random(size_t{16} * 16, 2);
   ops::PackedB packed;
   if (!ops::HasBf16()) {  // this CPU cannot: an error, not garbage
     EXPECT_THROW(ops::PackBf16(16, 16, b16.data(), 16, &packed),
@@ -125,13 +125,14 @@ TEST(KernelOps, Bf16ProductsAreTheProductsOfTheRoundedInputs) {
   for (const auto& [m, n, k] : shapes) {
     for (const bool transposed : {false, true}) {
       for (const int kind : {0, 1, 2}) {  // zero, accumulate, onto + bias
-        const long lda = std::max(m, k) + 3;
+        const int64_t lda = std::max(m, k) + 3;
         const std::vector<float> a =
             Random(static_cast<size_t>(transposed ? k : m) * lda, 1);
         const std::vector<float> b = Random(static_cast<size_t>(k) * n, 2);
         const std::vector<float> start = Random(static_cast<size_t>(m) * n, 3);
         const std::vector<float> bias = Random(static_cast<size_t>(n), 4);
-        const long a_row = transposed ? 1 : lda, a_col = transposed ? lda : 1;
+        const int64_t a_row = transposed ? 1 : lda,
+                      a_col = transposed ? lda : 1;
         ops::PackBf16(k, n, b.data(), n, &packed);
         std::vector<float> c = start;
         if (kind == 2) {
@@ -236,8 +237,8 @@ TEST(KernelOps, HeadProductsAreTheProductsWithTheBlockDiagonalMatrices) {
     for (int t = 0; t < tokens; ++t) {
       for (int h = 0; h < heads; ++h) {
         for (int d = 0; d < dh; ++d) {
-          block[static_cast<size_t>(t * heads + h) * inner + h * dh + d] =
-              x[t * inner + h * dh + d];
+          block[static_cast<size_t>(t * heads + h) * inner +
+                static_cast<size_t>(h * dh + d)] = x[t * inner + h * dh + d];
         }
       }
     }
@@ -287,7 +288,7 @@ TEST(KernelOps, SoftmaxesMatchTheDefinition) {
     // 8 heads over 7 tokens, column t * 8 + h, with a bias.
     const int tokens = 7, ld = 64;
     std::vector<float> h = Random(static_cast<size_t>(rows) * ld, 9, 3.0f);
-    const std::vector<float> bias = Random(tokens * 8, 10);
+    const std::vector<float> bias = Random(static_cast<size_t>(tokens) * 8, 10);
     const std::vector<float> h_raw = h;
     ops::SoftmaxHeads(h.data(), rows, ld, tokens, bias.data());
     for (int r = 0; r < rows; ++r) {
@@ -318,7 +319,7 @@ TEST(KernelOps, OnlineSoftmaxOverBlocksEqualsTheWholeSoftmax) {
       SCOPED_TRACE(cols);
       const int n = 300, channels = 3, block = 64;
       std::vector<float> scores = Random(static_cast<size_t>(n) * ld, 11, 2.0f);
-      for (int i = 0; i < n; ++i) {
+      for (size_t i = 0; i < static_cast<size_t>(n); ++i) {
         scores[i * ld] += 0.2f * static_cast<float>(i);
         scores[i * ld + cols - 1] -= 0.3f * static_cast<float>(i);
       }
@@ -329,19 +330,21 @@ TEST(KernelOps, OnlineSoftmaxOverBlocksEqualsTheWholeSoftmax) {
       int rescaled = 0;
       for (int b0 = 0; b0 < n; b0 += block) {
         const int nb = std::min(block, n - b0);
-        std::vector<float> s(scores.begin() + b0 * ld,
-                             scores.begin() + (b0 + nb) * ld);
+        std::vector<float> s(
+            scores.begin() + static_cast<ptrdiff_t>(b0) * ld,
+            scores.begin() + static_cast<ptrdiff_t>(b0 + nb) * ld);
         if (ops::OnlineSoftmaxColumns(s.data(), nb, cols, ld, max.data(),
                                       sum.data(), rescale.data())) {
           ++rescaled;
           for (int c = 0; c < cols; ++c) {
-            for (int k = 0; k < channels; ++k)
+            for (int k = 0; k < channels; ++k) {
               acc[c * channels + k] *= rescale[c];
+            }
           }
         }
         ops::Gemm(cols, channels, nb, s.data(), 1, ld,
-                  values.data() + b0 * channels, channels, acc.data(), channels,
-                  true);
+                  values.data() + static_cast<ptrdiff_t>(b0) * channels,
+                  channels, acc.data(), channels, true);
       }
       EXPECT_GE(rescaled, 2);  // the first block and the growing column
       for (int c = 0; c < cols; ++c) {
