@@ -193,7 +193,12 @@ TEST(RealModels, SkippingInsideRejectedMasksKeepsTheMasks) {
   auto blanket = MaskGenerator::Create(registry, blind);
   const double recall_blanket = Recall(ref, blanket->Generate(rgb));
   // Measured (bf16 kernel): 421 prompts -> 366, every mask found again; the
-  // blanket skip 331 prompts, one mask (the floor) lost.
+  // blanket skip 331 prompts, one mask (the floor) lost. Other backends'
+  // logits differ a little: there at most one mask in 20 may change.
+  if (kernel_ops::HasBf16()) {
+    EXPECT_EQ(recall, 1.0);
+    EXPECT_LT(recall_blanket, 1.0);
+  }
   EXPECT_GE(recall, 0.95);
   EXPECT_GE(recall, recall_blanket);
   EXPECT_LT(with->stats().prompts_decoded,
