@@ -63,4 +63,23 @@ int64_t MaskIntersection(const Mask& a, const Mask& b);
 /// |a ∩ b| / |a ∪ b| (0 when both are empty).
 double MaskIoU(const Mask& a, const Mask& b);
 
+/// SAM's stability score of logits: |logits > t + offset| / |logits > t -
+/// offset| (1 when both are empty).
+float StabilityScore(const std::vector<float>& logits, float threshold,
+                     float offset);
+
+/// Removes connected regions (8-connected) and fills holes (4-connected
+/// background not touching the box border... see .cc) smaller than
+/// `min_area_px`; re-tightens the mask.
+void RemoveSmallRegions(Mask* mask, int min_area_px);
+
+/// Greedy NMS on boxes: masks sorted by `predicted_iou` (then prompt order);
+/// a mask is dropped when its box IoU with a kept one exceeds `threshold`.
+std::vector<Mask> BoxNms(std::vector<Mask> masks, float threshold);
+
+/// Greedy NMS on boxes by `scores` (one per mask, highest first; ties: input
+/// order).
+std::vector<Mask> NmsByScore(std::vector<Mask> masks,
+                             const std::vector<float>& scores, float threshold);
+
 }  // namespace semrec::segment

@@ -136,18 +136,4 @@ class MaskGenerator {
   virtual PromptableSegmenter& model() = 0;
 };
 
-/// SAM's stability score of logits: |logits > t + offset| / |logits > t -
-/// offset| (1 when both are empty).
-float StabilityScore(const std::vector<float>& logits, float threshold,
-                     float offset);
-
-/// Removes connected regions (8-connected) and fills holes (4-connected
-/// background not touching the box border... see .cc) smaller than
-/// `min_area_px`; re-tightens the mask.
-void RemoveSmallRegions(Mask* mask, int min_area_px);
-
-/// Greedy NMS on boxes: masks sorted by `predicted_iou` (then prompt order);
-/// a mask is dropped when its box IoU with a kept one exceeds `threshold`.
-std::vector<Mask> BoxNms(std::vector<Mask> masks, float threshold);
-
 }  // namespace semrec::segment
