@@ -155,6 +155,19 @@ double Cosine(const std::vector<float>& a, const std::vector<float>& b) {
   return aa > 0 && bb > 0 ? dot / std::sqrt(aa * bb) : 1.0;
 }
 
+// The low-res cell (row-major in a width x height grid over the model frame)
+// nearest the image point p (continuous: pixel x spans [x, x + 1)).
+size_t NearestLowResCell(const infer::InputTransform& transform, int width,
+                         int height, const std::array<float, 2>& p) {
+  LowResMask dims;
+  dims.width = width;
+  dims.height = height;
+  const auto [u, v] = ImageToLowRes(transform, dims, p[0] - 0.5, p[1] - 0.5);
+  const int iu = std::clamp(static_cast<int>(std::lround(u)), 0, width - 1);
+  const int iv = std::clamp(static_cast<int>(std::lround(v)), 0, height - 1);
+  return static_cast<size_t>(iv) * width + iu;
+}
+
 // Content hash of an image (size and bytes): which image the model holds.
 size_t ImageHash(const ColorImage& rgb) {
   const std::string_view bytes(
@@ -331,14 +344,8 @@ class AutomaticMaskGenerator : public MaskGenerator {
     int cw = 0, ch = 0;
     const auto is_covered = [&](const std::array<float, 2>& p) {
       if (covered.empty()) return false;
-      LowResMask dims;
-      dims.width = cw;
-      dims.height = ch;
-      const auto [u, v] =
-          ImageToLowRes(model_->transform(), dims, p[0] - 0.5, p[1] - 0.5);
-      const int iu = std::clamp(static_cast<int>(std::lround(u)), 0, cw - 1);
-      const int iv = std::clamp(static_cast<int>(std::lround(v)), 0, ch - 1);
-      const int owner = covered[static_cast<size_t>(iv) * cw + iu];
+      const int owner =
+          covered[NearestLowResCell(model_->transform(), cw, ch, p)];
       if (owner < 0) return false;
       if (options_.covered_similarity <= 0) return true;
       return Cosine(model_->EmbeddingAt(p[0], p[1]), mask_embedding[owner]) >=
@@ -365,13 +372,8 @@ class AutomaticMaskGenerator : public MaskGenerator {
     const auto logits_at_points = [&](const LowResMask& m) {
       std::vector<float> at(outcome.size(), 0.0f);
       for (size_t q = 0; q < points.size(); ++q) {
-        const auto [u, v] = ImageToLowRes(
-            model_->transform(), m, points[q][0] - 0.5, points[q][1] - 0.5);
-        const int iu =
-            std::clamp(static_cast<int>(std::lround(u)), 0, m.width - 1);
-        const int iv =
-            std::clamp(static_cast<int>(std::lround(v)), 0, m.height - 1);
-        at[cell_of(q)] = m.logits[static_cast<size_t>(iv) * m.width + iu];
+        at[cell_of(q)] = m.logits[NearestLowResCell(
+            model_->transform(), m.width, m.height, points[q])];
       }
       return at;
     };
