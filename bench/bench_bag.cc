@@ -1,4 +1,4 @@
-// Issue 30: reading frames from ROS 2 bags vs the same frames from a folder.
+// Reading frames from ROS 2 bags vs the same frames from a folder.
 // The 100 7-Scenes chess frames (real colour and depth) are written as bags
 // the way a robot records them (io/test_bags.h: TF chain, CameraInfo), in
 // each storage and encoding; every variant is opened (indexed) and all its

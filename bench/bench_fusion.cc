@@ -218,7 +218,7 @@ int main(int argc, char** argv) {
     std::printf("\n== office, %d frames: fast vs brute force (labels on) ==\n",
                 office_frames);
     const Prepared office = Prepare("office", office_frames, tmp / "office");
-    // Median of 3 runs each: single runs on a shared 2-core VM vary by 20%.
+    // Median of 3 runs each: single runs on a shared 2-core machine vary by 20%.
     auto median_run = [&](Method method) {
       std::vector<Run> runs;
       for (int r = 0; r < 3; ++r) {

@@ -1,4 +1,4 @@
-// Map-guided segmentation (issue 19) against full segmentation of every frame,
+// Map-guided segmentation against full segmentation of every frame,
 // both in this one invocation on the same frames with the real models:
 //  - segmentation seconds per frame and their ratio, encoder calls and prompts
 //    decoded per frame, frames by mode (full / partial / projection only);

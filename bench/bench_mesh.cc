@@ -1,7 +1,7 @@
 // Meshing benchmark: per-frame integration cost of all per-object TSDF volumes
 // (each object's pixels into its own volume) against one whole-frame Open3D
 // volume on the same frames, same voxel size, in one run (goal: <= 1.2x;
-// session 7: 1.34-1.39x median of 4 runs).
+// the measured ratio is in docs/results.md).
 //   bench_mesh [frames=30]   (synthetic six-objects + office; Redwood if found)
 #include <chrono>
 #include <cstdio>

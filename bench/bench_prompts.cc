@@ -1,5 +1,5 @@
 // Full-frame segmentation cost, step by step: the hybrid segmenter as
-// `semrec segment` ran it before issue 32 (dense stride 2, the reference)
+// `semrec segment` ran it formerly (dense stride 2, the reference)
 // against the default and variants that decode fewer mask prompts, on the same
 // frames in one process. Per step: time per frame, prompts decoded, and whether
 // the masks hold: the share of the reference's instances (>= 1000 px)

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Issue 30: ROS 2 bags as input. A synthetic sequence written as bags (MCAP with zstd / lz4
+# ROS 2 bags as input. A synthetic sequence written as bags (MCAP with zstd / lz4
 # chunks, SQLite; raw and compressed images; the pose only as a TF chain) gives the same
 # scene through `semrec run` as the folder it was written from; `semrec info` lists the topics,
 # the chosen ones and the TF chain; bad bags are clear errors.

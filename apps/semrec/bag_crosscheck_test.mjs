@@ -1,4 +1,4 @@
-// Issue 30: semrec's MCAP and CDR code against the reference implementations
+// semrec's MCAP and CDR code against the reference implementations
 // (@mcap/core, @foxglove/rosmsg2-serialization, @foxglove/rosmsg; pinned in
 // scripts/setup). Both ways:
 //  1. A bag written by @mcap/core (chunks, message indexes, summary,

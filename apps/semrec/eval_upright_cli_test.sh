@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Issue 28: `semrec eval scene` scores a result that `semrec run` turned upright in the result's
+# `semrec eval scene` scores a result that `semrec run` turned upright in the result's
 # frame, taking T_upright_world from the scene's customLayerData (run writes no summary.json).
 # A synthetic recording with its world tilted (poses and ground truth) scores like the untilted
 # one, and badly with the identity in place of the transform; summary.json is the fallback and

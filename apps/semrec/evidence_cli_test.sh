@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Issue 17: on segmenter-like labels (synth --label-noise), fusion with multi-view evidence
+# On segmenter-like labels (synth --label-noise), fusion with multi-view evidence
 # brings the object count and instance AP50 close to the ground-truth labels' (the oracle),
 # while the paper's rule alone writes several objects per real one.
 set -u

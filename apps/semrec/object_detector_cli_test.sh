@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Issue 29: the object detector as a second source of class evidence, with the real models on one
+# The object detector as a second source of class evidence, with the real models on one
 # 7-Scenes chess frame where the pixel classifier calls most of a chair wall: with the detector
 # (the default) the chair's mask is voted chair although most of its pixels say otherwise; with
 # --object-detector none the detector plays no part; the chair's parts become one instance

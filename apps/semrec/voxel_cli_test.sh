@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Issue 28: objects decided per map voxel (--merge voxel, the default) on the failures real
+# Objects decided per map voxel (--merge voxel, the default) on the failures real
 # walk-throughs show: sparse independent views (objects seen once or twice) and labels that
 # bleed into the floor and walls, correlated across views. With ground-truth labels the default
 # is no worse than the paper's rule; with noisy, bleeding labels it beats it by a wide margin

@@ -1,4 +1,4 @@
-// What the map already knows, seen from a new frame (issue 19, map-guided
+// What the map already knows, seen from a new frame (for map-guided
 // segmentation): the fused objects' stored clouds are splatted into the frame
 // with a z-buffer, giving per pixel the nearest object, its class and its
 // depth. A pixel is *explained* when an object covers it and the measured depth

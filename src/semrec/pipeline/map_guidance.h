@@ -1,4 +1,4 @@
-// Map-guided segmentation (issue 19): per frame, decide from the projected map
+// Map-guided segmentation: per frame, decide from the projected map
 // whether the frame needs full automatic mask generation, prompts only where
 // the map cannot explain it, or no segmentation model at all, with a drift
 // guard that forces a full frame every so often and after large camera motion.

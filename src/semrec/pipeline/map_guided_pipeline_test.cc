@@ -1,4 +1,4 @@
-// Map-guided segmentation end to end (issue 19) on the tiny models that
+// Map-guided segmentation end to end on the tiny models that
 // segment by colour: a synthetic RGB-D sequence whose every pixel's object is
 // known, with an object that enters and one that is taken away.
 #include <algorithm>

@@ -56,7 +56,7 @@ struct MaskGeneratorOptions {
   /// between rejected ones see rejected_similarity. 0 = skip regardless (the
   /// former default: ~2x faster, but it missed 23-43% of the straightforward
   /// result's masks). 0.8 found 91-100% of them on 7 test images at 8.4-12.3 s
-  /// per image (bench/bench_segment); 0.6 (issue 32) is 1.28x faster than 0.8
+  /// per image (bench/bench_segment); 0.6 is 1.28x faster than 0.8
   /// at 99% of 0.8's instances and 99.9% of its pixels voted alike, ADE20K
   /// mIoU 48.1 -> 49.7 (bench/bench_prompts).
   float covered_similarity = 0.6f;
@@ -70,7 +70,7 @@ struct MaskGeneratorOptions {
   /// rejected_similarity like anywhere): prompted inside a mask SAM found
   /// unstable, it mostly gives that mask again. A neighbour skipped itself
   /// (no mask) never counts as inside. Off: rejected_inside_similarity = 1.
-  /// 0.5 / 2 (issue 32): 12% fewer prompts per full frame, the same
+  /// 0.5 / 2: 12% fewer prompts per full frame, the same
   /// instances and pixels as without it on bench_prompts' 5 frames and 8
   /// others; 0.6 / 0 loses chess frame 50's floor (bench/bench_prompts).
   float rejected_inside_similarity = 0.5f;

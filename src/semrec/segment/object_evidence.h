@@ -1,6 +1,6 @@
 // Object detections as a second source of class evidence for the vote: a
-// pixel classifier at 512x512 sees texture, a detector sees the whole object
-// (issue 29). Each detection of a class the label set can express becomes a
+// pixel classifier at 512x512 sees texture, a detector sees the whole object.
+// Each detection of a class the label set can express becomes a
 // box prompt; generated masks that match its mask, or lie inside it, receive
 // the detector's class weighted by its score; a detection no mask matches
 // adds its own mask.

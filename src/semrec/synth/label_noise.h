@@ -4,7 +4,7 @@
 // primitives - a chair's seat, back, legs - or by random planes through their
 // centre), joined with a touching neighbour, given another object class,
 // boundaries are jittered and small masks dropped. Fusion's evidence merging
-// is measured against this (issue 17); so is the paper's rule alone.
+// is measured against this; so is the paper's rule alone.
 // Optionally object pixels bleed into the structure they touch (a chair's legs
 // painted as floor, a cabinet's side as wall), the same parts in most views.
 #pragma once
