@@ -159,15 +159,14 @@ void Run(const std::string& name, const fs::path& sequence, size_t frames,
          (!guided && std::string(reuse) == "full")) &&
         fs::exists(out / "report.json")) {
       // Compare the runs of an earlier invocation again (no new timings).
-      results[guided].report = io::ReadJsonFile(out / "report.json");
+      results[guided].report = pipeline::ReadRunReport(out / "report.json");
       results[guided].scene.objects =
-          results[guided].report.at("objects").get<size_t>() +
-          results[guided].report.at("structure").get<size_t>();
+          results[guided].report.objects + results[guided].report.structure;
     } else {
       results[guided] = pipeline::RunSequence(
           reader, &registry, Options(registry, guided), out, Quiet());
     }
-    const nlohmann::json& r = results[guided].report;
+    const nlohmann::json r = pipeline::ToJson(results[guided].report);
     const nlohmann::json& g = r.at("map_guidance");
     const double n =
         static_cast<double>(r.at("processed_frames").get<size_t>());
@@ -190,13 +189,10 @@ void Run(const std::string& name, const fs::path& sequence, size_t frames,
     std::fflush(stdout);
   }
   const auto seg = [&](bool guided) {
-    return results[guided]
-        .report.at("seconds_per_frame")
-        .at("segment")
-        .get<double>();
+    return results[guided].report.seconds_per_frame.segment;
   };
   const auto fps = [&](bool guided) {
-    return results[guided].report.at("frames_per_second").get<double>();
+    return results[guided].report.frames_per_second;
   };
   const Agreement a = Compare(Scratch() / (name + "_full"),
                               Scratch() / (name + "_guided"), reader);

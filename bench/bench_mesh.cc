@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "semrec/core/file_util.h"
+#include "semrec/core/sample_data.h"
 #include "semrec/fuse/segments.h"
 #include "semrec/io/sequence_reader.h"
 #include "semrec/mesh/object_mesher.h"
@@ -111,9 +112,8 @@ int main(int argc, char** argv) {
               "vertices");
   for (const char* preset : {"six-objects", "office"})
     Run(Synthetic(preset, frames, tmp / preset));
-  const char* data = std::getenv("SEMREC_DATA");
-  const fs::path redwood =
-      fs::path(data ? data : "../shared/data") / "redwood_livingroom1_5";
+  const fs::path redwood = semrec::SampleDataDir().value_or("../shared/data") /
+                           "redwood_livingroom1_5";
   if (fs::exists(redwood)) Run(Redwood(redwood));
   fs::remove_all(tmp);
   return 0;

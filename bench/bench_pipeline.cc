@@ -72,15 +72,12 @@ pipeline::RunOptions ModelOptions(const infer::ModelRegistry& registry,
 }
 
 void PrintRun(const std::string& name, const pipeline::RunResult& r) {
-  const auto& s = r.report.at("seconds_per_frame");
+  const pipeline::StageRates& s = r.report.seconds_per_frame;
   std::printf(
       "  %-28s %6.3f frames/s | s/frame: read %.3f segment %.3f track %.3f "
       "fuse %.4f volumes %.3f overlay %.3f | %zu objects, %.0f MB peak\n",
-      name.c_str(), r.report.at("frames_per_second").get<double>(),
-      s.at("read").get<double>(), s.at("segment").get<double>(),
-      s.at("track").get<double>(), s.at("fuse").get<double>(),
-      s.at("volumes").get<double>(), s.at("overlay").get<double>(),
-      r.scene.objects, r.report.at("peak_rss_mb").get<double>());
+      name.c_str(), r.report.frames_per_second, s.read, s.segment, s.track,
+      s.fuse, s.volumes, s.overlay, r.scene.objects, r.report.peak_rss_mb);
   std::fflush(stdout);
 }
 
@@ -100,16 +97,15 @@ int MemoryChild(int frames, const fs::path& sequence) {
       reader, nullptr, run, Scratch() / ("mem_" + std::to_string(frames)),
       Quiet());
   size_t points = 0, vertices = 0;
-  for (const auto& o : r.report.at("scene")) {
-    points += o.at("fused_points").get<size_t>();
-    vertices += o.at("vertices").get<size_t>();
+  for (const pipeline::ObjectRecord& o : r.report.scene) {
+    points += o.fused_points;
+    vertices += o.vertices;
   }
   std::printf(
       "  %-12s %4d frames: peak %6.0f MB | map: %zu objects, %zu fused "
       "points, %zu mesh vertices\n",
-      sequence.filename().c_str(), frames,
-      r.report.at("peak_rss_mb").get<double>(), r.scene.objects, points,
-      vertices);
+      sequence.filename().c_str(), frames, r.report.peak_rss_mb,
+      r.scene.objects, points, vertices);
   std::fflush(stdout);
   return 0;
 }

@@ -16,6 +16,7 @@
 #include <fmt/format.h>
 
 #include "semrec/core/random.h"
+#include "semrec/core/sample_data.h"
 #include "semrec/eval/mot.h"
 #include "semrec/io/mot_io.h"
 #include "semrec/track/sequence.h"
@@ -148,9 +149,8 @@ int main(int argc, char** argv) {
                 us / reference_us, max_id);
   }
 
-  const char* data = std::getenv("SEMREC_DATA");
   const fs::path tud =
-      fs::path(data ? data : "../shared/data") / "mot15_tud_campus";
+      semrec::SampleDataDir().value_or("../shared/data") / "mot15_tud_campus";
   if (!fs::exists(tud / "det/det.txt")) {
     std::printf("\nTUD-Campus not found at %s: skipped\n", tud.c_str());
     return 0;

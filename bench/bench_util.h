@@ -12,6 +12,7 @@
 #include "semrec/core/file_util.h"
 #include "semrec/core/label_map.h"
 #include "semrec/core/progress.h"
+#include "semrec/core/sample_data.h"
 
 namespace semrec::bench {
 
@@ -29,13 +30,10 @@ inline ProgressOptions Quiet() {
   return p;
 }
 
-/// The real sample data: $SEMREC_DATA, else ../shared/data beside the
-/// repository.
+/// The real sample data (semrec::SampleDataDir; a path that does not exist
+/// when there is none, so that each benchmark says what it skips).
 inline std::filesystem::path SampleDataDir() {
-  const char* data = std::getenv("SEMREC_DATA");
-  return data != nullptr
-             ? std::filesystem::path(data)
-             : ProjectDataDir().parent_path().parent_path() / "shared" / "data";
+  return semrec::SampleDataDir().value_or("../shared/data");
 }
 
 /// An instance of a reference label map and how well another map recovers it.

@@ -44,6 +44,15 @@ grep -q "sparse views" "$tmp/sparse.out" && [ -f "$tmp/sparse/labels_noisy/seman
   >"$tmp/synth.out" 2>"$tmp/synth.err" || fail "synth failed: $(cat "$tmp/synth.err")"
 grep -q "rendering 3/3" "$tmp/synth.err" || fail "synth: no progress report"
 grep -q "objects: .*1 chair" "$tmp/synth.out" || fail "synth: no summary: $(cat "$tmp/synth.out")"
+# The resolver's passes: listed in order, an unknown one refused naming it, one left out.
+"$SEMREC" mesh --list-resolver-passes >"$tmp/passes" || fail "--list-resolver-passes failed"
+[ "$(head -1 "$tmp/passes")" = gate-structure ] && [ "$(wc -l <"$tmp/passes")" -eq 13 ] ||
+  fail "resolver passes: $(cat "$tmp/passes")"
+"$SEMREC" mesh "$tmp/syn" --resolver-skip judge-fragment --out "$tmp/m0" 2>"$tmp/err"; rc=$?
+[ "$rc" -eq 2 ] && grep -q "no resolver pass 'judge-fragment'" "$tmp/err" ||
+  fail "mesh: bad --resolver-skip: $rc $(cat "$tmp/err")"
+"$SEMREC" mesh "$tmp/syn" --resolver-skip judge-fragments,claim-enclosed --no-ply --out "$tmp/m1" \
+  >/dev/null 2>"$tmp/err" || fail "mesh --resolver-skip: $(cat "$tmp/err")"
 "$SEMREC" info "$tmp/syn" >"$tmp/syninfo" 2>/dev/null || fail "info on synthetic data failed"
 grep -q "layout: *semrec" "$tmp/syninfo" && grep -q "160x120" "$tmp/syninfo" || fail "info: $(cat "$tmp/syninfo")"
 "$SEMREC" synth --frames 3 --out "$tmp/syn" 2>"$tmp/err"; rc=$?

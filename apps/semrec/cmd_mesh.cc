@@ -139,6 +139,7 @@ void RegisterMesh(CLI::App& app) {
                 "as animated nodes");
   cmd->add_flag("--overwrite", args->options.overwrite,
                 "Write into a non-empty output folder");
+  AddResolverSkipArgs(cmd, &args->options.scene.fusion.map_objects.skip_passes);
   cmd->callback([args] { RunMesh(*args); });
 }
 

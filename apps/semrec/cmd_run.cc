@@ -66,14 +66,25 @@ void ApplyConfigFile(CLI::App* cmd, const std::string& path) {
                                   "' (see semrec run --help for the names)");
     }
     if (option->count() > 0) continue;  // given on the command line
-    if (!entry.second.IsScalar()) {
+    // A list (--resolver-skip) gives one value per item.
+    const bool list =
+        entry.second.IsSequence() && option->get_expected_max() > 1;
+    if (!entry.second.IsScalar() && !list) {
       throw FormatError(path, "option '" + key + "' must be a single value");
     }
-    std::string value = entry.second.as<std::string>();
-    if (value.size() >= 2 && value.front() == '"' && value.back() == '"') {
-      value = value.substr(1, value.size() - 2);
+    for (const YAML::Node& item :
+         list
+             ? std::vector<YAML::Node>(entry.second.begin(), entry.second.end())
+             : std::vector<YAML::Node>{entry.second}) {
+      if (!item.IsScalar()) {
+        throw FormatError(path, "option '" + key + "': a list of names");
+      }
+      std::string value = item.as<std::string>();
+      if (value.size() >= 2 && value.front() == '"' && value.back() == '"') {
+        value = value.substr(1, value.size() - 2);
+      }
+      option->add_result(value);
     }
-    option->add_result(value);
     try {
       option->run_callback();
     } catch (const CLI::Error& e) {
@@ -106,7 +117,10 @@ std::string EffectiveConfig(const CLI::App* cmd, bool scene_only) {
       continue;
     }
     std::string key = line.substr(0, eq), value = line.substr(eq + 1);
-    if (key == "config" || key == "resume" || key == "overwrite") continue;
+    if (key == "config" || key == "resume" || key == "overwrite" ||
+        key == "list-resolver-passes") {
+      continue;
+    }
     if (scene_only && AffectsOnlyOutputs(key)) continue;
     if (value == "\"\"" || value.empty()) value = "\"\"";
     out += fmt::format("{}: {}\n", key, value);
@@ -180,26 +194,8 @@ void RunRun(RunArgs& args, CLI::App* cmd) {
   }
 }
 
-}  // namespace
-
-void RegisterRun(CLI::App& app) {
-  auto args = std::make_shared<RunArgs>();
-  CLI::App* cmd = app.add_subcommand(
-      "run",
-      "The whole pipeline in one pass: every frame is read once, segmented "
-      "(semantic model + SAM-style masks + vote; every --segment-every "
-      "frames), its people tracked (YOLOX, box-prompted masks, "
-      "re-identification), the static segments fused into objects (people "
-      "left out) and integrated into each object's volume; the scene is "
-      "written as USD. Writes OUT/scene.usda (+ static.usda, dynamic.usda "
-      "with people), objects/*.ply, tracks.txt (MOTChallenge), overlay/*.png, "
-      "report.json (time per stage, frames/s, peak memory, objects per "
-      "class, people, skipped frames, model checksums) and run.yaml (the "
-      "effective options, usable as --config). Checkpoints let --resume "
-      "continue an interrupted run. Poses must come with the sequence "
-      "(semrec does not estimate them).");
-  AddSequenceArgs(cmd, &args->sequence);
-  cmd->add_option("--out,-o", args->out, "Output folder")->required();
+// Options file, label and people sources.
+void AddRunInputArgs(CLI::App* cmd, RunArgs* args) {
   cmd->add_option("--config", args->config,
                   "YAML file of options (keys = long option names, e.g. "
                   "'segment-every: 5'); command-line flags win");
@@ -215,6 +211,10 @@ void RegisterRun(CLI::App& app) {
                   "or semrec track's persons/ folder)");
   cmd->add_flag("--no-people", args->no_people,
                 "Do not track people (every pixel may go into the static map)");
+}
+
+// How often frames are segmented, the models and the mask generation.
+void AddRunSegmentationArgs(CLI::App* cmd, RunArgs* args) {
   cmd->add_option("--segment-every", args->segment_every,
                   "Segment every n-th frame (people are tracked on every "
                   "frame; fusion uses the segmented ones)")
@@ -268,6 +268,10 @@ void RegisterRun(CLI::App& app) {
                   args->run.pipeline.segmenter.masks.rejected_inside_logit,
                   "See --rejected-inside-similarity")
       ->capture_default_str();
+}
+
+// The object detector and map-guided segmentation.
+void AddRunGuidanceArgs(CLI::App* cmd, RunArgs* args) {
   pipeline::ScenePipelineOptions& pipe = args->run.pipeline;
   AddObjectDetectorArgs(cmd, &pipe.segmenter.objects);
   cmd->add_flag("--map-guidance", pipe.map_guidance,
@@ -314,6 +318,10 @@ void RegisterRun(CLI::App& app) {
                   "Map guidance: ... or moved this far")
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
+}
+
+// People detection, fusion, volumes and the scene's orientation.
+void AddRunFusionArgs(CLI::App* cmd, RunArgs* args) {
   cmd->add_option("--detector", args->detector, "Person detector (registry)")
       ->capture_default_str();
   cmd->add_option("--detector-score", args->detector_score,
@@ -347,6 +355,12 @@ void RegisterRun(CLI::App& app) {
   cmd->add_flag("--no-structure", args->no_structure,
                 "Fuse stuff classes like objects (no Structure prims)");
   AddSurfacePatchesFlag(cmd, &args->no_surface_patches);
+  AddResolverSkipArgs(cmd,
+                      &args->run.pipeline.scene.fusion.map_objects.skip_passes);
+}
+
+// Snapshots, checkpoints, resume and what is written.
+void AddRunOutputArgs(CLI::App* cmd, RunArgs* args) {
   cmd->add_option("--snapshot-every", args->run.snapshot_every,
                   "Write the scene (valid USD) every n frames while running "
                   "(0 = at the end only)")
@@ -374,6 +388,33 @@ void RegisterRun(CLI::App& app) {
       "Also write scene.glb (glTF 2.0 binary, Y-up, for tools without USD)");
   cmd->add_flag("--overwrite", args->run.overwrite,
                 "Write into a non-empty output folder (a fresh run)");
+}
+
+}  // namespace
+
+void RegisterRun(CLI::App& app) {
+  auto args = std::make_shared<RunArgs>();
+  CLI::App* cmd = app.add_subcommand(
+      "run",
+      "The whole pipeline in one pass: every frame is read once, segmented "
+      "(semantic model + SAM-style masks + vote; every --segment-every "
+      "frames), its people tracked (YOLOX, box-prompted masks, "
+      "re-identification), the static segments fused into objects (people "
+      "left out) and integrated into each object's volume; the scene is "
+      "written as USD. Writes OUT/scene.usda (+ static.usda, dynamic.usda "
+      "with people), objects/*.ply, tracks.txt (MOTChallenge), overlay/*.png, "
+      "report.json (time per stage, frames/s, peak memory, objects per "
+      "class, people, skipped frames, model checksums) and run.yaml (the "
+      "effective options, usable as --config). Checkpoints let --resume "
+      "continue an interrupted run. Poses must come with the sequence "
+      "(semrec does not estimate them).");
+  AddSequenceArgs(cmd, &args->sequence);
+  cmd->add_option("--out,-o", args->out, "Output folder")->required();
+  AddRunInputArgs(cmd, args.get());
+  AddRunSegmentationArgs(cmd, args.get());
+  AddRunGuidanceArgs(cmd, args.get());
+  AddRunFusionArgs(cmd, args.get());
+  AddRunOutputArgs(cmd, args.get());
   // By reference: --config sets the options through their bindings.
   cmd->callback([args, cmd] { RunRun(*args, cmd); });
 }

@@ -101,7 +101,7 @@ void RegisterSynth(CLI::App& app) {
       "truth: per-frame "
       "semantic, instance and person maps, exact object surfaces (meshes, "
       "dense points), people "
-      "tracks (MOTChallenge gt.txt). See README.md, 'Synthetic scenes'.");
+      "tracks (MOTChallenge gt.txt). See docs/usage.md, 'Synthetic scenes'.");
   cmd->add_option("--preset", args->preset,
                   "six-objects, people, office, flat (three rooms in a row "
                   "joined by doorways) or kitchen (rows of base cabinets "

@@ -1,12 +1,12 @@
 // `semrec tsdf <sequence> --out mesh.ply`: whole-scene TSDF fusion into one
 // mesh.
-#include <chrono>
 #include <cstdio>
 
 #include <fmt/format.h>
 
 #include "commands.h"
 #include "semrec/core/progress.h"
+#include "semrec/core/stopwatch.h"
 #include "semrec/io/sequence_reader.h"
 #include "semrec/mesh/tsdf_integrator.h"
 
@@ -21,7 +21,7 @@ struct TsdfArgs {
 
 void RunTsdf(const TsdfArgs& args) {
   CheckUsage(args.tsdf);  // before any expensive work
-  const auto start = std::chrono::steady_clock::now();
+  const Stopwatch start;
   const io::SequenceReader reader = io::SequenceReader::Open(
       args.sequence.path, args.sequence.ReaderOptions());
   mesh::TsdfIntegrator tsdf(args.tsdf);
@@ -34,9 +34,7 @@ void RunTsdf(const TsdfArgs& args) {
   }
   const auto mesh = tsdf.ExtractMesh();
   mesh::WriteMeshPly(args.out, *mesh);
-  const double seconds =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - start)
-          .count();
+  const double seconds = start.Elapsed();
   std::printf(
       "%s",
       fmt::format(

@@ -5,6 +5,7 @@
 #pragma once
 
 #include <cstdlib>
+#include <set>
 #include <string>
 
 #include <CLI/CLI.hpp>
@@ -64,6 +65,10 @@ void AddSequenceArgs(CLI::App* cmd, SequenceArgs* args);
 /// --no-surface-patches (mesh, run): SceneBuilderOptions::cover_owned_voxels
 /// off.
 void AddSurfacePatchesFlag(CLI::App* cmd, bool* no_surface_patches);
+
+/// --resolver-skip PASS[,PASS] and --list-resolver-passes (mesh, run): the
+/// object decision's passes left out, for ablations (scripts/ablate_resolver).
+void AddResolverSkipArgs(CLI::App* cmd, std::set<std::string>* skip_passes);
 
 /// What every command that runs ONNX models accepts: --registry, --threads,
 /// --provider.

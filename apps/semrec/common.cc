@@ -1,5 +1,10 @@
 #include "commands.h"
 
+#include <algorithm>
+#include <cstdio>
+
+#include "semrec/fuse/map_objects.h"
+
 namespace semrec::cli {
 
 io::SequenceReaderOptions SequenceArgs::ReaderOptions() const {
@@ -18,6 +23,45 @@ void AddSurfacePatchesFlag(CLI::App* cmd, bool* no_surface_patches) {
                 "(something thin, or seen once: a 2 cm TSDF gives it no "
                 "surface) with small patches at their points; such objects "
                 "then show holes, or no surface at all");
+}
+
+void AddResolverSkipArgs(CLI::App* cmd, std::set<std::string>* skip_passes) {
+  std::string names;
+  for (const std::string& n : fuse::MapResolverPassNames()) {
+    names += (names.empty() ? "" : ", ") + n;
+  }
+  // An empty value (run.yaml writes one when no pass is left out) adds none.
+  cmd->add_option_function<std::vector<std::string>>(
+         "--resolver-skip",
+         [skip_passes](const std::vector<std::string>& passes) {
+           for (const std::string& p : passes) {
+             if (!p.empty()) skip_passes->insert(p);
+           }
+         },
+         "Leave out these passes of the object decision (--merge voxel; for "
+         "ablations, docs/fusion.md): " +
+             names)
+      ->delimiter(',')
+      ->check(CLI::Validator(
+          [](std::string& pass) -> std::string {
+            const auto& known = fuse::MapResolverPassNames();
+            if (pass.empty() ||
+                std::find(known.begin(), known.end(), pass) != known.end()) {
+              return {};
+            }
+            return "no resolver pass '" + pass +
+                   "' (semrec mesh --list-resolver-passes)";
+          },
+          "PASS"));
+  cmd->add_flag_callback(
+      "--list-resolver-passes",
+      [] {
+        for (const std::string& n : fuse::MapResolverPassNames()) {
+          std::printf("%s\n", n.c_str());
+        }
+        throw CLI::Success();
+      },
+      "Print the object decision's passes, in the order they run, and exit");
 }
 
 void AddSequenceArgs(CLI::App* cmd, SequenceArgs* args) {

@@ -16,7 +16,8 @@ int Run(int argc, char** argv) {
       "semrec - semantic 3D reconstruction from RGB-D sequences.\n"
       "Sequences: a folder in one of the layouts semrec detects "
       "(Redwood/Open3D, 7-Scenes/3DMatch, "
-      "TUM RGB-D, or semrec's own sequence.yaml); see README.md.",
+      "TUM RGB-D, ScanNet .sens, a ROS 2 bag, or semrec's own "
+      "sequence.yaml); see docs/usage.md.",
       "semrec"};
   app.set_version_flag("--version", "semrec " SEMREC_VERSION);
   std::string log_level = "info";

@@ -42,7 +42,7 @@ views = [o["views"] for o in json.load(open(sys.argv[1]))["objects"]]
 sys.exit(0 if views and all(1 <= v <= 16 for v in views) and min(views) <= 2 else 1)
 PY
   fail "eval scene --observed-in does not count the views of each ground-truth object"
-grep -q "objects decided per map voxel" "$tmp/gt_voxel.log" || fail "no per-voxel decision logged"
+grep -q "the map's objects: " "$tmp/gt_voxel.log" || fail "no per-voxel decision logged"
 grep -q '"merge": "voxel"\|merge voxel' "$tmp/gt_voxel/summary.json" "$tmp/gt_voxel/static.usda" ||
   fail "the result does not name the voxel rule"
 python3 - "$tmp/gt_voxel/summary.json" "$tmp/gt_paper/summary.json" <<'PY' ||

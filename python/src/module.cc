@@ -392,15 +392,11 @@ nb::object Run(const std::string& sequence, const std::string& out,
     }
     r = pipeline::RunSequence(reader, registry.get(), o, out, progress);
   }
-  return FromJson(r.report);
+  return FromJson(pipeline::ToJson(r.report));
 }
 
-}  // namespace
-
-NB_MODULE(_semrec, m) {
-  m.doc() = "semrec's native module; use `import semrec`.";
-
-  // Exceptions: semrec.Error, and file errors that are OSErrors too.
+// semrec.Error, and file errors that are OSErrors too.
+void BindErrors(nb::module_& m) {
   static nb::object error = nb::steal(
       PyErr_NewException("semrec.Error", PyExc_RuntimeError, nullptr));
   static nb::object io_error = nb::steal(PyErr_NewException(
@@ -425,7 +421,9 @@ NB_MODULE(_semrec, m) {
       PyErr_SetString(error.ptr(), e.what());
     }
   });
+}
 
+void BindSequence(nb::module_& m) {
   nb::class_<PyFrame>(m, "Frame",
                       "One RGB-D frame: numpy arrays (views of the decoded "
                       "images, no copies).")
@@ -475,7 +473,9 @@ NB_MODULE(_semrec, m) {
       .def_prop_ro("classes", &PySequence::classes,
                    "The given labels' classes (list of dicts), or None.")
       .def_prop_ro("classes_name", &PySequence::classes_name);
+}
 
+void BindPipeline(nb::module_& m) {
   nb::class_<PyPipeline>(
       m, "Pipeline",
       "The streaming pipeline: add frames one by one, read the objects, write "
@@ -527,7 +527,15 @@ NB_MODULE(_semrec, m) {
            "Writes scene.usda (and PLY/GLB/USDZ) to out_dir.")
       .def("report", &PyPipeline::Report)
       .def_prop_ro("frames", &PyPipeline::frames);
+}
 
+}  // namespace
+
+NB_MODULE(_semrec, m) {
+  m.doc() = "semrec's native module; use `import semrec`.";
+  BindErrors(m);
+  BindSequence(m);
+  BindPipeline(m);
   BindSegmenter(m);
   BindEval(m);
   BindLoad(m);

@@ -246,21 +246,15 @@ GtObjectReport ReportObject(int32_t gt_id, int32_t class_id,
   return r;
 }
 
-SceneMetrics EvaluateScene(const SceneGroundTruth& gt,
-                           const std::vector<PredictedObject>& predicted,
-                           const std::set<int32_t>& thing_classes,
-                           const SceneEvalOptions& options) {
-  options.Check();
-  const size_t n = gt.points.size();
-  CheckArgument(gt.semantic.size() == n && gt.instance.size() == n,
-                "eval scene: one class and instance per ground-truth point");
-  CheckArgument(gt.views.empty() || gt.views.size() == n,
-                "eval scene: views for every ground-truth point or none");
-  SceneMetrics m;
-  m.gt_points = n;
+namespace {
 
-  // Label transfer: each ground-truth point takes its nearest predicted
-  // surface point's object, within the radius.
+constexpr size_t kNone = std::numeric_limits<size_t>::max();
+
+// Label transfer: each ground-truth point takes its nearest predicted surface
+// point's object, within the radius (kNone: none).
+std::vector<size_t> TransferLabels(
+    const SceneGroundTruth& gt, const std::vector<PredictedObject>& predicted,
+    double radius_m) {
   std::vector<Eigen::Vector3f> surface;
   std::vector<size_t> owner;
   for (size_t p = 0; p < predicted.size(); ++p) {
@@ -268,36 +262,40 @@ SceneMetrics EvaluateScene(const SceneGroundTruth& gt,
                    predicted[p].surface.end());
     owner.insert(owner.end(), predicted[p].surface.size(), p);
   }
-  constexpr size_t kNone = std::numeric_limits<size_t>::max();
-  std::vector<size_t> assigned(n, kNone);
-  if (!surface.empty()) {
-    const auto nearest = NearestNeighbors(gt.points, surface);
-    for (size_t i = 0; i < n; ++i) {
-      if (nearest[i].second <= options.radius_m) {
-        assigned[i] = owner[nearest[i].first];
-      }
-    }
+  std::vector<size_t> assigned(gt.points.size(), kNone);
+  if (surface.empty()) return assigned;
+  const auto nearest = NearestNeighbors(gt.points, surface);
+  for (size_t i = 0; i < gt.points.size(); ++i) {
+    if (nearest[i].second <= radius_m) assigned[i] = owner[nearest[i].first];
   }
+  return assigned;
+}
 
-  // Semantic IoU per ground-truth class.
-  std::map<int32_t, SceneClassMetrics> per_class;
+// Semantic IoU per ground-truth class (into *per_class, their mean into m),
+// and the instance overlaps the AP matching needs.
+Overlaps SemanticIou(const SceneGroundTruth& gt,
+                     const std::vector<PredictedObject>& predicted,
+                     const std::vector<size_t>& assigned,
+                     std::map<int32_t, SceneClassMetrics>* per_class,
+                     SceneMetrics* m) {
+  const size_t n = gt.points.size();
   for (size_t i = 0; i < n; ++i) {
     if (gt.semantic[i] < 0) continue;  // ignored ground truth
-    per_class[gt.semantic[i]].id = gt.semantic[i];
+    (*per_class)[gt.semantic[i]].id = gt.semantic[i];
   }
   Overlaps overlaps;
   overlaps.pred_size.assign(predicted.size(), 0);
   for (size_t i = 0; i < n; ++i) {
     const int32_t truth = gt.semantic[i];
     if (truth < 0) continue;
-    m.covered_points += assigned[i] != kNone;
+    m->covered_points += assigned[i] != kNone;
     const int32_t pred =
         assigned[i] != kNone ? predicted[assigned[i]].class_id : -1;
     if (pred == truth) {
-      ++per_class[truth].true_positives;
+      ++(*per_class)[truth].true_positives;
     } else {
-      ++per_class[truth].false_negatives;
-      if (const auto it = per_class.find(pred); it != per_class.end()) {
+      ++(*per_class)[truth].false_negatives;
+      if (const auto it = per_class->find(pred); it != per_class->end()) {
         ++it->second.false_positives;
       }
     }
@@ -310,36 +308,78 @@ SceneMetrics EvaluateScene(const SceneGroundTruth& gt,
     }
   }
   double iou_sum = 0.0;
-  for (auto& [id, c] : per_class) {
+  for (auto& [id, c] : *per_class) {
     const double denom = static_cast<double>(
         c.true_positives + c.false_positives + c.false_negatives);
     c.iou = denom > 0 ? static_cast<double>(c.true_positives) / denom : 0.0;
     iou_sum += c.iou;
   }
-  m.mean_iou =
-      per_class.empty() ? 0.0 : iou_sum / static_cast<double>(per_class.size());
+  m->mean_iou = per_class->empty()
+                    ? 0.0
+                    : iou_sum / static_cast<double>(per_class->size());
+  return overlaps;
+}
 
-  // Instances: the class of a ground-truth object is its points' majority.
+// Ground-truth objects of the thing classes, by class: an object's class is
+// its points' majority.
+std::map<int32_t, std::vector<int32_t>> GtObjectsOfClass(
+    const SceneGroundTruth& gt, const std::set<int32_t>& thing_classes) {
   std::map<int32_t, std::map<int32_t, size_t>> object_votes;
-  for (size_t i = 0; i < n; ++i) {
+  for (size_t i = 0; i < gt.points.size(); ++i) {
     if (gt.instance[i] > 0 && gt.semantic[i] >= 0) {
       ++object_votes[gt.instance[i]][gt.semantic[i]];
     }
   }
-  std::map<int32_t, std::vector<int32_t>> gt_objects_of_class;
+  std::map<int32_t, std::vector<int32_t>> out;
   for (const auto& [object, votes] : object_votes) {
     const auto best = std::max_element(
         votes.begin(), votes.end(),
         [](const auto& a, const auto& b) { return a.second < b.second; });
     if (thing_classes.count(best->first) != 0) {
-      gt_objects_of_class[best->first].push_back(object);
+      out[best->first].push_back(object);
     }
   }
+  return out;
+}
+
+// Per ground-truth object of a class: the predicted pieces holding >= 10% of
+// it, and its report line.
+void ReportObjects(const std::vector<int32_t>& objects, int32_t cls,
+                   const std::vector<PredictedObject>& predicted,
+                   const Overlaps& overlaps,
+                   const std::map<int32_t, uint16_t>& views_of,
+                   SceneMetrics* m) {
+  for (int32_t g : objects) {
+    size_t pieces = 0;
+    for (size_t p = 0; p < predicted.size(); ++p) {
+      const auto it = overlaps.intersection.find({p, g});
+      if (it != overlaps.intersection.end() &&
+          10 * it->second >= overlaps.gt_size.at(g)) {
+        ++pieces;
+      }
+    }
+    m->pieces_per_gt_object[g] = pieces;
+    m->objects.push_back(ReportObject(g, cls, predicted, overlaps));
+    if (const auto it = views_of.find(g); it != views_of.end()) {
+      m->objects.back().views = it->second;
+    }
+  }
+}
+
+// ScanNet-style AP25/AP50 per thing class and their means, recall and
+// precision at IoU 0.5, the objects' report.
+void InstanceMetrics(const SceneGroundTruth& gt,
+                     const std::vector<PredictedObject>& predicted,
+                     const std::set<int32_t>& thing_classes,
+                     const Overlaps& overlaps,
+                     std::map<int32_t, SceneClassMetrics>* per_class,
+                     SceneMetrics* m) {
+  const auto gt_objects_of_class = GtObjectsOfClass(gt, thing_classes);
   std::map<int32_t, std::vector<size_t>> predictions_of_class;
   for (size_t p = 0; p < predicted.size(); ++p) {
     if (thing_classes.count(predicted[p].class_id) != 0) {
       predictions_of_class[predicted[p].class_id].push_back(p);
-      ++m.predicted_objects;
+      ++m->predicted_objects;
     }
   }
   double ap25_sum = 0.0, ap50_sum = 0.0;
@@ -356,7 +396,7 @@ SceneMetrics EvaluateScene(const SceneGroundTruth& gt,
         MatchClass(objects, preds, predicted, overlaps, 0.25);
     const ClassMatches m50 =
         MatchClass(objects, preds, predicted, overlaps, 0.5);
-    SceneClassMetrics& c = per_class[cls];
+    SceneClassMetrics& c = (*per_class)[cls];
     c.id = cls;
     c.has_instances = true;
     c.gt_objects = objects.size();
@@ -367,41 +407,49 @@ SceneMetrics EvaluateScene(const SceneGroundTruth& gt,
     ap25_sum += c.ap25;
     ap50_sum += c.ap50;
     ++classes_with_objects;
-    m.gt_objects += objects.size();
+    m->gt_objects += objects.size();
     matched_gt50 += m50.matched_gt;
     matched_pred50 += m50.matched_predictions;
-    for (int32_t g : objects) {
-      size_t pieces = 0;
-      for (size_t p = 0; p < predicted.size(); ++p) {
-        const auto it = overlaps.intersection.find({p, g});
-        if (it != overlaps.intersection.end() &&
-            10 * it->second >= overlaps.gt_size.at(g)) {
-          ++pieces;
-        }
-      }
-      m.pieces_per_gt_object[g] = pieces;
-      m.objects.push_back(ReportObject(g, cls, predicted, overlaps));
-      if (const auto it = views_of.find(g); it != views_of.end()) {
-        m.objects.back().views = it->second;
-      }
-    }
+    ReportObjects(objects, cls, predicted, overlaps, views_of, m);
   }
-  std::sort(m.objects.begin(), m.objects.end(),
+  std::sort(m->objects.begin(), m->objects.end(),
             [](const auto& a, const auto& b) { return a.id < b.id; });
   if (classes_with_objects > 0) {
-    m.ap25 = ap25_sum / static_cast<double>(classes_with_objects);
-    m.ap50 = ap50_sum / static_cast<double>(classes_with_objects);
+    m->ap25 = ap25_sum / static_cast<double>(classes_with_objects);
+    m->ap50 = ap50_sum / static_cast<double>(classes_with_objects);
   }
-  if (m.gt_objects > 0) {
-    m.recall50 =
-        static_cast<double>(matched_gt50) / static_cast<double>(m.gt_objects);
-    m.objects_per_gt_object = static_cast<double>(m.predicted_objects) /
-                              static_cast<double>(m.gt_objects);
+  if (m->gt_objects > 0) {
+    m->recall50 =
+        static_cast<double>(matched_gt50) / static_cast<double>(m->gt_objects);
+    m->objects_per_gt_object = static_cast<double>(m->predicted_objects) /
+                               static_cast<double>(m->gt_objects);
   }
-  if (m.predicted_objects > 0) {
-    m.precision50 = static_cast<double>(matched_pred50) /
-                    static_cast<double>(m.predicted_objects);
+  if (m->predicted_objects > 0) {
+    m->precision50 = static_cast<double>(matched_pred50) /
+                     static_cast<double>(m->predicted_objects);
   }
+}
+
+}  // namespace
+
+SceneMetrics EvaluateScene(const SceneGroundTruth& gt,
+                           const std::vector<PredictedObject>& predicted,
+                           const std::set<int32_t>& thing_classes,
+                           const SceneEvalOptions& options) {
+  options.Check();
+  const size_t n = gt.points.size();
+  CheckArgument(gt.semantic.size() == n && gt.instance.size() == n,
+                "eval scene: one class and instance per ground-truth point");
+  CheckArgument(gt.views.empty() || gt.views.size() == n,
+                "eval scene: views for every ground-truth point or none");
+  SceneMetrics m;
+  m.gt_points = n;
+  const std::vector<size_t> assigned =
+      TransferLabels(gt, predicted, options.radius_m);
+  std::map<int32_t, SceneClassMetrics> per_class;
+  const Overlaps overlaps =
+      SemanticIou(gt, predicted, assigned, &per_class, &m);
+  InstanceMetrics(gt, predicted, thing_classes, overlaps, &per_class, &m);
   for (auto& [id, c] : per_class) m.classes.push_back(c);
   return m;
 }

@@ -1,7 +1,6 @@
 #include "semrec/fuse/fuse_sequence.h"
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <optional>
 #include <vector>
@@ -12,6 +11,7 @@
 
 #include "semrec/core/error.h"
 #include "semrec/core/file_util.h"
+#include "semrec/core/stopwatch.h"
 #include "semrec/io/ply_io.h"
 
 namespace fs = std::filesystem;
@@ -148,7 +148,7 @@ FuseSequenceResult FuseSequence(const io::SequenceReader& reader,
                                 SceneFusion* fusion,
                                 const ProgressOptions& progress_options) {
   CheckArgument(fusion != nullptr, "FuseSequence: fusion is null");
-  const auto start = std::chrono::steady_clock::now();
+  const Stopwatch start;
   FuseSequenceResult result;
   Progress progress("fusing", reader.size(), progress_options);
   std::vector<Transform> cameras;
@@ -190,9 +190,7 @@ FuseSequenceResult FuseSequence(const io::SequenceReader& reader,
     spdlog::warn("{} of {} frames had no segment with valid depth",
                  result.empty_frames, reader.size());
   }
-  result.seconds =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - start)
-          .count();
+  result.seconds = start.Elapsed();
   return result;
 }
 

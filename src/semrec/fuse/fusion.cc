@@ -2,7 +2,6 @@
 #include "semrec/fuse/fusion.h"
 
 #include <algorithm>
-#include <chrono>
 #include <map>
 #include <numeric>
 #include <optional>
@@ -13,18 +12,11 @@
 #include <tbb/parallel_for.h>
 
 #include "semrec/core/error.h"
+#include "semrec/core/stopwatch.h"
 #include "semrec/core/union_find.h"
 #include "semrec/fuse/overlap.h"
 
 namespace semrec::fuse {
-namespace {
-
-double Seconds(std::chrono::steady_clock::time_point since) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - since)
-      .count();
-}
-
-}  // namespace
 
 void FusionOptions::Check() const {
   CheckArgument(corr_voxel_size_m > 0.0,
@@ -112,7 +104,7 @@ std::vector<FrameSegment> JoinStuffPerClass(
 FrameFusionStats SceneFusion::Integrate(
     const std::vector<FrameSegment>& input_segments, size_t frame_index,
     const FrameObservation* observation) {
-  const auto start = std::chrono::steady_clock::now();
+  const Stopwatch start;
   last_frame_ = frame_index;
   // Joined stuff segments only when there is something to join: a copy of
   // every frame segment's points per frame is not free.
@@ -135,7 +127,7 @@ FrameFusionStats SceneFusion::Integrate(
   double evidence_seconds = 0.0;
   FrameCoverage coverage;
   if (evidence_on()) {
-    const auto t0 = std::chrono::steady_clock::now();
+    const Stopwatch t0;
     coverage = Coverage(frame_segments, clouds.corr, clouds.bounds);
     // The map seeing itself is neither a class vote nor a view.
     for (size_t f = 0; f < frame_segments.size(); ++f) {
@@ -143,14 +135,14 @@ FrameFusionStats SceneFusion::Integrate(
       std::fill(coverage.on[f].begin(), coverage.on[f].end(), 0u);
       std::fill(coverage.nearest[f].begin(), coverage.nearest[f].end(), 0u);
     }
-    evidence_seconds += Seconds(t0);
+    evidence_seconds += t0.Elapsed();
   }
   const auto matches = MatchSegments(frame_segments, clouds, map_object,
                                      coverage, frame_index, &stats);
   if (evidence_on()) {
-    const auto t0 = std::chrono::steady_clock::now();
+    const Stopwatch t0;
     RecordViewEvidence(frame_segments, coverage, frame_index);
-    evidence_seconds += Seconds(t0);
+    evidence_seconds += t0.Elapsed();
   }
   ApplyMatches(frame_segments, matches, map_object, frame_index, &clouds,
                &stats);
@@ -162,19 +154,19 @@ FrameFusionStats SceneFusion::Integrate(
     stats.assigned_ids = std::move(ids);
   }
   if (evidence_on()) {
-    const auto t0 = std::chrono::steady_clock::now();
+    const Stopwatch t0;
     for (SceneSegment& s : segments_) UpdateClass(&s);
     stats.evidence_merges = MergeByEvidence(frame_index);
-    evidence_seconds += Seconds(t0);
+    evidence_seconds += t0.Elapsed();
   }
   if (voxel_map_) {
-    const auto t0 = std::chrono::steady_clock::now();
+    const Stopwatch t0;
     voxel_map_->AddFrame(input_segments, stats.assigned_ids, observation,
                          frame_index);
-    evidence_seconds += Seconds(t0);
+    evidence_seconds += t0.Elapsed();
   }
   stats.evidence_seconds = evidence_seconds;
-  stats.seconds = Seconds(start);
+  stats.seconds = start.Elapsed();
   return stats;
 }
 
@@ -289,7 +281,7 @@ std::vector<std::vector<size_t>> SceneFusion::MatchSegments(
   // pairs are compared in parallel pair by pair (one large segment, floor or
   // wall, would otherwise keep a core busy alone).
   std::vector<std::vector<size_t>> matches(frame_segments.size());
-  const auto compare_start = std::chrono::steady_clock::now();
+  const Stopwatch compare_start;
   std::vector<Candidate> candidates = ListCandidates(
       frame_segments, clouds, map_object, coverage, &matches, stats);
   const bool fast = options_.method == FusionOptions::Method::kFast;
@@ -317,7 +309,7 @@ std::vector<std::vector<size_t>> SceneFusion::MatchSegments(
   } else {
     for (size_t k = 0; k < candidates.size(); ++k) compare(k);
   }
-  stats->compare_seconds = Seconds(compare_start);
+  stats->compare_seconds = compare_start.Elapsed();
   for (const Candidate& c : candidates) {
     stats->distance_computations_done += c.overlap.distance_computations;
     SPDLOG_TRACE(

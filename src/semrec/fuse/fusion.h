@@ -23,18 +23,19 @@
 // without an overlap test: one segment per stuff class (walls on opposite
 // sides of a room never overlap, yet they are the same structure).
 //
-// Evidence (Merge::kEvidence, the default): after the paper's rule, views that
+// Evidence (Merge::kEvidence): after the paper's rule, views that
 // show two objects inside one mask merge them (fuse/evidence.h), an object's
 // class is the vote of every mask that fell on it, a frame segment lying on an
 // object of another class merges into it on a strong overlap (sigma >
 // cross_class_alpha), and Finish() folds fragments into the object they touch
 // or drops them. Every such decision is listed in events().
 //
-// Voxel (Merge::kVoxel, the default): the evidence rule while streaming, and
-// every frame's labels also vote per map voxel (fuse/voxel_evidence.h); at the
-// end ResolveMap() decides the objects per place from those votes
-// (fuse/map_objects.h: structure only on its planes, objects split where
-// apart, fragments judged by visibility) instead of the fragment rule.
+// Voxel (Merge::kVoxel, the default; docs/fusion.md): the evidence rule while
+// streaming, and every frame's labels also vote per map voxel
+// (fuse/voxel_evidence.h); at the end ResolveMap() decides the objects per
+// place from those votes (fuse/map_objects.h: structure only on its planes,
+// objects split where apart, fragments judged by visibility) instead of the
+// fragment rule.
 #pragma once
 
 #include <cstdint>

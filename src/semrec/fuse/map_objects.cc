@@ -1,7 +1,6 @@
 #include "semrec/fuse/map_objects.h"
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <map>
 #include <set>
@@ -11,6 +10,7 @@
 #include <spdlog/spdlog.h>
 
 #include "semrec/core/error.h"
+#include "semrec/core/stopwatch.h"
 #include "semrec/fuse/map_resolver.h"
 
 namespace semrec::fuse {
@@ -53,6 +53,25 @@ void MapObjectOptions::Check() const {
                 "map objects: max_speck_gap_m must be >= 0");
   CheckArgument(touch_voxels >= 1 && touch_voxels <= 3,
                 "map objects: touch_voxels must be 1, 2 or 3");
+  for (const std::string& pass : skip_passes) {
+    const auto& names = MapResolverPassNames();
+    std::string known;
+    for (const std::string& n : names) known += (known.empty() ? "" : ", ") + n;
+    CheckArgument(
+        std::find(names.begin(), names.end(), pass) != names.end(),
+        "map objects: no resolver pass '" + pass + "' (passes: " + known + ")");
+  }
+}
+
+const std::vector<std::string>& MapResolverPassNames() {
+  static const std::vector<std::string> kNames = [] {
+    std::vector<std::string> names;
+    for (const auto& pass : internal::MapResolver::Passes()) {
+      names.push_back(pass.name);
+    }
+    return names;
+  }();
+  return kNames;
 }
 
 namespace internal {
@@ -78,25 +97,50 @@ uint16_t Winner(const VoxelEvidence& v, const std::vector<uint16_t>& excluded) {
 
 }  // namespace
 
+const std::vector<MapResolver::Pass>& MapResolver::Passes() {
+  // The object decision, in the order it runs (docs/fusion.md): structure
+  // from planes, objects from the fusion's, splits and merges by the masks'
+  // consensus, classes by size, fragments by visibility, structure that only
+  // things can own.
+  static const std::vector<Pass> kPasses = {
+      {"gate-structure", &MapResolver::GateStructure,
+       [](const MapObjectOptions& o) { return o.structure_planes; }},
+      {"release-flush-parts", &MapResolver::ReleaseFlushParts,
+       [](const MapObjectOptions& o) {
+         return o.structure_planes && o.min_flush_share < 1.0;
+       }},
+      {"assign-owners", &MapResolver::AssignOwners, nullptr},
+      {"split-by-masks", &MapResolver::SplitByMasks, nullptr},
+      {"split-disconnected", &MapResolver::SplitDisconnected, nullptr},
+      {"attach-orphans", &MapResolver::AttachOrphans, nullptr},
+      {"merge-by-masks", &MapResolver::MergeByMasks, nullptr},
+      {"fit-classes-to-sizes", &MapResolver::FitClassesToSizes,
+       [](const MapObjectOptions& o) { return o.size_slack > 0.0; }},
+      {"judge-fragments", &MapResolver::JudgeFragments, nullptr},
+      {"claim-fronts", &MapResolver::ClaimFronts,
+       [](const MapObjectOptions& o) { return o.claim_stranded; }},
+      {"claim-stranded", &MapResolver::ClaimStranded,
+       [](const MapObjectOptions& o) { return o.claim_stranded; }},
+      {"claim-enclosed", &MapResolver::ClaimEnclosed,
+       [](const MapObjectOptions& o) {
+         return o.structure_planes && o.claim_enclosed;
+       }},
+      {"release-far-specks", &MapResolver::ReleaseFarSpecks,
+       [](const MapObjectOptions& o) { return o.max_speck_gap_m > 0.0; }},
+  };
+  return kPasses;
+}
+
 MapResolution MapResolver::Run() {
   CollectCells();
-  if (options_.structure_planes) GateStructure();
-  if (options_.structure_planes && options_.min_flush_share < 1.0) {
-    ReleaseFlushParts();
+  for (const Pass& pass : Passes()) {
+    if (pass.enabled != nullptr && !pass.enabled(options_)) continue;
+    if (options_.skip_passes.contains(pass.name)) {
+      spdlog::debug("resolver pass {} left out", pass.name);
+      continue;
+    }
+    (this->*pass.run)();
   }
-  AssignOwners();
-  SplitByMasks();
-  SplitDisconnected();
-  AttachOrphans();
-  MergeByMasks();
-  if (options_.size_slack > 0.0) FitClassesToSizes();
-  JudgeFragments();
-  if (options_.claim_stranded) {
-    ClaimFronts();
-    ClaimStranded();
-  }
-  if (options_.structure_planes && options_.claim_enclosed) ClaimEnclosed();
-  if (options_.max_speck_gap_m > 0.0) ReleaseFarSpecks();
   return Build();
 }
 
@@ -104,7 +148,7 @@ void MapResolver::CollectCells() {
   // The far views' class weights join the voxel's; their views count for
   // visibility only (Visibility), not as ranged views of a class (which let a
   // class take over gated structure, CanTakeOver).
-  const auto far_start = std::chrono::steady_clock::now();
+  const Stopwatch far_start;
   far_ = map_.FarVotes();
   for (const auto& [key, votes] : far_) {
     VoxelEvidence& v = amended_[key] = map_.voxels().at(key);
@@ -114,9 +158,7 @@ void MapResolver::CollectCells() {
   }
   spdlog::debug("far views: {}, voxels they voted on: {} ({:.1f} ms)",
                 map_.far_view_count(), amended_.size(),
-                std::chrono::duration<double, std::milli>(
-                    std::chrono::steady_clock::now() - far_start)
-                    .count());
+                1000.0 * far_start.Elapsed());
   for (const auto& [key, v] : map_.voxels()) {
     if (v.classes.empty() || v.points == 0) continue;
     const auto amended = amended_.find(key);

@@ -60,6 +60,7 @@
 #include <cstdint>
 #include <functional>
 #include <map>
+#include <set>
 #include <string>
 #include <unordered_map>
 #include <vector>
@@ -72,7 +73,14 @@
 
 namespace semrec::fuse {
 
+/// The resolver's passes that can be left out, in the order they run (after
+/// the cells are collected; docs/fusion.md).
+const std::vector<std::string>& MapResolverPassNames();
+
 struct MapObjectOptions {
+  /// Passes of the resolver left out (MapResolverPassNames(); for ablations:
+  /// scripts/ablate_resolver, `--resolver-skip`).
+  std::set<std::string> skip_passes;
   /// Gate structure classes by planes (off: the histogram winner as it is).
   bool structure_planes = true;
   StructurePlaneOptions planes;

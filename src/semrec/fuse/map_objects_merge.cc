@@ -223,96 +223,121 @@ void MapResolver::JoinClasses(uint32_t keep, uint32_t gone, uint16_t winner) {
   owner_class_[keep] = winner;
 }
 
-void MapResolver::MergeByMasks() {
-  Members members = ThingMembers();
-  MaskHolders holders;
-  for (const auto& [id, cells] : members) holders[id] = Holders(cells);
-  const std::vector<MergeLink> links = MergeLinks(members, holders);
+// The groups links join: each object's group (a union-find over object ids),
+// the objects and voxels each group holds, and each group's mask holders.
+struct MapResolver::MergeGroups {
+  Members members;
+  MaskHolders holders;  // per object, as it was before merging
   std::map<uint32_t, uint32_t> into;
-  auto find = [&](uint32_t id) {
-    while (into.count(id)) id = into[id];
-    return id;
-  };
   // The objects each group holds, as they were before merging.
   std::map<uint32_t, std::vector<uint32_t>> parts;
-  for (const auto& entry : members) parts[entry.first] = {entry.first};
   // Each merged group's mask holders, computed when first needed (a large
   // group meets many links).
-  std::map<uint32_t, std::map<size_t, std::set<uint64_t>>> holders_of_group;
-  auto group_holders = [&](uint32_t id) -> const auto& {
+  MaskHolders holders_of_group;
+
+  uint32_t Find(uint32_t id) {
+    while (into.count(id)) id = into[id];
+    return id;
+  }
+  const std::map<size_t, std::set<uint64_t>>& GroupHolders(
+      const MapResolver& resolver, uint32_t id) {
     if (parts[id].size() == 1) return holders.at(id);
     auto it = holders_of_group.find(id);
     if (it == holders_of_group.end()) {
-      it = holders_of_group.emplace(id, Holders(members[id])).first;
+      it = holders_of_group.emplace(id, resolver.Holders(members[id])).first;
     }
     return it->second;
-  };
-  for (const MergeLink& link : links) {
-    const uint32_t x = find(link.a), y = find(link.b);
-    if (x == y) continue;
-    const bool same = owner_class_[x] == owner_class_[y];
-    // A piece attached to an object of another class joins it only as
-    // itself: once joined to others (a table's piece), its group is no piece.
-    if (link.piece != 0 && parts[find(link.piece)].size() != 1) {
-      spdlog::debug("objects {} and {}: not joined, {} is no longer a piece",
-                    link.a, link.b, link.piece);
-      continue;
-    }
-    const bool fits = same && FitsOne(members[x], members[y], owner_class_[x]);
-    // Parts of one object must still fit one object together, or still be
-    // nested.
-    if (link.parts && !fits) continue;
-    const bool nested = link.nested && Nested(members[x], members[y]);
-    if (link.nested && !nested) continue;
-    if (same && link.views.one < options_.min_one_views && !link.attached &&
-        !link.nested &&
-        !FitsTogether(members[x], members[y], owner_class_[x])) {
+  }
+  void Join(uint32_t keep, uint32_t gone) {
+    into[gone] = keep;
+    holders_of_group.erase(keep);
+    holders_of_group.erase(gone);
+    members[keep].insert(members[keep].end(), members[gone].begin(),
+                         members[gone].end());
+    parts[keep].insert(parts[keep].end(), parts[gone].begin(),
+                       parts[gone].end());
+  }
+};
+
+bool MapResolver::MayJoin(const MergeLink& link, uint32_t x, uint32_t y,
+                          MergeGroups* g) {
+  const bool same = owner_class_[x] == owner_class_[y];
+  // A piece attached to an object of another class joins it only as itself:
+  // once joined to others (a table's piece), its group is no piece.
+  if (link.piece != 0 && g->parts[g->Find(link.piece)].size() != 1) {
+    spdlog::debug("objects {} and {}: not joined, {} is no longer a piece",
+                  link.a, link.b, link.piece);
+    return false;
+  }
+  Members& members = g->members;
+  const bool fits = same && FitsOne(members[x], members[y], owner_class_[x]);
+  // Parts of one object must still fit one object together, or still be
+  // nested.
+  if (link.parts && !fits) return false;
+  const bool nested = link.nested && Nested(members[x], members[y]);
+  if (link.nested && !nested) return false;
+  if (same && link.views.one < options_.min_one_views && !link.attached &&
+      !link.nested && !FitsTogether(members[x], members[y], owner_class_[x])) {
+    spdlog::debug(
+        "objects {} and {}: not joined, {} view(s) saw them in one mask "
+        "and their groups ({} and {} voxels) are too large for one",
+        link.a, link.b, link.views.one, members[x].size(), members[y].size());
+    return false;
+  }
+  // No chain of links joins two objects the views held apart (chairs round
+  // a table, each touching a small piece that touches the next: six views
+  // showed two of them in different masks, none in one). Where one object
+  // of the class has a known size, fitting it decides instead: a mask
+  // generator that cuts a sofa's back off its seat in every view holds
+  // every piece of the back apart from every piece of the seat.
+  if (!fits && !nested &&
+      HeldApart(g->parts[x], g->parts[y], g->holders, link)) {
+    spdlog::debug("objects {} and {}: not joined, held apart", link.a, link.b);
+    return false;
+  }
+  // Two classes: the views are counted again on the groups the link would
+  // join, and more views holding them apart than in one mask keep them
+  // apart (a box whose pieces joined first, seen in its own mask by four
+  // views, is not one with the shelf three views held it with, though the
+  // piece at the shelf was held with it by more views than apart). The
+  // class evidence stays the pair's: a group dilutes a confused part's
+  // votes. A link of one class between groups of two (a table's piece
+  // joined the cabinet beside it first) says nothing of their classes: the
+  // groups must be one by the rule for two classes.
+  if (!same && (g->parts[x].size() > 1 || g->parts[y].size() > 1)) {
+    const PairViews v =
+        CoViews(g->GroupHolders(*this, x), g->GroupHolders(*this, y));
+    const bool one = link.same_class ? OneObject(members[x], members[y], x, y,
+                                                 v, link.contact)
+                                     : v.one >= v.two;
+    if (!one) {
       spdlog::debug(
-          "objects {} and {}: not joined, {} view(s) saw them in one mask "
-          "and their groups ({} and {} voxels) are too large for one",
-          link.a, link.b, link.views.one, members[x].size(), members[y].size());
-      continue;
+          "objects {} and {}: not joined, their groups ({} and {} voxels, "
+          "{} views one, {} two) are not one",
+          link.a, link.b, members[x].size(), members[y].size(), v.one, v.two);
+      return false;
     }
-    // No chain of links joins two objects the views held apart (chairs round
-    // a table, each touching a small piece that touches the next: six views
-    // showed two of them in different masks, none in one). Where one object
-    // of the class has a known size, fitting it decides instead: a mask
-    // generator that cuts a sofa's back off its seat in every view holds
-    // every piece of the back apart from every piece of the seat.
-    if (!fits && !nested && HeldApart(parts[x], parts[y], holders, link)) {
-      spdlog::debug("objects {} and {}: not joined, held apart", link.a,
-                    link.b);
-      continue;
-    }
-    // Two classes: the views are counted again on the groups the link would
-    // join, and more views holding them apart than in one mask keep them
-    // apart (a box whose pieces joined first, seen in its own mask by four
-    // views, is not one with the shelf three views held it with, though the
-    // piece at the shelf was held with it by more views than apart). The
-    // class evidence stays the pair's: a group dilutes a confused part's
-    // votes. A link of one class between groups of two (a table's piece
-    // joined the cabinet beside it first) says nothing of their classes: the
-    // groups must be one by the rule for two classes.
-    if (!same && (parts[x].size() > 1 || parts[y].size() > 1)) {
-      const PairViews v = CoViews(group_holders(x), group_holders(y));
-      const bool one = link.same_class ? OneObject(members[x], members[y], x, y,
-                                                   v, link.contact)
-                                       : v.one >= v.two;
-      if (!one) {
-        spdlog::debug(
-            "objects {} and {}: not joined, their groups ({} and {} voxels, "
-            "{} views one, {} two) are not one",
-            link.a, link.b, members[x].size(), members[y].size(), v.one, v.two);
-        continue;
-      }
-    }
+  }
+  return true;
+}
+
+void MapResolver::MergeByMasks() {
+  MergeGroups g;
+  g.members = ThingMembers();
+  for (const auto& [id, cells] : g.members) g.holders[id] = Holders(cells);
+  const std::vector<MergeLink> links = MergeLinks(g.members, g.holders);
+  for (const auto& entry : g.members) g.parts[entry.first] = {entry.first};
+  Members& members = g.members;
+  for (const MergeLink& link : links) {
+    const uint32_t x = g.Find(link.a), y = g.Find(link.b);
+    if (x == y || !MayJoin(link, x, y, &g)) continue;
     const bool x_keeps = members[x].size() >= members[y].size();
     const uint32_t keep = x_keeps ? x : y, gone = x_keeps ? y : x;
     const uint16_t ck = owner_class_[keep], cg = owner_class_[gone];
     uint16_t winner = ck;
     if (ck != cg) {
       // An attached piece of another class takes the object's class.
-      const uint32_t piece_group = link.piece != 0 ? find(link.piece) : 0;
+      const uint32_t piece_group = link.piece != 0 ? g.Find(link.piece) : 0;
       const uint16_t attached_to =
           piece_group == 0 ? kNoClass : (piece_group == keep ? cg : ck);
       bool fits = true;
@@ -333,19 +358,13 @@ void MapResolver::MergeByMasks() {
         link.views.one, link.views.two, link.contact,
         link.attached ? ", attached" : "", link.parts ? ", parts" : "",
         link.nested ? ", nested" : "");
-    into[gone] = keep;
-    holders_of_group.erase(keep);
-    holders_of_group.erase(gone);
-    members[keep].insert(members[keep].end(), members[gone].begin(),
-                         members[gone].end());
-    parts[keep].insert(parts[keep].end(), parts[gone].begin(),
-                       parts[gone].end());
+    g.Join(keep, gone);
     if (ck != cg) JoinClasses(keep, gone, winner);
     ++result_.merged_objects;
   }
   for (Cell& c : cells_) {
     if (c.owner == 0 || !IsThingCell(c)) continue;
-    c.owner = find(c.owner);
+    c.owner = g.Find(c.owner);
     c.class_id = owner_class_[c.owner];
   }
 }

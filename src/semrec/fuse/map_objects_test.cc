@@ -9,6 +9,7 @@
 
 #include <gtest/gtest.h>
 
+#include "semrec/core/error.h"
 #include "semrec/fuse/fusion.h"
 #include "semrec/fuse/map_test_util.h"
 #include "semrec/fuse/voxel_evidence.h"
@@ -56,6 +57,35 @@ TEST(MapObjects, PartSeenOnceWhereFiveViewsLookedIsAFragment) {
   const SceneFusion fusion = Fuse(views);
   EXPECT_EQ(Count(fusion, kLamp), 0u);
   EXPECT_EQ(fusion.map_resolution()->fragments_dropped, 1u);
+  // The ablation switch: without the fragment pass the lamp stays.
+  FusionOptions without;
+  without.map_objects.skip_passes = {"judge-fragments"};
+  const SceneFusion kept = Fuse(views, without);
+  EXPECT_EQ(Count(kept, kLamp), 1u);
+  EXPECT_EQ(kept.map_resolution()->fragments_dropped, 0u);
+}
+
+TEST(MapObjects, PassesAreNamedInTheOrderTheyRunAndUnknownOnesRefused) {
+  const std::vector<std::string>& names = MapResolverPassNames();
+  ASSERT_EQ(names.size(), 13u);
+  EXPECT_EQ(names.front(), "gate-structure");
+  EXPECT_EQ(names.back(), "release-far-specks");
+  const auto at = [&](const std::string& n) {
+    return std::find(names.begin(), names.end(), n) - names.begin();
+  };
+  EXPECT_LT(at("split-by-masks"), at("merge-by-masks"));
+  EXPECT_LT(at("merge-by-masks"), at("judge-fragments"));
+  MapObjectOptions options;
+  options.skip_passes = {"judge-fragments", "claim-enclosed"};
+  EXPECT_NO_THROW(options.Check());
+  options.skip_passes = {"judge-fragment"};
+  try {
+    options.Check();
+    FAIL() << "an unknown pass was accepted";
+  } catch (const InvalidArgument& e) {
+    EXPECT_NE(std::string(e.what()).find("judge-fragment'"), std::string::npos);
+    EXPECT_NE(std::string(e.what()).find("judge-fragments"), std::string::npos);
+  }
 }
 
 // Surfaces `a` and `b` each ended mostly (> 90%) in one object, not the same.

@@ -41,26 +41,64 @@ double ProjectedMap::UnexplainedShare() const {
                    static_cast<double>(valid_depth_pixels);
 }
 
-ProjectedMap ProjectMap(const std::vector<SceneSegment>& objects,
-                        const CameraIntrinsics& intrinsics,
-                        const Transform& T_world_camera,
-                        const DepthImage& depth_m,
-                        const MapProjectionOptions& options) {
-  options.Check();
-  intrinsics.Check();
-  CheckArgument(
-      depth_m.SameSize(intrinsics.width, intrinsics.height),
-      "map projection: the depth image size differs from the intrinsics'");
+namespace {
+
+constexpr float kFar = std::numeric_limits<float>::infinity();
+
+// A splat that explains a pixel's measured depth.
+struct Match {
+  float diff = kFar;
+  uint32_t id = 0;
+  uint16_t class_id = 0;
+  float z = 0.0f;
+};
+
+// Per pixel the nearest splat (what the map would show: z-buffer, object and
+// class in *out) and, apart, the splats whose depth is closest to the
+// measured depth within the tolerance (what explains the measurement): near a
+// silhouette a nearer object's splat spills over the background, which the
+// map explains all the same. The best and the second-best object (distinct)
+// per pixel.
+struct Splats {
+  std::vector<float> zbuf;
+  std::vector<Match> best, second;
+};
+
+class DepthTolerance {
+ public:
+  explicit DepthTolerance(const MapProjectionOptions& options)
+      : options_(options) {}
+  float operator()(float z) const {
+    return options_.depth_tolerance_m + options_.depth_tolerance_ratio * z;
+  }
+
+ private:
+  const MapProjectionOptions& options_;
+};
+
+// Keeps m as the pixel's best or second-best match (distinct objects).
+void Offer(const Match& m, Match* best, Match* second) {
+  if (m.id == best->id) {
+    if (m.diff < best->diff) *best = m;
+  } else if (m.diff < best->diff) {
+    *second = *best;
+    *best = m;
+  } else if (m.id == second->id) {
+    if (m.diff < second->diff) *second = m;
+  } else if (m.diff < second->diff) {
+    *second = m;
+  }
+}
+
+Splats SplatObjects(const std::vector<SceneSegment>& objects,
+                    const CameraIntrinsics& intrinsics,
+                    const Transform& T_world_camera, const DepthImage& depth_m,
+                    const MapProjectionOptions& options, ProjectedMap* out) {
   const int w = intrinsics.width;
   const int h = intrinsics.height;
-  ProjectedMap out;
-  out.object_id = Image<uint32_t>(w, h);
-  out.class_id = LabelMap(w, h);
-  out.depth_m = DepthImage(w, h);
-  out.state = Image<uint8_t>(w, h);
-  constexpr float kFar = std::numeric_limits<float>::infinity();
-  std::vector<float> zbuf(static_cast<size_t>(w) * h, kFar);
-
+  const size_t pixels = static_cast<size_t>(w) * h;
+  Splats splats{std::vector<float>(pixels, kFar), std::vector<Match>(pixels),
+                std::vector<Match>(pixels)};
   const Eigen::Matrix3f R = T_world_camera.rotation().transpose().cast<float>();
   const Eigen::Vector3f t =
       (-T_world_camera.rotation().transpose() * T_world_camera.translation())
@@ -69,22 +107,7 @@ ProjectedMap ProjectMap(const std::vector<SceneSegment>& objects,
   const auto fy = static_cast<float>(intrinsics.fy);
   const auto cx = static_cast<float>(intrinsics.cx);
   const auto cy = static_cast<float>(intrinsics.cy);
-  // Per pixel the nearest splat (what the map would show) and, apart, the
-  // splat whose depth is closest to the measured depth within the tolerance
-  // (what explains the measurement): near a silhouette a nearer object's
-  // splat spills over the background, which the map explains all the same.
-  // The best and the second-best object (distinct) per pixel.
-  struct Match {
-    float diff = kFar;
-    uint32_t id = 0;
-    uint16_t class_id = 0;
-    float z = 0.0f;
-  };
-  std::vector<Match> best(static_cast<size_t>(w) * h);
-  std::vector<Match> second(static_cast<size_t>(w) * h);
-  const auto tolerance = [&](float z) {
-    return options.depth_tolerance_m + options.depth_tolerance_ratio * z;
-  };
+  const DepthTolerance tolerance(options);
   for (const SceneSegment& object : objects) {
     for (const Eigen::Vector3f& p_world : object.points) {
       const Eigen::Vector3f p = R * p_world + t;
@@ -100,35 +123,34 @@ ProjectedMap ProjectMap(const std::vector<SceneSegment>& objects,
       for (int y = std::max(0, v0 - r); y <= std::min(h - 1, v0 + r); ++y) {
         for (int x = std::max(0, u0 - r); x <= std::min(w - 1, u0 + r); ++x) {
           const size_t i = static_cast<size_t>(y) * w + x;
-          if (p.z() < zbuf[i]) {
-            zbuf[i] = p.z();
-            out.object_id(x, y) = object.id;
-            out.class_id(x, y) = object.class_id;
+          if (p.z() < splats.zbuf[i]) {
+            splats.zbuf[i] = p.z();
+            out->object_id(x, y) = object.id;
+            out->class_id(x, y) = object.class_id;
           }
           const float z = depth_m(x, y);
           const float diff = std::abs(z - p.z());
           if (!(z > 0) || diff > tolerance(z)) continue;
-          const Match m{diff, object.id, object.class_id, p.z()};
-          if (object.id == best[i].id) {
-            if (diff < best[i].diff) best[i] = m;
-          } else if (diff < best[i].diff) {
-            second[i] = best[i];
-            best[i] = m;
-          } else if (object.id == second[i].id) {
-            if (diff < second[i].diff) second[i] = m;
-          } else if (diff < second[i].diff) {
-            second[i] = m;
-          }
+          Offer({diff, object.id, object.class_id, p.z()}, &splats.best[i],
+                &splats.second[i]);
         }
       }
     }
   }
+  return splats;
+}
 
-  // Where two objects explain a pixel about equally well they are one surface
-  // to the camera (a surface fused twice under two classes): the pixel goes
-  // to the one that explains more of its neighbourhood, so that the frame's
-  // labels do not speckle between them (the whole frame would favour the
-  // largest object, a structure class gathering every mislabelled pixel).
+// Where two objects explain a pixel about equally well they are one surface
+// to the camera (a surface fused twice under two classes): the pixel goes to
+// the one that explains more of its neighbourhood, so that the frame's labels
+// do not speckle between them (the whole frame would favour the largest
+// object, a structure class gathering every mislabelled pixel).
+void ResolveAmbiguous(const DepthImage& depth_m,
+                      const MapProjectionOptions& options, Splats* splats) {
+  const int w = depth_m.width(), h = depth_m.height();
+  std::vector<Match>& best = splats->best;
+  const std::vector<Match>& second = splats->second;
+  const DepthTolerance tolerance(options);
   const auto ambiguous = [&](size_t i) {
     return second[i].id != 0 &&
            second[i].diff - best[i].diff <=
@@ -154,34 +176,66 @@ ProjectedMap ProjectMap(const std::vector<SceneSegment>& objects,
       if (votes_second > votes_best) best[i] = second[i];
     }
   }
+}
 
-  const Image<uint32_t> nearest_id = out.object_id;
+// Per pixel: no depth, explained (the explaining object, class and depth), or
+// contradicted (the camera sees past where the map has a surface and nothing
+// of the map lies at the measured depth: it moved or is gone).
+void ClassifyPixels(const Splats& splats, const DepthImage& depth_m,
+                    const MapProjectionOptions& options, ProjectedMap* out) {
+  const int w = depth_m.width(), h = depth_m.height();
+  const DepthTolerance tolerance(options);
+  const Image<uint32_t> nearest_id = out->object_id;
   for (int y = 0; y < h; ++y) {
     for (int x = 0; x < w; ++x) {
       const size_t i = static_cast<size_t>(y) * w + x;
-      const float z_map = zbuf[i];
-      if (z_map != kFar) out.depth_m(x, y) = z_map;
+      const float z_map = splats.zbuf[i];
+      if (z_map != kFar) out->depth_m(x, y) = z_map;
       const float z = depth_m(x, y);
       if (!(z > 0) || !std::isfinite(z)) {
-        out.state(x, y) = ProjectedMap::kNoDepth;
+        out->state(x, y) = ProjectedMap::kNoDepth;
         continue;
       }
-      ++out.valid_depth_pixels;
-      if (best[i].id != 0) {
-        out.state(x, y) = ProjectedMap::kExplained;
-        out.object_id(x, y) = best[i].id;
-        out.class_id(x, y) = best[i].class_id;
-        out.depth_m(x, y) = best[i].z;
-        ++out.explained_pixels;
+      ++out->valid_depth_pixels;
+      const Match& best = splats.best[i];
+      if (best.id != 0) {
+        out->state(x, y) = ProjectedMap::kExplained;
+        out->object_id(x, y) = best.id;
+        out->class_id(x, y) = best.class_id;
+        out->depth_m(x, y) = best.z;
+        ++out->explained_pixels;
       } else if (z_map != kFar && z > z_map + tolerance(z) &&
                  Interior(nearest_id, x, y)) {
-        // The camera sees past where the map has a surface and nothing of
-        // the map lies at the measured depth: it moved or is gone.
-        out.state(x, y) = ProjectedMap::kContradicted;
-        ++out.contradicted_pixels;
+        out->state(x, y) = ProjectedMap::kContradicted;
+        ++out->contradicted_pixels;
       }
     }
   }
+}
+
+}  // namespace
+
+ProjectedMap ProjectMap(const std::vector<SceneSegment>& objects,
+                        const CameraIntrinsics& intrinsics,
+                        const Transform& T_world_camera,
+                        const DepthImage& depth_m,
+                        const MapProjectionOptions& options) {
+  options.Check();
+  intrinsics.Check();
+  CheckArgument(
+      depth_m.SameSize(intrinsics.width, intrinsics.height),
+      "map projection: the depth image size differs from the intrinsics'");
+  const int w = intrinsics.width;
+  const int h = intrinsics.height;
+  ProjectedMap out;
+  out.object_id = Image<uint32_t>(w, h);
+  out.class_id = LabelMap(w, h);
+  out.depth_m = DepthImage(w, h);
+  out.state = Image<uint8_t>(w, h);
+  Splats splats =
+      SplatObjects(objects, intrinsics, T_world_camera, depth_m, options, &out);
+  ResolveAmbiguous(depth_m, options, &splats);
+  ClassifyPixels(splats, depth_m, options, &out);
   return out;
 }
 

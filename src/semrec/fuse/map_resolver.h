@@ -1,9 +1,11 @@
 // Internal to fuse/map_objects.h: the resolver whose steps decide the map's
 // objects, shared by map_objects.cc (cells, structure gate, owners, the
 // result), map_objects_split.cc (cuts by masks and by connectivity) and
-// map_objects_merge.cc (orphans, merges by masks, fragments) and
-// map_objects_size.cc (footprints, fits, nesting, classes by size). Not
-// installed.
+// map_objects_merge.cc (orphans, merges by masks, fragments),
+// map_objects_size.cc (footprints, fits, nesting, classes by size),
+// map_objects_claim.cc (fronts and stranded structure claimed by things) and
+// map_objects_enclosed.cc (walls enclosed by things). docs/fusion.md lists
+// the passes in the order MapResolver::Run calls them. Not installed.
 #pragma once
 
 #include <cstddef>
@@ -50,6 +52,15 @@ class MapResolver {
         next_id_(next_id) {}
 
   MapResolution Run();
+
+  // One pass of Run: its name (MapResolverPassNames), the member that runs
+  // it, and whether the options turn it on (null: always).
+  struct Pass {
+    const char* name;
+    void (MapResolver::*run)();
+    bool (*enabled)(const MapObjectOptions&);
+  };
+  static const std::vector<Pass>& Passes();
 
  private:
   struct Cell {
@@ -377,6 +388,12 @@ class MapResolver {
   // side by side are also touching, and one mask may hold a row of them);
   // the larger keeps its id.
   void MergeByMasks();
+  // MergeByMasks' groups as its links join them.
+  struct MergeGroups;
+  // Whether `link` may join groups x and y (the vetoes above but the class
+  // fit, ConfusedWinner's); says why not in the debug log.
+  bool MayJoin(const MergeLink& link, uint32_t x, uint32_t y,
+               MergeGroups* groups);
   // Group `gone` joins `keep` (of another class): `keep` takes `winner` and
   // remembers the classes its parts had (part_classes_).
   void JoinClasses(uint32_t keep, uint32_t gone, uint16_t winner);

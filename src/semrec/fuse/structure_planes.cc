@@ -355,6 +355,133 @@ bool FacesSide(const Eigen::Vector3d& n, int side,
   return side * n.dot(towards_camera.cast<double>()) >= 0.0;
 }
 
+// The best of o.ransac_iterations vertical planes through two random points,
+// scored on a sample (rooms have tens of thousands of wall voxels) by the
+// points within the tolerance seen from one side; *side: that side.
+StructurePlane VerticalHypothesis(
+    const Cloud& points, const std::vector<Eigen::Vector3f>& towards_camera,
+    const Eigen::Vector3d& up, const StructurePlaneOptions& o,
+    std::mt19937_64* rng, int* side) {
+  std::uniform_int_distribution<size_t> pick(0, points.size() - 1);
+  constexpr size_t kSample = 4000;
+  std::vector<size_t> scored;
+  if (points.size() > kSample) {
+    for (size_t i = 0; i < kSample; ++i) scored.push_back(pick(*rng));
+  } else {
+    scored.resize(points.size());
+    std::iota(scored.begin(), scored.end(), size_t{0});
+  }
+  StructurePlane best;
+  *side = 1;
+  for (int it = 0; it < o.ransac_iterations; ++it) {
+    const Eigen::Vector3d a = points[pick(*rng)].cast<double>();
+    const Eigen::Vector3d b = points[pick(*rng)].cast<double>();
+    Eigen::Vector3d n = (b - a).cross(up);
+    if (n.norm() < 0.1) continue;  // too close, or one above the other
+    n.normalize();
+    const double offset = n.dot(a);
+    size_t front = 0, back = 0;
+    for (size_t i : scored) {
+      if (std::abs(n.dot(points[i].cast<double>()) - offset) > o.tolerance_m) {
+        continue;
+      }
+      front += FacesSide(n, 1, towards_camera[i]);
+      back += FacesSide(n, -1, towards_camera[i]);
+    }
+    if (std::max(front, back) > best.support) {
+      best.normal = n, best.offset = offset;
+      best.support = std::max(front, back);
+      *side = front >= back ? 1 : -1;
+    }
+  }
+  return best;
+}
+
+// Heights along up of a plane's inliers, sorted: the 5% and 95% quantiles.
+struct HeightSpan {
+  double low = 0.0, high = 0.0;
+  double height() const { return high - low; }
+};
+
+// Least squares over the inliers (normal kept horizontal within the tilt
+// allowed): centroid and the smallest principal direction; oriented towards
+// the cameras that saw it (the room's side) where view directions are known;
+// its own tolerance and the bins along it it covers.
+HeightSpan RefineVerticalPlane(
+    const Cloud& points, const std::vector<Eigen::Vector3f>& towards_camera,
+    const std::vector<size_t>& inliers, int side, const Eigen::Vector3d& up,
+    const StructurePlaneOptions& o, StructurePlane* plane) {
+  const double max_dot =
+      std::sin(o.max_wall_tilt_deg * std::numbers::pi / 180.0);
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+  std::vector<double> heights;
+  bool sided = false;
+  for (size_t i : inliers) {
+    const Eigen::Vector3d q = points[i].cast<double>();
+    heights.push_back(up.dot(q));
+    mean += q;
+    sided = sided || !towards_camera[i].isZero();
+  }
+  std::sort(heights.begin(), heights.end());
+  const HeightSpan span{heights[heights.size() * 5 / 100],
+                        heights[heights.size() * 95 / 100]};
+  mean /= static_cast<double>(inliers.size());
+  Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+  for (size_t i : inliers) {
+    const Eigen::Vector3d d = points[i].cast<double>() - mean;
+    cov += d * d.transpose();
+  }
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(cov);
+  Eigen::Vector3d n = eig.eigenvectors().col(0);
+  const Eigen::Vector3d seen_from = side * plane->normal;
+  if (std::abs(n.dot(up)) <= max_dot) {
+    plane->normal = n.normalized();
+    plane->offset = plane->normal.dot(mean);
+  }
+  if (sided) {  // towards the cameras that saw it: the room's side
+    if (plane->normal.dot(seen_from) < 0.0) {
+      plane->normal = -plane->normal, plane->offset = -plane->offset;
+    }
+    plane->oriented = true;
+  }
+  plane->geometry = StructureGeometry::kVertical;
+  // Its own tolerance, like the floor's: a flat wall measured well is thin,
+  // and a headboard 5 cm in front of it is not wall.
+  std::vector<double> r;
+  r.reserve(inliers.size());
+  for (size_t i : inliers) {
+    r.push_back(plane->normal.dot(points[i].cast<double>()) - plane->offset);
+  }
+  plane->tolerance_m = OwnTolerance(std::move(r), o);
+  plane->top_m = span.high;
+  plane->along = up.cross(plane->normal).normalized();
+  for (size_t i : inliers) {
+    plane->along_bins.push_back(
+        AlongBin(plane->along, points[i].cast<double>()));
+  }
+  std::sort(plane->along_bins.begin(), plane->along_bins.end());
+  plane->along_bins.erase(
+      std::unique(plane->along_bins.begin(), plane->along_bins.end()),
+      plane->along_bins.end());
+  return span;
+}
+
+// The inliers leave (the other face's points stay for the next plane).
+void RemovePoints(const std::vector<size_t>& inliers, Cloud* points,
+                  std::vector<Eigen::Vector3f>* towards_camera) {
+  std::vector<bool> gone(points->size(), false);
+  for (size_t i : inliers) gone[i] = true;
+  size_t kept = 0;
+  for (size_t i = 0; i < points->size(); ++i) {
+    if (gone[i]) continue;
+    (*points)[kept] = (*points)[i];
+    (*towards_camera)[kept] = (*towards_camera)[i];
+    ++kept;
+  }
+  points->resize(kept);
+  towards_camera->resize(kept);
+}
+
 // Sequential RANSAC over planes containing `up`: two points fix one. With
 // `towards_camera` (parallel to points, or empty), a plane holds only the
 // points seen from one side of it: the two faces of an interior wall 10 cm
@@ -368,129 +495,33 @@ std::vector<StructurePlane> VerticalPlanes(
   }
   std::vector<StructurePlane> planes;
   std::mt19937_64 rng(o.seed);
-  const double max_dot =
-      std::sin(o.max_wall_tilt_deg * std::numbers::pi / 180.0);
   // Rejected candidates (too low for a wall) count as attempts too.
   for (int attempt = 0; attempt < 2 * o.max_planes &&
                         static_cast<int>(planes.size()) < o.max_planes &&
                         points.size() >= min_support;
        ++attempt) {
-    std::uniform_int_distribution<size_t> pick(0, points.size() - 1);
-    // Hypotheses are scored on a sample (the winner on every point below):
-    // rooms have tens of thousands of wall voxels.
-    constexpr size_t kSample = 4000;
-    std::vector<size_t> scored;
-    if (points.size() > kSample) {
-      for (size_t i = 0; i < kSample; ++i) scored.push_back(pick(rng));
-    } else {
-      scored.resize(points.size());
-      std::iota(scored.begin(), scored.end(), size_t{0});
-    }
-    StructurePlane best;
-    int best_side = 1;
-    for (int it = 0; it < o.ransac_iterations; ++it) {
-      const Eigen::Vector3d a = points[pick(rng)].cast<double>();
-      const Eigen::Vector3d b = points[pick(rng)].cast<double>();
-      Eigen::Vector3d n = (b - a).cross(up);
-      if (n.norm() < 0.1) continue;  // too close, or one above the other
-      n.normalize();
-      const double offset = n.dot(a);
-      size_t front = 0, back = 0;
-      for (size_t i : scored) {
-        if (std::abs(n.dot(points[i].cast<double>()) - offset) >
-            o.tolerance_m) {
-          continue;
-        }
-        front += FacesSide(n, 1, towards_camera[i]);
-        back += FacesSide(n, -1, towards_camera[i]);
-      }
-      if (std::max(front, back) > best.support) {
-        best.normal = n, best.offset = offset;
-        best.support = std::max(front, back);
-        best_side = front >= back ? 1 : -1;
-      }
-    }
-    auto inlier = [&](size_t i) {
-      return std::abs(best.normal.dot(points[i].cast<double>()) -
-                      best.offset) <= o.tolerance_m &&
-             FacesSide(best.normal, best_side, towards_camera[i]);
-    };
+    int side = 1;
+    StructurePlane best =
+        VerticalHypothesis(points, towards_camera, up, o, &rng, &side);
     std::vector<size_t> inliers;
     for (size_t i = 0; i < points.size(); ++i) {
-      if (inlier(i)) inliers.push_back(i);
+      if (std::abs(best.normal.dot(points[i].cast<double>()) - best.offset) <=
+              o.tolerance_m &&
+          FacesSide(best.normal, side, towards_camera[i])) {
+        inliers.push_back(i);
+      }
     }
     best.support = inliers.size();
     if (best.support < min_support) break;
-    // Least squares over the inliers (normal kept horizontal within the tilt
-    // allowed): centroid and the smallest principal direction.
-    Eigen::Vector3d mean = Eigen::Vector3d::Zero();
-    std::vector<double> heights;
-    bool sided = false;
-    for (size_t i : inliers) {
-      const Eigen::Vector3d q = points[i].cast<double>();
-      heights.push_back(up.dot(q));
-      mean += q;
-      sided = sided || !towards_camera[i].isZero();
-    }
-    std::sort(heights.begin(), heights.end());
-    const double height =
-        heights[heights.size() * 95 / 100] - heights[heights.size() * 5 / 100];
-    mean /= static_cast<double>(inliers.size());
-    Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
-    for (size_t i : inliers) {
-      const Eigen::Vector3d d = points[i].cast<double>() - mean;
-      cov += d * d.transpose();
-    }
-    Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(cov);
-    Eigen::Vector3d n = eig.eigenvectors().col(0);
-    const Eigen::Vector3d seen_from = best_side * best.normal;
-    if (std::abs(n.dot(up)) <= max_dot) {
-      best.normal = n.normalized();
-      best.offset = best.normal.dot(mean);
-    }
-    if (sided) {  // towards the cameras that saw it: the room's side
-      if (best.normal.dot(seen_from) < 0.0) {
-        best.normal = -best.normal, best.offset = -best.offset;
-      }
-      best.oriented = true;
-    }
-    best.geometry = StructureGeometry::kVertical;
-    // Its own tolerance, like the floor's: a flat wall measured well is thin,
-    // and a headboard 5 cm in front of it is not wall.
-    std::vector<double> r;
-    r.reserve(inliers.size());
-    for (size_t i : inliers) {
-      r.push_back(best.normal.dot(points[i].cast<double>()) - best.offset);
-    }
-    best.tolerance_m = OwnTolerance(std::move(r), o);
-    best.top_m = heights[heights.size() * 95 / 100];
-    best.along = up.cross(best.normal).normalized();
-    for (size_t i : inliers) {
-      best.along_bins.push_back(AlongBin(best.along, points[i].cast<double>()));
-    }
-    std::sort(best.along_bins.begin(), best.along_bins.end());
-    best.along_bins.erase(
-        std::unique(best.along_bins.begin(), best.along_bins.end()),
-        best.along_bins.end());
-    // The inliers leave (the other face's points stay for the next plane).
-    std::vector<bool> gone(points.size(), false);
-    for (size_t i : inliers) gone[i] = true;
-    size_t kept = 0;
-    for (size_t i = 0; i < points.size(); ++i) {
-      if (gone[i]) continue;
-      points[kept] = points[i];
-      towards_camera[kept] = towards_camera[i];
-      ++kept;
-    }
-    points.resize(kept);
-    towards_camera.resize(kept);
+    const HeightSpan span = RefineVerticalPlane(points, towards_camera, inliers,
+                                                side, up, o, &best);
+    RemovePoints(inliers, &points, &towards_camera);
     spdlog::debug(
         "vertical plane candidate: {} points, {:.2f} m tall ({:.2f} "
         "to {:.2f} along up), tolerance {:.3f} m{}",
-        best.support, height, heights[heights.size() * 5 / 100],
-        heights[heights.size() * 95 / 100], best.tolerance_m,
-        height >= o.min_wall_height_m ? "" : " (too low for a wall)");
-    if (height >= o.min_wall_height_m) {
+        best.support, span.height(), span.low, span.high, best.tolerance_m,
+        span.height() >= o.min_wall_height_m ? "" : " (too low for a wall)");
+    if (span.height() >= o.min_wall_height_m) {
       planes.push_back(best);
     } else if (low != nullptr) {
       low->push_back(best);

@@ -138,23 +138,30 @@ T As(double v, const fs::path& path, const std::string& property,
 
 }  // namespace
 
-PlyData ReadPly(const fs::path& path) {
-  const std::vector<unsigned char> bytes = ReadFileBytes(path);
-  const std::string text(bytes.begin(), bytes.end());
+namespace {
+
+struct Element {
+  std::string name;
+  size_t count = 0;
+  std::vector<Property> properties;
+};
+
+struct Header {
+  bool binary = false;
+  std::vector<Element> elements;
+  size_t body_offset = 0;  // bytes
+};
+
+Header ParseHeader(const std::string& text, const fs::path& path) {
   const size_t end = text.find("end_header\n");
   if (text.rfind("ply", 0) != 0 || end == std::string::npos) {
     throw FormatError(path,
                       "not a PLY file (missing 'ply' magic or 'end_header')");
   }
-  std::istringstream header(text.substr(0, end));
+  std::istringstream lines(text.substr(0, end));
   std::string line, format;
-  struct Element {
-    std::string name;
-    size_t count = 0;
-    std::vector<Property> properties;
-  };
-  std::vector<Element> elements;
-  while (std::getline(header, line)) {
+  Header header;
+  while (std::getline(lines, line)) {
     std::istringstream tokens(line);
     std::string keyword;
     tokens >> keyword;
@@ -163,9 +170,9 @@ PlyData ReadPly(const fs::path& path) {
     } else if (keyword == "element") {
       Element e;
       tokens >> e.name >> e.count;
-      elements.push_back(e);
+      header.elements.push_back(e);
     } else if (keyword == "property") {
-      if (elements.empty()) {
+      if (header.elements.empty()) {
         throw FormatError(path, "property before any element");
       }
       Property prop;
@@ -175,111 +182,166 @@ PlyData ReadPly(const fs::path& path) {
         tokens >> prop.count_type >> prop.type;
       }
       tokens >> prop.name;
-      elements.back().properties.push_back(prop);
+      header.elements.back().properties.push_back(prop);
     }
   }
   if (format != "binary_little_endian" && format != "ascii") {
     throw FormatError(path, "unsupported PLY format '" + format + "'");
   }
-  const bool binary = format == "binary_little_endian";
-  PlyData out;
-  size_t offset = end + std::string("end_header\n").size();
-  std::istringstream ascii(binary ? std::string() : text.substr(offset));
-  auto next_value = [&](const std::string& type) -> double {
-    if (binary) {
-      const size_t size = TypeSize(path, type);
-      if (offset + size > bytes.size()) {
-        throw FormatError(path, "file is truncated");
+  header.binary = format == "binary_little_endian";
+  header.body_offset = end + std::string("end_header\n").size();
+  return header;
+}
+
+// The body's values one after the other, binary or ASCII.
+class ValueReader {
+ public:
+  ValueReader(const std::string& text, const Header& header,
+              const fs::path& path)
+      : text_(text),
+        path_(path),
+        binary_(header.binary),
+        offset_(header.body_offset),
+        ascii_(binary_ ? std::string() : text.substr(header.body_offset)) {}
+
+  double Next(const std::string& type) {
+    if (binary_) {
+      const size_t size = TypeSize(path_, type);
+      if (offset_ + size > text_.size()) {
+        throw FormatError(path_, "file is truncated");
       }
-      const double v = ReadBinaryValue(text.data() + offset, type);
-      offset += size;
+      const double v = ReadBinaryValue(text_.data() + offset_, type);
+      offset_ += size;
       return v;
     }
     double v = 0;
-    if (!(ascii >> v)) {
-      throw FormatError(path, "file is truncated or has a non-number");
+    if (!(ascii_ >> v)) {
+      throw FormatError(path_, "file is truncated or has a non-number");
     }
     return v;
-  };
+  }
+
+  // Bytes after the binary read position (an upper bound for ASCII).
+  size_t Remaining() const {
+    return text_.size() - std::min(offset_, text_.size());
+  }
+
+ private:
+  const std::string& text_;
+  const fs::path& path_;
+  bool binary_;
+  size_t offset_;
+  std::istringstream ascii_;
+};
+
+const std::set<std::string>& KnownVertexProperties() {
   static const std::set<std::string> kKnown = {"x",     "y",    "z",    "red",
                                                "green", "blue", "label"};
-  for (const Element& e : elements) {
-    const bool vertex = e.name == "vertex", face = e.name == "face";
-    // Every item takes at least a byte (binary) or a character (ASCII), so a
-    // header count beyond the file's size is a lie: refuse it before looping
-    // or allocating.
-    const size_t remaining = bytes.size() - std::min(offset, bytes.size());
-    if (e.count > 0 && (e.properties.empty() || e.count > remaining)) {
-      throw FormatError(
-          path, fmt::format("element '{}' claims {} items{}, more than the "
-                            "file holds",
-                            e.name, e.count,
-                            e.properties.empty() ? " without properties" : ""));
+  return kKnown;
+}
+
+// One list property's items; a face's polygon is fan-triangulated into out.
+void ReadList(const Property& prop, bool face, size_t file_bytes,
+              ValueReader* values, const fs::path& path, PlyData* out) {
+  const auto k = As<size_t>(values->Next(prop.count_type), path, prop.name);
+  if (k > file_bytes) {
+    throw FormatError(path, fmt::format("a '{}' list claims {} items, more "
+                                        "than the file holds",
+                                        prop.name, k));
+  }
+  std::vector<uint32_t> idx(k);
+  for (auto& v : idx) {
+    v = As<uint32_t>(values->Next(prop.type), path, prop.name);
+  }
+  if (!face) return;
+  for (size_t j = 2; j < k; ++j) {
+    out->triangles.push_back({idx[0], idx[j - 1], idx[j]});
+  }
+}
+
+// One vertex's scalar property into the vertex being read.
+struct Vertex {
+  Eigen::Vector3f p = Eigen::Vector3f::Zero();
+  std::array<uint8_t, 3> c{};
+  bool has_color = false, has_label = false;
+  uint32_t label = 0;
+};
+
+void SetVertexProperty(const std::string& name, double v,
+                       const std::map<std::string, size_t>& extra,
+                       const fs::path& path, Vertex* vertex, PlyData* out) {
+  if (name == "x") {
+    vertex->p.x() = As<float>(v, path, name);
+  } else if (name == "y") {
+    vertex->p.y() = As<float>(v, path, name);
+  } else if (name == "z") {
+    vertex->p.z() = As<float>(v, path, name);
+  } else if (name == "red") {
+    vertex->c[0] = As<uint8_t>(v, path, name, true), vertex->has_color = true;
+  } else if (name == "green") {
+    vertex->c[1] = As<uint8_t>(v, path, name, true);
+  } else if (name == "blue") {
+    vertex->c[2] = As<uint8_t>(v, path, name, true);
+  } else if (name == "label") {
+    vertex->label = As<uint32_t>(v, path, name), vertex->has_label = true;
+  } else if (const auto it = extra.find(name); it != extra.end()) {
+    out->int_properties[it->second].second.push_back(
+        As<int32_t>(v, path, name, true));
+  }
+}
+
+void ReadElement(const Element& e, size_t file_bytes, ValueReader* values,
+                 const fs::path& path, PlyData* out) {
+  const bool vertex = e.name == "vertex", face = e.name == "face";
+  // Every item takes at least a byte (binary) or a character (ASCII), so a
+  // header count beyond the file's size is a lie: refuse it before looping
+  // or allocating.
+  if (e.count > 0 && (e.properties.empty() || e.count > values->Remaining())) {
+    throw FormatError(
+        path, fmt::format("element '{}' claims {} items{}, more than the "
+                          "file holds",
+                          e.name, e.count,
+                          e.properties.empty() ? " without properties" : ""));
+  }
+  // Columns for the other scalar vertex properties.
+  std::map<std::string, size_t> extra;
+  if (vertex) {
+    for (const Property& prop : e.properties) {
+      if (!prop.is_list && KnownVertexProperties().count(prop.name) == 0 &&
+          extra.count(prop.name) == 0) {
+        extra[prop.name] = out->int_properties.size();
+        out->int_properties.emplace_back(prop.name, std::vector<int32_t>());
+      }
     }
-    // Columns for the other scalar vertex properties.
-    std::map<std::string, size_t> extra;
+  }
+  for (size_t i = 0; i < e.count; ++i) {
+    Vertex v;
+    for (const Property& prop : e.properties) {
+      if (prop.is_list) {
+        ReadList(prop, face, file_bytes, values, path, out);
+        continue;
+      }
+      const double value = values->Next(prop.type);
+      if (vertex) SetVertexProperty(prop.name, value, extra, path, &v, out);
+    }
     if (vertex) {
-      for (const Property& prop : e.properties) {
-        if (!prop.is_list && kKnown.count(prop.name) == 0 &&
-            extra.count(prop.name) == 0) {
-          extra[prop.name] = out.int_properties.size();
-          out.int_properties.emplace_back(prop.name, std::vector<int32_t>());
-        }
-      }
+      out->points.push_back(v.p);
+      if (v.has_color) out->colors.push_back(v.c);
+      if (v.has_label) out->labels.push_back(v.label);
     }
-    for (size_t i = 0; i < e.count; ++i) {
-      Eigen::Vector3f p = Eigen::Vector3f::Zero();
-      std::array<uint8_t, 3> c{};
-      bool has_color = false, has_label = false;
-      uint32_t label = 0;
-      for (const Property& prop : e.properties) {
-        if (prop.is_list) {
-          const auto k = As<size_t>(next_value(prop.count_type), path,
-                                    prop.name);
-          if (k > bytes.size()) {
-            throw FormatError(path, fmt::format("a '{}' list claims {} items, "
-                                                "more than the file holds",
-                                                prop.name, k));
-          }
-          std::vector<uint32_t> idx(k);
-          for (auto& v : idx) {
-            v = As<uint32_t>(next_value(prop.type), path, prop.name);
-          }
-          if (face) {
-            // Fan-triangulate polygons.
-            for (size_t j = 2; j < k; ++j) {
-              out.triangles.push_back({idx[0], idx[j - 1], idx[j]});
-            }
-          }
-          continue;
-        }
-        const double v = next_value(prop.type);
-        if (!vertex) continue;
-        if (prop.name == "x") {
-          p.x() = As<float>(v, path, prop.name);
-        } else if (prop.name == "y") {
-          p.y() = As<float>(v, path, prop.name);
-        } else if (prop.name == "z") {
-          p.z() = As<float>(v, path, prop.name);
-        } else if (prop.name == "red") {
-          c[0] = As<uint8_t>(v, path, prop.name, true), has_color = true;
-        } else if (prop.name == "green") {
-          c[1] = As<uint8_t>(v, path, prop.name, true);
-        } else if (prop.name == "blue") {
-          c[2] = As<uint8_t>(v, path, prop.name, true);
-        } else if (prop.name == "label") {
-          label = As<uint32_t>(v, path, prop.name), has_label = true;
-        } else if (const auto it = extra.find(prop.name); it != extra.end()) {
-          out.int_properties[it->second].second.push_back(
-              As<int32_t>(v, path, prop.name, true));
-        }
-      }
-      if (vertex) {
-        out.points.push_back(p);
-        if (has_color) out.colors.push_back(c);
-        if (has_label) out.labels.push_back(label);
-      }
-    }
+  }
+}
+
+}  // namespace
+
+PlyData ReadPly(const fs::path& path) {
+  const std::vector<unsigned char> bytes = ReadFileBytes(path);
+  const std::string text(bytes.begin(), bytes.end());
+  const Header header = ParseHeader(text, path);
+  ValueReader values(text, header, path);
+  PlyData out;
+  for (const Element& e : header.elements) {
+    ReadElement(e, bytes.size(), &values, path, &out);
   }
   for (const auto& t : out.triangles) {
     if (t[0] >= out.points.size() || t[1] >= out.points.size() ||

@@ -100,7 +100,7 @@ SequenceReader SequenceReader::Open(const fs::path& path,
         ".pose.txt), a ROS 2 bag (*.mcap, *.db3, or a folder with "
         "metadata.yaml), ScanNet "
         "*.sens. "
-        "See README.md, 'Sequence layouts'.");
+        "See docs/usage.md, 'Sequence layouts'.");
   }
   return std::move(*reader);
 }

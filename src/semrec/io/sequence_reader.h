@@ -21,7 +21,7 @@
 namespace semrec::io {
 
 /// ROS 2 bags (MCAP or SQLite rosbag2): which topics and frames make the
-/// RGB-D frames. Empty = chosen from the bag (see README.md, "ROS 2 bags").
+/// RGB-D frames. Empty = chosen from the bag (see docs/usage.md, "ROS 2 bags").
 struct BagOptions {
   std::string color_topic;
   std::string depth_topic;
@@ -152,7 +152,7 @@ class SequenceReader {
 
 /// Writes a generic-layout manifest (`sequence.yaml`) atomically; paths are
 /// stored relative to the manifest's folder when they lie inside it. See
-/// README.md "Generic sequence layout".
+/// docs/usage.md, "Generic layout".
 void WriteSequenceManifest(const std::filesystem::path& manifest_path,
                            const SequenceIndex& index);
 

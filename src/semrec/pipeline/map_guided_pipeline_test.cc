@@ -142,6 +142,60 @@ std::pair<double, double> Agreement(const fuse::FrameLabels& labels,
   return {static_cast<double>(same) / total, static_cast<double>(top) / total};
 }
 
+// What the pipeline will see in frame 4: the map after frame 2, projected
+// into frame 4, where the chair has just come in. Prompts may land on the
+// chair (and the margin around it) only, and the known objects are explained
+// with their own ids.
+void CheckChairFrameProjection(const ScenePipeline& pipeline,
+                               const Rendered& r) {
+  // What the pipeline will see: the map after frame 2, projected into
+  // frame 4, where the chair has just come in. Prompts may land on the
+  // chair (and the margin around it) only.
+  const fuse::ProjectedMap projected =
+      fuse::ProjectMap(pipeline.scene().fusion().segments(), r.frame.intrinsics,
+                       r.frame.T_world_camera, r.frame.depth);
+  const GuidanceDecision d = DecideFrame(projected, r.frame.T_world_camera,
+                                         Transform(), 1, MapGuidanceOptions());
+  ASSERT_EQ(d.mode, FrameMode::kPartial);
+  size_t chair = 0, chair_in_region = 0, others_in_region = 0;
+  for (int v = 0; v < kHeight; ++v) {
+    for (int u = 0; u < kWidth; ++u) {
+      const bool is_chair = r.gt_id(u, v) == 4;
+      chair += is_chair ? 1 : 0;
+      if (d.prompt_region(u, v) == 0) continue;
+      (is_chair ? chair_in_region : others_in_region) += 1;
+    }
+  }
+  EXPECT_EQ(chair_in_region, chair);
+  // The margin only: a band of 8 pixels around the 59 x 66 chair.
+  EXPECT_LT(others_in_region, 2 * 8 * (59 + 66 + 16) + 100);
+  // The known objects are explained with their own ids: each GT object
+  // maps (but for fringe objects of the tiny model's borders) onto one map
+  // object, its own.
+  std::map<int, std::map<uint32_t, size_t>> map_ids;
+  std::map<int, size_t> explained;
+  for (int v = 0; v < kHeight; ++v) {
+    for (int u = 0; u < kWidth; ++u) {
+      if (projected.state(u, v) == fuse::ProjectedMap::kExplained) {
+        ++map_ids[r.gt_id(u, v)][projected.object_id(u, v)];
+        ++explained[r.gt_id(u, v)];
+      }
+    }
+  }
+  EXPECT_EQ(map_ids.count(4), 0u);
+  std::set<uint32_t> dominant;
+  for (const int known : {1, 2, 3}) {
+    size_t top = 0;
+    uint32_t top_id = 0;
+    for (const auto& [id, n] : map_ids[known]) {
+      if (n > top) std::tie(top, top_id) = std::tie(n, id);
+    }
+    EXPECT_GT(static_cast<double>(top), 0.95 * explained[known]) << known;
+    dominant.insert(top_id);
+  }
+  EXPECT_EQ(dominant.size(), 3u);
+}
+
 class MapGuidedPipeline : public ::testing::TestWithParam<bool> {};
 
 // Param: prompt_on_disagreement (the tiny semantic branch agrees with the map
@@ -161,55 +215,7 @@ TEST_P(MapGuidedPipeline, SegmentsOnlyWhatTheMapCannotExplain) {
   for (size_t i = 0; i < 12; ++i) {
     Rendered r = Render(i, palette);
     gt.push_back(r.gt_id);
-    if (i == 4) {
-      // What the pipeline will see: the map after frame 2, projected into
-      // frame 4, where the chair has just come in. Prompts may land on the
-      // chair (and the margin around it) only.
-      const fuse::ProjectedMap projected = fuse::ProjectMap(
-          pipeline.scene().fusion().segments(), r.frame.intrinsics,
-          r.frame.T_world_camera, r.frame.depth);
-      const GuidanceDecision d =
-          DecideFrame(projected, r.frame.T_world_camera, Transform(), 1,
-                      MapGuidanceOptions());
-      ASSERT_EQ(d.mode, FrameMode::kPartial);
-      size_t chair = 0, chair_in_region = 0, others_in_region = 0;
-      for (int v = 0; v < kHeight; ++v) {
-        for (int u = 0; u < kWidth; ++u) {
-          const bool is_chair = r.gt_id(u, v) == 4;
-          chair += is_chair ? 1 : 0;
-          if (d.prompt_region(u, v) == 0) continue;
-          (is_chair ? chair_in_region : others_in_region) += 1;
-        }
-      }
-      EXPECT_EQ(chair_in_region, chair);
-      // The margin only: a band of 8 pixels around the 59 x 66 chair.
-      EXPECT_LT(others_in_region, 2 * 8 * (59 + 66 + 16) + 100);
-      // The known objects are explained with their own ids: each GT object
-      // maps (but for fringe objects of the tiny model's borders) onto one map
-      // object, its own.
-      std::map<int, std::map<uint32_t, size_t>> map_ids;
-      std::map<int, size_t> explained;
-      for (int v = 0; v < kHeight; ++v) {
-        for (int u = 0; u < kWidth; ++u) {
-          if (projected.state(u, v) == fuse::ProjectedMap::kExplained) {
-            ++map_ids[r.gt_id(u, v)][projected.object_id(u, v)];
-            ++explained[r.gt_id(u, v)];
-          }
-        }
-      }
-      EXPECT_EQ(map_ids.count(4), 0u);
-      std::set<uint32_t> dominant;
-      for (const int known : {1, 2, 3}) {
-        size_t top = 0;
-        uint32_t top_id = 0;
-        for (const auto& [id, n] : map_ids[known]) {
-          if (n > top) std::tie(top, top_id) = std::tie(n, id);
-        }
-        EXPECT_GT(static_cast<double>(top), 0.95 * explained[known]) << known;
-        dominant.insert(top_id);
-      }
-      EXPECT_EQ(dominant.size(), 3u);
-    }
+    if (i == 4) CheckChairFrameProjection(pipeline, r);
     const size_t before = pipeline.guidance_counts().prompts_decoded;
     PipelineInput input;
     input.frame = std::move(r.frame);

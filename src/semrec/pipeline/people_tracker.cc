@@ -1,7 +1,6 @@
 #include "semrec/pipeline/people_tracker.h"
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <numeric>
 
@@ -10,17 +9,11 @@
 
 #include "semrec/core/error.h"
 #include "semrec/core/label_map.h"
+#include "semrec/core/stopwatch.h"
 #include "semrec/segment/object_evidence.h"
 
 namespace semrec::pipeline {
-namespace {
-
-using Clock = std::chrono::steady_clock;
-double Seconds(Clock::time_point a, Clock::time_point b) {
-  return std::chrono::duration<double>(b - a).count();
-}
-
-}  // namespace
+namespace {}  // namespace
 
 void PeopleTrackerOptions::Check() const {
   detector.Check();
@@ -50,7 +43,7 @@ PeopleFrame PeopleTracker::Process(
     const ColorImage& rgb,
     const std::optional<std::vector<track::Detection>>& given) {
   PeopleFrame frame;
-  const auto t0 = Clock::now();
+  Stopwatch watch;
   std::vector<track::Detection> detections;
   if (given) {
     detections = *given;
@@ -63,14 +56,12 @@ PeopleFrame PeopleTracker::Process(
       detections.push_back(d.detection);
     }
   }
-  const auto t1 = Clock::now();
-  frame.detect_seconds = Seconds(t0, t1);
+  frame.detect_seconds = watch.Lap();
 
   std::vector<segment::Mask> masks(detections.size());
   if (masks_ && !detections.empty()) {
     masks_->SetImage(rgb);
-    const auto t2 = Clock::now();
-    frame.encode_seconds = Seconds(t1, t2);
+    frame.encode_seconds = watch.Lap();
     tbb::parallel_for(static_cast<size_t>(0), detections.size(), [&](size_t i) {
       segment::Prompt prompt;
       prompt.box =
@@ -83,7 +74,7 @@ PeopleFrame PeopleTracker::Process(
         detections[i].embedding = masks_->PooledEmbedding(masks[i]);
       }
     });
-    frame.mask_seconds = Seconds(t2, Clock::now());
+    frame.mask_seconds = watch.Lap();
   }
 
   // The tracker skips low-score detections and keeps the others in order:

@@ -25,6 +25,7 @@
 #include "semrec/io/mot_io.h"
 #include "semrec/pipeline/checkpoint.h"
 #include "semrec/pipeline/people_3d.h"
+#include "semrec/pipeline/run_report.h"
 
 namespace fs = std::filesystem;
 
@@ -58,9 +59,9 @@ std::string StageDetail(const StageSeconds& s, size_t frames) {
 }
 
 // Registry entries of the models a run uses, with their checksums.
-nlohmann::json ModelsJson(const infer::ModelRegistry* registry,
-                          const ScenePipelineOptions& options) {
-  nlohmann::json out = nlohmann::json::array();
+std::vector<ModelRecord> ModelRecords(const infer::ModelRegistry* registry,
+                                      const ScenePipelineOptions& options) {
+  std::vector<ModelRecord> out;
   if (registry == nullptr ||
       options.labels != ScenePipelineOptions::Labels::kModels) {
     return out;
@@ -92,10 +93,7 @@ nlohmann::json ModelsJson(const infer::ModelRegistry* registry,
     if (sha256.empty() && fs::is_regular_file(file)) {
       sha256 = Sha256File(file);
     }
-    out.push_back({{"name", name},
-                   {"file", file.string()},
-                   {"sha256", sha256},
-                   {"sha256_registered", !e.sha256.empty()}});
+    out.push_back({name, file.string(), sha256, !e.sha256.empty()});
   }
   return out;
 }
@@ -178,86 +176,108 @@ nlohmann::json TimingJson(const RunTiming& t, const StageSeconds& wall,
        "cores."}};
 }
 
-RunResult RunSequence(const io::SequenceReader& reader,
-                      const infer::ModelRegistry* registry,
-                      const RunOptions& options, const fs::path& out_dir,
-                      const ProgressOptions& progress_options) {
-  options.Check();
-  const Stopwatch run_time;
-  RunTiming timing;
-  const bool models =
-      options.pipeline.labels == ScenePipelineOptions::Labels::kModels;
-  if (!options.resume) RequireEmptyOrOverwrite(out_dir, options.overwrite);
-  std::error_code ec;
-  fs::create_directories(out_dir, ec);
-  if (ec) {
-    throw IoError(out_dir, "cannot create output folder: " + ec.message());
+namespace {
+
+// One frame read and decoded (on the prefetch thread), or why it could not be.
+struct Loaded {
+  PipelineInput input;
+  std::exception_ptr error;
+  double seconds = 0.0, cpu = 0.0;
+};
+
+// RunSequence's state: frames are read ahead on a prefetch thread, segmented
+// and tracked on this one, and fused and integrated (with their overlay and
+// checkpoint) on an integration thread while the next frame is segmented;
+// each side keeps frame order.
+class SequenceRun {
+ public:
+  SequenceRun(const io::SequenceReader& reader,
+              const infer::ModelRegistry* registry, const RunOptions& options,
+              const fs::path& out_dir, const ProgressOptions& progress_options)
+      : reader_(reader),
+        registry_(registry),
+        options_(options),
+        out_dir_(out_dir),
+        models_(options.pipeline.labels ==
+                ScenePipelineOptions::Labels::kModels) {
+    PrepareOutput();
+    OpenGivenLabels();
+    pipeline_.emplace(registry, source_ ? &source_->classes() : nullptr,
+                      options.pipeline);
+    begin_ = StartOrResume();
+    WriteTextFileAtomic(out_dir_ / "run.yaml", options_.config_text);
+    write_ = SceneWriteOptions::For(reader, options.write_ply, options.usdz);
+    write_.custom_layer_data["config"] = OneLine(options.config_text);
+    snapshot_ = write_;
+    snapshot_.write_ply = false;
+    snapshot_.usdz = false;
+    write_.glb = options.glb;
+    snapshot_.glb = false;
+    progress_.emplace("run", reader.size(), progress_options);
+  }
+
+  RunResult Run() {
+    timing_.setup = run_time_.Elapsed();
+    StartLoading(0);
+    for (size_t i = 0; i < reader_.size(); ++i) ProcessFrame(i);
+    WaitIntegrating();
+    progress_->Finish();
+    return Finish();
+  }
+
+ private:
+  void PrepareOutput() {
+    if (!options_.resume) RequireEmptyOrOverwrite(out_dir_, options_.overwrite);
+    std::error_code ec;
+    fs::create_directories(out_dir_, ec);
+    if (ec) {
+      throw IoError(out_dir_, "cannot create output folder: " + ec.message());
+    }
   }
 
   // Given labels: the sequence's own layers (or a label folder).
-  std::unique_ptr<fuse::SegmentationSource> source;
-  std::optional<PersonMapSource> person_maps;
-  if (!models) {
-    source = fuse::SegmentationSource::Create(options.given_labels, reader);
-    if (options.pipeline.track_people) {
-      std::string people = options.given_people;
-      if (people.empty() &&
-          reader.index().frames.front().layers.contains("person")) {
-        people = "gt";
-      }
-      if (!people.empty()) person_maps.emplace(people, reader);
+  void OpenGivenLabels() {
+    if (models_) return;
+    source_ = fuse::SegmentationSource::Create(options_.given_labels, reader_);
+    if (!options_.pipeline.track_people) return;
+    std::string people = options_.given_people;
+    if (people.empty() &&
+        reader_.index().frames.front().layers.contains("person")) {
+      people = "gt";
     }
+    if (!people.empty()) person_maps_.emplace(people, reader_);
   }
-  ScenePipeline pipeline(registry, source ? &source->classes() : nullptr,
-                         options.pipeline);
 
-  CheckpointStore store(out_dir / "checkpoint");
-  Sha256 config_hash;
-  config_hash.Update(options.resume_key.empty() ? options.config_text
-                                                : options.resume_key);
-  const RunIdentity identity = {reader.root().string(), reader.layout(),
-                                reader.size(), config_hash.HexDigest()};
-  const size_t begin = options.resume ? store.Resume(identity) : 0;
-  if (!options.resume) store.Start(identity);
-  if (options.resume) {
+  // The first frame to process: 0, or after the checkpoint's last frame.
+  size_t StartOrResume() {
+    Sha256 config_hash;
+    config_hash.Update(options_.resume_key.empty() ? options_.config_text
+                                                   : options_.resume_key);
+    const RunIdentity identity = {reader_.root().string(), reader_.layout(),
+                                  reader_.size(), config_hash.HexDigest()};
+    if (!options_.resume) {
+      store_.Start(identity);
+      return 0;
+    }
+    const size_t begin = store_.Resume(identity);
     spdlog::info(
         "resuming: {} of {} frames are done; replaying them without "
         "the models",
-        begin, reader.size());
+        begin, reader_.size());
+    return begin;
   }
-  WriteTextFileAtomic(out_dir / "run.yaml", options.config_text);
 
-  SceneWriteOptions write =
-      SceneWriteOptions::For(reader, options.write_ply, options.usdz);
-  write.custom_layer_data["config"] = OneLine(options.config_text);
-  SceneWriteOptions snapshot = write;
-  snapshot.write_ply = false;
-  snapshot.usdz = false;
-  write.glb = options.glb;
-  snapshot.glb = false;
-
-  RunResult result;
-  nlohmann::json skipped = nlohmann::json::array();
-  size_t snapshots = 0;
-  double read_seconds = 0.0;
-  Progress progress("run", reader.size(), progress_options);
-  // Reading and decoding frame i + 1 overlaps the work on frame i.
-  struct Loaded {
-    PipelineInput input;
-    std::exception_ptr error;
-    double seconds = 0.0, cpu = 0.0;
-  };
-  const auto load = [&](size_t i) {
+  Loaded Load(size_t i) {
     Loaded loaded;
     const Stopwatch read_time;
     const double read_cpu = ThreadCpuSeconds();
     loaded.input.name =
-        reader.index().frames[i].color_path.stem().string() + ".png";
+        reader_.index().frames[i].color_path.stem().string() + ".png";
     try {
-      loaded.input.frame = reader.Read(i);
-      if (!models) {
-        loaded.input.labels = source->Get(reader, i);
-        if (person_maps) loaded.input.person_ids = person_maps->Get(i);
+      loaded.input.frame = reader_.Read(i);
+      if (!models_) {
+        loaded.input.labels = source_->Get(reader_, i);
+        if (person_maps_) loaded.input.person_ids = person_maps_->Get(i);
       }
     } catch (...) {
       loaded.error = std::current_exception();
@@ -265,245 +285,281 @@ RunResult RunSequence(const io::SequenceReader& reader,
     loaded.seconds = read_time.Elapsed();
     loaded.cpu = ThreadCpuSeconds() - read_cpu;
     return loaded;
-  };
-  std::future<Loaded> next;
-  const auto start_loading = [&](size_t i) {
-    if (i < reader.size()) {
-      next = std::async(
-          options.prefetch ? std::launch::async : std::launch::deferred, load,
-          i);
-    }
-  };
-  // Fusion and volumes of frame i run on another thread while the models
-  // work on frame i + 1 (each side keeps frame order).
-  std::future<void> integrating;
-  bool tick_pending = false;
-  const auto wait_integrating = [&] {
+  }
+
+  // Reading and decoding frame i + 1 overlaps the work on frame i.
+  void StartLoading(size_t i) {
+    if (i >= reader_.size()) return;
+    next_ = std::async(
+        options_.prefetch ? std::launch::async : std::launch::deferred,
+        [this, i] { return Load(i); });
+  }
+
+  void WaitIntegrating() {
     const Stopwatch wait;
-    if (integrating.valid()) integrating.get();
-    timing.wait_integration += wait.Elapsed();
-    if (tick_pending) {
-      progress.set_detail(StageDetail(pipeline.seconds(), pipeline.frames()));
-      progress.Tick();
-      tick_pending = false;
+    if (integrating_.valid()) integrating_.get();
+    timing_.wait_integration += wait.Elapsed();
+    if (tick_pending_) {
+      progress_->set_detail(
+          StageDetail(pipeline_->seconds(), pipeline_->frames()));
+      progress_->Tick();
+      tick_pending_ = false;
     }
-  };
-  timing.setup = run_time.Elapsed();
-  start_loading(0);
-  for (size_t i = 0; i < reader.size(); ++i) {
+  }
+
+  void Skip(size_t i, const std::string& reason) {
+    skipped_.push_back({i, reason});
+    progress_->Tick();
+  }
+
+  void ProcessFrame(size_t i) {
     const Stopwatch wait_frame;
-    Loaded loaded = next.get();
-    timing.wait_frames += wait_frame.Elapsed();
-    start_loading(i + 1);
+    Loaded loaded = next_.get();
+    timing_.wait_frames += wait_frame.Elapsed();
+    StartLoading(i + 1);
     PipelineInput& input = loaded.input;
-    const bool replay = i < begin;
+    const bool replay = i < begin_;
     std::optional<CheckpointFrame> saved;
     if (replay) {
-      saved = store.Load(i);
+      saved = store_.Load(i);
       if (saved->skipped) {
-        wait_integrating();
-        skipped.push_back({{"frame", i}, {"reason", *saved->skipped}});
-        progress.Tick();
-        continue;
+        WaitIntegrating();
+        Skip(i, *saved->skipped);
+        return;
       }
     }
-    read_seconds += loaded.seconds;
-    timing.read_cpu += loaded.cpu;
+    read_seconds_ += loaded.seconds;
+    timing_.read_cpu += loaded.cpu;
     if (loaded.error) {
-      wait_integrating();
+      WaitIntegrating();
       try {
         std::rethrow_exception(loaded.error);
       } catch (const FileError& e) {
-        if (options.strict || replay) throw;
+        if (options_.strict || replay) throw;
         spdlog::warn("skipping frame {}: {}", i, e.what());
-        skipped.push_back({{"frame", i}, {"reason", e.what()}});
-        store.Record(i, {std::string(e.what()), std::nullopt});
-        progress.Tick();
-        continue;
-      }
-    }
-    if (replay && models) input.replay = std::move(saved->outputs);
-    std::string name = input.name;
-    const Stopwatch prepare;
-    PreparedFrame prepared = pipeline.Prepare(std::move(input));
-    timing.prepare += prepare.Elapsed();
-    wait_integrating();
-    const auto integrate = [&, i, replay, name = std::move(name),
-                            prepared = std::move(prepared)]() mutable {
-      const PipelineFrameResult frame = pipeline.Integrate(std::move(prepared));
-      if (replay) {
-        ++result.resumed_frames;
+        store_.Record(i, {std::string(e.what()), std::nullopt});
+        Skip(i, e.what());
         return;
       }
-      // The overlay's PNG and the checkpoint's, side by side.
-      tbb::task_group files;
-      if (!frame.overlay.empty()) {
-        files.run(
-            [&] { io::WritePng(out_dir / "overlay" / name, frame.overlay); });
-      }
-      store.Record(
-          i, {std::nullopt, models ? std::optional<ModelOutputs>(frame.outputs)
-                                   : std::nullopt});
-      files.wait();
-      if (options.checkpoint_every > 0 &&
-          (i + 1) % options.checkpoint_every == 0) {
-        store.Commit(i + 1);
-      }
-      if (options.snapshot_every > 0 && (i + 1) % options.snapshot_every == 0 &&
-          i + 1 < reader.size()) {
-        pipeline.Write(out_dir, snapshot);
-        ++snapshots;
-      }
+    }
+    if (replay && models_) input.replay = std::move(saved->outputs);
+    std::string name = input.name;
+    const Stopwatch prepare;
+    PreparedFrame prepared = pipeline_->Prepare(std::move(input));
+    timing_.prepare += prepare.Elapsed();
+    WaitIntegrating();
+    integrating_ = std::async(
+        options_.overlap ? std::launch::async : std::launch::deferred,
+        [this, i, replay, name = std::move(name),
+         prepared = std::move(prepared)]() mutable {
+          StageWatch watch;
+          Integrate(i, replay, name, std::move(prepared));
+          const StageWatch::Lap lap = watch.Next();
+          timing_.integrate_wall += lap.wall;
+          timing_.integrate_cpu += lap.cpu;
+        });
+    tick_pending_ = true;
+  }
+
+  // On the integration thread: fusion and volumes, then the overlay's PNG and
+  // the checkpoint's side by side, commits and snapshots.
+  void Integrate(size_t i, bool replay, const std::string& name,
+                 PreparedFrame prepared) {
+    const PipelineFrameResult frame = pipeline_->Integrate(std::move(prepared));
+    if (replay) {
+      ++resumed_frames_;
+      return;
+    }
+    tbb::task_group files;
+    if (!frame.overlay.empty()) {
+      files.run(
+          [&] { io::WritePng(out_dir_ / "overlay" / name, frame.overlay); });
+    }
+    store_.Record(
+        i, {std::nullopt, models_ ? std::optional<ModelOutputs>(frame.outputs)
+                                  : std::nullopt});
+    files.wait();
+    if (options_.checkpoint_every > 0 &&
+        (i + 1) % options_.checkpoint_every == 0) {
+      store_.Commit(i + 1);
+    }
+    if (options_.snapshot_every > 0 && (i + 1) % options_.snapshot_every == 0 &&
+        i + 1 < reader_.size()) {
+      pipeline_->Write(out_dir_, snapshot_);
+      ++snapshots_;
+    }
+  }
+
+  RunResult Finish() {
+    const Stopwatch finish;
+    store_.Commit(reader_.size());
+    pipeline_->Finish();
+    RunResult result;
+    result.resumed_frames = resumed_frames_;
+    result.scene = pipeline_->Write(out_dir_, write_);
+    const std::vector<io::MotBox> tracks = pipeline_->Tracks();
+    io::WriteMotFile(out_dir_ / "tracks.txt", tracks);
+    std::set<int> track_ids;
+    for (const io::MotBox& b : tracks) track_ids.insert(b.id);
+    result.tracks = track_ids.size();
+    result.frames = reader_.size();
+    result.skipped_frames = skipped_.size();
+    timing_.finish = finish.Elapsed();
+    result.seconds = run_time_.Elapsed();
+    result.report = MakeReport(result);
+    WriteRunReport(out_dir_ / "report.json", result.report);
+    return result;
+  }
+
+  RunReport MakeReport(const RunResult& result) const {
+    StageSeconds s = pipeline_->seconds();
+    s.read = read_seconds_;
+    const double processed = static_cast<double>(pipeline_->frames());
+    const auto per_frame = [&](double seconds) {
+      return processed > 0 ? seconds / processed : 0.0;
     };
-    integrating =
-        std::async(options.overlap ? std::launch::async : std::launch::deferred,
-                   [&timing, integrate = std::move(integrate)]() mutable {
-                     StageWatch watch;
-                     integrate();
-                     const StageWatch::Lap lap = watch.Next();
-                     timing.integrate_wall += lap.wall;
-                     timing.integrate_cpu += lap.cpu;
-                   });
-    tick_pending = true;
+    RunReport r;
+    if (const auto it = write_.custom_layer_data.find("input");
+        it != write_.custom_layer_data.end()) {
+      r.input = it->second;
+    }
+    r.labels = models_ ? "models" : options_.given_labels;
+    r.frames = result.frames;
+    r.processed_frames = pipeline_->frames();
+    r.segmented_frames = pipeline_->segmented_frames();
+    r.resumed_frames = result.resumed_frames;
+    r.skipped_frames = skipped_;
+    r.seconds = result.seconds;
+    r.frames_per_second = result.seconds > 0 ? processed / result.seconds : 0.0;
+    r.seconds_per_frame = {per_frame(s.read),    per_frame(s.segment),
+                           per_frame(s.track),   per_frame(s.fuse),
+                           per_frame(s.volumes), per_frame(s.overlay),
+                           per_frame(s.write)};
+    r.timing = TimingJson(timing_, s, pipeline_->cpu_seconds(), result.seconds);
+    r.peak_rss_mb = static_cast<double>(PeakRssBytes()) / (1 << 20);
+    r.scene =
+        ParseObjectRecords(result.scene.objects_json, out_dir_ / "report.json");
+    for (const ObjectRecord& object : r.scene) {
+      ++r.objects_per_class[object.class_name];
+    }
+    r.objects = result.scene.objects - result.scene.structure;
+    r.structure = result.scene.structure;
+    r.people = result.scene.people;
+    r.tracks = result.tracks;
+    r.snapshots = snapshots_;
+    r.gravity = GravityJson(result.scene.gravity, result.scene.upright_matrix);
+    r.options = result.scene.options_text;
+    r.version = SEMREC_VERSION;
+    r.models = ModelRecords(registry_, options_.pipeline);
+    r.fusion_events = fuse::FusionEventsJson(pipeline_->scene().fusion(),
+                                             pipeline_->classes());
+    r.map_objects = fuse::MapResolutionJson(pipeline_->scene().fusion(),
+                                            pipeline_->classes());
+    if (models_) {
+      r.map_guidance = MapGuidance();
+      r.object_detector = ObjectDetector();
+    }
+    return r;
   }
-  wait_integrating();
-  progress.Finish();
-  const Stopwatch finish;
-  store.Commit(reader.size());
 
-  pipeline.Finish();
-  result.scene = pipeline.Write(out_dir, write);
-  const std::vector<io::MotBox> tracks = pipeline.Tracks();
-  io::WriteMotFile(out_dir / "tracks.txt", tracks);
-  std::set<int> track_ids;
-  for (const io::MotBox& b : tracks) track_ids.insert(b.id);
-  result.tracks = track_ids.size();
-  result.frames = reader.size();
-  result.skipped_frames = skipped.size();
-  timing.finish = finish.Elapsed();
-  result.seconds = run_time.Elapsed();
-
-  // Report.
-  StageSeconds s = pipeline.seconds();
-  s.read = read_seconds;
-  const double processed = static_cast<double>(pipeline.frames());
-  std::map<std::string, int> per_class;
-  for (const auto& object : result.scene.objects_json) {
-    ++per_class[object.at("class").get<std::string>()];
-  }
-  const auto per_frame = [&](double seconds) {
-    return processed > 0 ? seconds / processed : 0.0;
-  };
-  result.report = {
-      {"input", write.custom_layer_data["input"]},
-      {"labels", models ? "models" : options.given_labels},
-      {"frames", result.frames},
-      {"processed_frames", pipeline.frames()},
-      {"segmented_frames", pipeline.segmented_frames()},
-      {"resumed_frames", result.resumed_frames},
-      {"skipped_frames", skipped},
-      {"seconds", result.seconds},
-      {"frames_per_second",
-       result.seconds > 0 ? processed / result.seconds : 0.0},
-      {"seconds_per_frame",
-       {{"read", per_frame(s.read)},
-        {"segment", per_frame(s.segment)},
-        {"track", per_frame(s.track)},
-        {"fuse", per_frame(s.fuse)},
-        {"volumes", per_frame(s.volumes)},
-        {"overlay", per_frame(s.overlay)},
-        {"write", per_frame(s.write)}}},
-      {"timing", TimingJson(timing, s, pipeline.cpu_seconds(), result.seconds)},
-      {"peak_rss_mb", static_cast<double>(PeakRssBytes()) / (1 << 20)},
-      {"objects", result.scene.objects - result.scene.structure},
-      {"structure", result.scene.structure},
-      {"objects_per_class", per_class},
-      {"people", result.scene.people},
-      {"tracks", result.tracks},
-      {"snapshots", snapshots},
-      {"gravity",
-       GravityJson(result.scene.gravity, result.scene.upright_matrix)},
-      {"options", result.scene.options_text},
-      {"config", "run.yaml"},
-      {"version", SEMREC_VERSION},
-      {"models", ModelsJson(registry, options.pipeline)},
-      {"scene", result.scene.objects_json},
-      {"fusion_events",
-       fuse::FusionEventsJson(pipeline.scene().fusion(), pipeline.classes())},
-      {"map_objects",
-       fuse::MapResolutionJson(pipeline.scene().fusion(), pipeline.classes())}};
-  if (models) {
-    // Without guidance every segmented frame is full; the counts of encoder
-    // calls and prompts compare the two.
-    const GuidanceCounts& g = pipeline.guidance_counts();
+  // Without guidance every segmented frame is full; the counts of encoder
+  // calls and prompts compare the two.
+  MapGuidanceReport MapGuidance() const {
+    const GuidanceCounts& g = pipeline_->guidance_counts();
     const size_t guided = g.partial + g.projection;
-    result.report["map_guidance"] = {
-        {"enabled", options.pipeline.map_guidance},
-        {"full_frames",
-         options.pipeline.map_guidance ? g.full : pipeline.segmented_frames()},
-        {"partial_frames", g.partial},
-        {"projection_frames", g.projection},
-        {"disagreement_frames", g.disagreement},
-        {"encoder_calls", g.encoder_calls},
-        {"prompts_decoded", g.prompts_decoded},
-        {"mean_unexplained_share",
-         guided > 0 ? g.unexplained_share_sum / static_cast<double>(guided)
-                    : 0.0}};
-    const segment::ObjectDetectorOptions& o =
-        options.pipeline.segmenter.objects;
-    const ObjectDetectionCounts& c = pipeline.object_counts();
-    result.report["object_detector"] = {
-        {"model", o.enabled() ? nlohmann::json(o.model) : nlohmann::json()},
-        {"score_threshold", o.score_threshold},
-        {"weight", o.weight},
-        {"stuff_yields", o.stuff_yields},
-        {"detections", c.detections},
-        {"matched_masks", c.matched},
-        {"added_masks", c.added},
-        {"parts", c.parts},
-        {"parts_joined", c.parts_joined},
-        {"frames_sharing_the_people_pass", c.shared_passes}};
+    MapGuidanceReport out;
+    out.enabled = options_.pipeline.map_guidance;
+    out.full_frames = out.enabled ? g.full : pipeline_->segmented_frames();
+    out.partial_frames = g.partial;
+    out.projection_frames = g.projection;
+    out.disagreement_frames = g.disagreement;
+    out.encoder_calls = g.encoder_calls;
+    out.prompts_decoded = g.prompts_decoded;
+    out.mean_unexplained_share =
+        guided > 0 ? g.unexplained_share_sum / static_cast<double>(guided)
+                   : 0.0;
+    return out;
   }
-  WriteTextFileAtomic(out_dir / "report.json", result.report.dump(2) + "\n");
-  return result;
+
+  ObjectDetectorReport ObjectDetector() const {
+    const segment::ObjectDetectorOptions& o =
+        options_.pipeline.segmenter.objects;
+    const ObjectDetectionCounts& c = pipeline_->object_counts();
+    ObjectDetectorReport out;
+    if (o.enabled()) out.model = o.model;
+    out.score_threshold = o.score_threshold;
+    out.weight = o.weight;
+    out.stuff_yields = o.stuff_yields;
+    out.detections = c.detections;
+    out.matched_masks = c.matched;
+    out.added_masks = c.added;
+    out.parts = c.parts;
+    out.parts_joined = c.parts_joined;
+    out.frames_sharing_the_people_pass = c.shared_passes;
+    return out;
+  }
+
+  const io::SequenceReader& reader_;
+  const infer::ModelRegistry* registry_;
+  const RunOptions& options_;
+  const fs::path out_dir_;
+  const bool models_;
+  const Stopwatch run_time_;
+  RunTiming timing_;
+  std::unique_ptr<fuse::SegmentationSource> source_;
+  std::optional<PersonMapSource> person_maps_;
+  std::optional<ScenePipeline> pipeline_;
+  CheckpointStore store_{out_dir_ / "checkpoint"};
+  size_t begin_ = 0;
+  SceneWriteOptions write_, snapshot_;
+  std::optional<Progress> progress_;  // from the first frame on
+  std::vector<SkippedFrame> skipped_;
+  size_t snapshots_ = 0, resumed_frames_ = 0;
+  double read_seconds_ = 0.0;
+  std::future<Loaded> next_;
+  std::future<void> integrating_;
+  bool tick_pending_ = false;
+};
+
+}  // namespace
+
+RunResult RunSequence(const io::SequenceReader& reader,
+                      const infer::ModelRegistry* registry,
+                      const RunOptions& options, const fs::path& out_dir,
+                      const ProgressOptions& progress_options) {
+  options.Check();
+  return SequenceRun(reader, registry, options, out_dir, progress_options)
+      .Run();
 }
 
 std::string RunSummaryTable(const RunResult& result, const fs::path& out_dir) {
-  const nlohmann::json& r = result.report;
+  const RunReport& r = result.report;
   std::string out = fmt::format(
       "{} frames ({} segmented, {} skipped{}) in {:.1f} s = {:.2f} frames/s, "
       "peak memory {:.0f} MB\n",
-      r.at("frames").get<size_t>(), r.at("segmented_frames").get<size_t>(),
-      result.skipped_frames,
+      r.frames, r.segmented_frames, result.skipped_frames,
       result.resumed_frames > 0
           ? fmt::format(", {} replayed from the checkpoint",
                         result.resumed_frames)
           : "",
-      result.seconds, r.at("frames_per_second").get<double>(),
-      r.at("peak_rss_mb").get<double>());
+      result.seconds, r.frames_per_second, r.peak_rss_mb);
   out += "  seconds per frame:";
-  for (const char* stage :
-       {"read", "segment", "track", "fuse", "volumes", "overlay", "write"}) {
-    out += fmt::format(" {} {:.3f}", stage,
-                       r.at("seconds_per_frame").at(stage).get<double>());
+  for (const auto& [stage, seconds] : r.seconds_per_frame.Named()) {
+    out += fmt::format(" {} {:.3f}", stage, seconds);
   }
   out += "\n";
-  out +=
-      fmt::format("  {} objects + {} structure:", r.at("objects").get<size_t>(),
-                  r.at("structure").get<size_t>());
-  for (const auto& [name, count] : r.at("objects_per_class").items()) {
-    out += fmt::format(" {} {}", count.get<int>(), name);
+  out += fmt::format("  {} objects + {} structure:", r.objects, r.structure);
+  for (const auto& [name, count] : r.objects_per_class) {
+    out += fmt::format(" {} {}", count, name);
   }
   out += "\n";
-  if (r.contains("map_guidance") && r["map_guidance"].value("enabled", false)) {
-    const nlohmann::json& g = r.at("map_guidance");
+  if (r.map_guidance && r.map_guidance->enabled) {
+    const MapGuidanceReport& g = *r.map_guidance;
     out += fmt::format(
         "  map guidance: {} full, {} partial, {} by projection alone; {} "
         "encoder calls, {} prompts decoded\n",
-        g.at("full_frames").get<size_t>(), g.at("partial_frames").get<size_t>(),
-        g.at("projection_frames").get<size_t>(),
-        g.at("encoder_calls").get<size_t>(),
-        g.at("prompts_decoded").get<size_t>());
+        g.full_frames, g.partial_frames, g.projection_frames, g.encoder_calls,
+        g.prompts_decoded);
   }
   out += fmt::format("  {} people prims, {} tracks in tracks.txt\n",
                      result.scene.people, result.tracks);

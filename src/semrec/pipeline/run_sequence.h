@@ -14,6 +14,7 @@
 #include "semrec/core/progress.h"
 #include "semrec/infer/model_registry.h"
 #include "semrec/io/sequence_reader.h"
+#include "semrec/pipeline/run_report.h"
 #include "semrec/pipeline/scene_pipeline.h"
 
 namespace semrec::pipeline {
@@ -63,7 +64,7 @@ struct RunResult {
   size_t tracks = 0;
   double seconds = 0.0;
   /// Everything report.json holds.
-  nlohmann::json report;
+  RunReport report;
 };
 
 /// Runs `reader`'s frames through the pipeline into `out_dir`. Corrupt or

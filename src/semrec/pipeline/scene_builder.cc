@@ -199,9 +199,9 @@ void SceneBuilder::Finish() {
   if (finished_) return;
   finished_ = true;
   if (const size_t cleaned = fusion_.Finish(); cleaned > 0) {
-    spdlog::info(
+    spdlog::debug(
         "end of sequence: {} objects merged or dropped (evidence, "
-        "fragments; see summary.json events)",
+        "fragments; report.json: fusion_events)",
         cleaned);
   }
   mesher_.Reconcile([&](uint32_t id) { return fusion_.ResolveId(id); });
@@ -211,6 +211,11 @@ void SceneBuilder::Finish() {
     const fuse::MapResolution& r =
         fusion_.ResolveMap(fuse::MakeMapContext(classes_, gravity.up_world));
     spdlog::info(
+        "the map's objects: {} (walls, floor and ceiling on {} planes); {} "
+        "fragments folded into objects, {} dropped",
+        r.objects.size(), r.planes.size(), r.fragments_folded,
+        r.fragments_dropped);
+    spdlog::debug(
         "objects decided per map voxel: {} objects, {} structure planes, {} "
         "voxels moved off structure, {} split, {} merged by masks, {} new, "
         "fragments {} folded / {} dropped, {} stranded structure voxels "

@@ -287,7 +287,7 @@ TEST(RunSequence, TimingAccountsForTheRunsWallTime) {
   options.config_text = "labels: gt\n";
   const RunResult r =
       RunSequence(reader, nullptr, options, dir / "out", Quiet());
-  const nlohmann::json& t = r.report.at("timing");
+  const nlohmann::json& t = r.report.timing;
   const double run = t.at("run_wall").get<double>();
   EXPECT_NEAR(run, r.seconds, 1e-9);
   const nlohmann::json& main = t.at("main_thread");
@@ -333,13 +333,16 @@ TEST(RunSequence, CorruptFramesAreSkippedAndCounted) {
   const RunResult r =
       RunSequence(reader, nullptr, options, dir / "out", Quiet());
   EXPECT_EQ(r.skipped_frames, 2u);
-  const auto& skipped = r.report["skipped_frames"];
+  const auto& skipped = r.report.skipped_frames;
   ASSERT_EQ(skipped.size(), 2u);
-  EXPECT_EQ(skipped[0]["frame"], 2);
-  EXPECT_NE(
-      skipped[0]["reason"].get<std::string>().find(broken.filename().string()),
-      std::string::npos);
-  EXPECT_EQ(skipped[1]["frame"], 4);
+  EXPECT_EQ(skipped[0].frame, 2u);
+  EXPECT_NE(skipped[0].reason.find(broken.filename().string()),
+            std::string::npos);
+  EXPECT_EQ(skipped[1].frame, 4u);
+  // report.json is the report, read back field for field.
+  const RunReport read = ReadRunReport(dir / "out" / "report.json");
+  EXPECT_EQ(ToJson(read), ToJson(r.report));
+  EXPECT_EQ(read.skipped_frames.size(), 2u);
   EXPECT_GT(r.scene.objects, 3u);
   options.strict = true;
   EXPECT_THROW(RunSequence(reader, nullptr, options, dir / "strict", Quiet()),

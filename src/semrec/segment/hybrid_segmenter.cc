@@ -1,9 +1,9 @@
 #include "semrec/segment/hybrid_segmenter.h"
 
-#include <chrono>
 #include <string>
 
 #include "semrec/core/error.h"
+#include "semrec/core/stopwatch.h"
 #include "semrec/io/label_set_io.h"
 
 namespace semrec::segment {
@@ -86,13 +86,11 @@ void HybridSegmenter::AddObjectEvidence(
     const ColorImage& rgb, const Image<uint8_t>* prompt_region,
     const std::vector<track::LabeledDetection>* detections,
     HybridResult* result) {
-  using Clock = std::chrono::steady_clock;
-  const auto t0 = Clock::now();
+  Stopwatch watch;
   const std::vector<track::LabeledDetection> raw =
       detections ? std::vector<track::LabeledDetection>{}
                  : detector_->Detect(rgb);
-  const auto t1 = Clock::now();
-  result->detect_seconds = std::chrono::duration<double>(t1 - t0).count();
+  result->detect_seconds = watch.Lap();
   std::vector<ObjectDetection> mapped = MapDetections(
       detections ? *detections : raw, class_map_,
       options_.objects.score_threshold, rgb.width(), rgb.height());
@@ -117,15 +115,13 @@ void HybridSegmenter::AddObjectEvidence(
   result->detections_added = evidence.added;
   result->detection_parts = evidence.parts;
   result->detections = std::move(mapped);
-  result->object_mask_seconds =
-      std::chrono::duration<double>(Clock::now() - t1).count();
+  result->object_mask_seconds = watch.Lap();
 }
 
 HybridResult HybridSegmenter::Run(
     const ColorImage& rgb, const Image<uint8_t>* prompt_region,
     std::optional<SemanticResult> semantic,
     const std::vector<track::LabeledDetection>* detections) {
-  using Clock = std::chrono::steady_clock;
   // Below this the models see a few pixels blown up to their input size and
   // return noise; say so instead.
   constexpr int kMinSide = 16;
@@ -134,18 +130,17 @@ HybridResult HybridSegmenter::Run(
                     std::to_string(rgb.height()) +
                     " pixels; segmentation needs at least 16x16");
   HybridResult result;
-  const auto t0 = Clock::now();
+  Stopwatch watch;
   result.semantic_branch =
       semantic ? std::move(*semantic) : semantic_->Segment(rgb);
-  const auto t1 = Clock::now();
-  result.semantic_seconds = std::chrono::duration<double>(t1 - t0).count();
+  result.semantic_seconds = watch.Lap();
   if (masks_) {
     result.masks = prompt_region ? masks_->GenerateWhere(rgb, *prompt_region)
                                  : masks_->Generate(rgb);
     if (detector_) AddObjectEvidence(rgb, prompt_region, detections, &result);
     result.mask_stats = masks_->stats();
   }
-  const auto t2 = Clock::now();
+  watch.Lap();  // the masks' time is in mask_stats
   result.vote =
       Vote(result.semantic_branch.labels, result.masks,
            result.mask_evidence.empty() ? nullptr : &result.mask_evidence,
@@ -155,8 +150,7 @@ HybridResult HybridSegmenter::Run(
         result.detections, result.mask_detection, result.mask_part_of,
         &result.vote, &result.parts_joined);
   }
-  result.vote_seconds =
-      std::chrono::duration<double>(Clock::now() - t2).count();
+  result.vote_seconds = watch.Lap();
   return result;
 }
 

@@ -1,7 +1,6 @@
 #include "semrec/segment/mask_generator.h"
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <numeric>
 #include <string_view>
@@ -9,6 +8,8 @@
 #include <tbb/parallel_for.h>
 
 #include "semrec/core/error.h"
+#include "semrec/core/stopwatch.h"
+#include "semrec/segment/grid_decoder.h"
 
 namespace semrec::segment {
 
@@ -56,11 +57,6 @@ MaskFilter MaskGeneratorOptions::Filter() const {
 }
 
 namespace {
-
-using Clock = std::chrono::steady_clock;
-double Seconds(Clock::time_point a, Clock::time_point b) {
-  return std::chrono::duration<double>(b - a).count();
-}
 
 // Grid points, coarse to fine: points on every 16th row/column first, then
 // every 8th, ..., so that large objects are found by the first prompts and
@@ -144,30 +140,6 @@ bool NearCropEdge(const Box& m, const Box& crop, int w, int h) {
          (near(g.y1, crop.y1) && !near(g.y1, h));
 }
 
-// Cosine similarity of two embedding vectors (1 when either is zero).
-double Cosine(const std::vector<float>& a, const std::vector<float>& b) {
-  double dot = 0, aa = 0, bb = 0;
-  for (size_t k = 0; k < a.size() && k < b.size(); ++k) {
-    dot += double{a[k]} * b[k];
-    aa += double{a[k]} * a[k];
-    bb += double{b[k]} * b[k];
-  }
-  return aa > 0 && bb > 0 ? dot / std::sqrt(aa * bb) : 1.0;
-}
-
-// The low-res cell (row-major in a width x height grid over the model frame)
-// nearest the image point p (continuous: pixel x spans [x, x + 1)).
-size_t NearestLowResCell(const infer::InputTransform& transform, int width,
-                         int height, const std::array<float, 2>& p) {
-  LowResMask dims;
-  dims.width = width;
-  dims.height = height;
-  const auto [u, v] = ImageToLowRes(transform, dims, p[0] - 0.5, p[1] - 0.5);
-  const int iu = std::clamp(static_cast<int>(std::lround(u)), 0, width - 1);
-  const int iv = std::clamp(static_cast<int>(std::lround(v)), 0, height - 1);
-  return static_cast<size_t>(iv) * width + iu;
-}
-
 // Content hash of an image (size and bytes): which image the model holds.
 size_t ImageHash(const ColorImage& rgb) {
   const std::string_view bytes(
@@ -240,7 +212,7 @@ class AutomaticMaskGenerator : public MaskGenerator {
         all.push_back(std::move(m));
       }
     }
-    const auto t2 = Clock::now();
+    const Stopwatch postprocess;
     std::vector<Mask> kept =
         crops.size() > 1
             ? NmsByScore(std::move(all), scores, options_.box_nms_threshold)
@@ -253,7 +225,7 @@ class AutomaticMaskGenerator : public MaskGenerator {
         kept.begin(), kept.end(),
         [](const Mask& a, const Mask& b) { return a.area > b.area; });
     stats_.kept = static_cast<int>(kept.size());
-    stats_.postprocess_seconds = Seconds(t2, Clock::now());
+    stats_.postprocess_seconds = postprocess.Elapsed();
     return kept;
   }
 
@@ -263,10 +235,10 @@ class AutomaticMaskGenerator : public MaskGenerator {
   void EncodeUnlessCurrent(const ColorImage& rgb) override {
     const size_t hash = ImageHash(rgb);
     if (encoded_whole_ && encoded_hash_ == hash) return;
-    const auto t0 = Clock::now();
+    const Stopwatch encode;
     model_->SetImage(rgb);
     ++stats_.encoder_calls;
-    stats_.encode_seconds += Seconds(t0, Clock::now());
+    stats_.encode_seconds += encode.Elapsed();
     encoded_whole_ = true;
     encoded_hash_ = hash;
   }
@@ -299,224 +271,27 @@ class AutomaticMaskGenerator : public MaskGenerator {
         return {};  // nothing new here: no encoder, no decoder
       }
     }
-    const auto t0 = Clock::now();
+    Stopwatch watch;
     model_->SetImage(rgb);
     ++stats_.encoder_calls;
-    const auto t1 = Clock::now();
+    const double encode_seconds = watch.Lap();
     // `rgb` is a crop's copy when crops are on: only a whole image counts.
     encoded_whole_ = crop.x0 == 0 && crop.y0 == 0 && options_.crop_layers == 0;
     encoded_hash_ = ImageHash(rgb);
     grid_side_ = points_per_side;
     stats_.prompts_total += static_cast<int>(points.size());
     std::vector<Mask> candidates =
-        reference_ ? DecodeAll(points) : DecodeSkippingCovered(points);
+        reference_ ? DecodeAll(points)
+                   : DecodeGridSkipping({points, levels_, cells_, grid_side_},
+                                        options_, model_.get(), &stats_);
     stats_.candidates += static_cast<int>(candidates.size());
-    stats_.encode_seconds += Seconds(t0, t1);
-    stats_.decode_seconds += Seconds(t1, Clock::now());
+    stats_.encode_seconds += encode_seconds;
+    stats_.decode_seconds += watch.Lap();
     return BoxNms(std::move(candidates), options_.box_nms_threshold);
   }
 
   bool Passes(const LowResMask& m, float stability) const {
-    return !m.rejected_early &&
-           m.predicted_iou >= options_.pred_iou_threshold &&
-           stability >= options_.stability_threshold;
-  }
-
-  static Prompt PointPrompt(const std::array<float, 2>& p) {
-    Prompt prompt;
-    prompt.points = {p};
-    prompt.labels = {1};
-    return prompt;
-  }
-
-  // The fast path: low-res filtering, full resolution only for survivors,
-  // finer points inside accepted masks (or between rejected ones) skipped
-  // where the image embedding says the image looks alike.
-  std::vector<Mask> DecodeSkippingCovered(
-      const std::vector<std::array<float, 2>>& points) {
-    const std::vector<int>& levels = levels_;
-    const MaskFilter filter = options_.Filter();
-    std::vector<Mask> candidates;
-    // Per low-res cell: the smallest accepted mask covering it (-1: none).
-    std::vector<int> covered;
-    std::vector<int> covered_area;
-    std::vector<std::vector<float>> mask_embedding;
-    int cw = 0, ch = 0;
-    const auto is_covered = [&](const std::array<float, 2>& p) {
-      if (covered.empty()) return false;
-      const int owner =
-          covered[NearestLowResCell(model_->transform(), cw, ch, p)];
-      if (owner < 0) return false;
-      if (options_.covered_similarity <= 0) return true;
-      return Cosine(model_->EmbeddingAt(p[0], p[1]), mask_embedding[owner]) >=
-             options_.covered_similarity;
-    };
-    int dense_level = 0;
-    while ((1 << dense_level) < options_.dense_stride) ++dense_level;
-    // Outcome per grid cell: 0 not decoded, 1 rejected, 2 accepted. A fine
-    // point whose surrounding dense points were all rejected lies in a region
-    // where SAM finds no good mask; decoding it again rarely helps.
-    // (A point skipped between rejected ones counts as rejected: with
-    // several skippable levels its finer neighbours are judged by it.)
-    const int n = grid_side_;
-    std::vector<uint8_t> outcome(static_cast<size_t>(n) * n, 0);
-    std::vector<size_t> point_of_cell(static_cast<size_t>(n) * n, 0);
-    const auto cell_of = [&](size_t p) {
-      return static_cast<size_t>(cells_[p][1]) * n + cells_[p][0];
-    };
-    for (size_t p = 0; p < cells_.size(); ++p) point_of_cell[cell_of(p)] = p;
-    // Per rejected cell whose points have finer neighbours: its mask's logit
-    // (or preview's) at every grid point.
-    const bool inside_test = options_.rejected_inside_similarity < 1.0f;
-    std::vector<std::vector<float>> rejected_logits(outcome.size());
-    const auto logits_at_points = [&](const LowResMask& m) {
-      std::vector<float> at(outcome.size(), 0.0f);
-      for (size_t q = 0; q < points.size(); ++q) {
-        at[cell_of(q)] = m.logits[NearestLowResCell(
-            model_->transform(), m.width, m.height, points[q])];
-      }
-      return at;
-    };
-    const auto between_rejected = [&](size_t p) {
-      if (!options_.skip_between_rejected) return false;
-      const auto [i, j] = cells_[p];
-      // The surrounding points of the next coarser level.
-      const int stride = 2 << levels[p];
-      const auto neighbours = [&](int v) {
-        const int lo = v / stride * stride;
-        return v % stride == 0 || lo + stride >= n
-                   ? std::vector<int>{lo}
-                   : std::vector<int>{lo, lo + stride};
-      };
-      std::vector<float> here;
-      for (int u : neighbours(i)) {
-        for (int v : neighbours(j)) {
-          const size_t cell = static_cast<size_t>(v) * n + u;
-          if (outcome[cell] != 1) return false;
-          // Only where the image looks the same as at the rejected points,
-          // or a little less alike inside their masks.
-          if (options_.rejected_similarity > 0) {
-            if (here.empty()) {
-              here = model_->EmbeddingAt(points[p][0], points[p][1]);
-            }
-            const auto& q = points[point_of_cell[cell]];
-            const double similarity =
-                Cosine(here, model_->EmbeddingAt(q[0], q[1]));
-            const std::vector<float>& logits = rejected_logits[cell];
-            const bool inside =
-                inside_test && !logits.empty() &&
-                logits[cell_of(p)] > options_.rejected_inside_logit &&
-                similarity >= options_.rejected_inside_similarity;
-            if (similarity < options_.rejected_similarity && !inside) {
-              return false;
-            }
-          }
-        }
-      }
-      return true;
-    };
-    size_t next = 0;
-    while (next < points.size()) {
-      std::vector<size_t> wave;
-      while (next < points.size() &&
-             static_cast<int>(wave.size()) < options_.prompts_per_wave) {
-        // A skippable level starts a wave of its own: its points are judged
-        // by the results of the level above.
-        if (!wave.empty() && levels[next] < dense_level &&
-            levels[next] != levels[wave.front()]) {
-          break;
-        }
-        if (!options_.skip_covered_points || levels[next] >= dense_level) {
-          wave.push_back(next);
-        } else if (!is_covered(points[next])) {
-          if (between_rejected(next)) {
-            outcome[cell_of(next)] = 1;
-          } else {
-            wave.push_back(next);
-          }
-        }
-        ++next;
-      }
-      // Decode, score, upsample and describe in parallel (the wave was
-      // chosen before any of its results); book-keeping below in prompt
-      // order.
-      std::vector<LowResMask> decoded(wave.size());
-      std::vector<float> stability(wave.size());
-      std::vector<Mask> upsampled(wave.size());
-      std::vector<int> low_res_area(wave.size(), 0);
-      std::vector<std::vector<float>> pooled(wave.size());
-      std::vector<std::vector<float>> logits_at(wave.size());
-      // In pairs: the decoder kernel decodes two prompts in one pass over
-      // the image's arrays (bench_prompts).
-      constexpr size_t kBatch = 2;
-      const size_t batches = (wave.size() + kBatch - 1) / kBatch;
-      tbb::parallel_for(static_cast<size_t>(0), batches, [&](size_t b) {
-        const size_t first = b * kBatch;
-        const size_t end = std::min(wave.size(), first + kBatch);
-        std::vector<Prompt> prompts;
-        for (size_t k = first; k < end; ++k) {
-          prompts.push_back(PointPrompt(points[wave[k]]));
-        }
-        std::vector<LowResMask> batch =
-            model_->DecodeBatchUnlessRejected(prompts, filter);
-        for (size_t k = first; k < end; ++k) {
-          const LowResMask& m = decoded[k] = std::move(batch[k - first]);
-          const bool finer = levels[wave[k]] > 0;
-          if (m.rejected_early) {
-            if (inside_test && finer && !m.logits.empty()) {
-              logits_at[k] = logits_at_points(m);
-            }
-            continue;
-          }
-          stability[k] =
-              model_->StabilityScore(m, 0.0f, options_.stability_offset);
-          if (!Passes(m, stability[k])) {
-            if (inside_test && finer) logits_at[k] = logits_at_points(m);
-            continue;
-          }
-          upsampled[k] = model_->Upsample(m);
-          for (float logit : m.logits) low_res_area[k] += logit > 0.0f;
-          if (options_.covered_similarity > 0) {
-            pooled[k] = model_->PooledEmbedding(m);
-          }
-        }
-      });
-      stats_.prompts_decoded += static_cast<int>(wave.size());
-      for (size_t k = 0; k < wave.size(); ++k) {
-        const LowResMask& m = decoded[k];
-        stats_.prompts_rejected_early += m.rejected_early;
-        const bool passes = Passes(m, stability[k]);
-        outcome[cell_of(wave[k])] = passes ? 2 : 1;
-        if (!passes) {
-          rejected_logits[cell_of(wave[k])] = std::move(logits_at[k]);
-          continue;
-        }
-        if (covered.empty()) {
-          cw = m.width;
-          ch = m.height;
-          covered.assign(static_cast<size_t>(cw) * ch, -1);
-          covered_area.assign(covered.size(), 0);
-        }
-        const int area = low_res_area[k];
-        const int id = static_cast<int>(mask_embedding.size());
-        mask_embedding.push_back(std::move(pooled[k]));
-        for (size_t i = 0; i < covered.size(); ++i) {
-          if (m.logits[i] > 0.0f &&
-              (covered[i] < 0 || area < covered_area[i])) {
-            covered[i] = id;
-            covered_area[i] = area;
-          }
-        }
-        Mask& mask = upsampled[k];
-        if (mask.area == 0) continue;
-        mask.stability = stability[k];
-        mask.point_x = points[wave[k]][0];
-        mask.point_y = points[wave[k]][1];
-        if (!m.object_pointer.empty()) mask.embedding = m.object_pointer;
-        candidates.push_back(std::move(mask));
-      }
-    }
-    return candidates;
+    return PassesThresholds(options_, m, stability);
   }
 
   // The straightforward algorithm: every prompt, logits upsampled to full

@@ -233,6 +233,126 @@ void SamKernel::PromptTokens(const Request& r, State* s) const {
   }
 }
 
+void SamKernel::FirstLayerTokens(const Image& im,
+                                 std::vector<State>* states) const {
+  const size_t n = states->size();
+  const int dh = kCrossDim / heads_;
+  const float scale = CrossScale();
+  const Layer& l0 = layers_[0];
+  // Its first self-attention has no positional encoding and no residual.
+  std::vector<int> first_row(n + 1, 0);
+  for (size_t p = 0; p < n; ++p) {
+    State& s = (*states)[p];
+    s.queries = TokenAttention(l0.self_attn, s.query_pe, s.query_pe, s.query_pe,
+                               s.tokens);
+    ops::LayerNormRows(s.queries.data(), s.tokens, kDim, kDim,
+                       l0.norm1.g.data(), l0.norm1.b.data(), norm_eps_);
+    first_row[p + 1] = first_row[p] + s.tokens;
+  }
+  // The token-to-image attention of all the batch's tokens in one pass over
+  // the image's keys and values (each row as alone).
+  const int rows = first_row[n];
+  std::vector<float> q(static_cast<size_t>(rows) * kCrossDim);
+  for (size_t p = 0; p < n; ++p) {
+    const State& s = (*states)[p];
+    const std::vector<float> qp =
+        ApplyTokens(l0.t2i.q, Sum(s.queries, s.query_pe), s.tokens);
+    std::copy(qp.begin(), qp.end(),
+              q.begin() + static_cast<size_t>(first_row[p]) * kCrossDim);
+  }
+  for (float& x : q) x *= scale;
+  std::vector<float> probs(static_cast<size_t>(rows) * im.tokens);
+  std::vector<float> o(static_cast<size_t>(rows) * kCrossDim);
+  for (int h = 0; h < heads_; ++h) {
+    ops::Gemm(rows, im.tokens, dh, q.data() + static_cast<int64_t>(h) * dh,
+              kCrossDim, 1,
+              im.t2i_keys_t.data() + static_cast<size_t>(h * dh) * im.tokens,
+              im.tokens, probs.data(), im.tokens, false);
+    ops::SoftmaxRows(probs.data(), rows, im.tokens, im.tokens);
+    ops::Gemm(rows, dh, im.tokens, probs.data(), im.tokens, 1,
+              im.t2i_values.data() + static_cast<size_t>(h) * im.tokens * dh,
+              dh, o.data() + static_cast<int64_t>(h) * dh, kCrossDim, false);
+  }
+  for (size_t p = 0; p < n; ++p) {
+    State& s = (*states)[p];
+    const auto from =
+        o.begin() + static_cast<ptrdiff_t>(first_row[p]) * kCrossDim;
+    const std::vector<float> op(
+        from, from + static_cast<ptrdiff_t>(s.tokens) * kCrossDim);
+    const std::vector<float> out = ApplyTokens(l0.t2i.o, op, s.tokens);
+    ops::Add(s.queries.data(), s.queries.data(), out.data(), out.size());
+    ops::LayerNormRows(s.queries.data(), s.tokens, kDim, kDim,
+                       l0.norm2.g.data(), l0.norm2.b.data(), norm_eps_);
+  }
+}
+
+void SamKernel::ImageSides(const Image& im,
+                           const std::vector<Request>& requests,
+                           const std::vector<std::vector<float>>& layer0_tokens,
+                           std::vector<State>* states, Scratch* scratch) const {
+  const size_t n = requests.size();
+  {
+    std::vector<FirstLayerWork> work;
+    work.reserve(n);  // no moves: the right-hand sides point into them
+    for (size_t p = 0; p < n; ++p) {
+      work.emplace_back(*this, layer0_tokens[p], &(*states)[p],
+                        requests[p].out->second_layer.image_tokens.data());
+    }
+    for (int b0 = 0; b0 < im.tokens; b0 += kBlock) {
+      for (FirstLayerWork& w : work) FirstLayerBlock(im, b0, &w);
+    }
+    for (FirstLayerWork& w : work) FirstLayerFinish(&w);
+  }
+  std::vector<SecondLayerWork> work;
+  work.reserve(n);
+  for (size_t p = 0; p < n; ++p) {
+    work.emplace_back(*this, &(*states)[p], &requests[p].out->second_layer,
+                      scratch->features[p].data());
+  }
+  for (int b0 = 0; b0 < im.tokens; b0 += kBlock) {
+    for (SecondLayerWork& w : work) SecondLayerBlock(im, b0, &w);
+  }
+  for (SecondLayerWork& w : work) SecondLayerFinish(&w);
+}
+
+void SamKernel::Heads(const Image& im, const std::vector<Request>& requests,
+                      const std::vector<State>& states,
+                      const Scratch& scratch) const {
+  const auto mlp3 = [&](const Linear(&l)[3], const float* x) {
+    std::vector<float> h(x, x + kDim);
+    for (int i = 0; i < 3; ++i) {
+      h = ApplyTokens(l[i], h, 1);
+      if (i < 2) {
+        for (float& v : h) v = std::max(v, 0.0f);
+      }
+    }
+    return h;
+  };
+  for (size_t p = 0; p < requests.size(); ++p) {
+    const State& s = states[p];
+    Output* out = requests[p].out;
+    const auto count = static_cast<float>(requests[p].points->size());
+    const std::vector<float> iou = mlp3(iou_, s.queries.data());
+    int best = 0;
+    float best_score = -1e30f;
+    for (int j = 0; j < 4; ++j) {
+      const float score =
+          iou[j] +
+          (j == 0 ? (count - points_offset_) * first_mask_reweight_ : 0.0f);
+      if (score > best_score) {
+        best_score = score;
+        best = j;
+      }
+    }
+    out->predicted_iou = iou[best];
+    out->mask_hyper = mlp3(
+        hyper_[best], s.queries.data() + static_cast<size_t>(1 + best) * kDim);
+    out->preview.resize(static_cast<size_t>(im.tokens));
+    ops::RowDots(im.tokens, kPreviewDim, scratch.features[p].data(),
+                 kPreviewDim, out->mask_hyper.data(), out->preview.data());
+  }
+}
+
 void SamKernel::DecodeBatch(const Image& im,
                             const std::vector<Request>& requests) const {
   if (im.tokens == 0) {
@@ -265,60 +385,12 @@ void SamKernel::DecodeBatch(const Image& im,
     scores = std::max(scores, static_cast<size_t>(kBlock) * s.padded);
   }
   scratch.scores.resize(scores);
-  const int dh = kCrossDim / heads_;
-  const float scale = CrossScale();
-  const Layer& l0 = layers_[0];
-  const Layer& l1 = layers_[1];
-  // Layer 0, token side (its first self-attention has no positional
-  // encoding and no residual).
-  std::vector<int> first_row(n + 1, 0);
-  for (size_t p = 0; p < n; ++p) {
-    State& s = states[p];
-    s.queries = TokenAttention(l0.self_attn, s.query_pe, s.query_pe, s.query_pe,
-                               s.tokens);
-    ops::LayerNormRows(s.queries.data(), s.tokens, kDim, kDim,
-                       l0.norm1.g.data(), l0.norm1.b.data(), norm_eps_);
-    first_row[p + 1] = first_row[p] + s.tokens;
-  }
-  {
-    // The token-to-image attention of all the batch's tokens in one pass
-    // over the image's keys and values (each row as alone).
-    const int rows = first_row[n];
-    std::vector<float> q(static_cast<size_t>(rows) * kCrossDim);
-    for (size_t p = 0; p < n; ++p) {
-      const State& s = states[p];
-      const std::vector<float> qp =
-          ApplyTokens(l0.t2i.q, Sum(s.queries, s.query_pe), s.tokens);
-      std::copy(qp.begin(), qp.end(),
-                q.begin() + static_cast<size_t>(first_row[p]) * kCrossDim);
-    }
-    for (float& x : q) x *= scale;
-    std::vector<float> probs(static_cast<size_t>(rows) * im.tokens);
-    std::vector<float> o(static_cast<size_t>(rows) * kCrossDim);
-    for (int h = 0; h < heads_; ++h) {
-      ops::Gemm(rows, im.tokens, dh, q.data() + static_cast<int64_t>(h) * dh,
-                kCrossDim, 1,
-                im.t2i_keys_t.data() + static_cast<size_t>(h * dh) * im.tokens,
-                im.tokens, probs.data(), im.tokens, false);
-      ops::SoftmaxRows(probs.data(), rows, im.tokens, im.tokens);
-      ops::Gemm(rows, dh, im.tokens, probs.data(), im.tokens, 1,
-                im.t2i_values.data() + static_cast<size_t>(h) * im.tokens * dh,
-                dh, o.data() + static_cast<int64_t>(h) * dh, kCrossDim, false);
-    }
-    for (size_t p = 0; p < n; ++p) {
-      State& s = states[p];
-      const auto from =
-          o.begin() + static_cast<ptrdiff_t>(first_row[p]) * kCrossDim;
-      const std::vector<float> op(
-          from, from + static_cast<ptrdiff_t>(s.tokens) * kCrossDim);
-      const std::vector<float> out = ApplyTokens(l0.t2i.o, op, s.tokens);
-      ops::Add(s.queries.data(), s.queries.data(), out.data(), out.size());
-      ops::LayerNormRows(s.queries.data(), s.tokens, kDim, kDim,
-                         l0.norm2.g.data(), l0.norm2.b.data(), norm_eps_);
-    }
-  }
+  // Layer 0, token side.
+  FirstLayerTokens(im, &states);
   // Layer 1's self-attention needs only the tokens: before the image side,
   // which takes layer 0's tokens and layer 1's.
+  const Layer& l0 = layers_[0];
+  const Layer& l1 = layers_[1];
   std::vector<std::vector<float>> layer0_tokens(n);
   for (size_t p = 0; p < n; ++p) {
     State& s = states[p];
@@ -333,64 +405,9 @@ void SamKernel::DecodeBatch(const Image& im,
   }
   // The image sides: block by block, each block for every prompt in turn
   // (the image's arrays read once per block for the batch).
-  {
-    std::vector<FirstLayerWork> work;
-    work.reserve(n);  // no moves: the right-hand sides point into them
-    for (size_t p = 0; p < n; ++p) {
-      work.emplace_back(*this, layer0_tokens[p], &states[p],
-                        requests[p].out->second_layer.image_tokens.data());
-    }
-    for (int b0 = 0; b0 < im.tokens; b0 += kBlock) {
-      for (FirstLayerWork& w : work) FirstLayerBlock(im, b0, &w);
-    }
-    for (FirstLayerWork& w : work) FirstLayerFinish(&w);
-  }
-  {
-    std::vector<SecondLayerWork> work;
-    work.reserve(n);
-    for (size_t p = 0; p < n; ++p) {
-      work.emplace_back(*this, &states[p], &requests[p].out->second_layer,
-                        scratch.features[p].data());
-    }
-    for (int b0 = 0; b0 < im.tokens; b0 += kBlock) {
-      for (SecondLayerWork& w : work) SecondLayerBlock(im, b0, &w);
-    }
-    for (SecondLayerWork& w : work) SecondLayerFinish(&w);
-  }
+  ImageSides(im, requests, layer0_tokens, &states, &scratch);
   // The heads: IoU prediction and the mask tokens' hypernetworks.
-  const auto mlp3 = [&](const Linear(&l)[3], const float* x) {
-    std::vector<float> h(x, x + kDim);
-    for (int i = 0; i < 3; ++i) {
-      h = ApplyTokens(l[i], h, 1);
-      if (i < 2) {
-        for (float& v : h) v = std::max(v, 0.0f);
-      }
-    }
-    return h;
-  };
-  for (size_t p = 0; p < n; ++p) {
-    const State& s = states[p];
-    Output* out = requests[p].out;
-    const auto count = static_cast<float>(requests[p].points->size());
-    const std::vector<float> iou = mlp3(iou_, s.queries.data());
-    int best = 0;
-    float best_score = -1e30f;
-    for (int j = 0; j < 4; ++j) {
-      const float score =
-          iou[j] +
-          (j == 0 ? (count - points_offset_) * first_mask_reweight_ : 0.0f);
-      if (score > best_score) {
-        best_score = score;
-        best = j;
-      }
-    }
-    out->predicted_iou = iou[best];
-    out->mask_hyper = mlp3(
-        hyper_[best], s.queries.data() + static_cast<size_t>(1 + best) * kDim);
-    out->preview.resize(static_cast<size_t>(im.tokens));
-    ops::RowDots(im.tokens, kPreviewDim, scratch.features[p].data(),
-                 kPreviewDim, out->mask_hyper.data(), out->preview.data());
-  }
+  Heads(im, requests, states, scratch);
 }
 
 }  // namespace semrec::segment

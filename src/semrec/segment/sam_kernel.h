@@ -187,6 +187,15 @@ class SamKernel {
                    const Rhs& folded, float* scores, OnlineAttention* online,
                    const State& s) const;
   void PromptTokens(const Request& r, State* s) const;
+  // DecodeBatch's steps: layer 0's token side (self-attention, then the
+  // batch's token-to-image attention in one pass), both layers' image sides
+  // block by block, and the IoU and hypernetwork heads.
+  void FirstLayerTokens(const Image& im, std::vector<State>* states) const;
+  void ImageSides(const Image& im, const std::vector<Request>& requests,
+                  const std::vector<std::vector<float>>& layer0_tokens,
+                  std::vector<State>* states, Scratch* scratch) const;
+  void Heads(const Image& im, const std::vector<Request>& requests,
+             const std::vector<State>& states, const Scratch& scratch) const;
   // A prompt's share of each layer's image side: set up, then per block of
   // image tokens, then finished (the first writes layer 1's image tokens).
   struct FirstLayerWork;

@@ -1,11 +1,10 @@
 #include "semrec/segment/segment_images.h"
 
-#include <chrono>
-
 #include <nlohmann/json.hpp>
 
 #include "semrec/core/error.h"
 #include "semrec/core/file_util.h"
+#include "semrec/core/stopwatch.h"
 #include "semrec/io/image_io.h"
 #include "semrec/io/label_set_io.h"
 
@@ -29,16 +28,14 @@ SegmentImagesResult SegmentImages(const infer::ModelRegistry& registry,
   SegmentImagesResult result;
   for (const auto& input : inputs) {
     const ColorImage rgb = input.Load();
-    const auto start = std::chrono::steady_clock::now();
+    const Stopwatch start;
     HybridResult segmented;
     try {
       segmented = segmenter.Segment(rgb);
     } catch (const InvalidArgument& e) {
       throw FormatError(input.image, e.what());
     }
-    seconds +=
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - start)
-            .count();
+    seconds += start.Elapsed();
     result.masks += segmented.masks.size();
     WriteSegmentation(out_dir, input, rgb, segmented, segmenter.label_set());
     progress.Tick();

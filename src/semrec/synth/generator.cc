@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <atomic>
-#include <chrono>
 #include <cmath>
 #include <mutex>
 
@@ -13,6 +12,7 @@
 #include "semrec/core/error.h"
 #include "semrec/core/file_util.h"
 #include "semrec/core/random.h"
+#include "semrec/core/stopwatch.h"
 #include "semrec/io/image_io.h"
 #include "semrec/io/label_set_io.h"
 #include "semrec/io/ply_io.h"
@@ -182,10 +182,270 @@ SynthOptions SynthOptions::Preset(const std::string& name) {
   return o;
 }
 
+namespace {
+
+// MOTChallenge rows from a frame's person map: boxes of the visible pixels,
+// visibility ratio against the unoccluded silhouette.
+std::string MotRows(const RenderedFrame& r, const Scene& scene, int frame,
+                    double time_s, const Transform& T_world_camera,
+                    const CameraIntrinsics& k, int* visible_people) {
+  std::map<uint16_t, std::array<int, 5>> boxes;  // id -> x0, y0, x1, y1, pixels
+  for (int v = 0; v < k.height; ++v) {
+    for (int u = 0; u < k.width; ++u) {
+      const uint16_t pid = r.person(u, v);
+      if (pid == 0) continue;
+      auto [it, inserted] =
+          boxes.try_emplace(pid, std::array<int, 5>{u, v, u, v, 0});
+      auto& b = it->second;
+      b[0] = std::min(b[0], u), b[1] = std::min(b[1], v);
+      b[2] = std::max(b[2], u), b[3] = std::max(b[3], v);
+      ++b[4];
+    }
+  }
+  std::string rows;
+  for (const auto& [pid, b] : boxes) {
+    const Silhouette full =
+        UnoccludedSilhouette(scene, pid, time_s, T_world_camera, k);
+    const double visibility =
+        full.pixels > 0 ? std::min(1.0, static_cast<double>(b[4]) / full.pixels)
+                        : 1.0;
+    rows +=
+        fmt::format("{},{},{},{},{},{},1,1,{:.4f}\n", frame + 1, pid, b[0] + 1,
+                    b[1] + 1, b[2] - b[0] + 1, b[3] - b[1] + 1, visibility);
+  }
+  *visible_people = static_cast<int>(boxes.size());
+  return rows;
+}
+
+// Renders frame i and writes its images (colour, noisy and clean depth, the
+// label layers, noisy labels when asked); returns the bytes written.
+uint64_t WriteFrame(const SynthOptions& options, const Scene& scene,
+                    const CameraIntrinsics& k, const Transform& T_world_camera,
+                    int i, const fs::path& out_dir, io::FrameRecord* record,
+                    std::string* mot_rows, int* visible_people) {
+  const double time_s = i / options.fps;
+  const RenderedFrame r = Render(scene, time_s, T_world_camera, k);
+  const DepthImage noisy = ApplyDepthNoise(
+      r.depth, r.cos_incidence, k, options.noise, MixSeed(options.seed, i + 1));
+  DepthNoiseOptions clean_options = options.noise;
+  clean_options.enabled = false;
+  const DepthImage clean =
+      ApplyDepthNoise(r.depth, r.cos_incidence, k, clean_options, 0);
+  const std::string stem = fmt::format("{:06}.png", i);
+  record->color_path = out_dir / "color" / stem;
+  record->depth_path = out_dir / "depth" / stem;
+  record->timestamp_s = time_s;
+  record->T_world_camera = T_world_camera;
+  record->layers = {{"depth_clean", out_dir / "depth_clean" / stem},
+                    {"semantic", out_dir / "semantic" / stem},
+                    {"instance", out_dir / "instance" / stem},
+                    {"person", out_dir / "person" / stem}};
+  io::WritePng(record->color_path, r.color);
+  io::WritePng(record->depth_path, ToRaw(noisy));
+  io::WritePng(record->layers["depth_clean"], ToRaw(clean));
+  io::WritePng(record->layers["semantic"], r.semantic);
+  io::WritePng(record->layers["instance"], r.instance);
+  io::WritePng(record->layers["person"], r.person);
+  uint64_t bytes = FileSize(record->color_path) + FileSize(record->depth_path);
+  if (options.write_noisy_labels) {
+    const NoisyLabels noisy_labels =
+        ApplyLabelNoise(r, scene, T_world_camera, k, options.label_noise,
+                        MixSeed(MixSeed(options.seed, 0x1abe1), i + 1),
+                        MixSeed(options.seed, 0xb1eed));
+    const fs::path noisy_dir = out_dir / "labels_noisy";
+    io::WritePng(noisy_dir / "instance" / stem, noisy_labels.instance);
+    io::WritePng(noisy_dir / "semantic" / stem, noisy_labels.semantic);
+    bytes += FileSize(noisy_dir / "instance" / stem) +
+             FileSize(noisy_dir / "semantic" / stem);
+  }
+  for (const auto& [name, path] : record->layers) bytes += FileSize(path);
+  *mot_rows = MotRows(r, scene, i, time_s, T_world_camera, k, visible_people);
+  return bytes;
+}
+
+// Whether surface sample s of object `self` lies within the contact distance
+// of another object (hidden where they touch).
+class ContactTest {
+ public:
+  ContactTest(const Scene& scene, double contact_m)
+      : scene_(scene), contact_m_(contact_m) {
+    const Eigen::Vector3d pad = Eigen::Vector3d::Constant(contact_m);
+    for (const SceneObject& o : scene.objects) {
+      const Eigen::AlignedBox3d b = o.Bounds();
+      near_bounds_.emplace_back(b.min() - pad, b.max() + pad);
+    }
+  }
+  bool TouchesAnother(size_t self, const Eigen::Vector3d& s) const {
+    if (contact_m_ <= 0.0) return false;
+    for (size_t k = 0; k < scene_.objects.size(); ++k) {
+      if (k == self || !near_bounds_[k].contains(s)) continue;
+      for (const Primitive& p : scene_.objects[k].parts) {
+        if (SignedDistance(p, s) < contact_m_) return true;
+      }
+    }
+    return false;
+  }
+
+ private:
+  const Scene& scene_;
+  double contact_m_;
+  std::vector<Eigen::AlignedBox3d> near_bounds_;
+};
+
+// Whether a surface sample of part `part` of object o belongs to the visible
+// surface: not outside the room, not inside another part of o, and for an
+// interior wall not where its parts meet or on the room's bounds.
+bool VisibleSample(const SceneObject& o, size_t part, const Eigen::Vector3d& s,
+                   const Eigen::Vector3d& room_size) {
+  const Eigen::Vector3d lo = -Eigen::Vector3d::Constant(1e-6);
+  const Eigen::Vector3d hi = room_size + Eigen::Vector3d::Constant(1e-6);
+  if ((s.array() < lo.array()).any() || (s.array() > hi.array()).any()) {
+    return false;
+  }
+  const bool inside = std::any_of(
+      o.parts.begin(), o.parts.end(),
+      [&](const Primitive& p) { return SignedDistance(p, s) < -1e-6; });
+  if (inside) return false;
+  // An interior wall's faces where its parts meet, and those on the room's
+  // bounds (floor, ceiling, outer walls), no camera can see.
+  if (o.structure && !o.room_face) {
+    const Eigen::Vector3d in_lo = lo.array() + 2e-6;
+    const Eigen::Vector3d in_hi = hi.array() - 2e-6;
+    if ((s.array() < in_lo.array()).any() ||
+        (s.array() > in_hi.array()).any()) {
+      return false;
+    }
+    for (size_t j = 0; j < o.parts.size(); ++j) {
+      if (j != part && SignedDistance(o.parts[j], s) < 1e-6) return false;
+    }
+  }
+  return true;
+}
+
+nlohmann::json ObjectJson(const SceneObject& o, const std::string& mesh_name) {
+  const Eigen::AlignedBox3d b = o.Bounds();
+  nlohmann::json parts = nlohmann::json::array();
+  for (const Primitive& p : o.parts) parts.push_back(PrimitiveJson(p));
+  return {{"instance_id", o.instance_id},
+          {"class_id", o.class_id},
+          {"class", SynthClasses().Get(o.class_id).name},
+          {"name", o.name},
+          {"structure", o.structure},
+          {"color", o.color},
+          {"bounds_min", {b.min().x(), b.min().y(), b.min().z()}},
+          {"bounds_max", {b.max().x(), b.max().y(), b.max().z()}},
+          {"mesh", mesh_name},
+          {"parts", parts}};
+}
+
+// gt/objects.json, gt/meshes/*.ply and the visible surface's samples
+// (gt/surface_points.ply, what `semrec eval scene` reads: per point the class
+// and the instance; `label` repeats the instance for older readers). Returns
+// the number of surface points.
+size_t WriteObjectsGroundTruth(const SynthOptions& options, const Scene& scene,
+                               const fs::path& gt) {
+  nlohmann::json objects = nlohmann::json::array();
+  io::PlyData surface;
+  std::vector<int32_t> semantic, instance;
+  const ContactTest contact(scene, options.gt_hidden_contact_m);
+  for (size_t oi = 0; oi < scene.objects.size(); ++oi) {
+    const SceneObject& o = scene.objects[oi];
+    const std::string mesh_name = fmt::format("meshes/{}.ply", o.name);
+    objects.push_back(ObjectJson(o, mesh_name));
+    TriangleMesh mesh;
+    std::vector<Eigen::Vector3d> samples;
+    const double spacing = o.structure ? options.gt_structure_spacing_m
+                                       : options.gt_object_spacing_m;
+    std::vector<size_t> sample_part;
+    for (size_t j = 0; j < o.parts.size(); ++j) {
+      AppendMesh(o.parts[j], 24, &mesh);
+      AppendSurfaceSamples(o.parts[j], spacing, &samples);
+      sample_part.resize(samples.size(), j);
+    }
+    io::PlyData mesh_ply;
+    for (const auto& v : mesh.vertices) {
+      mesh_ply.points.push_back(v.cast<float>());
+    }
+    mesh_ply.triangles = mesh.triangles;
+    io::WritePly(gt / mesh_name, mesh_ply);
+    for (size_t i = 0; i < samples.size(); ++i) {
+      const Eigen::Vector3d& s = samples[i];
+      if (!VisibleSample(o, sample_part[i], s, scene.room_size)) continue;
+      if (contact.TouchesAnother(oi, s)) continue;
+      surface.points.push_back(s.cast<float>());
+      surface.colors.push_back(o.color);
+      surface.labels.push_back(o.instance_id);
+      semantic.push_back(o.class_id);
+      instance.push_back(o.instance_id);
+    }
+  }
+  WriteTextFileAtomic(gt / "objects.json", objects.dump(2) + "\n");
+  surface.int_properties = {{"semantic", std::move(semantic)},
+                            {"instance", std::move(instance)}};
+  io::WritePly(gt / "surface_points.ply", surface);
+  return surface.points.size();
+}
+
+// gt/people.json and gt/people/gt.txt (MOTChallenge).
+void WritePeopleGroundTruth(const Scene& scene,
+                            const std::vector<std::string>& mot_rows,
+                            const fs::path& gt) {
+  nlohmann::json people = nlohmann::json::array();
+  for (const Person& p : scene.people) {
+    nlohmann::json path = nlohmann::json::array();
+    for (const auto& q : p.path) path.push_back({q.x(), q.y()});
+    people.push_back({{"person_id", p.person_id},
+                      {"instance_id", kPersonInstanceBase + p.person_id},
+                      {"height_m", p.height_m},
+                      {"speed_mps", p.speed_mps},
+                      {"start_offset_m", p.start_offset_m},
+                      {"shirt", p.shirt},
+                      {"pants", p.pants},
+                      {"path", path}});
+  }
+  WriteTextFileAtomic(gt / "people.json", people.dump(2) + "\n");
+  std::string mot;
+  for (const std::string& rows : mot_rows) mot += rows;
+  WriteTextFileAtomic(gt / "people" / "gt.txt", mot);
+}
+
+nlohmann::json SceneInfoJson(const SynthOptions& options, const Scene& scene,
+                             size_t surface_points) {
+  return {{"generator", "semrec synth"},
+          {"seed", options.seed},
+          {"frames", options.frames},
+          {"fps", options.fps},
+          {"room_size_m",
+           {scene.room_size.x(), scene.room_size.y(), scene.room_size.z()}},
+          {"views", options.trajectory.kind == TrajectoryOptions::Kind::kSparse
+                        ? "sparse"
+                        : "video"},
+          {"noise", options.noise.enabled ? "kinect" : "none"},
+          {"label_noise", options.write_noisy_labels},
+          {"label_bleed_share",
+           options.write_noisy_labels && options.label_noise.bleed
+               ? options.label_noise.bleed_share
+               : 0.0},
+          {"label_consistent_cuts",
+           options.write_noisy_labels ? options.label_noise.consistent_cut_share
+                                      : 0.0},
+          {"noise_strength", options.noise.strength},
+          {"max_depth_m", options.noise.max_depth_m},
+          {"depth_scale", kDepthScale},
+          {"gt_object_spacing_m", options.gt_object_spacing_m},
+          {"gt_structure_spacing_m", options.gt_structure_spacing_m},
+          {"gt_hidden_contact_m", options.gt_hidden_contact_m},
+          {"objects", scene.objects.size()},
+          {"people", scene.people.size()},
+          {"surface_points", surface_points}};
+}
+
+}  // namespace
+
 SynthSummary WriteSyntheticSequence(const SynthOptions& options_in,
                                     const fs::path& out_dir,
                                     const ProgressOptions& progress_options) {
-  const auto start = std::chrono::steady_clock::now();
+  const Stopwatch time;
   SynthOptions options = options_in;
   options.scene.seed = options.seed;
   options.Check();
@@ -224,81 +484,9 @@ SynthSummary WriteSyntheticSequence(const SynthOptions& options_in,
   std::atomic<uint64_t> bytes{0};
   std::mutex progress_mutex;
   Progress progress("rendering", options.frames, progress_options);
-
   tbb::parallel_for(0, options.frames, [&](int i) {
-    const double time_s = i / options.fps;
-    const RenderedFrame r = Render(scene, time_s, poses[i], k);
-    const DepthImage noisy =
-        ApplyDepthNoise(r.depth, r.cos_incidence, k, options.noise,
-                        MixSeed(options.seed, i + 1));
-    DepthNoiseOptions clean_options = options.noise;
-    clean_options.enabled = false;
-    const DepthImage clean =
-        ApplyDepthNoise(r.depth, r.cos_incidence, k, clean_options, 0);
-    io::FrameRecord& record = index.frames[i];
-    const std::string stem = fmt::format("{:06}.png", i);
-    record.color_path = out_dir / "color" / stem;
-    record.depth_path = out_dir / "depth" / stem;
-    record.timestamp_s = time_s;
-    record.T_world_camera = poses[i];
-    record.layers = {{"depth_clean", out_dir / "depth_clean" / stem},
-                     {"semantic", out_dir / "semantic" / stem},
-                     {"instance", out_dir / "instance" / stem},
-                     {"person", out_dir / "person" / stem}};
-    io::WritePng(record.color_path, r.color);
-    io::WritePng(record.depth_path, ToRaw(noisy));
-    io::WritePng(record.layers["depth_clean"], ToRaw(clean));
-    io::WritePng(record.layers["semantic"], r.semantic);
-    io::WritePng(record.layers["instance"], r.instance);
-    io::WritePng(record.layers["person"], r.person);
-    uint64_t frame_bytes =
-        FileSize(record.color_path) + FileSize(record.depth_path);
-    if (options.write_noisy_labels) {
-      const NoisyLabels noisy_labels =
-          ApplyLabelNoise(r, scene, poses[i], k, options.label_noise,
-                          MixSeed(MixSeed(options.seed, 0x1abe1), i + 1),
-                          MixSeed(options.seed, 0xb1eed));
-      const fs::path noisy = out_dir / "labels_noisy";
-      io::WritePng(noisy / "instance" / stem, noisy_labels.instance);
-      io::WritePng(noisy / "semantic" / stem, noisy_labels.semantic);
-      frame_bytes += FileSize(noisy / "instance" / stem) +
-                     FileSize(noisy / "semantic" / stem);
-    }
-    for (const auto& [name, path] : record.layers) {
-      frame_bytes += FileSize(path);
-    }
-    bytes += frame_bytes;
-
-    // MOTChallenge rows from the person map: boxes of the visible pixels,
-    // visibility ratio against the unoccluded silhouette.
-    std::map<uint16_t, std::array<int, 5>>
-        boxes;  // id -> x0, y0, x1, y1, pixels
-    for (int v = 0; v < k.height; ++v) {
-      for (int u = 0; u < k.width; ++u) {
-        const uint16_t pid = r.person(u, v);
-        if (pid == 0) continue;
-        auto [it, inserted] =
-            boxes.try_emplace(pid, std::array<int, 5>{u, v, u, v, 0});
-        auto& b = it->second;
-        b[0] = std::min(b[0], u), b[1] = std::min(b[1], v);
-        b[2] = std::max(b[2], u), b[3] = std::max(b[3], v);
-        ++b[4];
-      }
-    }
-    std::string rows;
-    for (const auto& [pid, b] : boxes) {
-      const Silhouette full =
-          UnoccludedSilhouette(scene, pid, time_s, poses[i], k);
-      const double visibility =
-          full.pixels > 0
-              ? std::min(1.0, static_cast<double>(b[4]) / full.pixels)
-              : 1.0;
-      rows +=
-          fmt::format("{},{},{},{},{},{},1,1,{:.4f}\n", i + 1, pid, b[0] + 1,
-                      b[1] + 1, b[2] - b[0] + 1, b[3] - b[1] + 1, visibility);
-    }
-    mot_rows[i] = rows;
-    visible_people[i] = static_cast<int>(boxes.size());
+    bytes += WriteFrame(options, scene, k, poses[i], i, out_dir,
+                        &index.frames[i], &mot_rows[i], &visible_people[i]);
     std::lock_guard<std::mutex> lock(progress_mutex);
     progress.Tick();
   });
@@ -314,158 +502,18 @@ SynthSummary WriteSyntheticSequence(const SynthOptions& options_in,
     io::WriteLabelSetJson(out_dir / "labels_noisy" / "classes.json",
                           SynthClasses());
   }
-
-  nlohmann::json objects = nlohmann::json::array();
-  io::PlyData surface;
-  std::vector<int32_t> semantic, instance;
-  // Solids of every object, widened by the contact distance, for the test
-  // of samples hidden at contacts.
-  const double contact = options.gt_hidden_contact_m;
-  std::vector<Eigen::AlignedBox3d> near_bounds;
-  for (const SceneObject& o : scene.objects) {
-    const Eigen::AlignedBox3d b = o.Bounds();
-    const Eigen::Vector3d pad = Eigen::Vector3d::Constant(contact);
-    near_bounds.emplace_back(b.min() - pad, b.max() + pad);
-  }
-  auto touches_another = [&](size_t self, const Eigen::Vector3d& s) {
-    for (size_t k = 0; k < scene.objects.size(); ++k) {
-      if (k == self || !near_bounds[k].contains(s)) continue;
-      for (const Primitive& p : scene.objects[k].parts) {
-        if (SignedDistance(p, s) < contact) return true;
-      }
-    }
-    return false;
-  };
-  for (size_t oi = 0; oi < scene.objects.size(); ++oi) {
-    const SceneObject& o = scene.objects[oi];
-    const Eigen::AlignedBox3d b = o.Bounds();
-    nlohmann::json parts = nlohmann::json::array();
-    for (const Primitive& p : o.parts) parts.push_back(PrimitiveJson(p));
-    const std::string mesh_name = fmt::format("meshes/{}.ply", o.name);
-    objects.push_back({{"instance_id", o.instance_id},
-                       {"class_id", o.class_id},
-                       {"class", SynthClasses().Get(o.class_id).name},
-                       {"name", o.name},
-                       {"structure", o.structure},
-                       {"color", o.color},
-                       {"bounds_min", {b.min().x(), b.min().y(), b.min().z()}},
-                       {"bounds_max", {b.max().x(), b.max().y(), b.max().z()}},
-                       {"mesh", mesh_name},
-                       {"parts", parts}});
-    TriangleMesh mesh;
-    std::vector<Eigen::Vector3d> samples;
-    const double spacing = o.structure ? options.gt_structure_spacing_m
-                                       : options.gt_object_spacing_m;
-    std::vector<size_t> sample_part;
-    for (size_t j = 0; j < o.parts.size(); ++j) {
-      AppendMesh(o.parts[j], 24, &mesh);
-      AppendSurfaceSamples(o.parts[j], spacing, &samples);
-      sample_part.resize(samples.size(), j);
-    }
-    io::PlyData mesh_ply;
-    for (const auto& v : mesh.vertices) {
-      mesh_ply.points.push_back(v.cast<float>());
-    }
-    mesh_ply.triangles = mesh.triangles;
-    io::WritePly(gt / mesh_name, mesh_ply);
-    const Eigen::Vector3d lo = -Eigen::Vector3d::Constant(1e-6);
-    const Eigen::Vector3d hi =
-        scene.room_size + Eigen::Vector3d::Constant(1e-6);
-    // An interior wall's faces where its parts meet, and those on the room's
-    // bounds (floor, ceiling, outer walls), no camera can see.
-    const bool interior_wall = o.structure && !o.room_face;
-    const Eigen::Vector3d in_lo = lo.array() + 2e-6;
-    const Eigen::Vector3d in_hi = hi.array() - 2e-6;
-    for (size_t i = 0; i < samples.size(); ++i) {
-      const Eigen::Vector3d& s = samples[i];
-      // Keep the visible union surface: not inside another part, not outside
-      // the room.
-      if ((s.array() < lo.array()).any() || (s.array() > hi.array()).any()) {
-        continue;
-      }
-      const bool inside = std::any_of(
-          o.parts.begin(), o.parts.end(),
-          [&](const Primitive& p) { return SignedDistance(p, s) < -1e-6; });
-      if (inside) continue;
-      if (interior_wall) {
-        bool hidden = (s.array() < in_lo.array()).any() ||
-                      (s.array() > in_hi.array()).any();
-        for (size_t j = 0; j < o.parts.size() && !hidden; ++j) {
-          hidden = j != sample_part[i] && SignedDistance(o.parts[j], s) < 1e-6;
-        }
-        if (hidden) continue;
-      }
-      if (contact > 0.0 && touches_another(oi, s)) continue;
-      surface.points.push_back(s.cast<float>());
-      surface.colors.push_back(o.color);
-      surface.labels.push_back(o.instance_id);
-      semantic.push_back(o.class_id);
-      instance.push_back(o.instance_id);
-    }
-  }
-  WriteTextFileAtomic(gt / "objects.json", objects.dump(2) + "\n");
-  // The 3D ground truth `semrec eval scene` reads: per point the class and
-  // the instance (`label` repeats the instance for older readers).
-  surface.int_properties = {{"semantic", std::move(semantic)},
-                            {"instance", std::move(instance)}};
-  io::WritePly(gt / "surface_points.ply", surface);
-
-  nlohmann::json people = nlohmann::json::array();
-  for (const Person& p : scene.people) {
-    nlohmann::json path = nlohmann::json::array();
-    for (const auto& q : p.path) path.push_back({q.x(), q.y()});
-    people.push_back({{"person_id", p.person_id},
-                      {"instance_id", kPersonInstanceBase + p.person_id},
-                      {"height_m", p.height_m},
-                      {"speed_mps", p.speed_mps},
-                      {"start_offset_m", p.start_offset_m},
-                      {"shirt", p.shirt},
-                      {"pants", p.pants},
-                      {"path", path}});
-  }
-  WriteTextFileAtomic(gt / "people.json", people.dump(2) + "\n");
-  std::string mot;
-  for (const std::string& rows : mot_rows) mot += rows;
-  WriteTextFileAtomic(gt / "people" / "gt.txt", mot);
-
-  nlohmann::json info = {
-      {"generator", "semrec synth"},
-      {"seed", options.seed},
-      {"frames", options.frames},
-      {"fps", options.fps},
-      {"room_size_m",
-       {scene.room_size.x(), scene.room_size.y(), scene.room_size.z()}},
-      {"views", options.trajectory.kind == TrajectoryOptions::Kind::kSparse
-                    ? "sparse"
-                    : "video"},
-      {"noise", options.noise.enabled ? "kinect" : "none"},
-      {"label_noise", options.write_noisy_labels},
-      {"label_bleed_share",
-       options.write_noisy_labels && options.label_noise.bleed
-           ? options.label_noise.bleed_share
-           : 0.0},
-      {"label_consistent_cuts", options.write_noisy_labels
-                                    ? options.label_noise.consistent_cut_share
-                                    : 0.0},
-      {"noise_strength", options.noise.strength},
-      {"max_depth_m", options.noise.max_depth_m},
-      {"depth_scale", kDepthScale},
-      {"gt_object_spacing_m", options.gt_object_spacing_m},
-      {"gt_structure_spacing_m", options.gt_structure_spacing_m},
-      {"gt_hidden_contact_m", options.gt_hidden_contact_m},
-      {"objects", scene.objects.size()},
-      {"people", scene.people.size()},
-      {"surface_points", surface.points.size()}};
-  WriteTextFileAtomic(gt / "scene.json", info.dump(2) + "\n");
+  const size_t surface_points = WriteObjectsGroundTruth(options, scene, gt);
+  WritePeopleGroundTruth(scene, mot_rows, gt);
+  WriteTextFileAtomic(
+      gt / "scene.json",
+      SceneInfoJson(options, scene, surface_points).dump(2) + "\n");
 
   for (const auto& entry : fs::recursive_directory_iterator(gt)) {
     if (entry.is_regular_file()) bytes += entry.file_size();
   }
   bytes += FileSize(out_dir / "sequence.yaml");
   summary.bytes_written = bytes;
-  summary.seconds =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - start)
-          .count();
+  summary.seconds = time.Elapsed();
   return summary;
 }
 

@@ -1,5 +1,5 @@
 // `semrec synth`: writes a synthetic RGB-D sequence in the generic layout with
-// full ground truth (see README.md, "Synthetic scenes", for every file, its
+// full ground truth (see docs/usage.md, "Synthetic scenes", for every file, its
 // format, frames and units).
 #pragma once
 

@@ -147,79 +147,99 @@ void LabelNoiseOptions::Check() const {
                 "label noise: bleed_dark_luma must be >= 0");
 }
 
-NoisyLabels ApplyLabelNoise(const RenderedFrame& frame, const Scene& scene,
-                            const Transform& T_world_camera,
-                            const CameraIntrinsics& k,
-                            const LabelNoiseOptions& options, uint64_t seed,
-                            uint64_t scene_seed) {
-  options.Check();
-  const int w = frame.instance.width(), h = frame.instance.height();
-  Rng rng(seed);
+namespace {
 
-  // Visible objects, their sizes and which touch which in the image.
+// Visible objects, their sizes and which touch which in the image.
+struct VisibleObjects {
   std::map<uint16_t, size_t> pixels;
   std::set<std::pair<uint16_t, uint16_t>> touching;
+  std::vector<uint16_t> ids;         // ascending
+  std::map<uint16_t, size_t> index;  // id -> position in ids
+};
+
+VisibleObjects FindVisibleObjects(const RenderedFrame& frame,
+                                  const Scene& scene) {
+  const int w = frame.instance.width(), h = frame.instance.height();
+  VisibleObjects out;
   for (int v = 0; v < h; ++v) {
     for (int u = 0; u < w; ++u) {
       const uint16_t a = frame.instance(u, v);
       if (!IsObject(a, scene)) continue;
-      ++pixels[a];
+      ++out.pixels[a];
       for (const auto& [du, dv] : {std::pair{1, 0}, std::pair{0, 1}}) {
         if (u + du >= w || v + dv >= h) continue;
         const uint16_t b = frame.instance(u + du, v + dv);
         if (b != a && IsObject(b, scene)) {
-          touching.emplace(std::min(a, b), std::max(a, b));
+          out.touching.emplace(std::min(a, b), std::max(a, b));
         }
       }
     }
   }
-  std::vector<uint16_t> visible;
-  std::map<uint16_t, size_t> index;
-  for (const auto& [id, n] : pixels) {
-    index[id] = visible.size();
-    visible.push_back(id);
+  for (const auto& [id, n] : out.pixels) {
+    out.index[id] = out.ids.size();
+    out.ids.push_back(id);
   }
+  return out;
+}
 
-  // Under-segmentation: some objects join a touching neighbour's mask.
-  UnionFind joined(visible.size());
-  std::vector<bool> was_joined(visible.size(), false);
-  for (size_t i = 0; i < visible.size(); ++i) {
-    if (rng.Uniform() >= options.merge_probability) continue;
+// Under-segmentation: some objects join a touching neighbour's mask; a joined
+// mask takes its largest member's class.
+struct Joins {
+  UnionFind joined;
+  std::vector<bool> was_joined;
+  std::map<size_t, uint16_t> group_class;  // root -> class
+};
+
+Joins JoinNeighbours(const VisibleObjects& visible, const Scene& scene,
+                     const LabelNoiseOptions& options, Rng* rng) {
+  const size_t n = visible.ids.size();
+  Joins out{UnionFind(n), std::vector<bool>(n, false), {}};
+  for (size_t i = 0; i < n; ++i) {
+    if (rng->Uniform() >= options.merge_probability) continue;
     std::vector<uint16_t> neighbours;
-    for (const auto& [a, b] : touching) {
-      if (a == visible[i]) neighbours.push_back(b);
-      if (b == visible[i]) neighbours.push_back(a);
+    for (const auto& [a, b] : visible.touching) {
+      if (a == visible.ids[i]) neighbours.push_back(b);
+      if (b == visible.ids[i]) neighbours.push_back(a);
     }
     if (neighbours.empty()) continue;
     const uint16_t other = neighbours[static_cast<size_t>(
-        rng.UniformInt(0, static_cast<int64_t>(neighbours.size()) - 1))];
-    joined.Unite(i, index[other]);
-    was_joined[i] = was_joined[index[other]] = true;
+        rng->UniformInt(0, static_cast<int64_t>(neighbours.size()) - 1))];
+    const size_t j = visible.index.at(other);
+    out.joined.Unite(i, j);
+    out.was_joined[i] = out.was_joined[j] = true;
   }
-  // A joined mask takes its largest member's class.
-  std::map<size_t, uint16_t> group_class;
   std::map<size_t, size_t> group_best;
-  for (size_t i = 0; i < visible.size(); ++i) {
-    const size_t root = joined.Find(i);
-    if (pixels[visible[i]] > group_best[root]) {
-      group_best[root] = pixels[visible[i]];
-      group_class[root] = scene.FindObject(visible[i])->class_id;
+  for (size_t i = 0; i < n; ++i) {
+    const size_t root = out.joined.Find(i);
+    const size_t pixels = visible.pixels.at(visible.ids[i]);
+    if (pixels > group_best[root]) {
+      group_best[root] = pixels;
+      out.group_class[root] = scene.FindObject(visible.ids[i])->class_id;
     }
   }
+  return out;
+}
 
-  // Over-segmentation: per object, pieces by primitive or by planes.
-  struct Cut {
-    bool by_parts = false;
-    std::vector<int> part_piece;  // piece of each primitive
-    std::vector<Eigen::Vector3d> normals;
-    Eigen::Vector3d center = Eigen::Vector3d::Zero();
-  };
+// Over-segmentation of one object: pieces by primitive or by planes.
+struct Cut {
+  bool by_parts = false;
+  std::vector<int> part_piece;  // piece of each primitive
+  std::vector<Eigen::Vector3d> normals;
+  Eigen::Vector3d center = Eigen::Vector3d::Zero();
+};
+
+std::map<uint16_t, Cut> ChooseCuts(const VisibleObjects& visible,
+                                   const Joins& joins, const Scene& scene,
+                                   const LabelNoiseOptions& options,
+                                   uint64_t seed, uint64_t scene_seed,
+                                   Rng* rng) {
   std::map<uint16_t, Cut> cuts;
-  for (size_t i = 0; i < visible.size(); ++i) {
-    if (was_joined[i]) continue;
-    const SceneObject& o = *scene.FindObject(visible[i]);
+  for (size_t i = 0; i < visible.ids.size(); ++i) {
+    if (joins.was_joined[i]) continue;
+    const uint16_t id = visible.ids[i];
+    const SceneObject& o = *scene.FindObject(id);
     if (options.consistent_cut_share > 0.0 && o.parts.size() >= 2) {
-      const uint64_t object = MixSeed(scene_seed, 0xc07c07ULL + visible[i]);
+      const uint64_t object = MixSeed(scene_seed, 0xc07c07ULL + id);
       if (UnitFromHash(object) < options.consistent_cut_share &&
           UnitFromHash(MixSeed(seed, object)) < kConsistentCutViewRate) {
         // The first two primitives apart, the others with one of them: the
@@ -231,75 +251,97 @@ NoisyLabels ApplyLabelNoise(const RenderedFrame& frame, const Scene& scene,
               p < 2 ? static_cast<int>(p)
                     : static_cast<int>(MixSeed(object, p) % 2));
         }
-        cuts[visible[i]] = std::move(cut);
+        cuts[id] = std::move(cut);
         continue;
       }
     }
-    if (rng.Uniform() >= options.split_probability) continue;
+    if (rng->Uniform() >= options.split_probability) continue;
     Cut cut;
-    const int pieces = static_cast<int>(rng.UniformInt(2, 3));
-    if (o.parts.size() >= 2 && rng.Uniform() < 0.5) {
+    const int pieces = static_cast<int>(rng->UniformInt(2, 3));
+    if (o.parts.size() >= 2 && rng->Uniform() < 0.5) {
       cut.by_parts = true;
       for (size_t p = 0; p < o.parts.size(); ++p) {
         cut.part_piece.push_back(
-            static_cast<int>(rng.UniformInt(0, pieces - 1)));
+            static_cast<int>(rng->UniformInt(0, pieces - 1)));
       }
     } else {
       cut.center = o.Bounds().center();
       for (int c = 0; c + 1 < pieces; ++c) {
         cut.normals.push_back(
-            Eigen::Vector3d(rng.Normal(), rng.Normal(), rng.Normal())
+            Eigen::Vector3d(rng->Normal(), rng->Normal(), rng->Normal())
                 .normalized());
       }
     }
-    cuts[visible[i]] = std::move(cut);
+    cuts[id] = std::move(cut);
   }
+  return cuts;
+}
 
-  // New masks: (key, piece) -> instance id, in order of first appearance.
-  NoisyLabels out{LabelMap(w, h), LabelMap(w, h)};
-  std::map<std::pair<uint32_t, int>, uint16_t> mask_id;
-  std::vector<uint16_t> mask_class(1, 0);
+// The piece of cut `cut` pixel (u, v) falls in.
+int PieceOf(const Cut& cut, const RenderedFrame& frame, int u, int v,
+            const Transform& T_world_camera, const CameraIntrinsics& k) {
+  if (cut.by_parts) {
+    const uint16_t part = frame.part(u, v);
+    return part >= 1 ? cut.part_piece[part - 1] : 0;
+  }
+  const Eigen::Vector3d p =
+      T_world_camera *
+      k.BackProject(u, v, static_cast<double>(frame.depth(u, v)));
+  int piece = 0;
+  for (size_t n = 0; n < cut.normals.size(); ++n) {
+    if (cut.normals[n].dot(p - cut.center) > 0) piece |= 1 << n;
+  }
+  return piece;
+}
+
+// The new masks: (key, piece) -> instance id, in order of first appearance,
+// and each mask's class (index = id).
+struct Masks {
+  std::map<std::pair<uint32_t, int>, uint16_t> id;
+  std::vector<uint16_t> class_of = {0};
+};
+
+Masks PaintMasks(const RenderedFrame& frame, const VisibleObjects& visible,
+                 Joins* joins, const std::map<uint16_t, Cut>& cuts,
+                 const Transform& T_world_camera, const CameraIntrinsics& k,
+                 NoisyLabels* out) {
+  const int w = frame.instance.width(), h = frame.instance.height();
+  Masks masks;
   for (int v = 0; v < h; ++v) {
     for (int u = 0; u < w; ++u) {
       const uint16_t inst = frame.instance(u, v);
       if (inst == 0) continue;
       uint16_t cls = frame.semantic(u, v);
       if (inst >= kPersonInstanceBase) {  // people stay as they are
-        out.instance(u, v) = inst;
-        out.semantic(u, v) = cls;
+        out->instance(u, v) = inst;
+        out->semantic(u, v) = cls;
         continue;
       }
       uint32_t key = inst;
       int piece = 0;
-      if (const auto it = index.find(inst); it != index.end()) {
-        const size_t root = joined.Find(it->second);
-        key = visible[root];
-        cls = group_class[root];
+      if (const auto it = visible.index.find(inst); it != visible.index.end()) {
+        const size_t root = joins->joined.Find(it->second);
+        key = visible.ids[root];
+        cls = joins->group_class[root];
         if (const auto c = cuts.find(inst); c != cuts.end()) {
-          const Cut& cut = c->second;
-          const uint16_t part = frame.part(u, v);
-          if (cut.by_parts && part >= 1) {
-            piece = cut.part_piece[part - 1];
-          } else if (!cut.by_parts) {
-            const Eigen::Vector3d p =
-                T_world_camera *
-                k.BackProject(u, v, static_cast<double>(frame.depth(u, v)));
-            for (size_t n = 0; n < cut.normals.size(); ++n) {
-              if (cut.normals[n].dot(p - cut.center) > 0) piece |= 1 << n;
-            }
-          }
+          piece = PieceOf(c->second, frame, u, v, T_world_camera, k);
         }
       }
-      auto [it, added] = mask_id.try_emplace(
-          {key, piece}, static_cast<uint16_t>(mask_class.size()));
-      if (added) mask_class.push_back(cls);
-      out.instance(u, v) = it->second;
+      auto [it, added] = masks.id.try_emplace(
+          {key, piece}, static_cast<uint16_t>(masks.class_of.size()));
+      if (added) masks.class_of.push_back(cls);
+      out->instance(u, v) = it->second;
     }
   }
-  CheckArgument(mask_class.size() < kPersonInstanceBase,
+  CheckArgument(masks.class_of.size() < kPersonInstanceBase,
                 "label noise: too many masks in one view");
+  return masks;
+}
 
-  // Class flips among the scene's object classes.
+// Class flips among the scene's object classes; then every mask's pixels
+// take its class.
+void FlipClasses(const Scene& scene, const LabelNoiseOptions& options,
+                 Masks* masks, Rng* rng, NoisyLabels* out) {
   std::vector<uint16_t> object_classes;
   for (const SceneObject& o : scene.objects) {
     if (!o.structure) object_classes.push_back(o.class_id);
@@ -308,69 +350,97 @@ NoisyLabels ApplyLabelNoise(const RenderedFrame& frame, const Scene& scene,
   object_classes.erase(
       std::unique(object_classes.begin(), object_classes.end()),
       object_classes.end());
-  for (const auto& [key, id] : mask_id) {
+  std::vector<uint16_t>& mask_class = masks->class_of;
+  for (const auto& [key, id] : masks->id) {
     const bool object = IsObject(static_cast<uint16_t>(key.first), scene);
     if (!object || object_classes.size() < 2 ||
-        rng.Uniform() >= options.class_flip_probability) {
+        rng->Uniform() >= options.class_flip_probability) {
       continue;
     }
     uint16_t flipped = mask_class[id];
     while (flipped == mask_class[id]) {
       flipped = object_classes[static_cast<size_t>(
-          rng.UniformInt(0, static_cast<int64_t>(object_classes.size()) - 1))];
+          rng->UniformInt(0, static_cast<int64_t>(object_classes.size()) - 1))];
     }
     mask_class[id] = flipped;
   }
+  for (int v = 0; v < out->instance.height(); ++v) {
+    for (int u = 0; u < out->instance.width(); ++u) {
+      const uint16_t id = out->instance(u, v);
+      if (id != 0 && id < kPersonInstanceBase) {
+        out->semantic(u, v) = mask_class[id];
+      }
+    }
+  }
+}
+
+// Ragged boundaries: a pixel near another mask may take that mask's labels.
+void JitterBoundaries(const RenderedFrame& frame, int jitter_px, Rng* rng,
+                      NoisyLabels* out) {
+  const int w = frame.instance.width(), h = frame.instance.height();
+  const NoisyLabels clean = *out;
+  const int j = jitter_px;
   for (int v = 0; v < h; ++v) {
     for (int u = 0; u < w; ++u) {
-      const uint16_t id = out.instance(u, v);
-      if (id != 0 && id < kPersonInstanceBase) {
-        out.semantic(u, v) = mask_class[id];
-      }
+      const int du = static_cast<int>(rng->UniformInt(-j, j));
+      const int dv = static_cast<int>(rng->UniformInt(-j, j));
+      const bool coin = rng->Uniform() < 0.5;
+      const int x = u + du, y = v + dv;
+      if (!coin || x < 0 || y < 0 || x >= w || y >= h) continue;
+      if (frame.depth(u, v) <= 0.0f || frame.depth(x, y) <= 0.0f) continue;
+      out->instance(u, v) = clean.instance(x, y);
+      out->semantic(u, v) = clean.semantic(x, y);
     }
   }
+}
 
-  if (options.bleed) {
-    ApplyStructureBleed(frame, scene, T_world_camera, k, options, mask_id,
-                        MixSeed(seed, 0xb1eed), scene_seed, &out);
-  }
-
-  // Ragged boundaries: a pixel near another mask may take that mask's labels.
-  if (options.jitter_px > 0) {
-    const NoisyLabels clean = out;
-    const int j = options.jitter_px;
-    for (int v = 0; v < h; ++v) {
-      for (int u = 0; u < w; ++u) {
-        const int du = static_cast<int>(rng.UniformInt(-j, j));
-        const int dv = static_cast<int>(rng.UniformInt(-j, j));
-        const bool coin = rng.Uniform() < 0.5;
-        const int x = u + du, y = v + dv;
-        if (!coin || x < 0 || y < 0 || x >= w || y >= h) continue;
-        if (frame.depth(u, v) <= 0.0f || frame.depth(x, y) <= 0.0f) continue;
-        out.instance(u, v) = clean.instance(x, y);
-        out.semantic(u, v) = clean.semantic(x, y);
-      }
-    }
-  }
-
-  // Small object masks are dropped.
+// Object masks smaller than min_mask_pixels are dropped.
+void DropSmallMasks(const Scene& scene, const Masks& masks, int min_mask_pixels,
+                    NoisyLabels* out) {
   std::map<uint16_t, size_t> sizes;
-  for (size_t i = 0; i < out.instance.NumPixels(); ++i) {
-    ++sizes[out.instance.data()[i]];
+  for (size_t i = 0; i < out->instance.NumPixels(); ++i) {
+    ++sizes[out->instance.data()[i]];
   }
   std::set<uint16_t> objects_masks;
-  for (const auto& [key, id] : mask_id) {
+  for (const auto& [key, id] : masks.id) {
     if (IsObject(static_cast<uint16_t>(key.first), scene)) {
       objects_masks.insert(id);
     }
   }
-  for (size_t i = 0; i < out.instance.NumPixels(); ++i) {
-    const uint16_t id = out.instance.data()[i];
+  for (size_t i = 0; i < out->instance.NumPixels(); ++i) {
+    const uint16_t id = out->instance.data()[i];
     if (objects_masks.count(id) != 0 &&
-        sizes[id] < static_cast<size_t>(options.min_mask_pixels)) {
-      out.instance.data()[i] = 0;
+        sizes[id] < static_cast<size_t>(min_mask_pixels)) {
+      out->instance.data()[i] = 0;
     }
   }
+}
+
+}  // namespace
+
+NoisyLabels ApplyLabelNoise(const RenderedFrame& frame, const Scene& scene,
+                            const Transform& T_world_camera,
+                            const CameraIntrinsics& k,
+                            const LabelNoiseOptions& options, uint64_t seed,
+                            uint64_t scene_seed) {
+  options.Check();
+  const int w = frame.instance.width(), h = frame.instance.height();
+  Rng rng(seed);
+  const VisibleObjects visible = FindVisibleObjects(frame, scene);
+  Joins joins = JoinNeighbours(visible, scene, options, &rng);
+  const std::map<uint16_t, Cut> cuts =
+      ChooseCuts(visible, joins, scene, options, seed, scene_seed, &rng);
+  NoisyLabels out{LabelMap(w, h), LabelMap(w, h)};
+  Masks masks =
+      PaintMasks(frame, visible, &joins, cuts, T_world_camera, k, &out);
+  FlipClasses(scene, options, &masks, &rng, &out);
+  if (options.bleed) {
+    ApplyStructureBleed(frame, scene, T_world_camera, k, options, masks.id,
+                        MixSeed(seed, 0xb1eed), scene_seed, &out);
+  }
+  if (options.jitter_px > 0)
+    JitterBoundaries(frame, options.jitter_px, &rng, &out);
+  DropSmallMasks(scene, masks, options.min_mask_pixels, &out);
   return out;
 }
 

@@ -290,6 +290,231 @@ void SceneOptions::Check() const {
   }
 }
 
+namespace {
+
+// Walls objects may stand against: a point on the face, the normal into the
+// room and the free stretch along it.
+struct WallFace {
+  Eigen::Vector2d origin, normal, along;
+  double length;
+};
+
+// The floor plan while objects are placed: footprints on the floor (objects
+// and interior wall segments), the faces objects may stand against, doorways.
+struct FloorPlan {
+  Eigen::Vector2d lo, hi;  // where objects may stand
+  std::vector<Footprint> footprints;
+  std::vector<size_t> footprint_object;
+  std::vector<bool> footprint_is_wall;
+  std::set<size_t> tables_with_monitor;  // footprint indices
+  std::vector<WallFace> faces;
+  std::vector<Footprint> doorways;
+};
+
+// Floor, walls (and the ceiling) as 10 cm slabs just outside the interior, so
+// inner faces are at the room bounds.
+void AddRoomShell(const SceneOptions& options, uint16_t* next_id,
+                  Scene* scene) {
+  const double W = options.room_width_m, D = options.room_depth_m,
+               H = options.room_height_m;
+  const LabelSet& classes = SynthClasses();
+  // Returns the new instance id.
+  auto add_structure = [&](uint16_t cls, const Box& box) -> uint16_t {
+    SceneObject o;
+    o.instance_id = (*next_id)++;
+    o.class_id = cls;
+    o.name = fmt::format("{}_{}", classes.Get(cls).name, o.instance_id);
+    o.parts.push_back(box);
+    o.color = classes.Get(cls).color;
+    o.structure = true;
+    o.room_face = true;
+    scene->objects.push_back(std::move(o));
+    return scene->objects.back().instance_id;
+  };
+  const double t = 0.05;
+  scene->room_faces[4] = add_structure(
+      kClassFloor, MakeBox(W / 2, D / 2, -t, W / 2 + 2 * t, D / 2 + 2 * t, t));
+  scene->room_faces[0] =
+      add_structure(kClassWall, MakeBox(-t, D / 2, H / 2, t, D / 2, H / 2));
+  scene->room_faces[1] =
+      add_structure(kClassWall, MakeBox(W + t, D / 2, H / 2, t, D / 2, H / 2));
+  scene->room_faces[2] = add_structure(
+      kClassWall, MakeBox(W / 2, -t, H / 2, W / 2 + 2 * t, t, H / 2));
+  scene->room_faces[3] = add_structure(
+      kClassWall, MakeBox(W / 2, D + t, H / 2, W / 2 + 2 * t, t, H / 2));
+  if (options.ceiling) {
+    scene->room_faces[5] = add_structure(
+        kClassCeiling,
+        MakeBox(W / 2, D / 2, H + t, W / 2 + 2 * t, D / 2 + 2 * t, t));
+  }
+}
+
+// Interior walls: anchors that objects may touch, never overlap; doorways
+// (and a walking space either side) stay free.
+void AddInteriorWalls(const SceneOptions& options, uint16_t* next_id,
+                      FloorPlan* plan, Scene* scene) {
+  const double D = options.room_depth_m, H = options.room_height_m;
+  for (const double x : options.partitions_x_m) {
+    SceneObject wall;
+    wall.instance_id = (*next_id)++;
+    wall.class_id = kClassWall;
+    wall.name = fmt::format("wall_{}", wall.instance_id);
+    wall.color = SynthClasses().Get(kClassWall).color;
+    wall.structure = true;
+    const double door = options.door_width_m, ht = 0.05;
+    const double y0 = D / 2 - door / 2, y1 = D / 2 + door / 2;
+    for (const auto& [a, b] : {std::pair{0.0, y0}, std::pair{y1, D}}) {
+      wall.parts.push_back(
+          MakeBox(x, (a + b) / 2, H / 2, ht, (b - a) / 2, H / 2));
+      plan->footprints.push_back({{x, (a + b) / 2}, 0.0, ht, (b - a) / 2});
+      plan->footprint_object.push_back(scene->objects.size());
+      plan->footprint_is_wall.push_back(true);
+      plan->faces.push_back({{x - ht, a}, {-1, 0}, {0, 1}, b - a});
+      plan->faces.push_back({{x + ht, a}, {1, 0}, {0, 1}, b - a});
+    }
+    const double lintel = H - options.door_height_m;
+    wall.parts.push_back(
+        MakeBox(x, D / 2, H - lintel / 2, ht, door / 2, lintel / 2));
+    plan->doorways.push_back({{x, D / 2}, 0.0, ht + 0.6, door / 2});
+    scene->objects.push_back(std::move(wall));
+  }
+}
+
+// A monitor stands on a table top when there is a table without one
+// (stacked, touching); one per table, not three in one place.
+bool PlaceOnTable(const Scene& scene, FloorPlan* plan, Footprint* fp,
+                  double* base_z) {
+  for (size_t k = 0; k < plan->footprints.size(); ++k) {
+    const SceneObject& other = scene.objects[plan->footprint_object[k]];
+    if (SynthClasses().Get(other.class_id).name != "table" ||
+        !plan->tables_with_monitor.insert(k).second) {
+      continue;
+    }
+    fp->center = plan->footprints[k].center;
+    fp->yaw = plan->footprints[k].yaw;
+    *base_z = other.Bounds().max().z();
+    return true;
+  }
+  return false;
+}
+
+// One placement attempt on the floor: touching an existing footprint, against
+// a wall, or anywhere; true when it overlaps nothing.
+bool TryFloorPlacement(const SceneOptions& options, const Blueprint& bp,
+                       int attempt, const FloorPlan& plan, Rng* rng,
+                       Footprint* fp) {
+  const bool touch = !plan.footprints.empty() && attempt < 100 &&
+                     rng->Uniform() < options.touching_probability;
+  size_t anchor = 0;
+  if (touch) {
+    anchor = static_cast<size_t>(
+        rng->UniformInt(0, static_cast<int64_t>(plan.footprints.size()) - 1));
+    const Footprint& a = plan.footprints[anchor];
+    const int side = static_cast<int>(rng->UniformInt(0, 3));
+    const Eigen::Vector2d ax(std::cos(a.yaw), std::sin(a.yaw)),
+        ay(-std::sin(a.yaw), std::cos(a.yaw));
+    fp->yaw = a.yaw + (side == 0   ? M_PI
+                       : side == 1 ? 0.0
+                       : side == 2 ? -M_PI / 2
+                                   : M_PI / 2);
+    // The new object's +x faces the anchor; 2 mm gap.
+    const Eigen::Vector2d dir = side == 0   ? ax
+                                : side == 1 ? -ax
+                                : side == 2 ? ay
+                                            : -ay;
+    const double reach = (side < 2 ? a.hx : a.hy) + bp.hx + 0.002;
+    const double slide = rng->Uniform(-0.3, 0.3);
+    const Eigen::Vector2d along = side < 2 ? ay : ax;
+    fp->center = a.center + reach * dir + slide * along;
+    // Against an interior wall its back is to the wall (a sofa, a shelf
+    // facing the room); the footprint is symmetric, so only the yaw turns.
+    if (plan.footprint_is_wall[anchor]) fp->yaw += M_PI;
+  } else if (bp.against_wall && rng->Uniform() < 0.8) {
+    const WallFace& f = plan.faces[static_cast<size_t>(
+        rng->UniformInt(0, static_cast<int64_t>(plan.faces.size()) - 1))];
+    const double gap = 0.01;
+    // The object's +x (its front) faces into the room.
+    fp->yaw = std::atan2(f.normal.y(), f.normal.x());
+    // Summed in the order the four-wall code did (identical bytes).
+    fp->center = f.origin + bp.hx * f.normal + gap * f.normal +
+                 rng->Uniform() * f.length * f.along;
+  } else {
+    fp->yaw = rng->Uniform() * 2 * M_PI;
+    fp->center = {plan.lo.x() + rng->Uniform() * (plan.hi.x() - plan.lo.x()),
+                  plan.lo.y() + rng->Uniform() * (plan.hi.y() - plan.lo.y())};
+  }
+  if (!InsideRoom(*fp, plan.lo, plan.hi)) return false;
+  bool free = true;
+  for (size_t k = 0; k < plan.footprints.size() && free; ++k) {
+    // Touching the anchor or a wall is intended: only forbid actual
+    // overlap with them.
+    const double margin =
+        ((touch && k == anchor) || plan.footprint_is_wall[k]) ? -0.0005 : 0.05;
+    free = !Overlap(*fp, plan.footprints[k], margin);
+  }
+  for (const Footprint& door : plan.doorways) {
+    free = free && !Overlap(*fp, door, 0.0);
+  }
+  return free;
+}
+
+void PlaceObject(const SceneOptions& options, const std::string& cls,
+                 uint16_t* next_id, Rng* rng, FloorPlan* plan, Scene* scene) {
+  Blueprint bp = Build(cls, *rng);
+  const LabelSet& classes = SynthClasses();
+  const uint16_t class_id = *classes.FindByName(cls);
+  SceneObject object;
+  object.instance_id = (*next_id)++;
+  object.class_id = class_id;
+  object.name = fmt::format("{}_{}", cls, object.instance_id);
+  object.color = classes.Get(class_id).color;
+  Footprint fp{{0, 0}, 0, bp.hx, bp.hy};
+  double base_z = 0.0;
+  bool placed = cls == "monitor" && PlaceOnTable(*scene, plan, &fp, &base_z);
+  for (int attempt = 0; attempt < 400 && !placed; ++attempt) {
+    placed = TryFloorPlacement(options, bp, attempt, *plan, rng, &fp);
+  }
+  if (!placed) {
+    throw Error(fmt::format(
+        "synth: cannot place object {} ('{}') in a {:.1f} x {:.1f} m room "
+        "without overlaps; use a bigger room or fewer objects",
+        object.instance_id, cls, options.room_width_m, options.room_depth_m));
+  }
+  const Eigen::Matrix3d R = Yaw(fp.yaw);
+  const Eigen::Vector3d offset(fp.center.x(), fp.center.y(), base_z);
+  for (const Primitive& p : bp.parts) {
+    object.parts.push_back(Transformed(p, R, offset));
+  }
+  if (base_z == 0.0) {
+    plan->footprints.push_back(fp);
+    plan->footprint_object.push_back(scene->objects.size());
+    plan->footprint_is_wall.push_back(false);
+  }
+  scene->objects.push_back(std::move(object));
+}
+
+// People walk rectangular loops in the front part of the room, long enough to
+// leave the view.
+void AddPeople(const SceneOptions& options, Rng* rng, Scene* scene) {
+  const double W = options.room_width_m, D = options.room_depth_m;
+  for (int i = 0; i < options.num_people; ++i) {
+    Person person;
+    person.person_id = static_cast<uint16_t>(i + 1);
+    person.height_m = rng->Uniform(1.6, 1.9);
+    person.shirt = kShirts[i % std::size(kShirts)];
+    person.pants = kPants[i % std::size(kPants)];
+    const double y0 = 0.6 + 0.15 * (i % 3), y1 = D * 0.5 - 0.1 * (i % 2);
+    const double x0 = 0.5 + 0.1 * i, x1 = W - 0.5 - 0.1 * i;
+    person.path = {{x0, y0}, {x1, y0}, {x1, y1}, {x0, y1}};
+    if (i % 2 == 1) std::reverse(person.path.begin(), person.path.end());
+    person.speed_mps = rng->Uniform(0.9, 1.4);
+    person.start_offset_m = rng->Uniform(0.0, 2 * (x1 - x0 + y1 - y0));
+    scene->people.push_back(std::move(person));
+  }
+}
+
+}  // namespace
+
 Scene GenerateScene(const SceneOptions& options) {
   options.Check();
   Rng rng(options.seed * 0x9E3779B97F4A7C15ULL + 17);
@@ -297,203 +522,24 @@ Scene GenerateScene(const SceneOptions& options) {
   const double W = options.room_width_m, D = options.room_depth_m,
                H = options.room_height_m;
   scene.room_size = {W, D, H};
-  const LabelSet& classes = SynthClasses();
   uint16_t next_id = 1;
-  // Returns the new instance id.
-  auto add_structure = [&](uint16_t cls, const Box& box) -> uint16_t {
-    SceneObject o;
-    o.instance_id = next_id++;
-    o.class_id = cls;
-    o.name = fmt::format("{}_{}", classes.Get(cls).name, o.instance_id);
-    o.parts.push_back(box);
-    o.color = classes.Get(cls).color;
-    o.structure = true;
-    o.room_face = true;
-    scene.objects.push_back(std::move(o));
-    return scene.objects.back().instance_id;
-  };
-  // Structure as 10 cm slabs just outside the interior, so inner faces are at
-  // the room bounds.
-  const double t = 0.05;
-  scene.room_faces[4] = add_structure(
-      kClassFloor, MakeBox(W / 2, D / 2, -t, W / 2 + 2 * t, D / 2 + 2 * t, t));
-  scene.room_faces[0] =
-      add_structure(kClassWall, MakeBox(-t, D / 2, H / 2, t, D / 2, H / 2));
-  scene.room_faces[1] =
-      add_structure(kClassWall, MakeBox(W + t, D / 2, H / 2, t, D / 2, H / 2));
-  scene.room_faces[2] = add_structure(
-      kClassWall, MakeBox(W / 2, -t, H / 2, W / 2 + 2 * t, t, H / 2));
-  scene.room_faces[3] = add_structure(
-      kClassWall, MakeBox(W / 2, D + t, H / 2, W / 2 + 2 * t, t, H / 2));
-  if (options.ceiling) {
-    scene.room_faces[5] = add_structure(
-        kClassCeiling,
-        MakeBox(W / 2, D / 2, H + t, W / 2 + 2 * t, D / 2 + 2 * t, t));
-  }
-
+  AddRoomShell(options, &next_id, &scene);
   // Objects stay out of a walkway when people are present (the front third of
   // the room).
-  const Eigen::Vector2d lo(0.0, options.num_people > 0 ? D * 0.55 : 0.0),
-      hi(W, D);
-  std::vector<Footprint> footprints;
-  std::vector<size_t> footprint_object;
-  std::set<size_t> tables_with_monitor;  // footprint indices
-  // Walls objects may stand against: a point on the face, the normal into the
-  // room and the free stretch along it (the outer walls first, in the order
-  // the draws have always had).
-  struct WallFace {
-    Eigen::Vector2d origin, normal, along;
-    double length;
-  };
-  std::vector<WallFace> faces = {
-      {{lo.x(), lo.y()}, {1, 0}, {0, 1}, hi.y() - lo.y()},
-      {{hi.x(), lo.y()}, {-1, 0}, {0, 1}, hi.y() - lo.y()},
-      {{lo.x(), lo.y()}, {0, 1}, {1, 0}, hi.x() - lo.x()},
-      {{lo.x(), hi.y()}, {0, -1}, {1, 0}, hi.x() - lo.x()}};
-  // Interior walls: anchors that objects may touch, never overlap; doorways
-  // (and a walking space either side) stay free.
-  std::vector<bool> footprint_is_wall;
-  std::vector<Footprint> doorways;
-  for (const double x : options.partitions_x_m) {
-    SceneObject wall;
-    wall.instance_id = next_id++;
-    wall.class_id = kClassWall;
-    wall.name = fmt::format("wall_{}", wall.instance_id);
-    wall.color = classes.Get(kClassWall).color;
-    wall.structure = true;
-    const double door = options.door_width_m, ht = 0.05;
-    const double y0 = D / 2 - door / 2, y1 = D / 2 + door / 2;
-    for (const auto& [a, b] : {std::pair{0.0, y0}, std::pair{y1, D}}) {
-      wall.parts.push_back(
-          MakeBox(x, (a + b) / 2, H / 2, ht, (b - a) / 2, H / 2));
-      footprints.push_back({{x, (a + b) / 2}, 0.0, ht, (b - a) / 2});
-      footprint_object.push_back(scene.objects.size());
-      footprint_is_wall.push_back(true);
-      faces.push_back({{x - ht, a}, {-1, 0}, {0, 1}, b - a});
-      faces.push_back({{x + ht, a}, {1, 0}, {0, 1}, b - a});
-    }
-    const double lintel = H - options.door_height_m;
-    wall.parts.push_back(
-        MakeBox(x, D / 2, H - lintel / 2, ht, door / 2, lintel / 2));
-    doorways.push_back({{x, D / 2}, 0.0, ht + 0.6, door / 2});
-    scene.objects.push_back(std::move(wall));
-  }
+  FloorPlan plan;
+  plan.lo = {0.0, options.num_people > 0 ? D * 0.55 : 0.0};
+  plan.hi = {W, D};
+  // The outer walls first, in the order the draws have always had.
+  const Eigen::Vector2d lo = plan.lo, hi = plan.hi;
+  plan.faces = {{{lo.x(), lo.y()}, {1, 0}, {0, 1}, hi.y() - lo.y()},
+                {{hi.x(), lo.y()}, {-1, 0}, {0, 1}, hi.y() - lo.y()},
+                {{lo.x(), lo.y()}, {0, 1}, {1, 0}, hi.x() - lo.x()},
+                {{lo.x(), hi.y()}, {0, -1}, {1, 0}, hi.x() - lo.x()}};
+  AddInteriorWalls(options, &next_id, &plan, &scene);
   for (const std::string& cls : options.object_classes) {
-    Blueprint bp = Build(cls, rng);
-    const uint16_t class_id = *classes.FindByName(cls);
-    SceneObject object;
-    object.instance_id = next_id++;
-    object.class_id = class_id;
-    object.name = fmt::format("{}_{}", cls, object.instance_id);
-    object.color = classes.Get(class_id).color;
-    bool placed = false;
-    Footprint fp{{0, 0}, 0, bp.hx, bp.hy};
-    double base_z = 0.0;
-    // A monitor stands on a table top when there is a table without one
-    // (stacked, touching); one per table, not three in one place.
-    if (cls == "monitor") {
-      for (size_t k = 0; k < footprints.size() && !placed; ++k) {
-        const SceneObject& other = scene.objects[footprint_object[k]];
-        if (classes.Get(other.class_id).name != "table" ||
-            !tables_with_monitor.insert(k).second) {
-          continue;
-        }
-        fp.center = footprints[k].center;
-        fp.yaw = footprints[k].yaw;
-        base_z = other.Bounds().max().z();
-        placed = true;
-      }
-    }
-    for (int attempt = 0; attempt < 400 && !placed; ++attempt) {
-      const bool touch = !footprints.empty() && attempt < 100 &&
-                         rng.Uniform() < options.touching_probability;
-      size_t anchor = 0;
-      if (touch) {
-        anchor = static_cast<size_t>(
-            rng.UniformInt(0, static_cast<int64_t>(footprints.size()) - 1));
-        const Footprint& a = footprints[anchor];
-        const int side = static_cast<int>(rng.UniformInt(0, 3));
-        const Eigen::Vector2d ax(std::cos(a.yaw), std::sin(a.yaw)),
-            ay(-std::sin(a.yaw), std::cos(a.yaw));
-        fp.yaw = a.yaw + (side == 0   ? M_PI
-                          : side == 1 ? 0.0
-                          : side == 2 ? -M_PI / 2
-                                      : M_PI / 2);
-        // The new object's +x faces the anchor; 2 mm gap.
-        const Eigen::Vector2d dir = side == 0   ? ax
-                                    : side == 1 ? -ax
-                                    : side == 2 ? ay
-                                                : -ay;
-        const double reach = (side < 2 ? a.hx : a.hy) + bp.hx + 0.002;
-        const double slide = rng.Uniform(-0.3, 0.3);
-        const Eigen::Vector2d along = side < 2 ? ay : ax;
-        fp.center = a.center + reach * dir + slide * along;
-        // Against an interior wall its back is to the wall (a sofa, a shelf
-        // facing the room); the footprint is symmetric, so only the yaw turns.
-        if (footprint_is_wall[anchor]) fp.yaw += M_PI;
-      } else if (bp.against_wall && rng.Uniform() < 0.8) {
-        const WallFace& f = faces[static_cast<size_t>(
-            rng.UniformInt(0, static_cast<int64_t>(faces.size()) - 1))];
-        const double gap = 0.01;
-        // The object's +x (its front) faces into the room.
-        fp.yaw = std::atan2(f.normal.y(), f.normal.x());
-        // Summed in the order the four-wall code did (identical bytes).
-        fp.center = f.origin + bp.hx * f.normal + gap * f.normal +
-                    rng.Uniform() * f.length * f.along;
-      } else {
-        fp.yaw = rng.Uniform() * 2 * M_PI;
-        fp.center = {lo.x() + rng.Uniform() * (hi.x() - lo.x()),
-                     lo.y() + rng.Uniform() * (hi.y() - lo.y())};
-      }
-      if (!InsideRoom(fp, lo, hi)) continue;
-      bool free = true;
-      for (size_t k = 0; k < footprints.size() && free; ++k) {
-        // Touching the anchor or a wall is intended: only forbid actual
-        // overlap with them.
-        const double margin =
-            ((touch && k == anchor) || footprint_is_wall[k]) ? -0.0005 : 0.05;
-        free = !Overlap(fp, footprints[k], margin);
-      }
-      for (const Footprint& door : doorways) {
-        free = free && !Overlap(fp, door, 0.0);
-      }
-      placed = free;
-    }
-    if (!placed) {
-      throw Error(fmt::format(
-          "synth: cannot place object {} ('{}') in a {:.1f} x {:.1f} m room "
-          "without overlaps; use a bigger room or fewer objects",
-          object.instance_id, cls, W, D));
-    }
-    const Eigen::Matrix3d R = Yaw(fp.yaw);
-    const Eigen::Vector3d offset(fp.center.x(), fp.center.y(), base_z);
-    for (const Primitive& p : bp.parts) {
-      object.parts.push_back(Transformed(p, R, offset));
-    }
-    if (base_z == 0.0) {
-      footprints.push_back(fp);
-      footprint_object.push_back(scene.objects.size());
-      footprint_is_wall.push_back(false);
-    }
-    scene.objects.push_back(std::move(object));
+    PlaceObject(options, cls, &next_id, &rng, &plan, &scene);
   }
-
-  // People walk rectangular loops in the front part of the room, long enough to
-  // leave the view.
-  for (int i = 0; i < options.num_people; ++i) {
-    Person person;
-    person.person_id = static_cast<uint16_t>(i + 1);
-    person.height_m = rng.Uniform(1.6, 1.9);
-    person.shirt = kShirts[i % std::size(kShirts)];
-    person.pants = kPants[i % std::size(kPants)];
-    const double y0 = 0.6 + 0.15 * (i % 3), y1 = D * 0.5 - 0.1 * (i % 2);
-    const double x0 = 0.5 + 0.1 * i, x1 = W - 0.5 - 0.1 * i;
-    person.path = {{x0, y0}, {x1, y0}, {x1, y1}, {x0, y1}};
-    if (i % 2 == 1) std::reverse(person.path.begin(), person.path.end());
-    person.speed_mps = rng.Uniform(0.9, 1.4);
-    person.start_offset_m = rng.Uniform(0.0, 2 * (x1 - x0 + y1 - y0));
-    scene.people.push_back(std::move(person));
-  }
+  AddPeople(options, &rng, &scene);
   return scene;
 }
 

@@ -1,4 +1,6 @@
 #include "semrec/testing/test_util.h"
+#include "semrec/core/file_util.h"
+#include "semrec/core/sample_data.h"
 
 #include <unistd.h>
 
@@ -37,16 +39,7 @@ fs::path SourceDir() {
   return env != nullptr ? fs::path(env) : fs::current_path();
 }
 
-std::optional<fs::path> SampleDataDir() {
-  if (const char* env = std::getenv("SEMREC_DATA");
-      env != nullptr && *env != '\0') {
-    if (fs::is_directory(env)) return fs::path(env);
-    return std::nullopt;
-  }
-  const fs::path beside = SourceDir() / ".." / "shared" / "data";
-  if (fs::is_directory(beside)) return fs::canonical(beside);
-  return std::nullopt;
-}
+std::optional<fs::path> SampleDataDir() { return semrec::SampleDataDir(); }
 
 fs::path TinyModelDir() {
   static fs::path dir;
@@ -72,13 +65,7 @@ fs::path TinyModelDir() {
   return dir;
 }
 
-fs::path ModelDir() {
-  if (const char* env = std::getenv("SEMREC_MODELS");
-      env != nullptr && *env != '\0') {
-    return env;
-  }
-  return SourceDir() / ".deps" / "models";
-}
+fs::path ModelDir() { return DefaultModelDir(); }
 
 void WriteText(const fs::path& path, const std::string& text) {
   fs::create_directories(path.parent_path());

@@ -40,7 +40,7 @@ struct OfflineOptions {
   /// The improved configuration's offline steps: tentative boxes reported,
   /// gaps up to 10 frames (the improved tracker's max_lost_frames) filled,
   /// tracks seen in fewer than 3 frames dropped. On TUD-Campus MOTA 0.605 ->
-  /// 0.674; gap filling alone gives 0.660 (README, bench_track).
+  /// 0.674; gap filling alone gives 0.660 (docs/results.md, bench_track).
   static OfflineOptions Improved();
 };
 
