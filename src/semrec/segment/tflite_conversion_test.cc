@@ -87,7 +87,10 @@ struct Case {
   std::vector<fs::path> images;
 };
 
-TEST(TfliteConversion, AgreesWithArmNnAndTheClampsAreNeeded) {
+// One test per model (Arm NN takes minutes per image): 0 MOSAIC, 1 DeepLab.
+class TfliteModels : public ::testing::TestWithParam<int> {};
+
+TEST_P(TfliteModels, AgreeWithArmNnAndTheClampsAreNeeded) {
   const fs::path models = semrec::testing::ModelDir();
   for (const char* f :
        {"mosaic_r4_ade20k_top31.onnx", "deeplabv3_mnv2_ade20k_top31.onnx",
@@ -119,7 +122,8 @@ TEST(TfliteConversion, AgreesWithArmNnAndTheClampsAreNeeded) {
        "deeplabv3_mnv2_ade20k_top31.tflite",
        {ade / "images" / "ADE_val_00000003.jpg"}},
   };
-  for (const Case& c : cases) {
+  {
+    const Case& c = cases.at(static_cast<size_t>(GetParam()));
     SCOPED_TRACE(c.registry_name);
     std::string cmd = fmt::format("/usr/bin/python3 {} {} --schema {}",
                                   (scripts / "armnn_reference.py").string(),
@@ -173,7 +177,7 @@ TEST(TfliteConversion, AgreesWithArmNnAndTheClampsAreNeeded) {
 
     // The same conversion without the clamps: the DeepLab file's ReLU6 exists
     // only as its tensors' quantized range, so this breaks it.
-    if (c.registry_name != "deeplabv3_mnv2_ade20k") continue;
+    if (c.registry_name != "deeplabv3_mnv2_ade20k") return;
     const fs::path broken = tmp / "no_clamp.onnx";
     ASSERT_TRUE(RunCommand(fmt::format(
         "/usr/bin/python3 {} {} {} --schema {} --output coarse-logits "
@@ -192,6 +196,12 @@ TEST(TfliteConversion, AgreesWithArmNnAndTheClampsAreNeeded) {
     EXPECT_LT(agreement, 0.5);
   }
 }
+
+INSTANTIATE_TEST_SUITE_P(Models, TfliteModels, ::testing::Values(0, 1),
+                         [](const ::testing::TestParamInfo<int>& info) {
+                           return info.param == 0 ? std::string("mosaic")
+                                                  : std::string("deeplab");
+                         });
 
 TEST(TfliteConversion, UnsupportedOperatorIsAClearError) {
   const fs::path models = semrec::testing::ModelDir();
