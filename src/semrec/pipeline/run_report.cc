@@ -28,10 +28,6 @@ class Fields {
       Fail(key, "of the right type");
     }
   }
-  template <typename T>
-  T GetOr(const char* key, T fallback) const {
-    return j_.contains(key) ? Get<T>(key) : fallback;
-  }
   const nlohmann::json& At(const char* key) const {
     if (!j_.contains(key)) Fail(key, "present");
     return j_.at(key);
@@ -53,6 +49,26 @@ class Fields {
   const fs::path& file_;
   std::string where_;
 };
+
+// Each item of the array `j` (named `name` in messages) through
+// parse(item, file, index).
+template <typename Parse>
+auto ParseArray(const nlohmann::json& j, const char* name, const fs::path& file,
+                Parse parse) {
+  if (!j.is_array()) {
+    throw FormatError(file,
+                      fmt::format("run report: {} must be an array", name));
+  }
+  std::vector<decltype(parse(j, file, size_t{0}))> out;
+  for (size_t i = 0; i < j.size(); ++i) out.push_back(parse(j[i], file, i));
+  return out;
+}
+
+SkippedFrame ParseSkippedFrame(const nlohmann::json& j, const fs::path& file,
+                               size_t index) {
+  const Fields s(j, file, fmt::format("skipped_frames[{}]", index));
+  return {s.Get<size_t>("frame"), s.Get<std::string>("reason")};
+}
 
 nlohmann::json ToJson(const StageRates& s) {
   nlohmann::json out = nlohmann::json::object();
@@ -239,14 +255,7 @@ nlohmann::json ToJson(const RunReport& r) {
 
 std::vector<ObjectRecord> ParseObjectRecords(const nlohmann::json& objects,
                                              const fs::path& file) {
-  if (!objects.is_array()) {
-    throw FormatError(file, "run report: scene must be an array");
-  }
-  std::vector<ObjectRecord> out;
-  for (size_t i = 0; i < objects.size(); ++i) {
-    out.push_back(ParseObjectRecord(objects[i], file, i));
-  }
-  return out;
+  return ParseArray(objects, "scene", file, ParseObjectRecord);
 }
 
 RunReport ParseRunReport(const nlohmann::json& j, const fs::path& file) {
@@ -258,15 +267,8 @@ RunReport ParseRunReport(const nlohmann::json& j, const fs::path& file) {
   r.processed_frames = f.Get<size_t>("processed_frames");
   r.segmented_frames = f.Get<size_t>("segmented_frames");
   r.resumed_frames = f.Get<size_t>("resumed_frames");
-  const nlohmann::json& skipped = f.At("skipped_frames");
-  if (!skipped.is_array()) {
-    throw FormatError(file, "run report: skipped_frames must be an array");
-  }
-  for (size_t i = 0; i < skipped.size(); ++i) {
-    const Fields s(skipped[i], file, fmt::format("skipped_frames[{}]", i));
-    r.skipped_frames.push_back(
-        {s.Get<size_t>("frame"), s.Get<std::string>("reason")});
-  }
+  r.skipped_frames = ParseArray(f.At("skipped_frames"), "skipped_frames", file,
+                                ParseSkippedFrame);
   r.seconds = f.Get<double>("seconds");
   r.frames_per_second = f.Get<double>("frames_per_second");
   r.seconds_per_frame = ParseStageRates(f.At("seconds_per_frame"), file);
@@ -280,13 +282,7 @@ RunReport ParseRunReport(const nlohmann::json& j, const fs::path& file) {
   r.options = f.Get<std::string>("options");
   r.config = f.Get<std::string>("config");
   r.version = f.Get<std::string>("version");
-  const nlohmann::json& models = f.At("models");
-  if (!models.is_array()) {
-    throw FormatError(file, "run report: models must be an array");
-  }
-  for (size_t i = 0; i < models.size(); ++i) {
-    r.models.push_back(ParseModel(models[i], file, i));
-  }
+  r.models = ParseArray(f.At("models"), "models", file, ParseModel);
   r.scene = ParseObjectRecords(f.At("scene"), file);
   if (f.Has("map_guidance")) {
     r.map_guidance = ParseMapGuidance(f.At("map_guidance"), file);
