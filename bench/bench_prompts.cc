@@ -18,8 +18,8 @@
 
 #include "bench_util.h"
 #include "semrec/io/image_io.h"
+#include "semrec/sam/kernel_ops.h"
 #include "semrec/segment/hybrid_segmenter.h"
-#include "semrec/segment/sam_kernel_ops.h"
 
 namespace fs = std::filesystem;
 using namespace semrec;
@@ -120,14 +120,13 @@ int Run(int argc, char** argv) {
          o->masks.model.decoder_kernel = Kernel::kOn;
          o->masks.model.kernel_upscales = false;
        }},
-      {segment::kernel_ops::HasBf16() ? "+ bf16 products"
-                                      : "ONNX Runtime upscales",
+      {sam::kernel_ops::HasBf16() ? "+ bf16 products" : "ONNX Runtime upscales",
        [](auto* o) {
          o->masks.rejected_inside_similarity = 1.0f;
          o->masks.model.kernel_upscales = false;
        }},
-      {segment::kernel_ops::HasBf16() ? "+ upscaling in kernel"
-                                      : "kernel upscales (no bf16 here)",
+      {sam::kernel_ops::HasBf16() ? "+ upscaling in kernel"
+                                  : "kernel upscales (no bf16 here)",
        [](auto* o) { o->masks.rejected_inside_similarity = 1.0f; }},
       {"+ skip inside rejected (default)", [](auto*) {}},
       {"default, inside sim. 0.6 logit 0",

@@ -161,7 +161,8 @@ void BenchSemanticModels(const infer::ModelRegistry& registry,
                          const std::vector<fs::path>& images) {
   std::vector<std::string> names;
   for (const std::string& name : registry.Names()) {
-    if (registry.Get(name).role == "semantic") names.push_back(name);
+    if (registry.Get(name).role == infer::ModelRole::kSemantic)
+      names.push_back(name);
   }
   std::stable_partition(names.begin(), names.end(),
                         [](const std::string& n) { return n == "deeplab_v3"; });

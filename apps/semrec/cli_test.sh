@@ -46,7 +46,7 @@ grep -q "rendering 3/3" "$tmp/synth.err" || fail "synth: no progress report"
 grep -q "objects: .*1 chair" "$tmp/synth.out" || fail "synth: no summary: $(cat "$tmp/synth.out")"
 # The resolver's passes: listed in order, an unknown one refused naming it, one left out.
 "$SEMREC" mesh --list-resolver-passes >"$tmp/passes" || fail "--list-resolver-passes failed"
-[ "$(head -1 "$tmp/passes")" = gate-structure ] && [ "$(wc -l <"$tmp/passes")" -eq 13 ] ||
+[ "$(head -1 "$tmp/passes")" = gate-structure ] && [ "$(wc -l <"$tmp/passes")" -eq 12 ] ||
   fail "resolver passes: $(cat "$tmp/passes")"
 "$SEMREC" mesh "$tmp/syn" --resolver-skip judge-fragment --out "$tmp/m0" 2>"$tmp/err"; rc=$?
 [ "$rc" -eq 2 ] && grep -q "no resolver pass 'judge-fragment'" "$tmp/err" ||

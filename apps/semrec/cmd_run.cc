@@ -8,9 +8,9 @@
 #include <yaml-cpp/yaml.h>
 
 #include "commands.h"
-#include "report_html.h"
 #include "semrec/core/error.h"
 #include "semrec/pipeline/run_sequence.h"
+#include "semrec/tasks/run_task.h"
 
 namespace semrec::cli {
 namespace {
@@ -130,39 +130,35 @@ std::string EffectiveConfig(const CLI::App* cmd, bool scene_only) {
 
 void RunRun(RunArgs& args, CLI::App* cmd) {
   if (!args.config.empty()) ApplyConfigFile(cmd, args.config);
+  tasks::RunTaskOptions task;
+  task.sequence = args.sequence.path;
+  task.reader = args.sequence.ReaderOptions();
+  task.out = args.out;
+  task.labels = args.labels;
+  task.report_html = !args.no_report;
+  task.report_pictures = !args.no_report_pictures;
   pipeline::RunOptions& run = args.run;
   run.config_text = EffectiveConfig(cmd, /*scene_only=*/false);
   run.resume_key = EffectiveConfig(cmd, /*scene_only=*/true);
   pipeline::ScenePipelineOptions& p = run.pipeline;
-  infer::ModelRegistry registry;
   if (args.labels == "models") {
-    registry = args.model.LoadRegistry();
-    p.labels = pipeline::ScenePipelineOptions::Labels::kModels;
-    p.segmenter.semantic.model = args.semantic;
-    p.segmenter.semantic.runtime = args.model.Runtime();
-    p.segmenter.use_masks = args.masks != "none";
-    if (p.segmenter.use_masks) {
-      p.segmenter.masks.model = segment::PromptableOptions::FromRegistry(
-          registry, args.masks, p.segmenter.semantic.runtime);
-      p.segmenter.masks.model.mask_margin_logits = args.mask_margin;
-      p.segmenter.masks.model.decoder_kernel =
-          DecoderKernelFromArg(args.decoder_kernel);
-    }
-    FinishObjectDetectorArgs(*cmd, p.segmenter.use_masks,
-                             p.segmenter.semantic.runtime,
+    tasks::ModelChoice& m = task.models;
+    m.registry = args.model.registry;
+    m.runtime = args.model.Runtime();
+    m.semantic = args.semantic;
+    m.masks = args.masks;
+    m.mask_margin_logits = args.mask_margin;
+    m.decoder_kernel =
+        segment::PromptableOptions::ParseKernel(args.decoder_kernel);
+    FinishObjectDetectorArgs(*cmd, args.masks != "none", m.runtime,
                              &p.segmenter.objects);
-    p.people.detector.model = args.detector;
-    p.people.detector.score_threshold = args.detector_score;
-    p.people.detector.runtime = args.model.Runtime();
-    p.people.masks = args.masks != "none";
-    if (p.people.masks) p.people.mask_model = p.segmenter.masks.model;
-    p.people.tracker = track::TrackerOptions::Improved();
+    m.object_detector = p.segmenter.objects.model;
+    m.people_detector = args.detector;
+    m.people_score = args.detector_score;
   } else {
     CheckUsage(!p.map_guidance,
                "--map-guidance guides the segmentation models: it needs "
                "--labels models");
-    p.labels = pipeline::ScenePipelineOptions::Labels::kGiven;
-    run.given_labels = args.labels;
     run.given_people = args.people;
   }
   p.track_people = !args.no_people;
@@ -173,21 +169,15 @@ void RunRun(RunArgs& args, CLI::App* cmd) {
   p.scene.cover_owned_voxels = !args.no_surface_patches;
   p.scene.fusion.merge = fuse::ParseMerge(args.merge);
   run.write_ply = !args.no_ply;
-  CheckUsage(run);
+  task.run = run;
+  CheckUsage(task);
 
-  io::SequenceReaderOptions reader_options = args.sequence.ReaderOptions();
-  reader_options.max_depth_m = p.scene.meshing.tsdf.max_depth_m;
-  const io::SequenceReader reader =
-      io::SequenceReader::Open(args.sequence.path, reader_options);
-  const pipeline::RunResult result = pipeline::RunSequence(
-      reader, args.labels == "models" ? &registry : nullptr, run, args.out);
-  std::printf("%s", pipeline::RunSummaryTable(result, args.out).c_str());
-  if (!args.no_report) {
-    const HtmlReportResult report =
-        WriteHtmlReport(args.out, !args.no_report_pictures);
-    if (report.pictures == 0 && !args.no_report_pictures) {
+  const tasks::RunTaskResult result = tasks::RunTask(task);
+  std::printf("%s", pipeline::RunSummaryTable(result.run, args.out).c_str());
+  if (result.report) {
+    if (result.report->pictures == 0 && task.report_pictures) {
       spdlog::warn("report.html has no pictures of the scene: {}",
-                   report.no_pictures_reason);
+                   result.report->no_pictures_reason);
     }
     std::printf("report: %s\n",
                 (std::filesystem::path(args.out) / "report.html").c_str());

@@ -45,7 +45,7 @@ void RunSegment(SegmentArgs args) {
         registry, args.masks, options.semantic.runtime);
     options.masks.model.mask_margin_logits = args.mask_margin;
     options.masks.model.decoder_kernel =
-        DecoderKernelFromArg(args.decoder_kernel);
+        segment::PromptableOptions::ParseKernel(args.decoder_kernel);
   }
   options.objects = args.objects;
   FinishObjectDetectorArgs(*args.cmd, options.use_masks,

@@ -6,7 +6,7 @@
 #include <fmt/format.h>
 
 #include "commands.h"
-#include "viewer_host.h"
+#include "semrec/viewer/viewer_host.h"
 
 namespace semrec::cli {
 namespace {
@@ -17,7 +17,7 @@ struct ViewArgs {
   std::string probe;
   std::string size = "1280x800";
   double time = -1.0;
-  ViewerOptions options;
+  viewer::ViewerOptions options;
 };
 
 void RunView(ViewArgs args) {
@@ -31,11 +31,11 @@ void RunView(ViewArgs args) {
   args.options.height = height;
   if (args.time >= 0.0) args.options.time = args.time;
   CheckUsage(args.options);
-  const auto scene = ResolveScene(args.input);
+  const auto scene = viewer::ResolveScene(args.input);
   if (args.screenshot.empty() && args.probe.empty()) {
-    ServeViewer(scene, args.options);
+    viewer::ServeViewer(scene, args.options);
   }
-  RenderScene(scene, args.screenshot, args.probe, args.options);
+  viewer::RenderScene(scene, args.screenshot, args.probe, args.options);
   if (!args.screenshot.empty()) fmt::print("wrote {}\n", args.screenshot);
   if (!args.probe.empty()) fmt::print("wrote {}\n", args.probe);
 }

@@ -14,7 +14,7 @@
 #include "semrec/infer/model_registry.h"
 #include "semrec/infer/onnx_model.h"
 #include "semrec/io/sequence_reader.h"
-#include "semrec/segment/object_evidence.h"
+#include "semrec/segment/detector_votes.h"
 
 namespace semrec::cli {
 
@@ -87,8 +87,6 @@ void AddModelArgs(CLI::App* cmd, ModelArgs* args);
 /// mask model's options come from the registry.
 void AddMaskMarginArg(CLI::App* cmd, float* margin_logits,
                       std::string* decoder_kernel);
-/// "auto", "on", "bf16", "off" (checked by the option's validator).
-segment::PromptableOptions::Kernel DecoderKernelFromArg(const std::string& arg);
 
 /// --object-detector (default yolox_nano) and its tuning options (segment,
 /// run).

@@ -41,18 +41,7 @@ void AddResolverSkipArgs(CLI::App* cmd, std::set<std::string>* skip_passes) {
          "Leave out these passes of the object decision (--merge voxel; for "
          "ablations, docs/fusion.md): " +
              names)
-      ->delimiter(',')
-      ->check(CLI::Validator(
-          [](std::string& pass) -> std::string {
-            const auto& known = fuse::MapResolverPassNames();
-            if (pass.empty() ||
-                std::find(known.begin(), known.end(), pass) != known.end()) {
-              return {};
-            }
-            return "no resolver pass '" + pass +
-                   "' (semrec mesh --list-resolver-passes)";
-          },
-          "PASS"));
+      ->delimiter(',');  // names are checked with the options
   cmd->add_flag_callback(
       "--list-resolver-passes",
       [] {
@@ -124,7 +113,7 @@ infer::ModelRegistry ModelArgs::LoadRegistry() const {
 infer::OnnxModelOptions ModelArgs::Runtime() const {
   infer::OnnxModelOptions runtime;
   runtime.intra_op_threads = threads;
-  runtime.provider = provider;
+  runtime.provider = infer::ParseProvider(provider);
   return runtime;
 }
 
@@ -135,17 +124,11 @@ void AddModelArgs(CLI::App* cmd, ModelArgs* args) {
   cmd->add_option("--threads", args->threads,
                   "Inference threads (0 = all cores)")
       ->capture_default_str();
-  cmd->add_option("--provider", args->provider, "auto, cpu or cuda")
+  cmd->add_option("--provider", args->provider,
+                  "Where the models run: auto (CUDA when ONNX Runtime can "
+                  "use it, else the CPU), cpu or cuda (fail without CUDA)")
+      ->check(CLI::IsMember({"auto", "cpu", "cuda"}))
       ->capture_default_str();
-}
-
-segment::PromptableOptions::Kernel DecoderKernelFromArg(
-    const std::string& arg) {
-  using Kernel = segment::PromptableOptions::Kernel;
-  return arg == "on"     ? Kernel::kOn
-         : arg == "bf16" ? Kernel::kBf16
-         : arg == "off"  ? Kernel::kOff
-                         : Kernel::kAuto;
 }
 
 void AddMaskMarginArg(CLI::App* cmd, float* margin_logits,

@@ -4,7 +4,7 @@
 
 #include <nanobind/stl/string.h>
 
-#include "semrec/track/yolox_detector.h"
+#include "semrec/detect/yolox_detector.h"
 
 namespace semrec::python {
 
@@ -41,7 +41,7 @@ std::unique_ptr<infer::ModelRegistry> LoadRegistry(const std::string& name) {
                         : infer::ModelRegistry::Load(name));
 }
 
-std::string DefaultDetector() { return track::YoloxOptions().model; }
+std::string DefaultDetector() { return detect::YoloxOptions().model; }
 
 nb::object FromJson(const nlohmann::json& j) {
   return nb::module_::import_("json").attr("loads")(j.dump());

@@ -24,6 +24,7 @@
 #include "semrec/pipeline/people_3d.h"
 #include "semrec/pipeline/run_sequence.h"
 #include "semrec/pipeline/scene_pipeline.h"
+#include "semrec/tasks/run_task.h"
 
 namespace semrec::python {
 namespace {
@@ -154,9 +155,11 @@ class PyPipeline {
     o.scene.meshing.tsdf.max_depth_m = max_depth_m;
     o.overlays = false;
     if (models) {
-      o.labels = pipeline::ScenePipelineOptions::Labels::kModels;
-      o.segmenter.objects.model = DefaultDetector();  // as `semrec run`
-      registry_ = LoadRegistry(*models);
+      tasks::ModelChoice choice;  // the models `semrec run` uses
+      if (*models != "default") choice.registry = *models;
+      registry_ =
+          std::make_unique<infer::ModelRegistry>(tasks::LoadRegistry(choice));
+      tasks::ApplyModelChoice(*registry_, choice, &o);
     } else {
       Require(classes.has_value(), false,
               "Pipeline: without models every frame brings its labels; say "
@@ -357,29 +360,26 @@ nb::object Run(const std::string& sequence, const std::string& out,
                const std::optional<std::string>& labels,
                const std::optional<std::string>& models, int segment_every,
                bool map_guidance, bool overwrite, int stride, size_t max_frames,
-               const std::optional<nb::callable>& on_progress) {
-  pipeline::RunOptions o;
-  o.pipeline.segment_every = segment_every;
-  o.pipeline.map_guidance = map_guidance;
-  o.overwrite = overwrite;
-  std::unique_ptr<infer::ModelRegistry> registry;
-  if (labels) {
-    o.pipeline.labels = pipeline::ScenePipelineOptions::Labels::kGiven;
-    o.given_labels = *labels;
-  } else {
-    o.pipeline.segmenter.objects.model = DefaultDetector();
-    registry = LoadRegistry(models.value_or("default"));
-  }
-  o.config_text = "python: semrec.run(" + sequence + ")";
-  o.Check();
-  io::SequenceReaderOptions ro;
-  ro.stride = stride;
-  ro.max_frames = max_frames;
-  ro.Check();
-  pipeline::RunResult r;
+               const std::optional<nb::callable>& on_progress, bool report,
+               bool report_pictures) {
+  // What `semrec run` does with the same arguments (tasks::RunTask).
+  tasks::RunTaskOptions task;
+  task.sequence = sequence;
+  task.out = out;
+  task.reader.stride = stride;
+  task.reader.max_frames = max_frames;
+  task.labels = labels.value_or("models");
+  if (models && *models != "default") task.models.registry = *models;
+  task.run.pipeline.segment_every = segment_every;
+  task.run.pipeline.map_guidance = map_guidance;
+  task.run.overwrite = overwrite;
+  task.run.config_text = "python: semrec.run(" + sequence + ")";
+  task.report_html = report;
+  task.report_pictures = report_pictures;
+  task.Check();
+  tasks::RunTaskResult r;
   {
     nb::gil_scoped_release release;
-    const io::SequenceReader reader = io::SequenceReader::Open(sequence, ro);
     ProgressOptions progress;
     progress.mode = ProgressOptions::Mode::kOff;
     if (on_progress) {
@@ -390,9 +390,9 @@ nb::object Run(const std::string& sequence, const std::string& out,
         (*on_progress)(done, total);
       };
     }
-    r = pipeline::RunSequence(reader, registry.get(), o, out, progress);
+    r = tasks::RunTask(task, progress);
   }
-  return FromJson(pipeline::ToJson(r.report));
+  return FromJson(pipeline::ToJson(r.run.report));
 }
 
 // semrec.Error, and file errors that are OSErrors too.
@@ -491,7 +491,9 @@ void BindPipeline(nb::module_& m) {
            nb::arg("merge") = "voxel", nb::arg("alpha") = 0.5,
            nb::arg("tsdf_voxel_m") = 0.02, nb::arg("tsdf_trunc_m") = 0.08,
            nb::arg("max_depth_m") = 4.0,
-           "models: 'default', a registry YAML, or None (labels come with "
+           "models: 'default', a registry YAML (merged over the installed "
+           "one; the models are those of `semrec run`), or None (labels come "
+           "with "
            "the frames; classes= names their label set). segment_every: "
            "segment every n-th frame (people every frame). merge: 'voxel' "
            "(objects decided per map voxel), 'evidence' or 'paper' (the "
@@ -549,11 +551,15 @@ NB_MODULE(_semrec, m) {
         nb::arg("models").none() = nb::none(), nb::arg("segment_every") = 1,
         nb::arg("map_guidance") = false, nb::arg("overwrite") = false,
         nb::arg("stride") = 1, nb::arg("max_frames") = 0,
-        nb::arg("progress").none() = nb::none(),
+        nb::arg("progress").none() = nb::none(), nb::arg("report") = true,
+        nb::arg("report_pictures") = false,
         "As `semrec run`: the whole sequence into out/; returns report.json "
         "as a dict. labels='gt' (or a label folder) skips the models. "
         "progress: called with (frames done, frames) after each frame (e.g. "
-        "to update a tqdm bar); an exception it raises stops the run.");
+        "to update a tqdm bar); an exception it raises stops the run. "
+        "report: write out/report.html as `semrec run` does; "
+        "report_pictures: with pictures of the scene (the browser viewer in "
+        "headless Chromium, a few seconds).");
 }
 
 }  // namespace semrec::python

@@ -269,6 +269,11 @@ def test_run_reports_progress_and_stops_when_told(synthetic, tmp_path):
                         progress=lambda done, total: seen.append((done, total)))
     assert seen == [(i, 8) for i in range(1, 9)]
     assert report["frames"] == 8 and report["objects"] >= 5
+    # report.html as `semrec run` writes it, from the same report.json.
+    html = (tmp_path / "a" / "report.html").read_text()
+    objects = html.split("<h2>Objects</h2>")[1].split("</table>")[0]
+    assert objects.count("<tr><td class=\"num\">") == len(report["scene"])
+    assert "No pictures: pictures were turned off" in html
 
     class Stop(Exception):
         pass

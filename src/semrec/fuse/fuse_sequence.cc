@@ -138,7 +138,7 @@ nlohmann::json MapResolutionJson(const SceneFusion& fusion,
           {"stranded_voxels_claimed", r->stranded_voxels_claimed},
           {"enclosed_voxels_claimed", r->enclosed_voxels_claimed},
           {"far_specks_moved", r->far_specks_moved},
-          {"reclassed_by_size", r->reclassed_by_size},
+          {"reclassed_on_fronts", r->reclassed_on_fronts},
           {"objects_from_fronts", r->objects_from_fronts}};
 }
 

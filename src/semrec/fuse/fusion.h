@@ -24,15 +24,15 @@
 // sides of a room never overlap, yet they are the same structure).
 //
 // Evidence (Merge::kEvidence): after the paper's rule, views that
-// show two objects inside one mask merge them (fuse/evidence.h), an object's
-// class is the vote of every mask that fell on it, a frame segment lying on an
-// object of another class merges into it on a strong overlap (sigma >
-// cross_class_alpha), and Finish() folds fragments into the object they touch
+// show two objects inside one mask merge them (fuse/mask_coverage.h), an
+// object's class is the vote of every mask that fell on it, a frame segment
+// lying on an object of another class merges into it on a strong overlap (sigma
+// > cross_class_alpha), and Finish() folds fragments into the object they touch
 // or drops them. Every such decision is listed in events().
 //
 // Voxel (Merge::kVoxel, the default; docs/fusion.md): the evidence rule while
 // streaming, and every frame's labels also vote per map voxel
-// (fuse/voxel_evidence.h); at the end ResolveMap() decides the objects per
+// (fuse/voxel_votes.h); at the end ResolveMap() decides the objects per
 // place from those votes (fuse/map_objects.h: structure only on its planes,
 // objects split where apart, fragments judged by visibility) instead of the
 // fragment rule.
@@ -46,12 +46,12 @@
 
 #include <Eigen/Geometry>
 
-#include "semrec/fuse/evidence.h"
 #include "semrec/fuse/map_objects.h"
+#include "semrec/fuse/mask_coverage.h"
 #include "semrec/fuse/overlap.h"
 #include "semrec/fuse/segments.h"
 #include "semrec/fuse/voxel.h"
-#include "semrec/fuse/voxel_evidence.h"
+#include "semrec/fuse/voxel_votes.h"
 
 namespace semrec::fuse {
 

@@ -233,40 +233,6 @@ TEST(MapObjects, ASmallPieceOfAnotherClassHeldWithAnObjectIsPartOfIt) {
   }
 }
 
-// A 2.4 m long low unit (a shelf: no known size) that views call chair (at
-// most 0.75 m): one chair is not that long, so the object takes the voted
-// class that fits, when that class has a fair share of its votes.
-TEST(MapObjects, AnObjectTooLargeForItsClassTakesAVotedClassThatFits) {
-  const Cloud unit = Box({1.0f, 1.0f, 0.05f}, {3.4f, 1.5f, 0.8f});
-  // views_chair views call it chair, views_shelf shelf, each whole.
-  auto fuse = [&](int views_chair, int views_shelf, double slack) {
-    std::vector<View> views;
-    for (int i = 0; i < views_chair + views_shelf; ++i) {
-      View v = RoomView();
-      v.segments.push_back(Segment(i < views_chair ? kChair : kShelf, 3, unit));
-      views.push_back(v);
-    }
-    FusionOptions options;
-    options.map_objects.size_slack = slack;
-    return Fuse(views, options);
-  };
-  const SceneFusion fused = fuse(2, 1, 1.25);
-  EXPECT_EQ(Count(fused, kChair), 0u);
-  ASSERT_EQ(Count(fused, kShelf), 1u);
-  EXPECT_GT(WhereItWent(fused, unit).at(Largest(fused, kShelf)->id), 0.9);
-  EXPECT_EQ(fused.map_resolution()->reclassed_by_size, 1u);
-  // Off: the votes' winner.
-  EXPECT_EQ(Count(fuse(2, 1, 0.0), kChair), 1u);
-  // A stray vote (1 of 5 views: under min_size_class_share) does not make it
-  // a shelf: too large with no class that fits, it is left as it is.
-  const SceneFusion stray = fuse(4, 1, 1.25);
-  EXPECT_EQ(Count(stray, kChair), 1u);
-  EXPECT_EQ(Count(stray, kShelf), 0u);
-  MapObjectOptions bad;
-  bad.size_slack = 0.5;
-  EXPECT_THROW(bad.Check(), InvalidArgument);
-}
-
 // Two views call the whole unit chair, two more its right end; three others
 // see its left third and call it shelf (that part's voxels are shelf). The
 // parts are one object (two masks held both), and the merged object keeps
@@ -295,9 +261,10 @@ TEST(MapObjects, ConfusedPartsJoinUnderAClassThatFitsTheWhole) {
     EXPECT_GT(WhereItWent(fusion, unit).at(Largest(fusion, expected)->id), 0.9)
         << slack;
     EXPECT_EQ(Count(fusion, slack > 0.0 ? kChair : kShelf), 0u) << slack;
-    // The merge chose the class, not the later pass over large objects.
-    EXPECT_EQ(fusion.map_resolution()->reclassed_by_size, 0u) << slack;
   }
+  MapObjectOptions bad;
+  bad.size_slack = 0.5;
+  EXPECT_THROW(bad.Check(), InvalidArgument);
 }
 
 // The streaming rule's merges off: pieces stay apart until the map decides

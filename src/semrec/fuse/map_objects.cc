@@ -100,7 +100,7 @@ uint16_t Winner(const VoxelEvidence& v, const std::vector<uint16_t>& excluded) {
 const std::vector<MapResolver::Pass>& MapResolver::Passes() {
   // The object decision, in the order it runs (docs/fusion.md): structure
   // from planes, objects from the fusion's, splits and merges by the masks'
-  // consensus, classes by size, fragments by visibility, structure that only
+  // consensus, fragments by visibility, structure that only
   // things can own.
   static const std::vector<Pass> kPasses = {
       {"gate-structure", &MapResolver::GateStructure,
@@ -114,8 +114,6 @@ const std::vector<MapResolver::Pass>& MapResolver::Passes() {
       {"split-disconnected", &MapResolver::SplitDisconnected, nullptr},
       {"attach-orphans", &MapResolver::AttachOrphans, nullptr},
       {"merge-by-masks", &MapResolver::MergeByMasks, nullptr},
-      {"fit-classes-to-sizes", &MapResolver::FitClassesToSizes,
-       [](const MapObjectOptions& o) { return o.size_slack > 0.0; }},
       {"judge-fragments", &MapResolver::JudgeFragments, nullptr},
       {"claim-fronts", &MapResolver::ClaimFronts,
        [](const MapObjectOptions& o) { return o.claim_stranded; }},

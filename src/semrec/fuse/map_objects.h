@@ -1,59 +1,39 @@
 // The map's final objects, decided per place from the voxel evidence
-// (fuse/voxel_evidence.h) at the end of a sequence.
+// (fuse/voxel_votes.h) at the end of a sequence.
 //
-//  1. Each voxel's class is its histogram's winner (distance-weighted view
-//     shares; ties: the smaller class id).
-//  2. Structure only where the geometry says so: a wall vote counts only on a
-//     large vertical plane, a floor vote only on the lowest large horizontal
-//     plane, a ceiling vote only on the highest (planes fitted to the voxels
-//     that vote for the class; gravity known). Elsewhere that class's
-//     evidence is set aside and the next class wins: a chair against a wall
-//     that some views call wall stays a chair (where no other class has real
-//     evidence, the structure class stays here; see 6). A class with no plane
-//     large enough is not gated (too little seen to tell). No wall stands a
-//     hand's width in front of a larger one: a voxel 9-60 cm in front of a
-//     larger wall plane (along a stretch of it seen at some height) is not on a
-//     wall, even where a smaller plane passes through it (furniture some
-//     views call wall can make a plane of its own). Nor is a vertical plane
-//     with a surface behind its top edge (a counter top over base cabinets
-//     every view calls wall): it is a furniture front, and a class whose
-//     every plane is a front is gated everywhere.
-//  3. Each thing voxel belongs to the fusion object of its class that most
-//     views put it in; structure voxels to their class's structure object.
-//     Thing voxels no object of their class claimed (they were fused into the
-//     wall) join the touching object of their class, or form a new one.
-//  4. A fusion object whose parts the views held in different masks (two
-//     monitors side by side that the overlap rule fused) is cut into them.
-//     An object's pieces that do not touch (within touch_voxels) are split
-//     into objects unless the views that saw both mostly put them in one mask
-//     (MaskClustering-style consensus); touching objects of one class are
-//     merged unless several views held them in different masks and few in
-//     one (1 : 1 merges when they touch directly); touching objects of
-//     confused classes that views held in one mask are merged too. A small
-//     piece joins the object of its class it touches, and so does one mostly
-//     in contact with a much larger one, or joined to it along a seam when
-//     together they are no longer than one object of the class (mask
-//     generators cut the same parts off in every view). Merges run surest
-//     first, and no chain of them joins objects the views held apart.
-//  5. Fragments are judged by visibility: an object is a fragment when the
-//     views that labelled its voxels as its class are few compared with the
-//     views that observed those voxels at all (a part seen once where five
-//     views looked at it). One seen in the only view that covers it is kept.
-//     Fragments fold into the object of their class they touch, or are
-//     dropped.
-//  6. Structure voxels off their planes that no other class can take (every
-//     view called a chair's legs floor, a chair's back by the wall wall) join
-//     the things they touch, each voxel the nearest, unless the group is
-//     larger than every thing it touches or few of its voxels touch one; a
-//     thing of a known size takes its share only while it still fits one
-//     object of its class (a counter every view called wall is no part of
-//     the plant beside it).
-//     Those on a furniture front first join the thing that holds a fair part
-//     of the front and lies mostly on it (a view named part of the row of
-//     cabinets), across the fronts it touches.
-//  7. Specks (pieces under 5% of a thing) far from the rest of it leave it
-//     where they make it too large for its class (any class of no known
-//     size): they join what they touch, or are dropped.
+// MapResolver::Passes() runs these in order; each can be left out alone
+// (MapObjectOptions::skip_passes, `--resolver-skip`), and docs/fusion.md
+// describes each with its parameters and its measured effect.
+//  - (cells) Each voxel's class is its histogram's winner (distance-weighted
+//    view shares; ties: the smaller class id).
+//  - gate-structure: structure only where the geometry says so. A wall vote
+//    counts only on a large vertical plane that is no furniture front (no
+//    surface behind its top edge, not a hand's width in front of a larger
+//    wall), a floor vote only on the lowest large horizontal plane, a ceiling
+//    vote only on the highest; elsewhere the next class with real evidence
+//    wins (a chair some views call wall stays a chair). A class with no plane
+//    large enough is not gated.
+//  - release-flush-parts: structure voxels on their plane that many views
+//    gave a touching thing's class join the thing (a headboard).
+//  - assign-owners: each thing voxel belongs to the fusion object of its
+//    class most views put it in; structure voxels to their class's object.
+//  - split-by-masks, split-disconnected: an object whose parts the views held
+//    in different masks is cut into them; pieces that do not touch are split
+//    unless the views that saw both put them in one mask.
+//  - attach-orphans: thing voxels no object of their class claimed join the
+//    touching object of their class, or form a new one.
+//  - merge-by-masks: touching objects the views held in one mask (of one
+//    class, or of confused classes) merge, surest first, never through a
+//    chain that joins objects the views held apart; small or nested pieces
+//    and seams that fit one object of the class join it.
+//  - judge-fragments: an object labelled by few of the views that observed
+//    its voxels is a fragment: it folds into the object it touches or goes.
+//  - claim-fronts, claim-stranded, claim-enclosed: structure off its planes
+//    that no other class can take (a chair's legs every view called floor, a
+//    shelf's back panel inside its outline) joins the things it touches,
+//    while they still fit their class's size.
+//  - release-far-specks: pieces under 5% of a thing, far from the rest of it,
+//    that make it too large for its class join what they touch or go.
 #pragma once
 
 #include <cstddef>
@@ -69,7 +49,7 @@
 
 #include "semrec/core/label_map.h"
 #include "semrec/fuse/structure_planes.h"
-#include "semrec/fuse/voxel_evidence.h"
+#include "semrec/fuse/voxel_votes.h"
 
 namespace semrec::fuse {
 
@@ -199,14 +179,12 @@ struct MapObjectOptions {
   /// ... or, when as many views held them apart as in one mask, when one's
   /// votes give the other's class at least this share.
   double tie_confusion_share = 0.4;
-  /// Objects larger than one object of their class can be (MapContext::
-  /// max_length_m / max_width_m times size_slack: a 2.6 m "plant", a counter
-  /// one view called plant) take the class with the most votes among those
-  /// that fit (of no known size, or small enough), given at least
-  /// min_size_class_share of the object's votes; a merge of two confused
-  /// classes keeps the class that fits the whole, given that share. Too
-  /// large with no such class: left as it is (two chairs one merge joined
-  /// are no sofa because a stray view said so). size_slack 0: never.
+  /// How much larger than one object of its class (MapContext::max_length_m /
+  /// max_width_m) an object may be: a merge of two confused classes keeps
+  /// the class that fits the whole, given at least min_size_class_share of
+  /// the object's votes (two chairs one merge joined are no sofa because a
+  /// stray view said so); cuts, joins and specks are judged against it
+  /// (below). size_slack 0: sizes are never checked.
   double size_slack = 1.25;
   double min_size_class_share = 0.25;
   /// A speck of a thing (a piece with under 5% of its voxels, kept with it
@@ -291,8 +269,9 @@ struct MapResolution {
   size_t fragments_dropped = 0;
   /// Structure voxels off their planes that joined the thing they touch.
   size_t stranded_voxels_claimed = 0;
-  /// Objects too large for their class that took a class that fits.
-  size_t reclassed_by_size = 0;
+  /// Things lying on a furniture front that took the front's class
+  /// (ClaimFronts).
+  size_t reclassed_on_fronts = 0;
   /// Furniture fronts no thing held that became objects of a front class.
   size_t objects_from_fronts = 0;
   /// Wall voxels closed in by a thing at the wall that joined it.

@@ -263,7 +263,7 @@ bool MapResolver::TakeFrontClass(uint32_t id, const std::vector<size_t>& cells,
       cells_[i].class_id = cls;
     }
   }
-  ++result_.reclassed_by_size;
+  ++result_.reclassed_on_fronts;
   return true;
 }
 

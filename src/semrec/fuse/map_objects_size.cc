@@ -232,33 +232,4 @@ std::map<uint16_t, double> MapResolver::ThingShares(
   return shares;
 }
 
-void MapResolver::FitClassesToSizes() {
-  const Members members = ThingMembers();
-  const double slack = options_.size_slack;
-  for (const auto& [id, cells] : members) {
-    const uint16_t cls = owner_class_[id];
-    if (MaxFootprint(cls).x() <= 0.0) continue;  // any size
-    const Eigen::Vector2d size_m = CoreFootprintSize(cells, kSizeTrimShare);
-    if (FitsSize(size_m, cls, slack)) continue;
-    // The object's other thing classes by votes, most first.
-    std::vector<std::pair<double, uint16_t>> ranked;
-    for (const auto& [c, share] : ThingShares(cells)) {
-      if (c != cls) ranked.emplace_back(share, c);
-    }
-    std::sort(ranked.begin(), ranked.end(), std::greater<>());
-    for (const auto& [share, c] : ranked) {
-      if (share < options_.min_size_class_share) break;
-      if (!FitsSize(size_m, c, slack)) continue;
-      spdlog::debug(
-          "object {} ({} voxels, {:.2f} x {:.2f} m): too large for class {}, "
-          "takes class {} ({:.0f}% of its thing votes)",
-          id, cells.size(), size_m.x(), size_m.y(), cls, c, 100.0 * share);
-      owner_class_[id] = c;
-      for (size_t i : cells) cells_[i].class_id = c;
-      ++result_.reclassed_by_size;
-      break;
-    }
-  }
-}
-
 }  // namespace semrec::fuse::internal

@@ -12,7 +12,7 @@
 #include "semrec/core/error.h"
 #include "semrec/fuse/fusion.h"
 #include "semrec/fuse/map_test_util.h"
-#include "semrec/fuse/voxel_evidence.h"
+#include "semrec/fuse/voxel_votes.h"
 
 namespace semrec::fuse {
 namespace {
@@ -67,7 +67,7 @@ TEST(MapObjects, PartSeenOnceWhereFiveViewsLookedIsAFragment) {
 
 TEST(MapObjects, PassesAreNamedInTheOrderTheyRunAndUnknownOnesRefused) {
   const std::vector<std::string>& names = MapResolverPassNames();
-  ASSERT_EQ(names.size(), 13u);
+  ASSERT_EQ(names.size(), 12u);
   EXPECT_EQ(names.front(), "gate-structure");
   EXPECT_EQ(names.back(), "release-far-specks");
   const auto at = [&](const std::string& n) {

@@ -2,7 +2,7 @@
 // objects, shared by map_objects.cc (cells, structure gate, owners, the
 // result), map_objects_split.cc (cuts by masks and by connectivity) and
 // map_objects_merge.cc (orphans, merges by masks, fragments),
-// map_objects_size.cc (footprints, fits, nesting, classes by size),
+// map_objects_size.cc (footprints, fits, nesting),
 // map_objects_claim.cc (fronts and stranded structure claimed by things) and
 // map_objects_enclosed.cc (walls enclosed by things). docs/fusion.md lists
 // the passes in the order MapResolver::Run calls them. Not installed.
@@ -303,9 +303,6 @@ class MapResolver {
   // Each thing class's share of the thing classes' votes over `cells`.
   std::map<uint16_t, double> ThingShares(
       const std::vector<size_t>& cells) const;
-  // Objects too large for their class take the most voted class that fits
-  // (MapObjectOptions::size_slack).
-  void FitClassesToSizes();
   // Whether `a` and `b` together (without specks) fit one object of the class
   // with size_slack (true for classes of no known size, or size_slack 0).
   bool FitsTogether(const std::vector<size_t>& a, const std::vector<size_t>& b,

@@ -9,7 +9,7 @@
 
 #include "semrec/fuse/map_test_util.h"
 #include "semrec/fuse/segments.h"
-#include "semrec/fuse/voxel_evidence.h"
+#include "semrec/fuse/voxel_votes.h"
 
 namespace semrec::fuse {
 namespace {

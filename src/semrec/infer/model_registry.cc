@@ -109,20 +109,14 @@ ModelEntry ParseEntry(const std::string& name, const YAML::Node& node) {
        e.sha256.find_first_not_of("0123456789abcdef") != std::string::npos)) {
     throw EntryError{"sha256 must be 64 lower-case hex digits"};
   }
-  e.role = Scalar<std::string>(node, "role");
-  static const std::vector<std::string> kRoles = {
-      "semantic", "mask_encoder", "mask_decoder", "mask_decoder_part",
-      "detector"};
-  if (std::find(kRoles.begin(), kRoles.end(), e.role) == kRoles.end()) {
-    throw EntryError{fmt::format("role must be one of {}, not '{}'",
-                                 fmt::join(kRoles, ", "), e.role)};
+  try {
+    e.role = ParseModelRole(Scalar<std::string>(node, "role"));
+    e.backend = ParseMaskBackend(ScalarOr<std::string>(node, "backend", "sam"));
+  } catch (const InvalidArgument& error) {
+    throw EntryError{error.what()};
   }
   e.label_set = ScalarOr<std::string>(node, "label_set", "");
   e.label_offset = ScalarOr<int>(node, "label_offset", 0);
-  e.backend = ScalarOr<std::string>(node, "backend", "sam");
-  if (e.backend != "sam" && e.backend != "sam2") {
-    throw EntryError{"backend must be sam or sam2, not '" + e.backend + "'"};
-  }
   if (const YAML::Node split = node["split"]) {
     e.split_image = Scalar<std::string>(split, "image");
     e.split_prompt = Scalar<std::string>(split, "prompt");
@@ -154,16 +148,57 @@ ModelEntry ParseEntry(const std::string& name, const YAML::Node& node) {
     e.inputs = ParseSignature(node["signature"]["inputs"]);
     e.outputs = ParseSignature(node["signature"]["outputs"]);
   }
-  if (e.role == "semantic" && (!e.input || !e.output || e.label_set.empty())) {
+  if (e.role == ModelRole::kSemantic &&
+      (!e.input || !e.output || e.label_set.empty())) {
     throw EntryError{"a semantic model needs input, output and label_set"};
   }
-  if (e.role == "mask_encoder" && !e.input) {
+  if (e.role == ModelRole::kMaskEncoder && !e.input) {
     throw EntryError{"a mask encoder needs an input spec"};
   }
   return e;
 }
 
 }  // namespace
+
+constexpr ModelRole kModelRoles[] = {
+    ModelRole::kSemantic, ModelRole::kMaskEncoder, ModelRole::kMaskDecoder,
+    ModelRole::kMaskDecoderPart, ModelRole::kDetector};
+
+const char* ModelRoleName(ModelRole role) {
+  switch (role) {
+    case ModelRole::kSemantic:
+      return "semantic";
+    case ModelRole::kMaskEncoder:
+      return "mask_encoder";
+    case ModelRole::kMaskDecoder:
+      return "mask_decoder";
+    case ModelRole::kMaskDecoderPart:
+      return "mask_decoder_part";
+    case ModelRole::kDetector:
+      return "detector";
+  }
+  return "?";
+}
+
+ModelRole ParseModelRole(const std::string& name) {
+  std::vector<std::string> names;
+  for (const ModelRole role : kModelRoles) {
+    if (name == ModelRoleName(role)) return role;
+    names.emplace_back(ModelRoleName(role));
+  }
+  throw InvalidArgument(fmt::format("role must be one of {}, not '{}'",
+                                    fmt::join(names, ", "), name));
+}
+
+const char* MaskBackendName(MaskBackend backend) {
+  return backend == MaskBackend::kSam2 ? "sam2" : "sam";
+}
+
+MaskBackend ParseMaskBackend(const std::string& name) {
+  if (name == "sam") return MaskBackend::kSam;
+  if (name == "sam2") return MaskBackend::kSam2;
+  throw InvalidArgument("backend must be sam or sam2, not '" + name + "'");
+}
 
 ModelRegistry ModelRegistry::Load(const std::filesystem::path& path) {
   const std::string text = ReadTextFile(path);
@@ -198,7 +233,7 @@ ModelRegistry ModelRegistry::Load(const std::filesystem::path& path) {
          {&e.split_image, &e.split_prompt, &e.split_masks, &e.split_kernel}) {
       if (part->empty()) continue;
       if (!registry.Contains(*part) ||
-          registry.Get(*part).role != "mask_decoder_part") {
+          registry.Get(*part).role != ModelRole::kMaskDecoderPart) {
         throw FormatError(
             path, fmt::format("model '{}': split part '{}' must be an entry "
                               "of this file with role mask_decoder_part",

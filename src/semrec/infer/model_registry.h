@@ -58,17 +58,39 @@ struct TensorSignature {
   std::vector<int64_t> shape;
 };
 
+/// What a model is for (the registry's `role`).
+enum class ModelRole {
+  kSemantic,
+  kMaskEncoder,
+  kMaskDecoder,
+  /// A part of a split mask decoder (scripts/split_sam_decoder.py).
+  kMaskDecoderPart,
+  kDetector,
+};
+/// "semantic", "mask_encoder", "mask_decoder", "mask_decoder_part",
+/// "detector"; ParseModelRole throws InvalidArgument for anything else, naming
+/// the choices.
+const char* ModelRoleName(ModelRole role);
+ModelRole ParseModelRole(const std::string& name);
+
+/// Which export a mask model is: SAM's (encoder `output`, decoder with
+/// orig_im_size and low_res_masks) or SAM2's (high-resolution features, a
+/// decoder returning low-res masks, IoUs and an object pointer).
+enum class MaskBackend { kSam, kSam2 };
+/// "sam", "sam2"; ParseMaskBackend throws InvalidArgument for anything else.
+const char* MaskBackendName(MaskBackend backend);
+MaskBackend ParseMaskBackend(const std::string& name);
+
 struct ModelEntry {
   std::string name;
   std::string file;
   /// Lower-case hex; empty = not checked.
   std::string sha256;
-  /// semantic | mask_encoder | mask_decoder | mask_decoder_part | detector
-  std::string role;
+  ModelRole role = ModelRole::kSemantic;
   std::string label_set;
   int label_offset = 0;
-  /// Mask decoders: "sam" (SAM ONNX export) or "sam2".
-  std::string backend = "sam";
+  /// Mask decoders: which export.
+  MaskBackend backend = MaskBackend::kSam;
   /// Mask decoders: registry names of the parts made from this decoder by
   /// scripts/split_sam_decoder.py (role mask_decoder_part): `split_image`
   /// runs once per image, `split_prompt` per prompt, `split_masks` (optional)

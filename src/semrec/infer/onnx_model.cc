@@ -13,9 +13,6 @@ namespace semrec::infer {
 
 void OnnxModelOptions::Check() const {
   CheckArgument(intra_op_threads >= 0, "model: intra_op_threads must be >= 0");
-  CheckArgument(
-      provider == "auto" || provider == "cpu" || provider == "cuda",
-      "model: provider must be auto, cpu or cuda, not '" + provider + "'");
 }
 
 namespace {

@@ -14,9 +14,8 @@ namespace semrec::infer {
 struct OnnxModelOptions {
   /// Threads for one operator; 0 = all cores.
   int intra_op_threads = 0;
-  /// "auto" (CUDA when ONNX Runtime can use it here, else CPU), "cpu", or
-  /// "cuda" (fail when CUDA is unavailable).
-  std::string provider = "auto";
+  /// Where the model runs (onnx_session.h: auto, cpu, cuda).
+  Provider provider = Provider::kAuto;
   /// Verify the file's sha256 against the registry before loading (~0.1 s
   /// per 30 MB); catches truncated downloads and swapped files.
   bool verify_checksum = true;
@@ -43,8 +42,8 @@ class OnnxModel {
   const ModelEntry& entry() const { return entry_; }
   const OnnxSession& session() const { return *session_; }
   const std::filesystem::path& file() const { return file_; }
-  /// The execution provider in use: "cpu" or "cuda".
-  const std::string& provider() const { return session_->provider(); }
+  /// The execution provider in use: kCpu or kCuda.
+  Provider provider() const { return session_->provider(); }
 
   std::map<std::string, Tensor> Run(
       const std::map<std::string, Tensor>& inputs) const {

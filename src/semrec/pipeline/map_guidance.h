@@ -50,11 +50,25 @@ struct MapGuidanceOptions {
 enum class FrameMode { kFull, kPartial, kProjectionOnly };
 const char* FrameModeName(FrameMode mode);
 
+/// Why a frame got its mode.
+enum class GuidanceReason {
+  kNoMapYet,
+  kFirstFrame,
+  kRefresh,
+  kCameraMoved,
+  kNewContent,
+  kExplained,
+  /// The map explained the frame, but the semantic branch disagrees with it
+  /// somewhere (AddDisagreement).
+  kDisagreement,
+};
+/// "no map yet", "first frame", "refresh", "camera moved", "new content",
+/// "explained", "disagreement" (for logs).
+const char* GuidanceReasonName(GuidanceReason reason);
+
 struct GuidanceDecision {
   FrameMode mode = FrameMode::kFull;
-  /// Why (for logs and report.json): "first frame", "refresh", "camera moved",
-  /// "new content", "explained".
-  std::string reason;
+  GuidanceReason reason = GuidanceReason::kNoMapYet;
   /// Where prompts may land (kPartial: the unexplained regions grown by the
   /// margin; kFull: all ones; kProjectionOnly: all zeros).
   Image<uint8_t> prompt_region;
@@ -84,7 +98,7 @@ GuidanceDecision DecideFrame(const fuse::ProjectedMap& projected,
 /// branch) disagrees with the projected class (areas: bands under 5 pixels,
 /// blurred borders, do not count), kept and grown as unexplained ones are; they
 /// join the prompt region and the override region, and a projection-only frame
-/// with such a region becomes partial ("disagreement"). Returns the share of
+/// with such a region becomes partial (kDisagreement). Returns the share of
 /// valid-depth pixels in those regions.
 double AddDisagreement(const fuse::ProjectedMap& projected,
                        const LabelMap& semantic,

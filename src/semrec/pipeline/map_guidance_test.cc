@@ -47,7 +47,7 @@ TEST(MapGuidance, PromptsOnlyWhereNewContentIsAndSkipsExplainedFrames) {
   const GuidanceDecision d = DecideFrame(
       Projected(100, 140, true), Moved(0.1, 5), Transform(), 3, options);
   EXPECT_EQ(d.mode, FrameMode::kPartial);
-  EXPECT_EQ(d.reason, "new content");
+  EXPECT_EQ(d.reason, GuidanceReason::kNewContent);
   EXPECT_NEAR(d.unexplained_share, 1600.0 / (200 * 90), 1e-12);
   size_t region_px = 0;
   for (uint8_t v : d.prompt_region.values()) region_px += v;
@@ -104,7 +104,7 @@ TEST(MapGuidance, DisagreementWithTheSemanticBranchIsPromptedAndWins) {
   const double share = AddDisagreement(p, semantic, options, &d);
   EXPECT_NEAR(share, 900.0 / (200 * 90), 1e-12);
   EXPECT_EQ(d.mode, FrameMode::kPartial);
-  EXPECT_EQ(d.reason, "disagreement");
+  EXPECT_EQ(d.reason, GuidanceReason::kDisagreement);
   size_t region_px = 0;
   for (uint8_t v : d.prompt_region.values()) region_px += v;
   EXPECT_EQ(region_px, 34u * 34u);  // the block and its margin only
@@ -135,12 +135,16 @@ TEST(MapGuidance, DriftGuardForcesFullFrames) {
                           const Transform& now) {
     return DecideFrame(explained, now, last, since, options);
   };
-  EXPECT_EQ(decide(std::nullopt, 0, Transform()).reason, "first frame");
-  EXPECT_EQ(decide(Transform(), 10, Transform()).reason, "refresh");
+  EXPECT_EQ(decide(std::nullopt, 0, Transform()).reason,
+            GuidanceReason::kFirstFrame);
+  EXPECT_EQ(decide(Transform(), 10, Transform()).reason,
+            GuidanceReason::kRefresh);
   EXPECT_EQ(decide(Transform(), 9, Transform()).mode,
             FrameMode::kProjectionOnly);
-  EXPECT_EQ(decide(Transform(), 1, Moved(0.0, 30)).reason, "camera moved");
-  EXPECT_EQ(decide(Transform(), 1, Moved(0.8, 0)).reason, "camera moved");
+  EXPECT_EQ(decide(Transform(), 1, Moved(0.0, 30)).reason,
+            GuidanceReason::kCameraMoved);
+  EXPECT_EQ(decide(Transform(), 1, Moved(0.8, 0)).reason,
+            GuidanceReason::kCameraMoved);
   EXPECT_EQ(decide(Moved(0.5, 30), 1, Moved(0.8, 0)).mode,
             FrameMode::kFull);  // turned back 30 degrees
   EXPECT_EQ(decide(Moved(0.5, 10), 1, Moved(0.8, 0)).mode,

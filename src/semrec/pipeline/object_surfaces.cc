@@ -9,7 +9,7 @@
 #include <vector>
 
 #include "semrec/fuse/voxel.h"
-#include "semrec/fuse/voxel_evidence.h"
+#include "semrec/fuse/voxel_votes.h"
 
 namespace semrec::pipeline {
 namespace {

@@ -10,7 +10,7 @@
 #include "semrec/core/error.h"
 #include "semrec/core/label_map.h"
 #include "semrec/core/stopwatch.h"
-#include "semrec/segment/object_evidence.h"
+#include "semrec/segment/detector_votes.h"
 
 namespace semrec::pipeline {
 namespace {}  // namespace
@@ -50,10 +50,10 @@ PeopleFrame PeopleTracker::Process(
   } else {
     if (!detector_) {
       detector_ =
-          std::make_unique<track::YoloxDetector>(registry_, options_.detector);
+          std::make_unique<detect::YoloxDetector>(registry_, options_.detector);
     }
     for (const auto& d : detector_->Detect(rgb)) {
-      detections.push_back(d.detection);
+      detections.push_back({.box = d.box, .score = d.score, .embedding = {}});
     }
   }
   frame.detect_seconds = watch.Lap();

@@ -13,18 +13,18 @@
 
 #include "semrec/core/image.h"
 #include "semrec/core/label_map.h"
+#include "semrec/detect/yolox_detector.h"
 #include "semrec/infer/model_registry.h"
 #include "semrec/segment/mask.h"
 #include "semrec/segment/promptable.h"
 #include "semrec/track/reid.h"
 #include "semrec/track/tracker.h"
-#include "semrec/track/yolox_detector.h"
 
 namespace semrec::pipeline {
 
 struct PeopleTrackerOptions {
   /// Person detector (used when Process() gets no detections).
-  track::YoloxOptions detector;
+  detect::YoloxOptions detector;
   /// Box-prompted person masks and embeddings; off = boxes only (no
   /// re-identification, since there is no appearance).
   bool masks = true;
@@ -78,7 +78,7 @@ class PeopleTracker {
  private:
   const infer::ModelRegistry& registry_;
   PeopleTrackerOptions options_;
-  std::unique_ptr<track::YoloxDetector> detector_;
+  std::unique_ptr<detect::YoloxDetector> detector_;
   std::unique_ptr<segment::PromptableSegmenter> masks_;
   track::Tracker tracker_;
 };

@@ -45,7 +45,7 @@ track::Detection Box(const Rect& r) {
 
 PeopleTrackerOptions Options(const std::string& backend, bool reid) {
   PeopleTrackerOptions options;
-  options.mask_model.backend = backend;
+  options.mask_model.backend = infer::ParseMaskBackend(backend);
   options.mask_model.encoder = "tiny_" + backend + "_encoder";
   options.mask_model.decoder = "tiny_" + backend + "_decoder";
   options.mask_model.runtime.model_dir = semrec::testing::TinyModelDir();

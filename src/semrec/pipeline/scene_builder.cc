@@ -220,12 +220,13 @@ void SceneBuilder::Finish() {
         "voxels moved off structure, {} split, {} merged by masks, {} new, "
         "fragments {} folded / {} dropped, {} stranded structure voxels "
         "joined things, {} wall voxels closed in by things joined them, {} "
-        "took a class that fits their size, {} furniture fronts no view "
+        "things on furniture fronts took the front's class, {} furniture "
+        "fronts no view "
         "named became objects, {} far specks left their objects",
         r.objects.size(), r.planes.size(), r.gated_voxels, r.split_objects,
         r.merged_objects, r.new_objects, r.fragments_folded,
         r.fragments_dropped, r.stranded_voxels_claimed,
-        r.enclosed_voxels_claimed, r.reclassed_by_size, r.objects_from_fronts,
+        r.enclosed_voxels_claimed, r.reclassed_on_fronts, r.objects_from_fronts,
         r.far_specks_moved);
   }
 }

@@ -30,15 +30,15 @@ namespace {
 
 // The people tracker's share of a detector pass over every class.
 std::vector<track::Detection> PersonDetections(
-    const std::vector<track::LabeledDetection>& all,
-    const track::YoloxOptions& people) {
+    const std::vector<detect::LabeledDetection>& all,
+    const detect::YoloxOptions& people) {
   std::vector<track::Detection> out;
-  for (const track::LabeledDetection& d : all) {
+  for (const detect::LabeledDetection& d : all) {
     const bool wanted = people.classes.empty() ||
                         std::find(people.classes.begin(), people.classes.end(),
                                   d.class_id) != people.classes.end();
-    if (wanted && d.detection.score >= people.score_threshold) {
-      out.push_back(d.detection);
+    if (wanted && d.score >= people.score_threshold) {
+      out.push_back({.box = d.box, .score = d.score, .embedding = {}});
     }
   }
   return out;
@@ -80,18 +80,18 @@ ScenePipeline::ScenePipeline(const infer::ModelRegistry* registry,
                                                             options_.segmenter);
     if (options_.track_people) {
       tracker_ = std::make_unique<PeopleTracker>(*registry, options_.people);
-      const track::YoloxOptions& people = options_.people.detector;
+      const detect::YoloxOptions& people = options_.people.detector;
       const segment::ObjectDetectorOptions& objects =
           options_.segmenter.objects;
       if (objects.enabled() && objects.model == people.model) {
         // Per-class NMS and a class filter after it: the people's boxes are
         // exactly those of a people-only pass.
-        track::YoloxOptions shared = people;
+        detect::YoloxOptions shared = people;
         shared.classes.clear();
         shared.score_threshold =
             std::min(people.score_threshold, objects.score_threshold);
         shared_detector_ =
-            std::make_unique<track::YoloxDetector>(*registry, shared);
+            std::make_unique<detect::YoloxDetector>(*registry, shared);
       }
     }
     builder_ =
@@ -120,7 +120,7 @@ PreparedFrame ScenePipeline::Prepare(PipelineInput input) {
   StageWatch watch;
 
   // One detector pass for people and objects (when they share a detector).
-  std::optional<std::vector<track::LabeledDetection>> detections;
+  std::optional<std::vector<detect::LabeledDetection>> detections;
   if (shared_detector_ && !input.replay) {
     try {
       detections = shared_detector_->Detect(frame.color);
@@ -197,7 +197,7 @@ fuse::FrameLabels ScenePipeline::SegmentFrame(
     const Frame& frame, size_t position,
     const std::optional<LabelMap>& person_ids, std::string* mode,
     std::optional<GuidanceDecision>* decision_out,
-    const std::vector<track::LabeledDetection>* detections) {
+    const std::vector<detect::LabeledDetection>* detections) {
   const std::string source = frame.color_path.string();
   // Without guidance, or before there is a map: a full frame.
   GuidanceDecision decision;
@@ -207,7 +207,7 @@ fuse::FrameLabels ScenePipeline::SegmentFrame(
     const std::shared_ptr<const std::vector<fuse::SceneSegment>> map =
         MapFor(position);
     if (map->empty()) {
-      decision.reason = "no map yet";
+      decision.reason = GuidanceReason::kNoMapYet;
     } else {
       try {
         projected =
@@ -231,7 +231,9 @@ fuse::FrameLabels ScenePipeline::SegmentFrame(
       }
       AddDisagreement(projected, semantic->labels, options_.guidance,
                       &decision);
-      if (decision.reason == "disagreement") ++guidance_counts_.disagreement;
+      if (decision.reason == GuidanceReason::kDisagreement) {
+        ++guidance_counts_.disagreement;
+      }
     }
     *mode = FrameModeName(decision.mode);
     CountGuidance(*mode, frame.T_world_camera);

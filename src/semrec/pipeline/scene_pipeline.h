@@ -220,7 +220,7 @@ class ScenePipeline {
       const Frame& frame, size_t position,
       const std::optional<LabelMap>& person_ids, std::string* mode,
       std::optional<GuidanceDecision>* decision,
-      const std::vector<track::LabeledDetection>* detections);
+      const std::vector<detect::LabeledDetection>* detections);
   /// Map guidance bookkeeping for a segmented frame's mode.
   void CountGuidance(const std::string& mode, const Transform& T_world_camera);
   /// The map frame `position` is guided by (after frame position - 2).
@@ -233,7 +233,7 @@ class ScenePipeline {
   std::unique_ptr<PeopleTracker> tracker_;
   // One detector pass per frame for people and object evidence, when both
   // use the same detector (null otherwise: each runs its own).
-  std::unique_ptr<track::YoloxDetector> shared_detector_;
+  std::unique_ptr<detect::YoloxDetector> shared_detector_;
   std::unique_ptr<SceneBuilder> builder_;
   std::vector<track::TrackPoint> track_points_;
   std::vector<track::TrackPoint> finished_tracks_;

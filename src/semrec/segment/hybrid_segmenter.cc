@@ -26,12 +26,12 @@ HybridSegmenter::HybridSegmenter(const infer::ModelRegistry& registry,
     masks_ = MaskGenerator::Create(registry, options_.masks);
   }
   if (options_.objects.enabled()) {
-    track::YoloxOptions detector;
+    detect::YoloxOptions detector;
     detector.model = options_.objects.model;
     detector.runtime = options_.objects.runtime;
     detector.score_threshold = options_.objects.score_threshold;
     detector.classes.clear();
-    detector_ = std::make_unique<track::YoloxDetector>(registry, detector);
+    detector_ = std::make_unique<detect::YoloxDetector>(registry, detector);
     const std::string& detector_set = registry.Get(detector.model).label_set;
     const std::filesystem::path map_file =
         options_.objects.class_map.empty()
@@ -51,11 +51,11 @@ HybridSegmenter::HybridSegmenter(const infer::ModelRegistry& registry,
 
 HybridResult HybridSegmenter::Segment(
     const ColorImage& rgb,
-    const std::vector<track::LabeledDetection>* detections) {
+    const std::vector<detect::LabeledDetection>* detections) {
   return Run(rgb, nullptr, std::nullopt, detections);
 }
 
-std::vector<track::LabeledDetection> HybridSegmenter::DetectObjects(
+std::vector<detect::LabeledDetection> HybridSegmenter::DetectObjects(
     const ColorImage& rgb) const {
   CheckArgument(detector_ != nullptr,
                 "hybrid segmenter: the object detector is off");
@@ -69,7 +69,7 @@ SemanticResult HybridSegmenter::SegmentSemantic(const ColorImage& rgb) {
 HybridResult HybridSegmenter::SegmentWhere(
     const ColorImage& rgb, const Image<uint8_t>& prompt_region,
     std::optional<SemanticResult> semantic,
-    const std::vector<track::LabeledDetection>* detections) {
+    const std::vector<detect::LabeledDetection>* detections) {
   CheckArgument(prompt_region.SameSize(rgb.width(), rgb.height()),
                 "hybrid segmenter: the prompt region is " +
                     std::to_string(prompt_region.width()) + "x" +
@@ -84,11 +84,11 @@ HybridResult HybridSegmenter::SegmentWhere(
 
 void HybridSegmenter::AddObjectEvidence(
     const ColorImage& rgb, const Image<uint8_t>* prompt_region,
-    const std::vector<track::LabeledDetection>* detections,
+    const std::vector<detect::LabeledDetection>* detections,
     HybridResult* result) {
   Stopwatch watch;
-  const std::vector<track::LabeledDetection> raw =
-      detections ? std::vector<track::LabeledDetection>{}
+  const std::vector<detect::LabeledDetection> raw =
+      detections ? std::vector<detect::LabeledDetection>{}
                  : detector_->Detect(rgb);
   result->detect_seconds = watch.Lap();
   std::vector<ObjectDetection> mapped = MapDetections(
@@ -121,7 +121,7 @@ void HybridSegmenter::AddObjectEvidence(
 HybridResult HybridSegmenter::Run(
     const ColorImage& rgb, const Image<uint8_t>* prompt_region,
     std::optional<SemanticResult> semantic,
-    const std::vector<track::LabeledDetection>* detections) {
+    const std::vector<detect::LabeledDetection>* detections) {
   // Below this the models see a few pixels blown up to their input size and
   // return noise; say so instead.
   constexpr int kMinSide = 16;

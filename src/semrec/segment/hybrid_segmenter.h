@@ -5,11 +5,11 @@
 #include <optional>
 #include <vector>
 
+#include "semrec/detect/yolox_detector.h"
+#include "semrec/segment/detector_votes.h"
 #include "semrec/segment/mask_generator.h"
-#include "semrec/segment/object_evidence.h"
 #include "semrec/segment/semantic_segmenter.h"
 #include "semrec/segment/vote.h"
-#include "semrec/track/yolox_detector.h"
 
 namespace semrec::segment {
 
@@ -63,7 +63,7 @@ class HybridSegmenter {
   /// is off.
   HybridResult Segment(
       const ColorImage& rgb,
-      const std::vector<track::LabeledDetection>* detections = nullptr);
+      const std::vector<detect::LabeledDetection>* detections = nullptr);
   /// The semantic branch alone (map guidance looks at its labels before it
   /// chooses where to prompt).
   SemanticResult SegmentSemantic(const ColorImage& rgb);
@@ -76,7 +76,7 @@ class HybridSegmenter {
   HybridResult SegmentWhere(
       const ColorImage& rgb, const Image<uint8_t>& prompt_region,
       std::optional<SemanticResult> semantic = std::nullopt,
-      const std::vector<track::LabeledDetection>* detections = nullptr);
+      const std::vector<detect::LabeledDetection>* detections = nullptr);
   const LabelSet& label_set() const { return semantic_->label_set(); }
 
   /// Whether the object detector is on, its registry name and options.
@@ -86,22 +86,22 @@ class HybridSegmenter {
   }
   /// The object detector's raw output (every class, at its score
   /// threshold). Throws InvalidArgument when it is off.
-  std::vector<track::LabeledDetection> DetectObjects(
+  std::vector<detect::LabeledDetection> DetectObjects(
       const ColorImage& rgb) const;
 
  private:
   HybridResult Run(const ColorImage& rgb, const Image<uint8_t>* prompt_region,
                    std::optional<SemanticResult> semantic,
-                   const std::vector<track::LabeledDetection>* detections);
-  void AddObjectEvidence(const ColorImage& rgb,
-                         const Image<uint8_t>* prompt_region,
-                         const std::vector<track::LabeledDetection>* detections,
-                         HybridResult* result);
+                   const std::vector<detect::LabeledDetection>* detections);
+  void AddObjectEvidence(
+      const ColorImage& rgb, const Image<uint8_t>* prompt_region,
+      const std::vector<detect::LabeledDetection>* detections,
+      HybridResult* result);
 
   HybridSegmenterOptions options_;
   std::unique_ptr<SemanticSegmenter> semantic_;
   std::unique_ptr<MaskGenerator> masks_;
-  std::unique_ptr<track::YoloxDetector> detector_;
+  std::unique_ptr<detect::YoloxDetector> detector_;
   DetectorClassMap class_map_;
 };
 

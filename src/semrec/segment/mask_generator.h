@@ -109,7 +109,7 @@ struct MaskGeneratorStats {
 class MaskGenerator {
  public:
   virtual ~MaskGenerator() = default;
-  /// "sam" / "sam2" backends (options.model.backend) or "reference" (the
+  /// SAM / SAM2 backends (options.model.backend) or the reference (the
   /// straightforward algorithm: every prompt, full-resolution masks, the
   /// decoder export unsplit).
   static std::unique_ptr<MaskGenerator> Create(

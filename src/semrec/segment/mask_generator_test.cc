@@ -174,8 +174,15 @@ TEST(MaskGenerator, OptionsAreChecked) {
   o.points_per_side = 0;
   EXPECT_THROW(o.Check(), InvalidArgument);
   o = {};
-  o.model.backend = "sam3";
-  EXPECT_THROW(o.Check(), InvalidArgument);
+  EXPECT_THROW(infer::ParseMaskBackend("sam3"), InvalidArgument);
+  EXPECT_EQ(infer::ParseMaskBackend("sam2"), infer::MaskBackend::kSam2);
+  using Kernel = PromptableOptions::Kernel;
+  for (const Kernel k :
+       {Kernel::kAuto, Kernel::kOn, Kernel::kBf16, Kernel::kOff}) {
+    EXPECT_EQ(PromptableOptions::ParseKernel(PromptableOptions::KernelName(k)),
+              k);
+  }
+  EXPECT_THROW(PromptableOptions::ParseKernel("fast"), InvalidArgument);
   o = {};
   o.box_nms_threshold = 0;
   EXPECT_THROW(o.Check(), InvalidArgument);

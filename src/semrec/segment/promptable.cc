@@ -79,10 +79,31 @@ LowResMask ComposeMaskBlocks(const LowResMask& preview,
   return m;
 }
 
+const char* PromptableOptions::KernelName(Kernel kernel) {
+  switch (kernel) {
+    case Kernel::kAuto:
+      return "auto";
+    case Kernel::kOn:
+      return "on";
+    case Kernel::kBf16:
+      return "bf16";
+    case Kernel::kOff:
+      return "off";
+  }
+  return "?";
+}
+
+PromptableOptions::Kernel PromptableOptions::ParseKernel(
+    const std::string& name) {
+  for (const Kernel k :
+       {Kernel::kAuto, Kernel::kOn, Kernel::kBf16, Kernel::kOff}) {
+    if (name == KernelName(k)) return k;
+  }
+  throw InvalidArgument("decoder kernel must be auto, on, bf16 or off, not '" +
+                        name + "'");
+}
+
 void PromptableOptions::Check() const {
-  CheckArgument(
-      backend == "sam" || backend == "sam2",
-      "mask model: backend must be sam or sam2, not '" + backend + "'");
   CheckArgument(!encoder.empty() && !decoder.empty(),
                 "mask model: encoder and decoder names are required");
   CheckArgument(decoder_threads >= 0,

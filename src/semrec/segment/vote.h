@@ -8,8 +8,8 @@
 #include <vector>
 
 #include "semrec/core/label_map.h"
+#include "semrec/segment/detector_votes.h"
 #include "semrec/segment/mask.h"
-#include "semrec/segment/object_evidence.h"
 
 namespace semrec::segment {
 

@@ -1,22 +1,17 @@
-// Boxes in pixels, the two association costs, and a constant-velocity Kalman
-// filter over a box (the state SORT uses: centre, area, aspect ratio).
+// A constant-velocity Kalman filter over a box in pixels (the state SORT
+// uses: centre, area, aspect ratio).
 #pragma once
 
 #include <Eigen/Core>
 
+#include "semrec/detect/box.h"
+
 namespace semrec::track {
 
-/// An axis-aligned box in pixels: left, top, width, height.
-struct Box {
-  double left = 0.0;
-  double top = 0.0;
-  double width = 0.0;
-  double height = 0.0;
-};
-
-/// Sum of the distances between corresponding corners (the paper's c_ij).
-double CornerDistance(const Box& a, const Box& b);
-double Iou(const Box& a, const Box& b);
+// The tracker works on the detector's boxes.
+using detect::Box;
+using detect::CornerDistance;
+using detect::Iou;
 
 /// Kalman filter with state (cx, cy, area, aspect, d cx, d cy, d area): the
 /// aspect ratio is taken as constant, the centre and the area move linearly.

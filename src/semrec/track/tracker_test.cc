@@ -12,14 +12,6 @@
 namespace semrec::track {
 namespace {
 
-TEST(Tracker, CornerDistanceIsTheSumOfFourCorners) {
-  // Shifted by (3, 4): every corner moves 5 px.
-  EXPECT_DOUBLE_EQ(CornerDistance({0, 0, 10, 20}, {3, 4, 10, 20}), 20.0);
-  // Grown by 2 px to the right: the two right corners move 2 px.
-  EXPECT_DOUBLE_EQ(CornerDistance({0, 0, 10, 20}, {0, 0, 12, 20}), 4.0);
-  EXPECT_NEAR(Iou({0, 0, 10, 10}, {5, 0, 10, 10}), 50.0 / 150.0, 1e-12);
-}
-
 TEST(Tracker, KeepsIdsOfMovingBoxesAndHandlesGaps) {
   auto frame = [](int f, bool show_b) {
     std::vector<Detection> d = {{{10.0 + 5 * f, 50, 40, 100}, 0.9, {}}};

@@ -1,4 +1,4 @@
-// The few dense float operations SAM's decoder kernel (sam_kernel.h) is made
+// The few dense float operations SAM's decoder kernel (sam/kernel.h) is made
 // of, each compiled for AVX-512, AVX2 + FMA and baseline x86-64 and chosen
 // once at run time for the CPU (the build targets baseline x86-64, where
 // they run several times slower). Row-major matrices with explicit strides.
@@ -9,7 +9,7 @@
 #include <string>
 #include <vector>
 
-namespace semrec::segment::kernel_ops {
+namespace semrec::sam::kernel_ops {
 
 /// The instruction set in use: "avx512", "avx2" or "baseline".
 const char* SimdLevel();
@@ -114,4 +114,4 @@ void GemmOntoBf16(int m, const float* a, int64_t a_row, int64_t a_col,
                   const PackedB& b, float* c, int64_t ldc, const float* init,
                   int64_t ld_init, const float* bias);
 
-}  // namespace semrec::segment::kernel_ops
+}  // namespace semrec::sam::kernel_ops

@@ -1,4 +1,4 @@
-#include "viewer_host.h"
+#include "semrec/viewer/viewer_host.h"
 
 #include <fcntl.h>
 #include <spawn.h>
@@ -18,7 +18,7 @@
 
 extern char** environ;
 
-namespace semrec::cli {
+namespace semrec::viewer {
 namespace fs = std::filesystem;
 namespace {
 
@@ -218,4 +218,4 @@ void RenderScene(const fs::path& scene, const fs::path& png,
   throw Error(filtered);  // the host's message names the scene
 }
 
-}  // namespace semrec::cli
+}  // namespace semrec::viewer

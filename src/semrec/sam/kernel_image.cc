@@ -3,11 +3,11 @@
 #include <algorithm>
 #include <cmath>
 
-#include "semrec/segment/sam_kernel.h"
-#include "semrec/segment/sam_kernel_internal.h"
-#include "semrec/segment/sam_kernel_ops.h"
+#include "semrec/sam/kernel.h"
+#include "semrec/sam/kernel_internal.h"
+#include "semrec/sam/kernel_ops.h"
 
-namespace semrec::segment {
+namespace semrec::sam {
 
 namespace ops = kernel_ops;
 using kernel_detail::Sum;
@@ -264,4 +264,4 @@ void SamKernel::SecondLayerTokens(const Output::SecondLayer& second,
                      norm_eps_, pe, keys_pe);
 }
 
-}  // namespace semrec::segment
+}  // namespace semrec::sam

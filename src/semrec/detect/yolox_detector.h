@@ -1,17 +1,18 @@
-// YOLOX object detection on ONNX (the tracker's person detector; any COCO
-// class can be kept).
+// YOLOX object detection on ONNX: the people tracker's person detector and the
+// segmenter's second source of class evidence (any COCO class can be kept).
 #pragma once
 
+#include <memory>
 #include <string>
 #include <vector>
 
 #include "semrec/core/image.h"
+#include "semrec/detect/box.h"
 #include "semrec/infer/image_input.h"
 #include "semrec/infer/model_registry.h"
 #include "semrec/infer/onnx_model.h"
-#include "semrec/track/tracker.h"
 
-namespace semrec::track {
+namespace semrec::detect {
 
 struct YoloxOptions {
   /// Registry name (role detector). The input size and pre-processing come
@@ -29,8 +30,11 @@ struct YoloxOptions {
   void Check() const;
 };
 
+/// One detected object: its box in image pixels, objectness x class score,
+/// and label id.
 struct LabeledDetection {
-  Detection detection;
+  Box box;
+  double score = 1.0;
   int class_id = 0;
 };
 
@@ -56,4 +60,4 @@ std::vector<LabeledDetection> DecodeYolox(
     const infer::Tensor& output, const infer::InputTransform& transform,
     const YoloxOptions& options, int label_offset);
 
-}  // namespace semrec::track
+}  // namespace semrec::detect

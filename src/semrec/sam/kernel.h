@@ -3,7 +3,7 @@
 // tokens (adds, layer norms, softmaxes: about a third of a prompt's time);
 // here each pass works on a block of 64 image tokens while it is in the
 // cache, the softmaxes over all tokens run online (a running maximum and
-// sum), and the products use the CPU's widest vectors (sam_kernel_ops.h).
+// sum), and the products use the CPU's widest vectors (sam/kernel_ops.h).
 // Same arithmetic as the export up to float rounding: the outputs are the
 // split prompt part's (docs/models.md), for the mask part to upscale.
 // Weights: scripts/export_sam_kernel.py (run by scripts/setup).
@@ -18,9 +18,9 @@
 #include <utility>
 #include <vector>
 
-#include "semrec/segment/sam_kernel_ops.h"
+#include "semrec/sam/kernel_ops.h"
 
-namespace semrec::segment {
+namespace semrec::sam {
 
 class SamKernel {
  public:
@@ -253,4 +253,4 @@ class SamKernel {
   mutable std::pair<std::pair<int, int>, std::vector<float>> pe_cache_;
 };
 
-}  // namespace semrec::segment
+}  // namespace semrec::sam

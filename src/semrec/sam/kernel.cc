@@ -1,4 +1,4 @@
-#include "semrec/segment/sam_kernel.h"
+#include "semrec/sam/kernel.h"
 
 #include <algorithm>
 #include <cmath>
@@ -9,10 +9,10 @@
 #include <tbb/parallel_invoke.h>
 
 #include "semrec/core/error.h"
-#include "semrec/segment/sam_kernel_internal.h"
-#include "semrec/segment/sam_kernel_ops.h"
+#include "semrec/sam/kernel_internal.h"
+#include "semrec/sam/kernel_ops.h"
 
-namespace semrec::segment {
+namespace semrec::sam {
 
 namespace ops = kernel_ops;
 using kernel_detail::Padded;
@@ -410,4 +410,4 @@ void SamKernel::DecodeBatch(const Image& im,
   Heads(im, requests, states, scratch);
 }
 
-}  // namespace semrec::segment
+}  // namespace semrec::sam

@@ -11,12 +11,12 @@
 #include <vector>
 
 #include "semrec/core/error.h"
-#include "semrec/segment/sam_kernel_ops.h"
+#include "semrec/sam/kernel_ops.h"
 
 #define SEMREC_BF16 \
   __attribute__((target("avx512f,avx512bw,avx512vl,avx512dq,avx512bf16")))
 
-namespace semrec::segment::kernel_ops {
+namespace semrec::sam::kernel_ops {
 namespace {
 
 // fp32 -> bf16, round to nearest even (as VCVTNEPS2BF16, except that it
@@ -266,4 +266,4 @@ void GemmOntoBf16(int m, const float* a, int64_t a_row, int64_t a_col,
                false);
 }
 
-}  // namespace semrec::segment::kernel_ops
+}  // namespace semrec::sam::kernel_ops

@@ -1,6 +1,6 @@
 // SceneFusion's evidence steps (FusionOptions::Merge::kEvidence): coverage of
 // the scene's objects by a frame's masks, class votes, merges the views argue
-// for, and the fragment clean-up at the end. See fuse/evidence.h.
+// for, and the fragment clean-up at the end. See fuse/mask_coverage.h.
 #include <algorithm>
 #include <map>
 

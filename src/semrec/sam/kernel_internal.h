@@ -4,10 +4,10 @@
 
 #include <vector>
 
-#include "semrec/segment/sam_kernel.h"
-#include "semrec/segment/sam_kernel_ops.h"
+#include "semrec/sam/kernel.h"
+#include "semrec/sam/kernel_ops.h"
 
-namespace semrec::segment {
+namespace semrec::sam {
 
 namespace kernel_detail {
 
@@ -75,4 +75,4 @@ struct SamKernel::SecondLayerWork {
   OnlineAttention online;
 };
 
-}  // namespace semrec::segment
+}  // namespace semrec::sam

@@ -1,4 +1,4 @@
-#include "semrec/fuse/evidence.h"
+#include "semrec/fuse/mask_coverage.h"
 
 #include <algorithm>
 #include <iterator>

@@ -1,4 +1,4 @@
-#include "report_html.h"
+#include "semrec/viewer/report_html.h"
 
 #include <algorithm>
 #include <vector>
@@ -10,9 +10,9 @@
 #include "semrec/core/error.h"
 #include "semrec/core/file_util.h"
 #include "semrec/pipeline/run_report.h"
-#include "viewer_host.h"
+#include "semrec/viewer/viewer_host.h"
 
-namespace semrec::cli {
+namespace semrec::viewer {
 namespace fs = std::filesystem;
 namespace {
 
@@ -300,4 +300,4 @@ HtmlReportResult WriteHtmlReport(const fs::path& out_dir, bool pictures) {
   return result;
 }
 
-}  // namespace semrec::cli
+}  // namespace semrec::viewer

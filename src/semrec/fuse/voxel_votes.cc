@@ -1,4 +1,4 @@
-#include "semrec/fuse/voxel_evidence.h"
+#include "semrec/fuse/voxel_votes.h"
 
 #include <algorithm>
 #include <cmath>

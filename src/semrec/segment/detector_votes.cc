@@ -1,4 +1,4 @@
-#include "semrec/segment/object_evidence.h"
+#include "semrec/segment/detector_votes.h"
 
 #include <algorithm>
 #include <cmath>
@@ -83,7 +83,7 @@ std::optional<uint16_t> DetectorClassMap::Map(int detector_class) const {
   return it->second;
 }
 
-Box PromptBox(const track::Box& b, int width, int height) {
+Box PromptBox(const detect::Box& b, int width, int height) {
   const auto clip = [](double v, int hi) {
     return std::clamp(static_cast<int>(std::lround(v)), 0, hi);
   };
@@ -92,19 +92,19 @@ Box PromptBox(const track::Box& b, int width, int height) {
 }
 
 std::vector<ObjectDetection> MapDetections(
-    const std::vector<track::LabeledDetection>& detections,
+    const std::vector<detect::LabeledDetection>& detections,
     const DetectorClassMap& class_map, float min_score, int width, int height) {
   std::vector<ObjectDetection> out;
-  for (const track::LabeledDetection& d : detections) {
-    if (d.detection.score < min_score) continue;
+  for (const detect::LabeledDetection& d : detections) {
+    if (d.score < min_score) continue;
     const auto id = class_map.Map(d.class_id);
     if (!id) continue;
     ObjectDetection o;
-    o.box = PromptBox(d.detection.box, width, height);
+    o.box = PromptBox(d.box, width, height);
     if (o.box.area() == 0) continue;
     o.class_id = *id;
     o.detector_class = d.class_id;
-    o.score = static_cast<float>(d.detection.score);
+    o.score = static_cast<float>(d.score);
     out.push_back(o);
   }
   return out;

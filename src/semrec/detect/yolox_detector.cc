@@ -1,4 +1,4 @@
-#include "semrec/track/yolox_detector.h"
+#include "semrec/detect/yolox_detector.h"
 
 #include <algorithm>
 #include <cmath>
@@ -8,7 +8,7 @@
 
 #include "semrec/core/error.h"
 
-namespace semrec::track {
+namespace semrec::detect {
 
 void YoloxOptions::Check() const {
   CheckArgument(!model.empty(), "detector: model name is empty");
@@ -59,9 +59,9 @@ std::vector<LabeledDetection> DecodeYolox(const infer::Tensor& output,
         const double w = std::exp(p[2]) * s, h = std::exp(p[3]) * s;
         LabeledDetection d;
         d.class_id = id;
-        d.detection.score = score;
-        d.detection.box = {(cx - w / 2) / t.scale_x, (cy - h / 2) / t.scale_y,
-                           w / t.scale_x, h / t.scale_y};
+        d.score = score;
+        d.box = {(cx - w / 2) / t.scale_x, (cy - h / 2) / t.scale_y,
+                 w / t.scale_x, h / t.scale_y};
         candidates.push_back(d);
       }
     }
@@ -69,14 +69,14 @@ std::vector<LabeledDetection> DecodeYolox(const infer::Tensor& output,
   (void)num_classes;
   std::stable_sort(candidates.begin(), candidates.end(),
                    [](const LabeledDetection& x, const LabeledDetection& y) {
-                     return x.detection.score > y.detection.score;
+                     return x.score > y.score;
                    });
   std::vector<LabeledDetection> kept;
   for (const auto& c : candidates) {
     const bool suppressed =
         std::any_of(kept.begin(), kept.end(), [&](const LabeledDetection& k) {
           return k.class_id == c.class_id &&
-                 Iou(k.detection.box, c.detection.box) > options.nms_iou;
+                 Iou(k.box, c.box) > options.nms_iou;
         });
     if (!suppressed) kept.push_back(c);
   }
@@ -88,9 +88,10 @@ YoloxDetector::YoloxDetector(const infer::ModelRegistry& registry,
     : options_(options) {
   options_.Check();
   const infer::ModelEntry& entry = registry.Get(options_.model);
-  CheckArgument(entry.role == "detector" && entry.input && entry.output,
-                "model '" + entry.name + "' is not a detector (role '" +
-                    entry.role + "')");
+  CheckArgument(
+      entry.role == infer::ModelRole::kDetector && entry.input && entry.output,
+      "model '" + entry.name + "' is not a detector (role '" +
+          infer::ModelRoleName(entry.role) + "')");
   model_ = std::make_unique<infer::OnnxModel>(entry, options_.runtime);
 }
 
@@ -108,4 +109,4 @@ std::vector<LabeledDetection> YoloxDetector::Detect(
   return DecodeYolox(it->second, transform, options_, e.label_offset);
 }
 
-}  // namespace semrec::track
+}  // namespace semrec::detect

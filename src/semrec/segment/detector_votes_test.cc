@@ -2,7 +2,7 @@
 // masks, the vote's rule, and the hybrid segmenter end to end on tiny models
 // (tests/models/make_tiny_models.py: a detector that always reports one
 // chair).
-#include "semrec/segment/object_evidence.h"
+#include "semrec/segment/detector_votes.h"
 
 #include <nlohmann/json.hpp>
 
@@ -80,11 +80,11 @@ TEST(ObjectEvidence, MapDetectionsKeepsMappedClassesAboveTheScoreClipped) {
   const LabelSet top31 = io::LoadLabelSet("ade20k-top31");
   const DetectorClassMap map = DetectorClassMap::Load(
       DetectorClassMap::DefaultPath("coco80", "ade20k-top31"), coco, top31);
-  const auto det = [&](const char* name, double score, track::Box box) {
-    track::LabeledDetection d;
+  const auto det = [&](const char* name, double score, detect::Box box) {
+    detect::LabeledDetection d;
     d.class_id = *coco.FindByName(name);
-    d.detection.score = score;
-    d.detection.box = box;
+    d.score = score;
+    d.box = box;
     return d;
   };
   const auto mapped = MapDetections(
@@ -340,7 +340,7 @@ TEST_F(TinyHybrid, ADetectedChairOverridesTheWallTheClassifierSaw) {
   EXPECT_EQ(ade.Get(r.vote.semantic(200, 200)).name, "floor");
   // Given detections replace the detector (shared with people tracking):
   // none given, none used.
-  const std::vector<track::LabeledDetection> none;
+  const std::vector<detect::LabeledDetection> none;
   EXPECT_EQ(
       ade.Get(segmenter.Segment(Scene(), &none).vote.semantic(80, 100)).name,
       "wall");

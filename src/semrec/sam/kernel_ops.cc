@@ -1,4 +1,4 @@
-#include "semrec/segment/sam_kernel_ops.h"
+#include "semrec/sam/kernel_ops.h"
 
 #include <algorithm>
 #include <atomic>
@@ -8,9 +8,9 @@
 #include <cstring>
 
 #include "semrec/core/error.h"
-#include "semrec/segment/sam_kernel_simd.h"
+#include "semrec/sam/kernel_simd.h"
 
-namespace semrec::segment::kernel_ops {
+namespace semrec::sam::kernel_ops {
 namespace simd {
 namespace {
 
@@ -368,4 +368,4 @@ void HeadColumnsProduct(int tokens, int heads, int dh, int k, const float* a,
   Current().head_columns(tokens, heads, dh, k, a, lda, w, ldw, out, ldo);
 }
 
-}  // namespace semrec::segment::kernel_ops
+}  // namespace semrec::sam::kernel_ops

@@ -14,10 +14,10 @@
 #include <vector>
 
 #include "semrec/core/label_map.h"
+#include "semrec/detect/yolox_detector.h"
 #include "semrec/infer/onnx_model.h"
 #include "semrec/segment/mask.h"
 #include "semrec/segment/promptable.h"
-#include "semrec/track/yolox_detector.h"
 
 namespace semrec::segment {
 
@@ -95,12 +95,12 @@ class DetectorClassMap {
 
 /// A detector's box (pixels, fractional) rounded and clipped to a
 /// width x height image, as a box prompt.
-Box PromptBox(const track::Box& box, int width, int height);
+Box PromptBox(const detect::Box& box, int width, int height);
 
 /// Detections of mapped classes with score >= min_score, boxes clipped to
 /// the image (empty boxes dropped), in the given order.
 std::vector<ObjectDetection> MapDetections(
-    const std::vector<track::LabeledDetection>& detections,
+    const std::vector<detect::LabeledDetection>& detections,
     const DetectorClassMap& class_map, float min_score, int width, int height);
 
 /// Box-prompted masks of `detections` on the image `model` holds, one per

@@ -5,10 +5,10 @@
 #include <fmt/format.h>
 
 #include "semrec/core/error.h"
-#include "semrec/segment/sam_kernel.h"
-#include "semrec/segment/sam_kernel_ops.h"
+#include "semrec/sam/kernel.h"
+#include "semrec/sam/kernel_ops.h"
 
-namespace semrec::segment {
+namespace semrec::sam {
 
 namespace ops = kernel_ops;
 
@@ -92,4 +92,4 @@ void SamKernel::UpscaleBlocks(const Image& im, const Output& decoded,
   }
 }
 
-}  // namespace semrec::segment
+}  // namespace semrec::sam

@@ -1,4 +1,4 @@
-// Runs the browser viewer (apps/semrec/viewer): Node serves the page, OpenUSD
+// Runs the browser viewer (viewer/page): Node serves the page, OpenUSD
 // compiled to WebAssembly reads the scene in the browser, and headless Chromium
 // takes screenshots. Used by `semrec view` and by `semrec run`'s report.
 #pragma once
@@ -6,7 +6,7 @@
 #include <optional>
 #include <string>
 
-namespace semrec::cli {
+namespace semrec::viewer {
 
 struct ViewerOptions {
   /// Local port to serve on; 0 picks a free one.
@@ -49,4 +49,4 @@ void RenderScene(const std::filesystem::path& scene,
                  const std::filesystem::path& probe_json,
                  const ViewerOptions& options);
 
-}  // namespace semrec::cli
+}  // namespace semrec::viewer

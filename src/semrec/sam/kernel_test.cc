@@ -14,11 +14,11 @@
 #include <vector>
 
 #include "semrec/core/error.h"
-#include "semrec/segment/sam_kernel.h"
-#include "semrec/segment/sam_kernel_ops.h"
+#include "semrec/sam/kernel.h"
+#include "semrec/sam/kernel_ops.h"
 #include "semrec/testing/test_util.h"
 
-namespace semrec::segment {
+namespace semrec::sam {
 namespace {
 
 namespace ops = kernel_ops;
@@ -410,4 +410,4 @@ TEST(SamKernel, WeightFilesThatAreNotTheKernelsAreRefusedByName) {
 }
 
 }  // namespace
-}  // namespace semrec::segment
+}  // namespace semrec::sam

@@ -6,10 +6,10 @@
 #include <nlohmann/json.hpp>
 
 #include "semrec/core/error.h"
-#include "semrec/segment/sam_kernel.h"
-#include "semrec/segment/sam_kernel_ops.h"
+#include "semrec/sam/kernel.h"
+#include "semrec/sam/kernel_ops.h"
 
-namespace semrec::segment {
+namespace semrec::sam {
 
 namespace ops = kernel_ops;
 
@@ -188,4 +188,4 @@ SamKernel::SamKernel(const std::filesystem::path& path, Precision precision)
   }
 }
 
-}  // namespace semrec::segment
+}  // namespace semrec::sam

@@ -6,7 +6,7 @@
 #include <filesystem>
 #include <string>
 
-namespace semrec::cli {
+namespace semrec::viewer {
 
 struct HtmlReportResult {
   /// The pictures written (report/scene_*.png); 0 when the viewer is
@@ -23,4 +23,4 @@ struct HtmlReportResult {
 HtmlReportResult WriteHtmlReport(const std::filesystem::path& out_dir,
                                  bool pictures);
 
-}  // namespace semrec::cli
+}  // namespace semrec::viewer

@@ -1,5 +1,5 @@
 // The decoder kernel's vector code: templates over the vector width for
-// sam_kernel_ops.cc only (not part of the library's interface).
+// kernel_ops.cc only (not part of the library's interface).
 #pragma once
 
 #include <algorithm>
@@ -14,7 +14,7 @@
 // without it).
 #define SEMREC_INLINE [[gnu::always_inline]] inline
 
-namespace semrec::segment::kernel_ops::simd {
+namespace semrec::sam::kernel_ops::simd {
 
 template <int W>
 struct Lanes;
@@ -446,4 +446,4 @@ SEMREC_INLINE bool OnlineSoftmaxColumnsT(float* s, int rows, int cols,
 }
 
 // The operations of one instruction set.
-}  // namespace semrec::segment::kernel_ops::simd
+}  // namespace semrec::sam::kernel_ops::simd

@@ -1,4 +1,4 @@
-#include "semrec/track/yolox_detector.h"
+#include "semrec/detect/yolox_detector.h"
 
 #include <cmath>
 
@@ -8,7 +8,7 @@
 #include "semrec/io/image_io.h"
 #include "semrec/testing/test_util.h"
 
-namespace semrec::track {
+namespace semrec::detect {
 namespace {
 
 infer::InputTransform Letterbox416(int w, int h) {
@@ -57,17 +57,17 @@ TEST(Yolox, DecodesGridRelativeBoxesThroughTheLetterbox) {
   const auto dets = DecodeYolox(raw.t, Letterbox416(832, 624), options, 1);
   ASSERT_EQ(dets.size(), 1u);
   EXPECT_EQ(dets[0].class_id, 1);
-  EXPECT_NEAR(dets[0].detection.score, 0.72, 1e-6);
-  EXPECT_NEAR(dets[0].detection.box.left, (84 - 16) * 2.0, 1e-3);
-  EXPECT_NEAR(dets[0].detection.box.top, (164 - 32) * 2.0, 1e-3);
-  EXPECT_NEAR(dets[0].detection.box.width, 64.0, 1e-3);
-  EXPECT_NEAR(dets[0].detection.box.height, 128.0, 1e-3);
+  EXPECT_NEAR(dets[0].score, 0.72, 1e-6);
+  EXPECT_NEAR(dets[0].box.left, (84 - 16) * 2.0, 1e-3);
+  EXPECT_NEAR(dets[0].box.top, (164 - 32) * 2.0, 1e-3);
+  EXPECT_NEAR(dets[0].box.width, 64.0, 1e-3);
+  EXPECT_NEAR(dets[0].box.height, 128.0, 1e-3);
   // All classes: the car appears too (COCO id 3), first by score.
   options.classes.clear();
   const auto all = DecodeYolox(raw.t, Letterbox416(832, 624), options, 1);
   ASSERT_EQ(all.size(), 2u);
   EXPECT_EQ(all[0].class_id, 3);
-  EXPECT_NEAR(all[0].detection.box.left, ((3 + 0.5) * 32 - 32) * 2.0, 1e-3);
+  EXPECT_NEAR(all[0].box.left, ((3 + 0.5) * 32 - 32) * 2.0, 1e-3);
 }
 
 TEST(Yolox, RejectsOutputsThatDoNotMatchTheInput) {
@@ -95,7 +95,7 @@ TEST(Yolox, RealModelFindsVehiclesInAStreetAndNothingInABlankImage) {
   ASSERT_FALSE(dets.empty());
   int vehicles = 0;
   for (const auto& d : dets) {
-    const Box& b = d.detection.box;
+    const Box& b = d.box;
     EXPECT_GT(b.width, 0);
     EXPECT_GT(b.left + b.width, 0);
     EXPECT_LT(b.left, street.width());
@@ -107,4 +107,4 @@ TEST(Yolox, RealModelFindsVehiclesInAStreetAndNothingInABlankImage) {
 }
 
 }  // namespace
-}  // namespace semrec::track
+}  // namespace semrec::detect

@@ -1,0 +1,100 @@
+#include "semrec/tasks/run_task.h"
+
+#include <gtest/gtest.h>
+
+#include "semrec/core/error.h"
+#include "semrec/core/file_util.h"
+#include "semrec/testing/small_scene.h"
+#include "semrec/testing/test_util.h"
+
+namespace semrec::tasks {
+namespace {
+
+using testing::QuietProgress;
+
+// The task is the library's run: from given labels it writes what
+// RunSequence writes (the same scene, byte for byte) and a report.html
+// listing every object of report.json.
+TEST(RunTask, GivenLabelsRunAsRunSequenceWithItsReport) {
+  testing::TempDir dir;
+  synth::WriteSyntheticSequence(testing::SmallScene("six-objects", 6),
+                                dir / "seq", QuietProgress());
+  RunTaskOptions task;
+  task.sequence = dir / "seq";
+  task.out = dir / "task";
+  task.labels = "gt";
+  task.run.config_text = "labels: gt\n";
+  task.report_pictures = false;
+  const RunTaskResult result = RunTask(task, QuietProgress());
+
+  pipeline::RunOptions direct = task.run;
+  direct.pipeline.labels = pipeline::ScenePipelineOptions::Labels::kGiven;
+  direct.given_labels = "gt";
+  const pipeline::RunResult reference =
+      pipeline::RunSequence(io::SequenceReader::Open(dir / "seq"), nullptr,
+                            direct, dir / "direct", QuietProgress());
+  EXPECT_EQ(ReadTextFile(dir / "task" / "static.usda"),
+            ReadTextFile(dir / "direct" / "static.usda"));
+  EXPECT_EQ(result.run.report.objects, reference.report.objects);
+  EXPECT_GE(result.run.report.objects, 5u);
+
+  ASSERT_TRUE(result.report.has_value());
+  EXPECT_EQ(result.report->pictures, 0);
+  const std::string html = ReadTextFile(dir / "task" / "report.html");
+  size_t rows = 0;
+  for (size_t at = html.find("<tr><td class=\"num\">"); at != std::string::npos;
+       at = html.find("<tr><td class=\"num\">", at + 1)) {
+    ++rows;
+  }
+  EXPECT_EQ(rows, result.run.report.scene.size());
+}
+
+TEST(RunTask, ModelChoiceSetsTheSegmenterAndThePeopleTracker) {
+  ModelChoice choice;
+  choice.masks = "none";
+  choice.object_detector = "yolox_nano";
+  // The detector's boxes prompt masks: without masks it cannot run.
+  EXPECT_THROW(choice.Check(), InvalidArgument);
+  choice.object_detector.clear();
+  choice.semantic = "deeplab_v3";
+  choice.people_score = 0.5f;
+  choice.runtime.intra_op_threads = 1;
+  pipeline::ScenePipelineOptions pipeline;
+  pipeline.labels = pipeline::ScenePipelineOptions::Labels::kGiven;
+  ApplyModelChoice(infer::ModelRegistry(), choice, &pipeline);
+  EXPECT_EQ(pipeline.labels, pipeline::ScenePipelineOptions::Labels::kModels);
+  EXPECT_EQ(pipeline.segmenter.semantic.model, "deeplab_v3");
+  EXPECT_EQ(pipeline.segmenter.semantic.runtime.intra_op_threads, 1);
+  EXPECT_FALSE(pipeline.segmenter.use_masks);
+  EXPECT_FALSE(pipeline.segmenter.objects.enabled());
+  EXPECT_FALSE(pipeline.people.masks);
+  EXPECT_FLOAT_EQ(pipeline.people.detector.score_threshold, 0.5f);
+  EXPECT_EQ(pipeline.people.detector.runtime.intra_op_threads, 1);
+}
+
+TEST(RunTask, BadOptionsAndInputsAreRefusedWithTheirReason) {
+  testing::TempDir dir;
+  RunTaskOptions task;
+  task.sequence = dir / "missing";
+  task.out = dir / "out";
+  task.labels = "gt";
+  task.run.pipeline.map_guidance = true;
+  try {
+    RunTask(task);
+    ADD_FAILURE() << "map guidance without the models ran";
+  } catch (const InvalidArgument& e) {
+    EXPECT_NE(std::string(e.what()).find("map guidance"), std::string::npos)
+        << e.what();
+  }
+  task.run.pipeline.map_guidance = false;
+  try {
+    RunTask(task);
+    ADD_FAILURE() << "a missing recording ran";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("missing"), std::string::npos)
+        << e.what();
+  }
+}
+
+}  // namespace
+}  // namespace semrec::tasks
