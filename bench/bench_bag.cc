@@ -13,6 +13,7 @@
 
 #include "bench_util.h"
 #include "semrec/core/error.h"
+#include "semrec/core/stopwatch.h"
 #include "semrec/io/sequence_reader.h"
 #include "semrec/io/test_bags.h"
 #include "semrec/testing/test_util.h"
@@ -36,7 +37,7 @@ std::pair<long, long> RssKb() {
 
 // Opens and reads every frame; returns seconds.
 double ReadAll(const fs::path& path, size_t* frames) {
-  const auto t = bench::Clock::now();
+  const Stopwatch t;
   const io::SequenceReader reader = io::SequenceReader::Open(path);
   double checksum = 0.0;
   for (size_t i = 0; i < reader.size(); ++i) {
@@ -45,7 +46,7 @@ double ReadAll(const fs::path& path, size_t* frames) {
   }
   *frames = reader.size();
   if (checksum < 0) std::printf("%f\n", checksum);  // keep the reads
-  return bench::Since(t);
+  return t.Elapsed();
 }
 
 std::vector<io::testing::BagFrame> Frames(const io::SequenceReader& r,

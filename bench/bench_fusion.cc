@@ -14,12 +14,12 @@
 // 4. With a sequence and a label folder (`semrec segment` output, or any
 //    folder `semrec fuse --labels` reads): the table of 1 on real frames,
 //    using the frames that have a label file.
-#include <chrono>
 #include <cstdio>
 #include <filesystem>
 #include <map>
 #include <set>
 
+#include "semrec/core/stopwatch.h"
 #include "semrec/eval/c2c.h"
 #include "semrec/fuse/fusion.h"
 #include "semrec/fuse/segments.h"
@@ -87,14 +87,12 @@ Run Fuse(const std::vector<std::vector<fuse::FrameSegment>>& input, bool gating,
   options.method = method;
   fuse::SceneFusion fusion(options);
   Run run;
-  const auto start = std::chrono::steady_clock::now();
+  const Stopwatch clock;
   for (size_t i = 0; i < std::min(frames, input.size()); ++i) {
     run.stats.push_back(fusion.Integrate(input[i], i));
     run.compare_seconds += run.stats.back().compare_seconds;
   }
-  run.seconds =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - start)
-          .count();
+  run.seconds = clock.Elapsed();
   run.segments = fusion.segments();
   return run;
 }
@@ -218,7 +216,8 @@ int main(int argc, char** argv) {
     std::printf("\n== office, %d frames: fast vs brute force (labels on) ==\n",
                 office_frames);
     const Prepared office = Prepare("office", office_frames, tmp / "office");
-    // Median of 3 runs each: single runs on a shared 2-core machine vary by 20%.
+    // Median of 3 runs each: single runs on a shared 2-core machine vary by
+    // 20%.
     auto median_run = [&](Method method) {
       std::vector<Run> runs;
       for (int r = 0; r < 3; ++r) {

@@ -3,7 +3,6 @@
 // volume on the same frames, same voxel size, in one run (goal: <= 1.2x;
 // the measured ratio is in docs/results.md).
 //   bench_mesh [frames=30]   (synthetic six-objects + office; Redwood if found)
-#include <chrono>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -14,6 +13,7 @@
 
 #include "semrec/core/file_util.h"
 #include "semrec/core/sample_data.h"
+#include "semrec/core/stopwatch.h"
 #include "semrec/fuse/segments.h"
 #include "semrec/io/sequence_reader.h"
 #include "semrec/mesh/object_mesher.h"
@@ -22,13 +22,8 @@
 
 namespace fs = std::filesystem;
 using namespace semrec;
-using Clock = std::chrono::steady_clock;
 
 namespace {
-
-double Since(Clock::time_point t) {
-  return std::chrono::duration<double>(Clock::now() - t).count();
-}
 
 struct Input {
   std::string name;
@@ -68,12 +63,12 @@ void Run(const Input& in) {
   const mesh::ObjectMeshingOptions options;
   // Whole frame, the reference.
   mesh::TsdfIntegrator whole(options.tsdf);
-  auto start = Clock::now();
+  Stopwatch start;
   for (const Frame& f : in.frames) whole.Integrate(f);
-  const double whole_s = Since(start);
-  start = Clock::now();
+  const double whole_s = start.Elapsed();
+  start.Lap();
   const size_t whole_vertices = whole.ExtractMesh()->vertices_.size();
-  const double whole_mesh_s = Since(start);
+  const double whole_mesh_s = start.Elapsed();
   // Per object.
   mesh::ObjectMesher mesher(options);
   double objects_s = 0;
@@ -84,9 +79,9 @@ void Run(const Input& in) {
         if (in.labels[i](u, v) != 0) ids.insert(in.labels[i](u, v));
     std::vector<std::pair<uint16_t, uint32_t>> mapping;
     for (uint16_t id : ids) mapping.emplace_back(id, id);
-    start = Clock::now();
+    start.Lap();
     mesher.Integrate(in.frames[i], in.labels[i], mapping);
-    objects_s += Since(start);
+    objects_s += start.Elapsed();
   }
   const size_t n = in.frames.size();
   std::printf("%-20s %6zu %8zu %12.1f %12.1f %8.2fx %10.1f %10zu\n",

@@ -8,7 +8,6 @@
 //   bench_prompts [image ...]   (default: 7-Scenes chess, Redwood, 3DMatch)
 // Needs the real models (scripts/setup).
 #include <algorithm>
-#include <chrono>
 #include <cstdio>
 #include <filesystem>
 #include <functional>
@@ -17,14 +16,13 @@
 #include <vector>
 
 #include "bench_util.h"
+#include "semrec/core/stopwatch.h"
 #include "semrec/io/image_io.h"
 #include "semrec/sam/kernel_ops.h"
 #include "semrec/segment/hybrid_segmenter.h"
 
 namespace fs = std::filesystem;
 using namespace semrec;
-using bench::Clock;
-using bench::Since;
 
 namespace {
 
@@ -162,9 +160,9 @@ int Run(int argc, char** argv) {
     segment::HybridResult first;
     for (size_t s = 0; s < steps.size(); ++s) {
       segment::HybridSegmenter segmenter(registry, options[s]);
-      const auto t = Clock::now();
+      const Stopwatch t;
       segment::HybridResult r = segmenter.Segment(rgb);
-      const double seconds = Since(t);
+      const double seconds = t.Elapsed();
       total[s].seconds += seconds;
       total[s].prompts += r.mask_stats.prompts_decoded;
       total[s].encode_seconds += r.mask_stats.encode_seconds;

@@ -6,7 +6,6 @@
 // timings on the first image only).
 // Needs the real models (scripts/setup).
 #include <algorithm>
-#include <chrono>
 #include <cstdio>
 #include <filesystem>
 #include <string>
@@ -15,6 +14,7 @@
 #include <fmt/format.h>
 
 #include "semrec/core/random.h"
+#include "semrec/core/stopwatch.h"
 #include "semrec/io/image_io.h"
 #include "semrec/segment/mask_generator.h"
 #include "semrec/segment/promptable.h"
@@ -23,13 +23,8 @@
 
 namespace fs = std::filesystem;
 using namespace semrec;
-using Clock = std::chrono::steady_clock;
 
 namespace {
-
-double Since(Clock::time_point t) {
-  return std::chrono::duration<double>(Clock::now() - t).count();
-}
 
 struct Agreement {
   double mean_best_iou = 0;  // reference masks' best IoU with a fast mask
@@ -88,10 +83,10 @@ void BenchVote() {
   }
   segment::Vote(semantic, masks);  // warm-up
   const int runs = 20;
-  const auto t = Clock::now();
+  const Stopwatch t;
   for (int i = 0; i < runs; ++i) segment::Vote(semantic, masks);
   std::printf("vote: 640x480, 200 masks: %.2f ms per image (target < 20 ms)\n",
-              1000 * Since(t) / runs);
+              1000 * t.Elapsed() / runs);
 }
 
 // One decoder call per prompt on one thread: the SAM export as is vs the
@@ -104,12 +99,12 @@ void BenchDecoder(const infer::ModelRegistry& registry, const ColorImage& rgb) {
   auto whole = segment::PromptableSegmenter::Create(registry, options);
   whole->SetImage(rgb);  // warm-up: first runs allocate
   split->SetImage(rgb);
-  auto t = Clock::now();
+  Stopwatch t;
   whole->SetImage(rgb);
-  const double whole_image_s = Since(t);
-  t = Clock::now();
+  const double whole_image_s = t.Elapsed();
+  t.Lap();
   split->SetImage(rgb);
-  const double split_image_s = Since(t);
+  const double split_image_s = t.Elapsed();
   double whole_s = 0, split_s = 0, stopped_s = 0;
   segment::MaskFilter reject_all;  // every prompt stops on its preview
   reject_all.min_predicted_iou = 2.0f;
@@ -120,15 +115,15 @@ void BenchDecoder(const infer::ModelRegistry& registry, const ColorImage& rgb) {
     prompt.points = {{(static_cast<float>(column) + 0.5f) * rgb.width() / 8,
                       (static_cast<float>(row) + 0.5f) * rgb.height() / 6}};
     prompt.labels = {1};
-    t = Clock::now();
+    t.Lap();
     whole->Decode(prompt);
-    whole_s += Since(t);
-    t = Clock::now();
+    whole_s += t.Elapsed();
+    t.Lap();
     split->Decode(prompt);
-    split_s += Since(t);
-    t = Clock::now();
+    split_s += t.Elapsed();
+    t.Lap();
     split->DecodeUnlessRejected(prompt, reject_all);
-    stopped_s += Since(t);
+    stopped_s += t.Elapsed();
   }
   std::printf(
       "decoder, 1 thread, %d prompts: export %.1f ms/prompt, split %.1f "
@@ -144,9 +139,9 @@ template <typename F>
 void PrintMedianMs(bool is_first, double* first, F f) {
   std::vector<double> times;
   for (int r = 0; r < 5; ++r) {
-    const auto t = Clock::now();
+    const Stopwatch t;
     f();
-    times.push_back(Since(t));
+    times.push_back(t.Elapsed());
   }
   std::nth_element(times.begin(), times.begin() + 2, times.end());
   const double ms = 1000.0 * times[2];
@@ -270,21 +265,21 @@ int Run(int argc, char** argv) {
               "default (embedding test 0.8)");
   for (const fs::path& path : images) {
     const ColorImage rgb = io::ReadColorImage(path);
-    auto t = Clock::now();
+    Stopwatch t;
     semantic.Segment(rgb);
-    const double semantic_s = Since(t);
-    t = Clock::now();
+    const double semantic_s = t.Elapsed();
+    t.Lap();
     const auto ref = reference->Generate(rgb);
-    const double ref_s = Since(t);
-    t = Clock::now();
+    const double ref_s = t.Elapsed();
+    t.Lap();
     const auto low = low_res->Generate(rgb);
-    const double low_s = Since(t);
-    t = Clock::now();
+    const double low_s = t.Elapsed();
+    t.Lap();
     const auto skipped = blind->Generate(rgb);
-    const double blind_s = Since(t);
-    t = Clock::now();
+    const double blind_s = t.Elapsed();
+    t.Lap();
     const auto fst = fast->Generate(rgb);
-    const double fast_s = Since(t);
+    const double fast_s = t.Elapsed();
     std::printf(
         "%-24s %8.2fs | %6.1f s %5d %4zu | %6.1f s %5d %4zu (%.1fx) | "
         "%6.1f s %5d %4zu (%.1fx)\n",

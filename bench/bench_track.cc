@@ -4,7 +4,6 @@
 // process; then MOTA / IDF1 / ID switches of every configuration on
 // TUD-Campus public detections when ../shared/data is there.
 //   bench_track [detections_per_frame=50] [frames=2000]
-#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -17,6 +16,7 @@
 
 #include "semrec/core/random.h"
 #include "semrec/core/sample_data.h"
+#include "semrec/core/stopwatch.h"
 #include "semrec/eval/mot.h"
 #include "semrec/io/mot_io.h"
 #include "semrec/track/sequence.h"
@@ -24,7 +24,6 @@
 
 namespace fs = std::filesystem;
 using namespace semrec;
-using Clock = std::chrono::steady_clock;
 
 namespace {
 
@@ -135,15 +134,12 @@ int main(int argc, char** argv) {
         for (auto& d : frame) d.embedding.clear();
     }
     int max_id = 0;
-    const auto start = Clock::now();
+    const Stopwatch start;
     for (const auto& frame : input) {
       for (const auto& t : tracker.Update(frame))
         max_id = std::max(max_id, t.track_id);
     }
-    const double us =
-        std::chrono::duration<double, std::micro>(Clock::now() - start)
-            .count() /
-        frames;
+    const double us = 1e6 * start.Elapsed() / frames;
     if (reference_us == 0) reference_us = us;
     std::printf("%-28s %12.1f %9.2fx %8d\n", config.name.c_str(), us,
                 us / reference_us, max_id);

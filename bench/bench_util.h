@@ -2,7 +2,6 @@
 #pragma once
 
 #include <algorithm>
-#include <chrono>
 #include <cstdint>
 #include <cstdlib>
 #include <filesystem>
@@ -13,15 +12,9 @@
 #include "semrec/core/label_map.h"
 #include "semrec/core/progress.h"
 #include "semrec/core/sample_data.h"
+#include "semrec/core/stopwatch.h"
 
 namespace semrec::bench {
-
-using Clock = std::chrono::steady_clock;
-
-/// Seconds since `t`.
-inline double Since(Clock::time_point t) {
-  return std::chrono::duration<double>(Clock::now() - t).count();
-}
 
 /// No progress output (the benchmarks print their own tables).
 inline ProgressOptions Quiet() {
