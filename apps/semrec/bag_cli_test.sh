@@ -37,13 +37,13 @@ done
 for bag in zstd lz4.mcap sqlite; do
   "$SEMREC" mesh "$tmp/$bag" --labels "$labels" --out "$tmp/out_$bag" --no-ply >"$tmp/$bag.log" 2>&1 ||
     fail "mesh on the $bag bag failed: $(tail -3 "$tmp/$bag.log")"
-  python3 - "$tmp/folder_out/summary.json" "$tmp/out_$bag/summary.json" <<'PY' || fail "the $bag bag gives another scene"
+  python3 - "$tmp/folder_out/report.json" "$tmp/out_$bag/report.json" <<'PY' || fail "the $bag bag gives another scene"
 import json, sys
 a, b = (json.load(open(p)) for p in sys.argv[1:])
 def objs(j):
     # The same depth, poses to 1e-9 and labels: the same fused points and meshes.
     return sorted((o["id"], o["class"], o["fused_points"], o["vertices"], o["triangles"])
-                  for o in j["objects"])
+                  for o in j["scene"])
 oa, ob = objs(a), objs(b)
 if oa != ob:
     print("folder:", oa); print("bag:   ", ob); sys.exit(1)

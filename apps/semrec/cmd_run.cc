@@ -93,41 +93,6 @@ void ApplyConfigFile(CLI::App* cmd, const std::string& path) {
   }
 }
 
-// Options that change where or how often things are written, not the scene:
-// a run may be resumed with other values.
-bool AffectsOnlyOutputs(const std::string& key) {
-  for (const char* k : {"out", "snapshot-every", "checkpoint-every", "strict",
-                        "threads", "provider", "no-overlays", "no-ply", "usdz",
-                        "glb", "no-report", "no-report-pictures"}) {
-    if (key == k) return true;
-  }
-  return false;
-}
-
-// The effective options as YAML (every option with its value or default);
-// `scene_only` leaves out those that only affect the outputs.
-std::string EffectiveConfig(const CLI::App* cmd, bool scene_only) {
-  std::istringstream toml(cmd->config_to_str(/*default_also=*/true));
-  std::string out =
-      "# semrec run: the effective options (usable as --config)\n";
-  for (std::string line; std::getline(toml, line);) {
-    const size_t eq = line.find('=');
-    if (line.empty() || line[0] == '#' || line[0] == '[' ||
-        eq == std::string::npos) {
-      continue;
-    }
-    std::string key = line.substr(0, eq), value = line.substr(eq + 1);
-    if (key == "config" || key == "resume" || key == "overwrite" ||
-        key == "list-resolver-passes") {
-      continue;
-    }
-    if (scene_only && AffectsOnlyOutputs(key)) continue;
-    if (value == "\"\"" || value.empty()) value = "\"\"";
-    out += fmt::format("{}: {}\n", key, value);
-  }
-  return out;
-}
-
 void RunRun(RunArgs& args, CLI::App* cmd) {
   if (!args.config.empty()) ApplyConfigFile(cmd, args.config);
   tasks::RunTaskOptions task;

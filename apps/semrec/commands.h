@@ -70,6 +70,11 @@ void AddSurfacePatchesFlag(CLI::App* cmd, bool* no_surface_patches);
 /// object decision's passes left out, for ablations (scripts/ablate_resolver).
 void AddResolverSkipArgs(CLI::App* cmd, std::set<std::string>* skip_passes);
 
+/// The effective options of `cmd` as YAML, every option with its value or
+/// default (run.yaml; usable as `run --config`); `scene_only` leaves out
+/// those that only change the outputs (the key a resumed run must match).
+std::string EffectiveConfig(const CLI::App* cmd, bool scene_only);
+
 /// What every command that runs ONNX models accepts: --registry, --threads,
 /// --provider.
 struct ModelArgs {

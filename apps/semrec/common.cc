@@ -2,6 +2,9 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <sstream>
+
+#include <fmt/format.h>
 
 #include "semrec/fuse/map_objects.h"
 
@@ -104,10 +107,45 @@ void AddSequenceArgs(CLI::App* cmd, SequenceArgs* args) {
       ->group(bags);
 }
 
+namespace {
+
+// Options that change where or how often things are written, not the scene:
+// a run may be resumed with other values.
+bool AffectsOnlyOutputs(const std::string& key) {
+  for (const char* k : {"out", "snapshot-every", "checkpoint-every", "strict",
+                        "threads", "provider", "no-overlays", "no-ply", "usdz",
+                        "glb", "no-report", "no-report-pictures"}) {
+    if (key == k) return true;
+  }
+  return false;
+}
+
+}  // namespace
+
+std::string EffectiveConfig(const CLI::App* cmd, bool scene_only) {
+  std::istringstream toml(cmd->config_to_str(/*default_also=*/true));
+  std::string out =
+      fmt::format("# semrec {}: the effective options\n", cmd->get_name());
+  for (std::string line; std::getline(toml, line);) {
+    const size_t eq = line.find('=');
+    if (line.empty() || line[0] == '#' || line[0] == '[' ||
+        eq == std::string::npos) {
+      continue;
+    }
+    std::string key = line.substr(0, eq), value = line.substr(eq + 1);
+    if (key == "config" || key == "resume" || key == "overwrite" ||
+        key == "list-resolver-passes") {
+      continue;
+    }
+    if (scene_only && AffectsOnlyOutputs(key)) continue;
+    if (value == "\"\"" || value.empty()) value = "\"\"";
+    out += fmt::format("{}: {}\n", key, value);
+  }
+  return out;
+}
+
 infer::ModelRegistry ModelArgs::LoadRegistry() const {
-  infer::ModelRegistry r = infer::ModelRegistry::LoadDefault();
-  if (!registry.empty()) r.Merge(infer::ModelRegistry::Load(registry));
-  return r;
+  return infer::ModelRegistry::LoadDefaultWith(registry);
 }
 
 infer::OnnxModelOptions ModelArgs::Runtime() const {

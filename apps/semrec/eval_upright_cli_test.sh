@@ -1,9 +1,8 @@
 #!/usr/bin/env bash
 # `semrec eval scene` scores a result that `semrec run` turned upright in the result's
-# frame, taking T_upright_world from the scene's customLayerData (run writes no summary.json).
-# A synthetic recording with its world tilted (poses and ground truth) scores like the untilted
-# one, and badly with the identity in place of the transform; summary.json is the fallback and
-# loses to the scene; a missing or malformed entry is an error naming the file.
+# frame, taking T_upright_world from the scene's customLayerData. A synthetic recording with its
+# world tilted (poses and ground truth) scores like the untilted one, and badly with the identity
+# in place of the transform; a missing or malformed entry is an error naming the file.
 set -u
 SEMREC="$1"
 source "$(dirname "${BASH_SOURCE[0]}")/test_lib.sh"
@@ -65,7 +64,6 @@ miou() {  # result sequence -> prints mIoU on what the sequence saw
 }
 run flat syn
 run tilted tilt
-[ ! -e "$tmp/tilted/summary.json" ] || fail "run wrote summary.json: the test no longer tests the scene's entry"
 grep -q 'string gravity = "planes"\|string gravity = "floor class"' "$tmp/tilted/scene.usda" ||
   fail "the tilted run was not turned upright: $(grep gravity "$tmp/tilted/scene.usda")"
 flat=$(miou flat syn)
@@ -79,21 +77,11 @@ echo "mIoU: untilted $flat, tilted $tilted, tilted scored with the identity $wro
 /usr/bin/python3 -c "import sys; f, t, w = map(float, sys.argv[1:]); sys.exit(0 if f > 0.6 and abs(t - f) < 0.05 and w < 0.2 else 1)" \
   "$flat" "$tilted" "$wrong" || fail "tilted scores: untilted $flat, tilted $tilted, identity $wrong"
 
-# summary.json: the fallback when the scene has no entry; the scene wins when both have one.
-T=$(sed -n 's/.*string T_upright_world = "\(.*\)"/\1/p' "$tmp/tilted/scene.usda")
-cp -r "$tmp/tilted" "$tmp/summary"
-sed -i '/string T_upright_world = /d' "$tmp/summary"/*.usda
-printf '{"gravity": {"method": "planes", "T_upright_world": "%s"}}\n' "$T" >"$tmp/summary/summary.json"
-[ "$(miou summary tilt)" = "$tilted" ] || fail "summary.json fallback"
-printf '{"gravity": {"method": "planes", "T_upright_world": "%s"}}\n' "$identity" >"$tmp/tilted/summary.json"
-[ "$(miou tilted tilt)" = "$tilted" ] || fail "summary.json won over the scene"
-grep -q "scene.usda and .*summary.json disagree on T_upright_world; using the scene's" "$tmp/eval.err" ||
-  fail "no warning on disagreement: $(cat "$tmp/eval.err")"
-
-# Neither: an error naming the scene, never the identity.
-rm "$tmp/summary/summary.json"
-"$SEMREC" eval scene "$tmp/summary" "$tmp/tilt/gt/surface_points.ply" 2>"$tmp/err"; rc=$?
-[ "$rc" -eq 1 ] && grep -q "summary/scene.usda: the result was turned upright (gravity: [a-z ]*) but" "$tmp/err" ||
+# No entry: an error naming the scene, never the identity.
+cp -r "$tmp/tilted" "$tmp/noentry"
+sed -i '/string T_upright_world = /d' "$tmp/noentry"/*.usda
+"$SEMREC" eval scene "$tmp/noentry" "$tmp/tilt/gt/surface_points.ply" 2>"$tmp/err"; rc=$?
+[ "$rc" -eq 1 ] && grep -q "noentry/scene.usda: the result was turned upright (gravity: [a-z ]*) but" "$tmp/err" ||
   fail "no transform: exit $rc $(cat "$tmp/err")"
 # Malformed: an error naming the layer and the entry.
 sed -i 's/string T_upright_world = ".*"/string T_upright_world = "1 0 0"/' "$tmp/ident/scene.usda"

@@ -32,8 +32,8 @@ ok &= en <= 1.5 * on and eap >= oap - 0.2 and eap >= pap + 0.2 and emiou > pmiou
 sys.exit(0 if ok else 1)
 PY
   fail "evidence merging does not recover the objects"
-grep -q '"event": "evidence_merge"' "$tmp/evidence_noisy/summary.json" || fail "summary.json lists no evidence merge"
-grep -q '"class_votes"' "$tmp/evidence_noisy/summary.json" || fail "summary.json has no class votes"
+grep -q '"event": "evidence_merge"' "$tmp/evidence_noisy/report.json" || fail "report.json lists no evidence merge"
+grep -q '"class_votes"' "$tmp/evidence_noisy/report.json" || fail "report.json has no class votes"
 grep -q 'semrec:classVotes' "$tmp/evidence_noisy/static.usda" || fail "USD has no class votes"
 "$SEMREC" mesh "$tmp/syn" --merge magic --out "$tmp/bad" 2>"$tmp/err"; rc=$?
 [ "$rc" -ne 0 ] && grep -q "magic" "$tmp/err" || fail "--merge magic accepted: $(cat "$tmp/err")"

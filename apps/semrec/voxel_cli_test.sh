@@ -43,9 +43,9 @@ sys.exit(0 if views and all(1 <= v <= 16 for v in views) and min(views) <= 2 els
 PY
   fail "eval scene --observed-in does not count the views of each ground-truth object"
 grep -q "the map's objects: " "$tmp/gt_voxel.log" || fail "no per-voxel decision logged"
-grep -q '"merge": "voxel"\|merge voxel' "$tmp/gt_voxel/summary.json" "$tmp/gt_voxel/static.usda" ||
+grep -q '"merge": "voxel"\|merge voxel' "$tmp/gt_voxel/report.json" "$tmp/gt_voxel/static.usda" ||
   fail "the result does not name the voxel rule"
-python3 - "$tmp/gt_voxel/summary.json" "$tmp/gt_paper/summary.json" <<'PY' ||
+python3 - "$tmp/gt_voxel/report.json" "$tmp/gt_paper/report.json" <<'PY' ||
 import json, sys
 v, p = (json.load(open(f)) for f in sys.argv[1:])
 m = v["map_objects"]
@@ -55,16 +55,16 @@ ok &= len(m["visibility"]) >= 1 and all(0.3 <= o["seen_ratio"] <= 1 and o["max_v
 ok &= p["map_objects"] is None  # only the voxel rule decides per voxel
 sys.exit(0 if ok else 1)
 PY
-  fail "summary.json does not report the per-voxel decision (map_objects)"
+  fail "report.json does not report the per-voxel decision (map_objects)"
 # Surface patches: map voxels of things no volume meshed get one each (4 triangles), unless off.
 "$SEMREC" mesh "$tmp/syn" --labels "$tmp/syn/labels_noisy" --no-surface-patches --out "$tmp/bare" \
   --no-ply >/dev/null 2>&1 || fail "mesh --no-surface-patches failed"
-python3 - "$tmp/noisy_voxel/summary.json" "$tmp/bare/summary.json" <<'PY' ||
+python3 - "$tmp/noisy_voxel/report.json" "$tmp/bare/report.json" <<'PY' ||
 import json, sys
 with_, bare = (json.load(open(f)) for f in sys.argv[1:])
-tris = lambda j: sum(o["triangles"] for o in j["objects"])
+tris = lambda j: sum(o["triangles"] for o in j["scene"])
 n = with_["surface_patches"]
 sys.exit(0 if n > 0 and bare["surface_patches"] == 0 and tris(with_) - tris(bare) == 4 * n else 1)
 PY
-  fail "surface patches: not counted in summary.json, or --no-surface-patches does not turn them off"
+  fail "surface patches: not counted in report.json, or --no-surface-patches does not turn them off"
 echo "ok"

@@ -37,8 +37,7 @@ std::string DescribeDtype(const AnyArray& a) {
 
 std::unique_ptr<infer::ModelRegistry> LoadRegistry(const std::string& name) {
   return std::make_unique<infer::ModelRegistry>(
-      name == "default" ? infer::ModelRegistry::LoadDefault()
-                        : infer::ModelRegistry::Load(name));
+      infer::ModelRegistry::LoadDefaultWith(name == "default" ? "" : name));
 }
 
 std::string DefaultDetector() { return detect::YoloxOptions().model; }

@@ -139,8 +139,8 @@ nb::ndarray<nb::numpy, double> MatrixToArray(const Eigen::MatrixXd& m);
 /// documents only).
 nb::object FromJson(const nlohmann::json& j);
 
-/// The models of a registry: "default" (data/models.yaml) or a registry
-/// file.
+/// The installed registry (data/models.yaml), with a registry file's entries
+/// merged over it unless `name` is "default".
 std::unique_ptr<infer::ModelRegistry> LoadRegistry(const std::string& name);
 
 /// The object detector `semrec run` and `semrec segment` use by default.

@@ -157,8 +157,8 @@ class PyPipeline {
     if (models) {
       tasks::ModelChoice choice;  // the models `semrec run` uses
       if (*models != "default") choice.registry = *models;
-      registry_ =
-          std::make_unique<infer::ModelRegistry>(tasks::LoadRegistry(choice));
+      registry_ = std::make_unique<infer::ModelRegistry>(
+          infer::ModelRegistry::LoadDefaultWith(choice.registry));
       tasks::ApplyModelChoice(*registry_, choice, &o);
     } else {
       Require(classes.has_value(), false,

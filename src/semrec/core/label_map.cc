@@ -19,9 +19,10 @@ const char* ClassKindName(ClassKind kind) {
 }
 
 std::optional<ClassKind> ParseClassKind(const std::string& text) {
-  if (text == "thing") return ClassKind::kThing;
-  if (text == "stuff") return ClassKind::kStuff;
-  if (text == "other") return ClassKind::kOther;
+  for (const ClassKind kind :
+       {ClassKind::kThing, ClassKind::kStuff, ClassKind::kOther}) {
+    if (text == ClassKindName(kind)) return kind;
+  }
   return std::nullopt;
 }
 

@@ -32,8 +32,7 @@ Progress::Progress(std::string label, size_t total,
     : label_(std::move(label)),
       total_(total),
       options_(options),
-      stream_(stream),
-      start_(std::chrono::steady_clock::now()) {
+      stream_(stream) {
   options_.Check();
   switch (options_.mode) {
     case ProgressOptions::Mode::kAuto:
@@ -52,11 +51,7 @@ Progress::Progress(std::string label, size_t total,
 
 Progress::~Progress() { Finish(); }
 
-double Progress::ElapsedS() const {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() -
-                                       start_)
-      .count();
-}
+double Progress::ElapsedS() const { return since_start_.Elapsed(); }
 
 std::string Progress::Render(bool bar) const {
   const double elapsed = ElapsedS();

@@ -2,12 +2,13 @@
 // plain periodic lines otherwise (CI logs, pipes), nothing when disabled.
 #pragma once
 
-#include <chrono>
 #include <cstddef>
 #include <cstdio>
 #include <functional>
 #include <string>
 #include <utility>
+
+#include "semrec/core/stopwatch.h"
 
 namespace semrec {
 
@@ -65,7 +66,7 @@ class Progress {
   bool bar_ = false;
   size_t done_ = 0;
   bool finished_ = false;
-  std::chrono::steady_clock::time_point start_;
+  Stopwatch since_start_;
   double last_emit_s_ = -1e9;
   size_t emitted_done_ = static_cast<size_t>(-1);
 };

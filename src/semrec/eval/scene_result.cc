@@ -1,11 +1,9 @@
 #include "semrec/eval/scene_result.h"
 
-#include <optional>
 #include <set>
 #include <sstream>
 
 #include <fmt/format.h>
-#include <spdlog/spdlog.h>
 
 #include "semrec/core/error.h"
 #include "semrec/io/image_io.h"
@@ -84,22 +82,14 @@ Transform ParseUpright(const std::string& text, const fs::path& file,
   }
 }
 
-// An upright transform and the file that gave it.
-struct Upright {
-  Transform T;
-  fs::path file;
-};
+}  // namespace
 
 // The transform that turned the result upright (T_upright_world), so that the
 // ground truth can be brought into the result's frame. Every result with a
 // scene (`semrec run`, `semrec mesh`) writes it into its layers'
-// customLayerData; summary.json's gravity (mesh only) is the fallback. The
-// scene wins when both have it. Identity only when neither says the result
-// was turned: guessing would score in the wrong frame without a word.
-}  // namespace
-
+// customLayerData. Identity only when no layer says the result was turned:
+// guessing would score in the wrong frame without a word.
 Transform ResultUprightTransform(const fs::path& scene) {
-  std::optional<Upright> from_scene;
   std::string gravity;  // the layers' "gravity" method, if any
   for (const fs::path& layer : {scene, scene.parent_path() / "static.usda"}) {
     if (!fs::exists(layer)) continue;
@@ -108,47 +98,15 @@ Transform ResultUprightTransform(const fs::path& scene) {
       gravity = it->second;
     }
     if (const auto it = data.find("T_upright_world"); it != data.end()) {
-      from_scene = {
-          ParseUpright(it->second, layer, "customLayerData T_upright_world"),
-          layer};
-      break;
+      return ParseUpright(it->second, layer, "customLayerData T_upright_world");
     }
   }
-  std::optional<Upright> from_summary;
-  const fs::path summary = scene.parent_path() / "summary.json";
-  if (fs::exists(summary)) {
-    const nlohmann::json j = io::ReadJsonFile(summary);
-    if (j.contains("gravity") && j["gravity"].is_object()) {
-      const nlohmann::json& g = j["gravity"];
-      if (gravity.empty() && g.contains("method") && g["method"].is_string()) {
-        gravity = g["method"].get<std::string>();
-      }
-      if (g.contains("T_upright_world")) {
-        if (!g["T_upright_world"].is_string()) {
-          throw FormatError(summary,
-                            "gravity.T_upright_world is not a string "
-                            "of 16 numbers");
-        }
-        from_summary = {ParseUpright(g["T_upright_world"].get<std::string>(),
-                                     summary, "gravity.T_upright_world"),
-                        summary};
-      }
-    }
-  }
-  if (from_scene) {
-    if (from_summary && !from_scene->T.IsApprox(from_summary->T, 1e-4)) {
-      spdlog::warn("{} and {} disagree on T_upright_world; using the scene's",
-                   from_scene->file.string(), from_summary->file.string());
-    }
-    return from_scene->T;
-  }
-  if (from_summary) return from_summary->T;
   if (!gravity.empty() && gravity != "none") {
     throw FormatError(
         scene, fmt::format("the result was turned upright (gravity: {}) but "
-                           "neither its layers' customLayerData nor a "
-                           "summary.json beside it has T_upright_world: "
-                           "cannot bring the ground truth into its frame",
+                           "its layers' customLayerData have no "
+                           "T_upright_world: cannot bring the ground truth "
+                           "into its frame",
                            gravity));
   }
   return Transform();

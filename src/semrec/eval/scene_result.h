@@ -61,8 +61,7 @@ struct SceneResultEvaluation {
 SceneResultEvaluation EvaluateSceneResult(const SceneResultOptions& options);
 
 /// The transform that turned a result upright (T_upright_world): from its
-/// layers' customLayerData, else summary.json's gravity; identity only when
-/// neither says it was turned.
+/// layers' customLayerData; identity only when they do not say it was turned.
 Transform ResultUprightTransform(const std::filesystem::path& scene);
 
 /// Predicted class name -> ground-truth id from a class-map JSON (see

@@ -11,6 +11,7 @@
 #include <spdlog/spdlog.h>
 #include <tbb/parallel_for.h>
 
+#include "semrec/core/enum_names.h"
 #include "semrec/core/error.h"
 #include "semrec/core/stopwatch.h"
 #include "semrec/core/union_find.h"
@@ -37,17 +38,15 @@ const char* MergeName(FusionOptions::Merge merge) {
     case FusionOptions::Merge::kEvidence:
       return "evidence";
     case FusionOptions::Merge::kVoxel:
-      break;
+      return "voxel";
   }
-  return "voxel";
+  return "?";
 }
 
 FusionOptions::Merge ParseMerge(const std::string& name) {
-  if (name == "paper") return FusionOptions::Merge::kPaper;
-  if (name == "evidence") return FusionOptions::Merge::kEvidence;
-  if (name == "voxel") return FusionOptions::Merge::kVoxel;
-  throw InvalidArgument(
-      "merge rule must be 'paper', 'evidence' or 'voxel', got '" + name + "'");
+  using Merge = FusionOptions::Merge;
+  return ParseEnumName(name, {Merge::kPaper, Merge::kEvidence, Merge::kVoxel},
+                       MergeName, "merge rule");
 }
 
 SceneFusion::SceneFusion(const FusionOptions& options) : options_(options) {

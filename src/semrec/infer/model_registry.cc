@@ -4,6 +4,7 @@
 #include <fmt/ranges.h>
 #include <yaml-cpp/yaml.h>
 
+#include "semrec/core/enum_names.h"
 #include "semrec/core/error.h"
 #include "semrec/core/file_util.h"
 
@@ -160,10 +161,6 @@ ModelEntry ParseEntry(const std::string& name, const YAML::Node& node) {
 
 }  // namespace
 
-constexpr ModelRole kModelRoles[] = {
-    ModelRole::kSemantic, ModelRole::kMaskEncoder, ModelRole::kMaskDecoder,
-    ModelRole::kMaskDecoderPart, ModelRole::kDetector};
-
 const char* ModelRoleName(ModelRole role) {
   switch (role) {
     case ModelRole::kSemantic:
@@ -181,23 +178,26 @@ const char* ModelRoleName(ModelRole role) {
 }
 
 ModelRole ParseModelRole(const std::string& name) {
-  std::vector<std::string> names;
-  for (const ModelRole role : kModelRoles) {
-    if (name == ModelRoleName(role)) return role;
-    names.emplace_back(ModelRoleName(role));
-  }
-  throw InvalidArgument(fmt::format("role must be one of {}, not '{}'",
-                                    fmt::join(names, ", "), name));
+  return ParseEnumName(
+      name,
+      {ModelRole::kSemantic, ModelRole::kMaskEncoder, ModelRole::kMaskDecoder,
+       ModelRole::kMaskDecoderPart, ModelRole::kDetector},
+      ModelRoleName, "role");
 }
 
 const char* MaskBackendName(MaskBackend backend) {
-  return backend == MaskBackend::kSam2 ? "sam2" : "sam";
+  switch (backend) {
+    case MaskBackend::kSam:
+      return "sam";
+    case MaskBackend::kSam2:
+      return "sam2";
+  }
+  return "?";
 }
 
 MaskBackend ParseMaskBackend(const std::string& name) {
-  if (name == "sam") return MaskBackend::kSam;
-  if (name == "sam2") return MaskBackend::kSam2;
-  throw InvalidArgument("backend must be sam or sam2, not '" + name + "'");
+  return ParseEnumName(name, {MaskBackend::kSam, MaskBackend::kSam2},
+                       MaskBackendName, "backend");
 }
 
 ModelRegistry ModelRegistry::Load(const std::filesystem::path& path) {
@@ -249,6 +249,13 @@ std::filesystem::path ModelRegistry::DefaultPath() {
 }
 
 ModelRegistry ModelRegistry::LoadDefault() { return Load(DefaultPath()); }
+
+ModelRegistry ModelRegistry::LoadDefaultWith(
+    const std::filesystem::path& extra) {
+  ModelRegistry registry = LoadDefault();
+  if (!extra.empty()) registry.Merge(Load(extra));
+  return registry;
+}
 
 const ModelEntry& ModelRegistry::Get(const std::string& name) const {
   auto it = entries_.find(name);

@@ -118,6 +118,9 @@ class ModelRegistry {
   static ModelRegistry Load(const std::filesystem::path& path);
   /// data/models.yaml of the project (see ProjectDataDir()).
   static ModelRegistry LoadDefault();
+  /// The default registry with the entries of `extra` merged over it (a
+  /// user's own exports); `extra` empty: the default alone.
+  static ModelRegistry LoadDefaultWith(const std::filesystem::path& extra);
   /// The default registry's path.
   static std::filesystem::path DefaultPath();
 

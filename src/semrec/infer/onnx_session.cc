@@ -11,6 +11,7 @@
 #include <fmt/ranges.h>
 
 #include <spdlog/spdlog.h>
+#include "semrec/core/enum_names.h"
 #include "semrec/core/error.h"
 #include "semrec/core/file_util.h"
 
@@ -29,11 +30,8 @@ const char* ProviderName(Provider provider) {
 }
 
 Provider ParseProvider(const std::string& name) {
-  for (const Provider p : {Provider::kAuto, Provider::kCpu, Provider::kCuda}) {
-    if (name == ProviderName(p)) return p;
-  }
-  throw InvalidArgument("provider must be auto, cpu or cuda, not '" + name +
-                        "'");
+  return ParseEnumName(name, {Provider::kAuto, Provider::kCpu, Provider::kCuda},
+                       ProviderName, "provider");
 }
 
 void OnnxSessionOptions::Check() const {

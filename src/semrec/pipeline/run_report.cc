@@ -236,6 +236,8 @@ nlohmann::json ToJson(const RunReport& r) {
                         {"peak_rss_mb", r.peak_rss_mb},
                         {"objects", r.objects},
                         {"structure", r.structure},
+                        {"surface_patches", r.surface_patches},
+                        {"skipped_empty_objects", r.skipped_empty_objects},
                         {"objects_per_class", r.objects_per_class},
                         {"people", r.people},
                         {"tracks", r.tracks},
@@ -275,6 +277,8 @@ RunReport ParseRunReport(const nlohmann::json& j, const fs::path& file) {
   r.peak_rss_mb = f.Get<double>("peak_rss_mb");
   r.objects = f.Get<size_t>("objects");
   r.structure = f.Get<size_t>("structure");
+  r.surface_patches = f.Get<size_t>("surface_patches");
+  r.skipped_empty_objects = f.Get<size_t>("skipped_empty_objects");
   r.objects_per_class = f.Get<std::map<std::string, int>>("objects_per_class");
   r.people = f.Get<size_t>("people");
   r.tracks = f.Get<size_t>("tracks");

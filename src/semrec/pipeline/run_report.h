@@ -73,6 +73,9 @@ struct RunReport {
   StageRates seconds_per_frame;
   double peak_rss_mb = 0.0;
   size_t objects = 0, structure = 0;  // objects excludes structure
+  /// Map voxels of things no volume meshed, written as small patches; objects
+  /// with no surface to mesh, left out.
+  size_t surface_patches = 0, skipped_empty_objects = 0;
   std::map<std::string, int> objects_per_class;
   size_t people = 0, tracks = 0, snapshots = 0;
   std::string options;              // the scene's option summary

@@ -24,6 +24,7 @@ RunReport SampleReport() {
   r.peak_rss_mb = 812.0;
   r.objects = 2;
   r.structure = 1;
+  r.surface_patches = 6;
   r.objects_per_class = {{"chair", 2}, {"wall", 1}};
   r.people = 1;
   r.tracks = 1;
@@ -59,6 +60,7 @@ TEST(RunReport, WrittenAndReadBackFieldForField) {
   EXPECT_EQ(read.map_guidance->prompts_decoded, 600u);
   EXPECT_EQ(read.object_detector->model, "yolox_nano");
   EXPECT_EQ(read.GravityMethod(), "floor plane");
+  EXPECT_EQ(read.surface_patches, 6u);
   // Given labels: no model sections, and a detector that was off reads back
   // as off.
   RunReport given = r;

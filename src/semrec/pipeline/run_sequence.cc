@@ -444,6 +444,8 @@ class SequenceRun {
     }
     r.objects = result.scene.objects - result.scene.structure;
     r.structure = result.scene.structure;
+    r.surface_patches = result.scene.patches;
+    r.skipped_empty_objects = result.scene.skipped_empty_objects;
     r.people = result.scene.people;
     r.tracks = result.tracks;
     r.snapshots = snapshots_;
@@ -563,10 +565,13 @@ std::string RunSummaryTable(const RunResult& result, const fs::path& out_dir) {
   }
   out += fmt::format("  {} people prims, {} tracks in tracks.txt\n",
                      result.scene.people, result.tracks);
+  std::string written;
+  for (const char* name : {"objects/", "overlay/", "tracks.txt"}) {
+    if (fs::exists(out_dir / name)) written += fmt::format("{}, ", name);
+  }
   out += fmt::format(
-      "  wrote {0}/scene.usda (+ static.usda, dynamic.usda), objects/, "
-      "overlay/, tracks.txt, report.json\n",
-      out_dir.string());
+      "  wrote {}/scene.usda (+ static.usda, dynamic.usda), {}report.json\n",
+      out_dir.string(), written);
   return out;
 }
 

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "semrec/core/enum_names.h"
 #include "semrec/core/error.h"
 
 namespace semrec::segment {
@@ -95,12 +96,9 @@ const char* PromptableOptions::KernelName(Kernel kernel) {
 
 PromptableOptions::Kernel PromptableOptions::ParseKernel(
     const std::string& name) {
-  for (const Kernel k :
-       {Kernel::kAuto, Kernel::kOn, Kernel::kBf16, Kernel::kOff}) {
-    if (name == KernelName(k)) return k;
-  }
-  throw InvalidArgument("decoder kernel must be auto, on, bf16 or off, not '" +
-                        name + "'");
+  return ParseEnumName(
+      name, {Kernel::kAuto, Kernel::kOn, Kernel::kBf16, Kernel::kOff},
+      KernelName, "decoder kernel");
 }
 
 void PromptableOptions::Check() const {

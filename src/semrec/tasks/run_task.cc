@@ -20,14 +20,6 @@ void ModelChoice::Check() const {
   runtime.Check();
 }
 
-infer::ModelRegistry LoadRegistry(const ModelChoice& choice) {
-  infer::ModelRegistry registry = infer::ModelRegistry::LoadDefault();
-  if (!choice.registry.empty()) {
-    registry.Merge(infer::ModelRegistry::Load(choice.registry));
-  }
-  return registry;
-}
-
 void ApplyModelChoice(const infer::ModelRegistry& registry,
                       const ModelChoice& choice,
                       pipeline::ScenePipelineOptions* pipeline) {
@@ -74,7 +66,7 @@ RunTaskResult RunTask(const RunTaskOptions& options,
   pipeline::RunOptions run = options.run;
   std::optional<infer::ModelRegistry> registry;
   if (options.labels == "models") {
-    registry = LoadRegistry(options.models);
+    registry = infer::ModelRegistry::LoadDefaultWith(options.models.registry);
     ApplyModelChoice(*registry, options.models, &run.pipeline);
   } else {
     run.pipeline.labels = pipeline::ScenePipelineOptions::Labels::kGiven;

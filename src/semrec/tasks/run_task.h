@@ -45,9 +45,6 @@ struct ModelChoice {
   void Check() const;
 };
 
-/// The installed registry with `choice.registry` merged over it.
-infer::ModelRegistry LoadRegistry(const ModelChoice& choice);
-
 /// Sets the segmenter and the people tracker of `pipeline` to the chosen
 /// models (the mask model's backend from its registry entry), labels from
 /// the models. The detector's other options (score, weight) stay as they are.

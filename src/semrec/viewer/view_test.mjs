@@ -1,6 +1,6 @@
 // End-to-end test of `semrec view` and `--glb`: scenes written by semrec are opened by Pixar's
 // OpenUSD (WASM) and by three's GLTFLoader in headless Chromium, and what they read is checked
-// against what semrec wrote (our own reader via `semrec query`, summary.json).
+// against what semrec wrote (our own reader via `semrec query`, report.json).
 //   node view_test.mjs <semrec binary>
 // Exit 0 pass, 1 fail, 77 skipped (a failure under SEMREC_REQUIRE_ALL=1).
 import { spawnSync } from 'node:child_process';
@@ -136,7 +136,7 @@ Run(['mesh', 'people-syn', '--people', 'people-syn/person', '--out', 'people', '
 const timelines = {};
 for (const dir of ['six', 'people']) {
   const ours = JSON.parse(Run(['query', `${dir}/scene.usda`, '--json']).stdout);
-  const summary = JSON.parse(fs.readFileSync(path.join(tmp, dir, 'summary.json'), 'utf8'));
+  const report = JSON.parse(fs.readFileSync(path.join(tmp, dir, 'report.json'), 'utf8'));
   const ourClasses = ours.map((o) => o.class).sort();
   for (const file of ['scene.usda', 'scene.usdz', 'scene.glb']) {
     const scene = path.join(tmp, dir, file);
@@ -158,8 +158,8 @@ for (const dir of ['six', 'people']) {
                                  Math.abs(o.confidence - confidence.get(o.instanceId)) < 1e-4),
           `${what}: confidences ${JSON.stringify(r.objects.map((o) => o.confidence))} vs ` +
           `${JSON.stringify(ours.map((o) => o.confidence))}`);
-    Check(r.people.length === (summary.people ?? 0),
-          `${what}: ${r.people.length} people read, semrec wrote ${summary.people}`);
+    Check(r.people.length === report.people,
+          `${what}: ${r.people.length} people read, semrec wrote ${report.people}`);
     Check(r.people.every((p) => p.points > 0), `${what}: a person without points`);
     Check(r.upAxis === (file === 'scene.glb' ? 'Y' : 'Z'), `${what}: up axis ${r.upAxis}`);
     if (dir === 'people') {
