@@ -83,8 +83,8 @@ double Iou(const Image<uint32_t>& a, const Image<uint32_t>& b, uint32_t id) {
   return uni ? static_cast<double>(inter) / static_cast<double>(uni) : 0.0;
 }
 
-const Plate kTable{5, 3, -0.5f, 0.0f, -0.25f, 0.25f, 2.0f};
-const Plate kChair{7, 4, 0.2f, 0.6f, -0.2f, 0.2f, 2.5f};
+const Plate kTablePlate{5, 3, -0.5f, 0.0f, -0.25f, 0.25f, 2.0f};
+const Plate kChairPlate{7, 4, 0.2f, 0.6f, -0.2f, 0.2f, 2.5f};
 
 TEST(MapProjection, ExplainsKnownObjectsWithTheirIdsAndClasses) {
   for (const Transform& T_world_camera :
@@ -92,10 +92,10 @@ TEST(MapProjection, ExplainsKnownObjectsWithTheirIdsAndClasses) {
         Transform::FromQuaternion(Eigen::Quaterniond(0.9, 0.1, -0.3, 0.2),
                                   Eigen::Vector3d(1.0, -2.0, 0.5))}) {
     Image<uint32_t> gt;
-    const DepthImage depth = Render({kTable, kChair}, &gt);
-    const ProjectedMap map = ProjectMap(
-        {Object(kTable, T_world_camera), Object(kChair, T_world_camera)},
-        Camera(), T_world_camera, depth);
+    const DepthImage depth = Render({kTablePlate, kChairPlate}, &gt);
+    const ProjectedMap map = ProjectMap({Object(kTablePlate, T_world_camera),
+                                         Object(kChairPlate, T_world_camera)},
+                                        Camera(), T_world_camera, depth);
     EXPECT_GT(Iou(map.object_id, gt, 5), 0.85);
     EXPECT_GT(Iou(map.object_id, gt, 7), 0.85);
     size_t gt_pixels = 0, explained_on_gt = 0, explained_off_gt = 0;
@@ -131,9 +131,9 @@ TEST(MapProjection, ANewObjectInFrontIsUnexplainedAndARemovedOneContradicts) {
   // table.
   const Plate box{9, 6, -0.3f, 0.1f, 0.0f, 0.3f, 1.5f};
   Image<uint32_t> gt;
-  const DepthImage depth = Render({kTable, kChair, box}, &gt);
-  const ProjectedMap map =
-      ProjectMap({Object(kTable, {}), Object(kChair, {})}, Camera(), {}, depth);
+  const DepthImage depth = Render({kTablePlate, kChairPlate, box}, &gt);
+  const ProjectedMap map = ProjectMap(
+      {Object(kTablePlate, {}), Object(kChairPlate, {})}, Camera(), {}, depth);
   size_t box_pixels = 0, box_explained = 0, box_contradicted = 0;
   for (size_t i = 0; i < gt.values().size(); ++i) {
     if (gt.values()[i] != 9) continue;
@@ -148,9 +148,10 @@ TEST(MapProjection, ANewObjectInFrontIsUnexplainedAndARemovedOneContradicts) {
 
   // The chair was taken away: the camera sees the wall where the map has the
   // chair.
-  const DepthImage without_chair = Render({kTable}, &gt);
-  const ProjectedMap after = ProjectMap(
-      {Object(kTable, {}), Object(kChair, {})}, Camera(), {}, without_chair);
+  const DepthImage without_chair = Render({kTablePlate}, &gt);
+  const ProjectedMap after =
+      ProjectMap({Object(kTablePlate, {}), Object(kChairPlate, {})}, Camera(),
+                 {}, without_chair);
   size_t chair_pixels = 0, chair_explained = 0, chair_contradicted = 0;
   for (size_t i = 0; i < gt.values().size(); ++i) {
     if (after.object_id.values()[i] != 7) continue;
@@ -316,17 +317,18 @@ TEST(MapProjection, NearerObjectsHideFartherOnesAndBadInputIsRefused) {
   // (table) wins.
   const Plate behind{7, 4, -0.4f, 0.0f, -0.2f, 0.2f, 3.0f};
   Image<uint32_t> gt;
-  const DepthImage depth = Render({kTable, behind}, &gt);
-  const ProjectedMap map =
-      ProjectMap({Object(behind, {}), Object(kTable, {})}, Camera(), {}, depth);
+  const DepthImage depth = Render({kTablePlate, behind}, &gt);
+  const ProjectedMap map = ProjectMap(
+      {Object(behind, {}), Object(kTablePlate, {})}, Camera(), {}, depth);
   EXPECT_EQ(map.object_id(70, 60), 5u);  // this ray passes through both plates
   EXPECT_NEAR(map.depth_m(70, 60), 2.0, 1e-5);
   EXPECT_EQ(map.state(70, 60), ProjectedMap::kExplained);
 
   // Behind the camera or without depth: nothing projects, nothing is valid.
   const ProjectedMap empty = ProjectMap(
-      {Object(kTable, Transform::FromQuaternion(Eigen::Quaterniond(0, 1, 0, 0),
-                                                Eigen::Vector3d::Zero()))},
+      {Object(kTablePlate,
+              Transform::FromQuaternion(Eigen::Quaterniond(0, 1, 0, 0),
+                                        Eigen::Vector3d::Zero()))},
       Camera(), {}, DepthImage(160, 120));
   EXPECT_EQ(empty.valid_depth_pixels, 0u);
   EXPECT_DOUBLE_EQ(empty.UnexplainedShare(), 1.0);

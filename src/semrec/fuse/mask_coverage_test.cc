@@ -124,7 +124,7 @@ Cloud Patch(float x0, float x1, std::mt19937& rng, float y1 = 0.5f) {
   return c;
 }
 
-FrameSegment Segment(uint16_t cls, uint16_t label, Cloud points) {
+FrameSegment SegmentOf(uint16_t cls, uint16_t label, Cloud points) {
   FrameSegment s;
   s.class_id = cls;
   s.source_label = label;
@@ -143,12 +143,12 @@ TEST(FusionEvidence, PartsThatViewsShowInOneMaskBecomeOneObject) {
     FusionOptions options;
     options.merge = merge;
     SceneFusion fusion(options);
-    fusion.Integrate({Segment(1, 1, Patch(0.0f, 1.0f, rng)),
-                      Segment(1, 2, Patch(1.0f, 2.0f, rng))},
+    fusion.Integrate({SegmentOf(1, 1, Patch(0.0f, 1.0f, rng)),
+                      SegmentOf(1, 2, Patch(1.0f, 2.0f, rng))},
                      0);
     ASSERT_EQ(fusion.segments().size(), 2u);
     for (size_t f = 1; f <= 4; ++f) {
-      fusion.Integrate({Segment(1, 1, Patch(0.7f, 1.3f, rng, 0.8f))}, f);
+      fusion.Integrate({SegmentOf(1, 1, Patch(0.7f, 1.3f, rng, 0.8f))}, f);
     }
     fusion.Finish();
     if (merge == FusionOptions::Merge::kPaper) {
@@ -175,12 +175,12 @@ TEST(FusionEvidence, NeighboursSeenApartStayApart) {
   SceneFusion fusion;
   uint32_t frame = 0;
   for (int k = 0; k < 5; ++k, ++frame) {
-    fusion.Integrate({Segment(1, 1, Patch(0.0f, 1.0f, rng)),
-                      Segment(1, 2, Patch(1.0f, 2.0f, rng))},
+    fusion.Integrate({SegmentOf(1, 1, Patch(0.0f, 1.0f, rng)),
+                      SegmentOf(1, 2, Patch(1.0f, 2.0f, rng))},
                      frame);
   }
   for (int k = 0; k < 2; ++k, ++frame) {
-    fusion.Integrate({Segment(1, 1, Patch(0.7f, 1.3f, rng, 0.8f))}, frame);
+    fusion.Integrate({SegmentOf(1, 1, Patch(0.7f, 1.3f, rng, 0.8f))}, frame);
   }
   fusion.Finish();
   // one = 2 views, two = 4 views: 2 > 0.5 * 4 fails.
@@ -203,7 +203,7 @@ TEST(FusionEvidence, ClassIsTheVoteOfEveryView) {
     SceneFusion fusion(options);
     const std::vector<uint16_t> classes = {1, 1, 2, 2, 2, 2};
     for (size_t f = 0; f < classes.size(); ++f) {
-      fusion.Integrate({Segment(classes[f], 1, Patch(0.0f, 1.0f, rng))}, f);
+      fusion.Integrate({SegmentOf(classes[f], 1, Patch(0.0f, 1.0f, rng))}, f);
     }
     fusion.Finish();
     if (merge == FusionOptions::Merge::kPaper) {
@@ -246,12 +246,13 @@ TEST(FusionEvidence, FragmentsAreFoldedOrDropped) {
   std::mt19937 rng(10);
   SceneFusion fusion(EvidenceRule());
   for (size_t f = 0; f < 3; ++f) {
-    fusion.Integrate({Segment(1, 1, Patch(0.0f, 1.0f, rng))}, f);
+    fusion.Integrate({SegmentOf(1, 1, Patch(0.0f, 1.0f, rng))}, f);
   }
   Cloud far = Patch(0.0f, 0.1f, rng, 0.1f);
   for (auto& p : far) p.x() += 5.0f;
   fusion.Integrate(
-      {Segment(1, 2, Patch(1.0f, 1.12f, rng, 0.1f)), Segment(1, 3, far)}, 3);
+      {SegmentOf(1, 2, Patch(1.0f, 1.12f, rng, 0.1f)), SegmentOf(1, 3, far)},
+      3);
   ASSERT_EQ(fusion.segments().size(), 3u);
   EXPECT_EQ(fusion.Finish(), 2u);
   ASSERT_EQ(fusion.segments().size(), 1u);
@@ -269,7 +270,7 @@ TEST(FusionEvidence, FragmentsAreFoldedOrDropped) {
   FusionOptions paper;
   paper.merge = FusionOptions::Merge::kPaper;
   SceneFusion p(paper);
-  p.Integrate({Segment(1, 3, far)}, 0);
+  p.Integrate({SegmentOf(1, 3, far)}, 0);
   EXPECT_EQ(p.Finish(), 0u);
   EXPECT_EQ(p.segments().size(), 1u);
 }
@@ -281,7 +282,7 @@ TEST(FusionEvidence, MasksOfOneViewAreOneSighting) {
   SceneFusion fusion(EvidenceRule());
   Cloud left = Patch(0.0f, 0.1f, rng, 0.2f);
   Cloud right = Patch(0.1f, 0.25f, rng, 0.2f);
-  fusion.Integrate({Segment(1, 1, left), Segment(1, 2, right)}, 0);
+  fusion.Integrate({SegmentOf(1, 1, left), SegmentOf(1, 2, right)}, 0);
   ASSERT_EQ(fusion.segments().size(), 2u);
   EXPECT_EQ(fusion.Finish(), 2u);
   EXPECT_TRUE(fusion.segments().empty());

@@ -94,11 +94,6 @@ std::vector<std::array<uint8_t, 3>> TinyPalette() {
       .get<std::vector<std::array<uint8_t, 3>>>();
 }
 
-infer::ModelRegistry TinyRegistry() {
-  return infer::ModelRegistry::Load(semrec::testing::TinyModelDir() /
-                                    "registry.yaml");
-}
-
 ScenePipelineOptions GuidedOptions() {
   ScenePipelineOptions o;
   o.labels = ScenePipelineOptions::Labels::kModels;
@@ -203,7 +198,8 @@ class MapGuidedPipeline : public ::testing::TestWithParam<bool> {};
 TEST_P(MapGuidedPipeline, SegmentsOnlyWhatTheMapCannotExplain) {
   ASSERT_FALSE(semrec::testing::TinyModelDir().empty());
   const auto palette = TinyPalette();
-  const infer::ModelRegistry registry = TinyRegistry();
+  const infer::ModelRegistry registry =
+      infer::ModelRegistry::Load(semrec::testing::TinyRegistryFile());
   ScenePipelineOptions options = GuidedOptions();
   options.guidance.prompt_on_disagreement = GetParam();
   ScenePipeline pipeline(&registry, nullptr, options);
@@ -296,7 +292,8 @@ INSTANTIATE_TEST_SUITE_P(Disagreement, MapGuidedPipeline, ::testing::Bool());
 TEST(MapGuidedReplay, ReplayedFramesRestoreTheGuidance) {
   ASSERT_FALSE(semrec::testing::TinyModelDir().empty());
   const auto palette = TinyPalette();
-  const infer::ModelRegistry registry = TinyRegistry();
+  const infer::ModelRegistry registry =
+      infer::ModelRegistry::Load(semrec::testing::TinyRegistryFile());
   const auto run = [&](const std::vector<ModelOutputs>* recorded,
                        size_t replay_frames) {
     ScenePipeline pipeline(&registry, nullptr, GuidedOptions());
@@ -342,7 +339,8 @@ TEST(MapGuidedReplay, ReplayedFramesRestoreTheGuidance) {
 TEST(ObjectDetectorPipeline, OneDetectorPassServesPeopleAndObjects) {
   ASSERT_FALSE(semrec::testing::TinyModelDir().empty());
   const auto palette = TinyPalette();
-  const infer::ModelRegistry registry = TinyRegistry();
+  const infer::ModelRegistry registry =
+      infer::ModelRegistry::Load(semrec::testing::TinyRegistryFile());
   const auto run = [&](bool objects) {
     ScenePipelineOptions options = GuidedOptions();
     options.map_guidance = false;

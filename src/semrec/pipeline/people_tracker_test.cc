@@ -8,24 +8,19 @@
 namespace semrec::pipeline {
 namespace {
 
-infer::ModelRegistry TinyRegistry() {
-  return infer::ModelRegistry::Load(semrec::testing::TinyModelDir() /
-                                    "registry.yaml");
-}
-
-struct Rect {
+struct PixelRect {
   int x, y, w, h;
   std::array<uint8_t, 3> color;
 };
 
-ColorImage Scene(const std::vector<Rect>& rects) {
+ColorImage Scene(const std::vector<PixelRect>& rects) {
   ColorImage img(320, 240, 3);
   for (int y = 0; y < 240; ++y) {
     for (int x = 0; x < 320; ++x) {
       for (int c = 0; c < 3; ++c) img(x, y, c) = 128;
     }
   }
-  for (const Rect& r : rects) {
+  for (const PixelRect& r : rects) {
     for (int y = r.y; y < r.y + r.h; ++y) {
       for (int x = r.x; x < r.x + r.w; ++x) {
         for (int c = 0; c < 3; ++c) img(x, y, c) = r.color[c];
@@ -36,7 +31,7 @@ ColorImage Scene(const std::vector<Rect>& rects) {
 }
 
 // A detector's box around a person: a few pixels of margin.
-track::Detection Box(const Rect& r) {
+track::Detection Box(const PixelRect& r) {
   track::Detection d;
   d.box = {r.x - 4.0, r.y - 4.0, r.w + 8.0, r.h + 8.0};
   d.score = 0.9;
@@ -66,12 +61,13 @@ struct WalkResult {
 };
 
 WalkResult Walk(const std::string& backend, bool reid) {
-  const auto registry = TinyRegistry();
+  const auto registry =
+      infer::ModelRegistry::Load(semrec::testing::TinyRegistryFile());
   PeopleTracker tracker(registry, Options(backend, reid));
-  const Rect blue{220, 60, 40, 120, {0, 0, 255}};
+  const PixelRect blue{220, 60, 40, 120, {0, 0, 255}};
   WalkResult result;
   for (int f = 0; f < 4; ++f) {
-    const Rect red{20 + 10 * f, 80, 30, 100, {255, 0, 0}};
+    const PixelRect red{20 + 10 * f, 80, 30, 100, {255, 0, 0}};
     const auto frame =
         tracker.Process(Scene({red, blue}), std::vector{Box(red), Box(blue)});
     EXPECT_EQ(frame.people.size(), 2u);
@@ -92,7 +88,7 @@ WalkResult Walk(const std::string& backend, bool reid) {
     const auto frame = tracker.Process(Scene({blue}), std::vector{Box(blue)});
     EXPECT_EQ(frame.people.at(0).box.track_id, result.blue);
   }
-  const Rect red{100, 90, 30, 100, {255, 0, 0}};
+  const PixelRect red{100, 90, 30, 100, {255, 0, 0}};
   const auto frame =
       tracker.Process(Scene({red, blue}), std::vector{Box(red), Box(blue)});
   EXPECT_EQ(frame.people.at(1).box.track_id, result.blue);
@@ -100,7 +96,7 @@ WalkResult Walk(const std::string& backend, bool reid) {
   result.red_reidentified = frame.people.at(0).box.reidentified;
 
   // A different person (green) entering is not taken for red or blue.
-  const Rect green{20, 90, 30, 100, {0, 255, 0}};
+  const PixelRect green{20, 90, 30, 100, {0, 255, 0}};
   const auto next = tracker.Process(
       Scene({red, blue, green}), std::vector{Box(red), Box(blue), Box(green)});
   EXPECT_EQ(next.people.size(), 3u);
@@ -144,9 +140,10 @@ TEST(PeopleTracker, InstanceMapAndOverlay) {
 TEST(PeopleTracker, BoxesOnlyWithoutMasksAndBadOptions) {
   PeopleTrackerOptions options;
   options.masks = false;
-  const auto registry = TinyRegistry();
+  const auto registry =
+      infer::ModelRegistry::Load(semrec::testing::TinyRegistryFile());
   PeopleTracker tracker(registry, options);
-  const Rect red{20, 80, 30, 100, {255, 0, 0}};
+  const PixelRect red{20, 80, 30, 100, {255, 0, 0}};
   const auto frame = tracker.Process(Scene({red}), std::vector{Box(red)});
   ASSERT_EQ(frame.people.size(), 1u);
   EXPECT_EQ(frame.people[0].mask.area, 0);

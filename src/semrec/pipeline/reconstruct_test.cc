@@ -19,8 +19,6 @@ namespace fs = std::filesystem;
 namespace semrec::pipeline {
 namespace {
 
-ProgressOptions Quiet() { return testing::QuietProgress(); }
-
 // SmallScene without sensor noise.
 synth::SynthOptions SmallNoiselessScene(const std::string& preset, int frames) {
   synth::SynthOptions o = testing::SmallScene(preset, frames);
@@ -34,11 +32,11 @@ synth::SynthOptions SmallNoiselessScene(const std::string& preset, int frames) {
 TEST(Reconstruct, SixObjectsBecomeSixLabelledMeshPrims) {
   testing::TempDir dir;
   const synth::SynthOptions o = SmallNoiselessScene("six-objects", 12);
-  synth::WriteSyntheticSequence(o, dir / "seq", Quiet());
+  synth::WriteSyntheticSequence(o, dir / "seq", testing::QuietProgress());
   const io::SequenceReader reader = io::SequenceReader::Open(dir / "seq");
   const auto source = fuse::SegmentationSource::Create("gt", reader);
   const ReconstructResult r =
-      Reconstruct(reader, *source, {}, dir / "out", Quiet());
+      Reconstruct(reader, *source, {}, dir / "out", testing::QuietProgress());
   EXPECT_EQ(r.frames, 12u);
   const auto summary =
       nlohmann::json::parse(ReadTextFile(dir / "out/summary.json"));
@@ -51,7 +49,9 @@ TEST(Reconstruct, SixObjectsBecomeSixLabelledMeshPrims) {
   }
   EXPECT_TRUE(fs::is_regular_file(dir / "out/scene.usda"));
   // Refuses to overwrite.
-  EXPECT_THROW(Reconstruct(reader, *source, {}, dir / "out", Quiet()), IoError);
+  EXPECT_THROW(
+      Reconstruct(reader, *source, {}, dir / "out", testing::QuietProgress()),
+      IoError);
   const auto report = testing::ValidateUsd(dir / "out/static.usda", dir.path());
   if (!report) SEMREC_SKIP("tinyusdz (npm) or node missing: run scripts/setup");
   ASSERT_TRUE((*report)["ok"].get<bool>()) << (*report)["error"];
@@ -67,11 +67,11 @@ TEST(Reconstruct, SixObjectsBecomeSixLabelledMeshPrims) {
 TEST(Reconstruct, StructureIsOnePrimPerClassAndTheSceneIsUpright) {
   testing::TempDir dir;
   const synth::SynthOptions o = SmallNoiselessScene("six-objects", 8);
-  synth::WriteSyntheticSequence(o, dir / "seq", Quiet());
+  synth::WriteSyntheticSequence(o, dir / "seq", testing::QuietProgress());
   const io::SequenceReader reader = io::SequenceReader::Open(dir / "seq");
   const auto source = fuse::SegmentationSource::Create("gt", reader);
   const ReconstructResult r =
-      Reconstruct(reader, *source, {}, dir / "z", Quiet());
+      Reconstruct(reader, *source, {}, dir / "z", testing::QuietProgress());
   EXPECT_EQ(r.scene.gravity.method, "already upright");
   EXPECT_EQ(r.scene.gravity.T_upright_world.Matrix(),
             Eigen::Matrix4d::Identity());
@@ -95,7 +95,7 @@ TEST(Reconstruct, StructureIsOnePrimPerClassAndTheSceneIsUpright) {
 
   ReconstructOptions y_up;
   y_up.scene.stage.up_axis = "Y";
-  Reconstruct(reader, *source, y_up, dir / "y", Quiet());
+  Reconstruct(reader, *source, y_up, dir / "y", testing::QuietProgress());
   bool saw_floor = false, saw_table = false;
   for (const usd::MeshPrim& m : usd::ReadScene(dir / "y/scene.usda")) {
     float top = -1e9f;
@@ -118,14 +118,14 @@ TEST(Reconstruct, StructureIsOnePrimPerClassAndTheSceneIsUpright) {
 TEST(Reconstruct, PeopleBecomeTimeSampledPrimsOnTheirGroundTruthPaths) {
   testing::TempDir dir;
   const synth::SynthOptions o = SmallNoiselessScene("people", 40);
-  synth::WriteSyntheticSequence(o, dir / "seq", Quiet());
+  synth::WriteSyntheticSequence(o, dir / "seq", testing::QuietProgress());
   const io::SequenceReader reader = io::SequenceReader::Open(dir / "seq");
   const auto source = fuse::SegmentationSource::Create("gt", reader);
   ReconstructOptions options;
   options.people = "gt";
   options.usdz = true;
-  const ReconstructResult r =
-      Reconstruct(reader, *source, options, dir / "out", Quiet());
+  const ReconstructResult r = Reconstruct(reader, *source, options, dir / "out",
+                                          testing::QuietProgress());
   ASSERT_GE(r.scene.people, 2u);
 
   // Positions: the centroid of the visible points is within a body's width of
@@ -166,7 +166,8 @@ TEST(Reconstruct, PeopleBecomeTimeSampledPrimsOnTheirGroundTruthPaths) {
   ReconstructOptions no_people = options;
   no_people.people = (dir / "nopeople").string();
   no_people.overwrite = true;
-  EXPECT_THROW(Reconstruct(reader, *source, no_people, dir / "out2", Quiet()),
+  EXPECT_THROW(Reconstruct(reader, *source, no_people, dir / "out2",
+                           testing::QuietProgress()),
                IoError);
 
   const auto report = testing::ValidateUsd(dir / "out/scene.usda", dir.path());
@@ -199,8 +200,8 @@ TEST(Reconstruct, RedwoodSingleLabelMatchesWholeSceneVolume) {
   const io::SequenceReader reader = io::SequenceReader::Open(data);
   const auto source = fuse::SegmentationSource::Create("single:scene", reader);
   ReconstructOptions options;
-  const ReconstructResult r =
-      Reconstruct(reader, *source, options, dir / "out", Quiet());
+  const ReconstructResult r = Reconstruct(reader, *source, options, dir / "out",
+                                          testing::QuietProgress());
   ASSERT_EQ(r.scene.objects, 1u);
   mesh::TsdfIntegrator whole(options.scene.meshing.tsdf);
   for (size_t i = 0; i < reader.size(); ++i) whole.Integrate(reader.Read(i));

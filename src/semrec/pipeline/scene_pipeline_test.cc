@@ -28,7 +28,6 @@ namespace semrec::pipeline {
 namespace {
 
 using testing::SmallScene;
-ProgressOptions Quiet() { return testing::QuietProgress(); }
 
 // Largest distance from a sample of `a`'s points (about 400) to the nearest
 // point of `b`, by brute force.
@@ -51,7 +50,7 @@ TEST(TsdfAbsorb, EqualsIntegratingAllFramesIntoOneVolume) {
   testing::TempDir dir;
   synth::SynthOptions o = SmallScene("six-objects", 6);
   o.noise.enabled = false;
-  synth::WriteSyntheticSequence(o, dir / "seq", Quiet());
+  synth::WriteSyntheticSequence(o, dir / "seq", testing::QuietProgress());
   const io::SequenceReader reader = io::SequenceReader::Open(dir / "seq");
   mesh::TsdfOptions tsdf{0.04, 0.12, 4.0, true};
   mesh::TsdfIntegrator all(tsdf), first(tsdf), second(tsdf);
@@ -85,16 +84,16 @@ TEST(SceneBuilder, StreamingMatchesTwoPass) {
   testing::TempDir dir;
   synth::SynthOptions o = SmallScene("six-objects", 16);
   o.write_noisy_labels = true;
-  synth::WriteSyntheticSequence(o, dir / "seq", Quiet());
+  synth::WriteSyntheticSequence(o, dir / "seq", testing::QuietProgress());
   const io::SequenceReader reader = io::SequenceReader::Open(dir / "seq");
   const auto source = fuse::SegmentationSource::Create(
       (dir / "seq/labels_noisy").string(), reader);
   ReconstructOptions options;
-  const ReconstructResult streaming =
-      Reconstruct(reader, *source, options, dir / "stream", Quiet());
+  const ReconstructResult streaming = Reconstruct(
+      reader, *source, options, dir / "stream", testing::QuietProgress());
   options.scene.stream_volumes = false;
-  const ReconstructResult two_pass =
-      Reconstruct(reader, *source, options, dir / "two", Quiet());
+  const ReconstructResult two_pass = Reconstruct(
+      reader, *source, options, dir / "two", testing::QuietProgress());
   const auto s1 =
       nlohmann::json::parse(ReadTextFile(dir / "stream/summary.json"));
   const auto s2 = nlohmann::json::parse(ReadTextFile(dir / "two/summary.json"));
@@ -130,7 +129,8 @@ TEST(SceneBuilder, StreamingMatchesTwoPass) {
   run.pipeline.overlays = false;
   run.given_labels = (dir / "seq/labels_noisy").string();
   run.config_text = "labels: noisy\n";
-  const RunResult r = RunSequence(reader, nullptr, run, dir / "run", Quiet());
+  const RunResult r =
+      RunSequence(reader, nullptr, run, dir / "run", testing::QuietProgress());
   ASSERT_EQ(r.report.scene.size(), s1["objects"].size());
   for (size_t k = 0; k < r.report.scene.size(); ++k) {
     const ObjectRecord& o = r.report.scene[k];
@@ -152,15 +152,15 @@ TEST(RunSequence, GroundTruthLabelsAndPeople) {
   o.noise.max_depth_m = 8.0;  // the furniture stands 4-7 m from the camera
   o.gt_object_spacing_m = 0.01;
   o.noise.enabled = false;  // 4-7 m away, sensor noise would dominate
-  synth::WriteSyntheticSequence(o, dir / "seq", Quiet());
+  synth::WriteSyntheticSequence(o, dir / "seq", testing::QuietProgress());
   const io::SequenceReader reader = io::SequenceReader::Open(dir / "seq");
   RunOptions options;
   options.pipeline.labels = ScenePipelineOptions::Labels::kGiven;
   options.pipeline.scene.meshing.tsdf.max_depth_m = 8.0;
   options.snapshot_every = 10;
   options.config_text = "labels: gt\n";
-  const RunResult r =
-      RunSequence(reader, nullptr, options, dir / "out", Quiet());
+  const RunResult r = RunSequence(reader, nullptr, options, dir / "out",
+                                  testing::QuietProgress());
   EXPECT_EQ(r.frames, 40u);
   EXPECT_EQ(r.skipped_frames, 0u);
   std::map<std::string, int> per_class;
@@ -238,7 +238,7 @@ TEST(SceneBuilder, TrackedPeopleStayOutOfTheStaticMap) {
   testing::TempDir dir;
   synth::SynthOptions o = SmallScene("people", 24);
   o.noise.max_depth_m = 8.0;
-  synth::WriteSyntheticSequence(o, dir / "seq", Quiet());
+  synth::WriteSyntheticSequence(o, dir / "seq", testing::QuietProgress());
   const io::SequenceReader reader = io::SequenceReader::Open(dir / "seq");
   const auto source = fuse::SegmentationSource::Create("gt", reader);
   const PersonMapSource people("gt", reader);
@@ -298,13 +298,13 @@ TEST(SceneBuilder, TrackedPeopleStayOutOfTheStaticMap) {
 TEST(RunSequence, TimingAccountsForTheRunsWallTime) {
   testing::TempDir dir;
   synth::WriteSyntheticSequence(SmallScene("six-objects", 8), dir / "seq",
-                                Quiet());
+                                testing::QuietProgress());
   const io::SequenceReader reader = io::SequenceReader::Open(dir / "seq");
   RunOptions options;
   options.pipeline.labels = ScenePipelineOptions::Labels::kGiven;
   options.config_text = "labels: gt\n";
-  const RunResult r =
-      RunSequence(reader, nullptr, options, dir / "out", Quiet());
+  const RunResult r = RunSequence(reader, nullptr, options, dir / "out",
+                                  testing::QuietProgress());
   const nlohmann::json& t = r.report.timing;
   const double run = t.at("run_wall").get<double>();
   EXPECT_NEAR(run, r.seconds, 1e-9);
@@ -340,7 +340,7 @@ TEST(RunSequence, TimingAccountsForTheRunsWallTime) {
 TEST(RunSequence, CorruptFramesAreSkippedAndCounted) {
   testing::TempDir dir;
   synth::SynthOptions o = SmallScene("six-objects", 6);
-  synth::WriteSyntheticSequence(o, dir / "seq", Quiet());
+  synth::WriteSyntheticSequence(o, dir / "seq", testing::QuietProgress());
   const io::SequenceReader reader = io::SequenceReader::Open(dir / "seq");
   const fs::path broken = reader.index().frames[2].depth_path;
   testing::WriteText(broken, "not a png");
@@ -348,8 +348,8 @@ TEST(RunSequence, CorruptFramesAreSkippedAndCounted) {
   RunOptions options;
   options.pipeline.labels = ScenePipelineOptions::Labels::kGiven;
   options.config_text = "labels: gt\n";
-  const RunResult r =
-      RunSequence(reader, nullptr, options, dir / "out", Quiet());
+  const RunResult r = RunSequence(reader, nullptr, options, dir / "out",
+                                  testing::QuietProgress());
   EXPECT_EQ(r.skipped_frames, 2u);
   const auto& skipped = r.report.skipped_frames;
   ASSERT_EQ(skipped.size(), 2u);
@@ -363,7 +363,8 @@ TEST(RunSequence, CorruptFramesAreSkippedAndCounted) {
   EXPECT_EQ(read.skipped_frames.size(), 2u);
   EXPECT_GT(r.scene.objects, 3u);
   options.strict = true;
-  EXPECT_THROW(RunSequence(reader, nullptr, options, dir / "strict", Quiet()),
+  EXPECT_THROW(RunSequence(reader, nullptr, options, dir / "strict",
+                           testing::QuietProgress()),
                FileError);
 }
 
@@ -373,29 +374,31 @@ TEST(RunSequence, ResumeGivesTheSameScene) {
   testing::TempDir dir;
   synth::SynthOptions o = SmallScene("six-objects", 12);
   o.write_noisy_labels = true;
-  synth::WriteSyntheticSequence(o, dir / "seq", Quiet());
+  synth::WriteSyntheticSequence(o, dir / "seq", testing::QuietProgress());
   const io::SequenceReader reader = io::SequenceReader::Open(dir / "seq");
   RunOptions options;
   options.pipeline.labels = ScenePipelineOptions::Labels::kGiven;
   options.given_labels = (dir / "seq/labels_noisy").string();
   options.checkpoint_every = 4;
   options.config_text = "labels: noisy\n";
-  RunSequence(reader, nullptr, options, dir / "clean", Quiet());
+  RunSequence(reader, nullptr, options, dir / "clean",
+              testing::QuietProgress());
   // Interrupted: the first 8 frames only (a run on a shorter sequence is
   // refused as another sequence, so the checkpoint is cut back instead).
-  RunSequence(reader, nullptr, options, dir / "cut", Quiet());
+  RunSequence(reader, nullptr, options, dir / "cut", testing::QuietProgress());
   CheckpointStore(dir / "cut/checkpoint").Commit(8);
   fs::remove(dir / "cut/scene.usda");
   options.resume = true;
-  const RunResult resumed =
-      RunSequence(reader, nullptr, options, dir / "cut", Quiet());
+  const RunResult resumed = RunSequence(reader, nullptr, options, dir / "cut",
+                                        testing::QuietProgress());
   EXPECT_EQ(resumed.resumed_frames, 8u);
   EXPECT_EQ(ReadTextFile(dir / "cut/static.usda"),
             ReadTextFile(dir / "clean/static.usda"));
   // Other options: refused, saying so.
   options.config_text = "labels: noisy\nalpha: 0.3\n";
   try {
-    RunSequence(reader, nullptr, options, dir / "cut", Quiet());
+    RunSequence(reader, nullptr, options, dir / "cut",
+                testing::QuietProgress());
     FAIL() << "a checkpoint of other options was accepted";
   } catch (const InvalidArgument& e) {
     EXPECT_NE(std::string(e.what()).find("different set of options"),
@@ -403,7 +406,8 @@ TEST(RunSequence, ResumeGivesTheSameScene) {
         << e.what();
   }
   // No checkpoint at all.
-  EXPECT_THROW(RunSequence(reader, nullptr, options, dir / "none", Quiet()),
+  EXPECT_THROW(RunSequence(reader, nullptr, options, dir / "none",
+                           testing::QuietProgress()),
                IoError);
 }
 
@@ -457,7 +461,8 @@ TEST(TrackImages, StrideKeepsTheRecordingsFrameNumbers) {
   options.frame_step = 2;
   const infer::ModelRegistry registry;
   const TrackImagesResult r =
-      TrackImages(registry, options, {}, inputs, &given, dir / "out", Quiet());
+      TrackImages(registry, options, {}, inputs, &given, dir / "out",
+                  testing::QuietProgress());
   ASSERT_EQ(r.boxes.size(), 5u);
   for (const io::MotBox& b : r.boxes) {
     EXPECT_EQ((b.frame - 1) % 2, 0) << b.frame;

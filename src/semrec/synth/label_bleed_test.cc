@@ -48,17 +48,12 @@ LabelNoiseOptions BleedOnly(double share) {
   return o;
 }
 
-bool IsObjectInstance(uint16_t id, const Scene& scene) {
-  const SceneObject* o = scene.FindObject(id);
-  return o != nullptr && !o->structure;
-}
-
 // What the option promises, computed independently: an object pixel within
 // bleed_contact_m of the floor or a wall, or dark.
 bool IsCandidate(const Views& v, size_t view, int u, int w,
                  const LabelNoiseOptions& o) {
   const RenderedFrame& f = v.frames[view];
-  if (!IsObjectInstance(f.instance(u, w), v.scene)) return false;
+  if (!v.scene.IsObject(f.instance(u, w))) return false;
   const Eigen::Vector3d p =
       v.poses[view] * v.k.BackProject(u, w, f.depth(u, w));
   const Eigen::Vector3d& room = v.scene.room_size;
@@ -80,7 +75,7 @@ std::vector<std::vector<bool>> Bled(const Views& v, const LabelNoiseOptions& o,
     std::vector<bool> bled(n.semantic.NumPixels());
     for (size_t p = 0; p < bled.size(); ++p) {
       const uint16_t c = n.semantic.data()[p];
-      bled[p] = IsObjectInstance(v.frames[i].instance.data()[p], v.scene) &&
+      bled[p] = v.scene.IsObject(v.frames[i].instance.data()[p]) &&
                 (c == kClassFloor || c == kClassWall);
     }
     out.push_back(std::move(bled));
@@ -98,7 +93,7 @@ TEST(LabelBleed, OnlyCandidatesBleedAndJoinTheStructureMask) {
         ApplyLabelNoise(f, v.scene, v.poses[i], v.k, all, 1, 1);
     std::map<uint16_t, uint16_t> structure_mask_class;
     for (size_t p = 0; p < f.instance.NumPixels(); ++p) {
-      if (!IsObjectInstance(f.instance.data()[p], v.scene)) {
+      if (!v.scene.IsObject(f.instance.data()[p])) {
         structure_mask_class[n.instance.data()[p]] = f.semantic.data()[p];
       }
     }
@@ -161,7 +156,7 @@ TEST(LabelBleed, AWallLookalikeBleedsWholeIntoTheWall) {
     const NoisyLabels n = ApplyLabelNoise(f, v.scene, v.poses[i], v.k, o, 7, 3);
     for (size_t p = 0; p < f.semantic.NumPixels(); ++p) {
       const bool is_counter = f.semantic.data()[p] == counter &&
-                              IsObjectInstance(f.instance.data()[p], v.scene);
+                              v.scene.IsObject(f.instance.data()[p]);
       counter_px += is_counter;
       if (n.semantic.data()[p] == f.semantic.data()[p]) continue;
       ASSERT_TRUE(is_counter) << "view " << i << " pixel " << p;
@@ -269,7 +264,7 @@ TEST(LabelBleed, InteriorWallsBleedIntoTheirOwnMask) {
     }
     for (int w = 0; w < v.k.height; ++w) {
       for (int u = 0; u < v.k.width; ++u) {
-        if (!IsObjectInstance(f.instance(u, w), v.scene)) continue;
+        if (!v.scene.IsObject(f.instance(u, w))) continue;
         const Eigen::Vector3d p =
             v.poses[i] * v.k.BackProject(u, w, f.depth(u, w));
         const Eigen::Vector3d& room = v.scene.room_size;

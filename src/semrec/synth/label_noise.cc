@@ -16,12 +16,6 @@
 namespace semrec::synth {
 namespace {
 
-bool IsObject(uint16_t instance, const Scene& scene) {
-  if (instance == 0 || instance >= kPersonInstanceBase) return false;
-  const SceneObject* o = scene.FindObject(instance);
-  return o != nullptr && !o->structure;
-}
-
 // Share of the views in which a bleeding part bleeds (LabelNoiseOptions).
 constexpr double kBleedViewRate = 0.8;
 // Views in which an object cut the same way in every view is cut so.
@@ -92,7 +86,7 @@ void ApplyStructureBleed(
   for (int v = 0; v < frame.instance.height(); ++v) {
     for (int u = 0; u < frame.instance.width(); ++u) {
       const uint16_t instance = frame.instance(u, v);
-      if (!IsObject(instance, scene)) continue;
+      if (!scene.IsObject(instance)) continue;
       const Eigen::Vector3d p =
           T_world_camera *
           k.BackProject(u, v, static_cast<double>(frame.depth(u, v)));
@@ -164,12 +158,12 @@ VisibleObjects FindVisibleObjects(const RenderedFrame& frame,
   for (int v = 0; v < h; ++v) {
     for (int u = 0; u < w; ++u) {
       const uint16_t a = frame.instance(u, v);
-      if (!IsObject(a, scene)) continue;
+      if (!scene.IsObject(a)) continue;
       ++out.pixels[a];
       for (const auto& [du, dv] : {std::pair{1, 0}, std::pair{0, 1}}) {
         if (u + du >= w || v + dv >= h) continue;
         const uint16_t b = frame.instance(u + du, v + dv);
-        if (b != a && IsObject(b, scene)) {
+        if (b != a && scene.IsObject(b)) {
           out.touching.emplace(std::min(a, b), std::max(a, b));
         }
       }
@@ -352,7 +346,7 @@ void FlipClasses(const Scene& scene, const LabelNoiseOptions& options,
       object_classes.end());
   std::vector<uint16_t>& mask_class = masks->class_of;
   for (const auto& [key, id] : masks->id) {
-    const bool object = IsObject(static_cast<uint16_t>(key.first), scene);
+    const bool object = scene.IsObject(static_cast<uint16_t>(key.first));
     if (!object || object_classes.size() < 2 ||
         rng->Uniform() >= options.class_flip_probability) {
       continue;
@@ -403,7 +397,7 @@ void DropSmallMasks(const Scene& scene, const Masks& masks, int min_mask_pixels,
   }
   std::set<uint16_t> objects_masks;
   for (const auto& [key, id] : masks.id) {
-    if (IsObject(static_cast<uint16_t>(key.first), scene)) {
+    if (scene.IsObject(static_cast<uint16_t>(key.first))) {
       objects_masks.insert(id);
     }
   }

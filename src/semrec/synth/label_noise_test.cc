@@ -42,18 +42,13 @@ LabelNoiseOptions Clean() {
   return o;
 }
 
-bool IsObjectInstance(uint16_t id, const Scene& scene) {
-  const SceneObject* o = scene.FindObject(id);
-  return o != nullptr && !o->structure;
-}
-
 // GT object instance -> the noisy masks over its pixels (and the reverse).
 std::map<uint16_t, std::set<uint16_t>> MasksPerObject(const View& v,
                                                       const NoisyLabels& n) {
   std::map<uint16_t, std::set<uint16_t>> out;
   for (size_t i = 0; i < v.frame.instance.NumPixels(); ++i) {
     const uint16_t gt = v.frame.instance.data()[i];
-    if (IsObjectInstance(gt, v.scene)) out[gt].insert(n.instance.data()[i]);
+    if (v.scene.IsObject(gt)) out[gt].insert(n.instance.data()[i]);
   }
   return out;
 }
@@ -74,7 +69,7 @@ TEST(LabelNoise, WithoutNoiseTheMasksAreTheGroundTruth) {
   }
   size_t objects = 0;
   for (const auto& [gt, mask] : forward) {
-    objects += IsObjectInstance(gt, v.scene);
+    objects += v.scene.IsObject(gt);
   }
   EXPECT_GE(objects, 4u) << "the view should show most of the six objects";
 }
@@ -116,7 +111,7 @@ TEST(LabelNoise, ConsistentCutsSplitObjectsAlongTheSamePartsInEveryView) {
       for (size_t i = 0; i < n.instance.NumPixels(); ++i) {
         const uint16_t gt = v.frame.instance.data()[i];
         const uint16_t part = v.frame.part.data()[i];
-        if (!IsObjectInstance(gt, v.scene) || part == 0 ||
+        if (!v.scene.IsObject(gt) || part == 0 ||
             v.scene.FindObject(gt)->parts.size() < 2) {
           continue;
         }
@@ -151,7 +146,7 @@ TEST(LabelNoise, MergesJoinTouchingNeighboursAndFlipsChangeClasses) {
   std::map<uint16_t, std::set<uint16_t>> objects_per_mask;
   for (size_t i = 0; i < merged.instance.NumPixels(); ++i) {
     const uint16_t gt = v.frame.instance.data()[i];
-    if (IsObjectInstance(gt, v.scene)) {
+    if (v.scene.IsObject(gt)) {
       objects_per_mask[merged.instance.data()[i]].insert(gt);
     }
   }
@@ -166,7 +161,7 @@ TEST(LabelNoise, MergesJoinTouchingNeighboursAndFlipsChangeClasses) {
   const NoisyLabels flipped = Noisy(v, o, 1);
   for (size_t i = 0; i < flipped.semantic.NumPixels(); ++i) {
     const uint16_t gt = v.frame.instance.data()[i];
-    if (IsObjectInstance(gt, v.scene)) {
+    if (v.scene.IsObject(gt)) {
       ASSERT_NE(flipped.semantic.data()[i], v.frame.semantic.data()[i]);
     } else {
       ASSERT_EQ(flipped.semantic.data()[i], v.frame.semantic.data()[i]);
@@ -192,7 +187,7 @@ TEST(LabelNoise, JitterRaggesBoundariesAndSmallMasksAreDropped) {
   const NoisyLabels dropped = Noisy(v, o, 1);
   for (size_t i = 0; i < dropped.instance.NumPixels(); ++i) {
     const uint16_t gt = v.frame.instance.data()[i];
-    if (IsObjectInstance(gt, v.scene)) {
+    if (v.scene.IsObject(gt)) {
       ASSERT_EQ(dropped.instance.data()[i], 0);
     } else {
       ASSERT_EQ(dropped.instance.data()[i] == 0, gt == 0);  // structure stays

@@ -9,7 +9,7 @@
 namespace semrec::synth {
 namespace {
 
-const CameraIntrinsics kK{640, 480, 525.0, 525.0, 319.5, 239.5};
+const CameraIntrinsics kVga{640, 480, 525.0, 525.0, 319.5, 239.5};
 
 struct Stats {
   double mean = 0, std = 0;
@@ -40,7 +40,8 @@ TEST_P(NoiseStatistics, MatchesTheKinectModel) {
   const Image<float> facing(640, 480, 1, 1.0f);
   DepthNoiseOptions options;
   options.disparity_step_px = 0.0;  // axial noise alone first
-  const Stats axial = Measure(ApplyDepthNoise(clean, facing, kK, options, 11));
+  const Stats axial =
+      Measure(ApplyDepthNoise(clean, facing, kVga, options, 11));
   const double sigma = KinectAxialSigmaM(z);
   EXPECT_NEAR(axial.mean, z, 0.1 * sigma);
   EXPECT_NEAR(axial.std, sigma, 0.1 * sigma);
@@ -50,8 +51,8 @@ TEST_P(NoiseStatistics, MatchesTheKinectModel) {
   // sqrt(sigma^2 + dz^2/12).
   options.disparity_step_px = 0.125;
   const Stats quantised =
-      Measure(ApplyDepthNoise(clean, facing, kK, options, 12));
-  const double dz = z * z * 0.125 / (options.baseline_m * kK.fx);
+      Measure(ApplyDepthNoise(clean, facing, kVga, options, 12));
+  const double dz = z * z * 0.125 / (options.baseline_m * kVga.fx);
   const double expected = std::sqrt(sigma * sigma + dz * dz / 12);
   EXPECT_NEAR(quantised.mean, z, 0.1 * expected);
   EXPECT_NEAR(quantised.std, expected, 0.1 * expected);
@@ -66,7 +67,7 @@ TEST(DepthNoise, StrengthScalesSigma) {
   options.disparity_step_px = 0.0;
   options.strength = 2.0;
   const Stats s =
-      Measure(ApplyDepthNoise(clean, facing, kK.Scaled(0.5), options, 3));
+      Measure(ApplyDepthNoise(clean, facing, kVga.Scaled(0.5), options, 3));
   EXPECT_NEAR(s.std, 2.0 * KinectAxialSigmaM(2.0),
               0.1 * 2.0 * KinectAxialSigmaM(2.0));
 }
@@ -82,7 +83,8 @@ TEST(DepthNoise, GrazingAnglesEdgesAndRangeDropOut) {
   DepthNoiseOptions options;
   options.strength = 0.0;  // only deterministic effects
   options.disparity_step_px = 0.0;
-  const DepthImage out = ApplyDepthNoise(clean, cos_incidence, kK, options, 1);
+  const DepthImage out =
+      ApplyDepthNoise(clean, cos_incidence, kVga, options, 1);
   for (int v = 0; v < 10; ++v) {
     EXPECT_EQ(out(0, v), 0.0f) << "grazing";
     EXPECT_FLOAT_EQ(out(9, v), 1.0f) << "near side of the edge stays";
@@ -96,14 +98,15 @@ TEST(DepthNoise, DeterministicPerSeedAndOffIsExact) {
   const DepthImage clean(64, 48, 1, 1.5f);
   const Image<float> facing(64, 48, 1, 1.0f);
   DepthNoiseOptions options;
-  EXPECT_EQ(ApplyDepthNoise(clean, facing, kK, options, 5),
-            ApplyDepthNoise(clean, facing, kK, options, 5));
-  EXPECT_NE(ApplyDepthNoise(clean, facing, kK, options, 5),
-            ApplyDepthNoise(clean, facing, kK, options, 6));
+  EXPECT_EQ(ApplyDepthNoise(clean, facing, kVga, options, 5),
+            ApplyDepthNoise(clean, facing, kVga, options, 5));
+  EXPECT_NE(ApplyDepthNoise(clean, facing, kVga, options, 5),
+            ApplyDepthNoise(clean, facing, kVga, options, 6));
   options.enabled = false;
-  EXPECT_EQ(ApplyDepthNoise(clean, facing, kK, options, 5), clean);
+  EXPECT_EQ(ApplyDepthNoise(clean, facing, kVga, options, 5), clean);
   options.strength = -1;
-  EXPECT_THROW(ApplyDepthNoise(clean, facing, kK, options, 5), InvalidArgument);
+  EXPECT_THROW(ApplyDepthNoise(clean, facing, kVga, options, 5),
+               InvalidArgument);
 }
 
 }  // namespace

@@ -255,6 +255,12 @@ const SceneObject* Scene::FindObject(uint16_t instance_id) const {
   return nullptr;
 }
 
+bool Scene::IsObject(uint16_t instance_id) const {
+  if (instance_id == 0 || instance_id >= kPersonInstanceBase) return false;
+  const SceneObject* o = FindObject(instance_id);
+  return o != nullptr && !o->structure;
+}
+
 void SceneOptions::Check() const {
   CheckArgument(
       room_width_m >= 2.0 && room_depth_m >= 2.0 && room_height_m >= 2.0,

@@ -84,6 +84,8 @@ struct Scene {
   std::vector<Person> people;
 
   const SceneObject* FindObject(uint16_t instance_id) const;
+  /// A thing of the scene (not structure, not a person, not 0).
+  bool IsObject(uint16_t instance_id) const;
 };
 
 struct SceneOptions {

@@ -25,11 +25,6 @@ std::vector<Transform> Poses(const Scene& scene, const SynthOptions& o,
   return MakeTrajectory(scene, o.trajectory, frames, o.fps, o.seed);
 }
 
-bool IsObject(const Scene& scene, uint16_t instance) {
-  const SceneObject* o = scene.FindObject(instance);
-  return o != nullptr && !o->structure;
-}
-
 // 1/8 of the presets' resolution, same field of view.
 CameraIntrinsics Tiny(const SynthOptions& o) {
   return {o.width / 8,
@@ -119,7 +114,7 @@ TEST(SparseViews, LookAtObjectsFromAUsefulDistance) {
       const double median = depths[depths.size() / 2];
       size_t object_pixels = 0;
       for (size_t p = 0; p < r.instance.NumPixels(); ++p) {
-        object_pixels += IsObject(scene, r.instance.data()[p]);
+        object_pixels += scene.IsObject(r.instance.data()[p]);
       }
       EXPECT_GT(median, 0.6) << preset << " view " << i;
       good += median <= o.trajectory.sparse_max_median_depth_m + 0.5 &&
@@ -144,7 +139,7 @@ TEST(SparseViews, SeeManyObjectsInOneOrTwoViews) {
       if (r.depth.data()[p] <= 4.0f) ++pixels[r.instance.data()[p]];
     }
     for (const auto& [id, n] : pixels) {
-      if (IsObject(scene, id) && n >= 10) ++views[id];
+      if (scene.IsObject(id) && n >= 10) ++views[id];
     }
   }
   int rare = 0;

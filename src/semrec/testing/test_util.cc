@@ -41,6 +41,8 @@ fs::path SourceDir() {
 
 std::optional<fs::path> SampleDataDir() { return semrec::SampleDataDir(); }
 
+fs::path TinyRegistryFile() { return TinyModelDir() / "registry.yaml"; }
+
 fs::path TinyModelDir() {
   static fs::path dir;
   static std::once_flag once;

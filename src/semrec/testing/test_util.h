@@ -44,6 +44,8 @@ void WriteText(const std::filesystem::path& path, const std::string& text);
 /// built once per process with Debian's python3-onnx (no downloads). Returns
 /// an empty path (and prints the script's output) when they cannot be built.
 std::filesystem::path TinyModelDir();
+/// The tiny models' registry (TinyModelDir() / "registry.yaml").
+std::filesystem::path TinyRegistryFile();
 
 /// Parses a USD file with the independent parser (tinyusdz in node, installed
 /// by scripts/setup) and returns its report {ok, error, meshes: [{path, points,
