@@ -32,7 +32,7 @@ void RunMesh(MeshArgs args, const CLI::App* cmd) {
   task.sequence = args.sequence.path;
   task.reader = args.sequence.ReaderOptions();
   task.out = args.out;
-  task.labels = args.labels;
+  task.labels = fuse::LabelSpec::Parse(args.labels);
   task.report_html = false;
   pipeline::RunOptions& run = task.run;
   run.config_text = EffectiveConfig(cmd, /*scene_only=*/false);
@@ -50,7 +50,7 @@ void RunMesh(MeshArgs args, const CLI::App* cmd) {
   p.scene.cover_owned_voxels = !args.no_surface_patches;
   p.scene.fusion.stuff_per_class = !args.no_structure;
   p.scene.fusion.merge = fuse::ParseMerge(args.merge);
-  CheckUsage(args.labels != "models",
+  CheckUsage(task.labels.given(),
              "mesh takes labels as they are (gt, a folder, single:CLASS); "
              "semrec run --labels models runs the models");
   CheckUsage(task);

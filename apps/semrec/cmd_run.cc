@@ -99,14 +99,14 @@ void RunRun(RunArgs& args, CLI::App* cmd) {
   task.sequence = args.sequence.path;
   task.reader = args.sequence.ReaderOptions();
   task.out = args.out;
-  task.labels = args.labels;
+  task.labels = fuse::LabelSpec::Parse(args.labels);
   task.report_html = !args.no_report;
   task.report_pictures = !args.no_report_pictures;
   pipeline::RunOptions& run = args.run;
   run.config_text = EffectiveConfig(cmd, /*scene_only=*/false);
   run.resume_key = EffectiveConfig(cmd, /*scene_only=*/true);
   pipeline::ScenePipelineOptions& p = run.pipeline;
-  if (args.labels == "models") {
+  if (!task.labels.given()) {
     tasks::ModelChoice& m = task.models;
     m.registry = args.model.registry;
     m.runtime = args.model.Runtime();

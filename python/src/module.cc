@@ -368,7 +368,7 @@ nb::object Run(const std::string& sequence, const std::string& out,
   task.out = out;
   task.reader.stride = stride;
   task.reader.max_frames = max_frames;
-  task.labels = labels.value_or("models");
+  task.labels = fuse::LabelSpec::Parse(labels.value_or("models"));
   if (models && *models != "default") task.models.registry = *models;
   task.run.pipeline.segment_every = segment_every;
   task.run.pipeline.map_guidance = map_guidance;

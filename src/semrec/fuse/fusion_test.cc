@@ -3,6 +3,9 @@
 #include <map>
 #include <random>
 #include <set>
+#include <string>
+#include <tuple>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -240,6 +243,33 @@ TEST(SegmentationSource, LabelFoldersCarryTheSegmentersConfidence) {
     EXPECT_NE(std::string(e.what()).find(stem + ".json"), std::string::npos)
         << e.what();
   }
+}
+
+TEST(LabelSpec, ParsesWhatLabelsNameAndGivesTheTextBack) {
+  using Kind = LabelSpec::Kind;
+  for (const auto& [text, kind, value] :
+       std::vector<std::tuple<std::string, Kind, std::string>>{
+           {"models", Kind::kModels, ""},
+           {"gt", Kind::kSequence, ""},
+           {"single:chair", Kind::kSingleClass, "chair"},
+           {"/runs/labels", Kind::kFolder, "/runs/labels"}}) {
+    const LabelSpec spec = LabelSpec::Parse(text);
+    EXPECT_EQ(spec.kind, kind) << text;
+    EXPECT_EQ(spec.value, value) << text;
+    EXPECT_EQ(spec.Text(), text);
+    EXPECT_EQ(spec.given(), kind != Kind::kModels) << text;
+  }
+  EXPECT_THROW(LabelSpec::Parse(""), InvalidArgument);
+  EXPECT_THROW(LabelSpec::Parse("single:"), InvalidArgument);
+  testing::TempDir dir;
+  synth::WriteSyntheticSequence(testing::SmallScene("six-objects", 1),
+                                dir.path(), testing::QuietProgress());
+  const io::SequenceReader reader = io::SequenceReader::Open(dir.path());
+  EXPECT_THROW(SegmentationSource::Create(LabelSpec::Parse("models"), reader),
+               InvalidArgument);
+  EXPECT_THROW(SegmentationSource::Create("/no/such/labels", reader), IoError);
+  EXPECT_EQ(
+      SegmentationSource::Create("single:chair", reader)->classes().size(), 1u);
 }
 
 // On a synthetic sequence with ground-truth labels (a hand-held pace: 2 degrees

@@ -134,21 +134,57 @@ class SingleClassSource : public SegmentationSource {
 
 }  // namespace
 
+LabelSpec LabelSpec::Parse(const std::string& text) {
+  CheckArgument(!text.empty(),
+                "labels must be 'models', 'gt', 'single:<class>' or a label "
+                "folder");
+  if (text == "models") return {Kind::kModels, ""};
+  if (text == "gt") return {Kind::kSequence, ""};
+  if (text.rfind("single:", 0) == 0) {
+    CheckArgument(text.size() > 7, "labels 'single:<class>' need a class name");
+    return {Kind::kSingleClass, text.substr(7)};
+  }
+  return {Kind::kFolder, text};
+}
+
+std::string LabelSpec::Text() const {
+  switch (kind) {
+    case Kind::kModels:
+      return "models";
+    case Kind::kSequence:
+      return "gt";
+    case Kind::kFolder:
+      return value;
+    case Kind::kSingleClass:
+      return "single:" + value;
+  }
+  return "?";
+}
+
+std::unique_ptr<SegmentationSource> SegmentationSource::Create(
+    const LabelSpec& spec, const io::SequenceReader& reader) {
+  switch (spec.kind) {
+    case LabelSpec::Kind::kModels:
+      break;
+    case LabelSpec::Kind::kSequence:
+      return std::make_unique<LayerSource>(reader);
+    case LabelSpec::Kind::kSingleClass:
+      return std::make_unique<SingleClassSource>(spec.value);
+    case LabelSpec::Kind::kFolder:
+      if (!fs::is_directory(spec.value)) {
+        throw IoError(spec.value,
+                      "labels must be 'gt', 'single:<class>' or an existing "
+                      "folder with instance/, semantic/ and classes.json");
+      }
+      return std::make_unique<FolderSource>(spec.value);
+  }
+  throw InvalidArgument(
+      "labels 'models' come from the segmentation models, not from files");
+}
+
 std::unique_ptr<SegmentationSource> SegmentationSource::Create(
     const std::string& spec, const io::SequenceReader& reader) {
-  if (spec == "gt") return std::make_unique<LayerSource>(reader);
-  if (spec.rfind("single:", 0) == 0) {
-    const std::string name = spec.substr(7);
-    CheckArgument(!name.empty(), "labels 'single:<class>' need a class name");
-    return std::make_unique<SingleClassSource>(name);
-  }
-  if (!fs::is_directory(spec)) {
-    throw IoError(
-        spec,
-        "labels must be 'gt', 'single:<class>' or an existing folder with "
-        "instance/, semantic/ and classes.json");
-  }
-  return std::make_unique<FolderSource>(spec);
+  return Create(LabelSpec::Parse(spec), reader);
 }
 
 Eigen::Vector3f SurfaceNormalAt(const DepthImage& depth,

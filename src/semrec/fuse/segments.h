@@ -45,6 +45,29 @@ struct FrameLabels {
   std::map<uint16_t, float> confidence;
 };
 
+/// Where a run's labels come from, as `--labels` names it.
+struct LabelSpec {
+  enum class Kind {
+    /// "models": the segmentation models label the frames (no source).
+    kModels,
+    /// "gt": the sequence's own `instance` and `semantic` layers.
+    kSequence,
+    /// A label folder (`semrec segment`'s output, `synth`'s labels_noisy).
+    kFolder,
+    /// "single:<class>": every pixel with depth is one segment of the class.
+    kSingleClass,
+  };
+  Kind kind = Kind::kSequence;
+  /// kFolder: the folder; kSingleClass: the class name.
+  std::string value;
+  /// "models", "gt", "single:<class>", anything else a folder. Throws
+  /// InvalidArgument for an empty text or "single:" without a class.
+  static LabelSpec Parse(const std::string& text);
+  /// The text Parse reads back.
+  std::string Text() const;
+  bool given() const { return kind != Kind::kModels; }
+};
+
 class SegmentationSource {
  public:
   virtual ~SegmentationSource() = default;
@@ -67,6 +90,11 @@ class SegmentationSource {
   ///  - "single:<class name>": every pixel with depth is one segment of that
   ///  class (class table
   ///    with that single class, id 1).
+  /// Throws InvalidArgument for LabelSpec::Kind::kModels, IoError for a
+  /// folder that does not exist.
+  static std::unique_ptr<SegmentationSource> Create(
+      const LabelSpec& spec, const io::SequenceReader& reader);
+  /// Create(LabelSpec::Parse(spec), reader).
   static std::unique_ptr<SegmentationSource> Create(
       const std::string& spec, const io::SequenceReader& reader);
 };

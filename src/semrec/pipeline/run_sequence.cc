@@ -423,7 +423,7 @@ class SequenceRun {
         it != write_.custom_layer_data.end()) {
       r.input = it->second;
     }
-    r.labels = models_ ? "models" : options_.given_labels;
+    r.labels = models_ ? "models" : options_.given_labels.Text();
     r.frames = result.frames;
     r.processed_frames = pipeline_->frames();
     r.segmented_frames = pipeline_->segmented_frames();

@@ -12,6 +12,7 @@
 #include <nlohmann/json.hpp>
 
 #include "semrec/core/progress.h"
+#include "semrec/fuse/segments.h"
 #include "semrec/infer/model_registry.h"
 #include "semrec/io/sequence_reader.h"
 #include "semrec/pipeline/run_report.h"
@@ -21,10 +22,10 @@ namespace semrec::pipeline {
 
 struct RunOptions {
   ScenePipelineOptions pipeline;
-  /// Labels::kGiven: the labels spec of fuse::SegmentationSource::Create
-  /// ("gt" = the sequence's own layers) and the people spec of
+  /// Labels::kGiven: where the labels come from (fuse::LabelSpec; default
+  /// "gt", the sequence's own layers) and the people spec of
   /// PersonMapSource ("gt"; "" = the person layer when the sequence has one).
-  std::string given_labels = "gt";
+  fuse::LabelSpec given_labels;
   std::string given_people;
   /// Write the scene every n frames while running (0 = only at the end).
   int snapshot_every = 0;

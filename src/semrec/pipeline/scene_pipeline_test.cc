@@ -127,7 +127,8 @@ TEST(SceneBuilder, StreamingMatchesTwoPass) {
   run.pipeline.labels = ScenePipelineOptions::Labels::kGiven;
   run.pipeline.track_people = false;
   run.pipeline.overlays = false;
-  run.given_labels = (dir / "seq/labels_noisy").string();
+  run.given_labels =
+      fuse::LabelSpec::Parse((dir / "seq/labels_noisy").string());
   run.config_text = "labels: noisy\n";
   const RunResult r =
       RunSequence(reader, nullptr, run, dir / "run", testing::QuietProgress());
@@ -378,7 +379,8 @@ TEST(RunSequence, ResumeGivesTheSameScene) {
   const io::SequenceReader reader = io::SequenceReader::Open(dir / "seq");
   RunOptions options;
   options.pipeline.labels = ScenePipelineOptions::Labels::kGiven;
-  options.given_labels = (dir / "seq/labels_noisy").string();
+  options.given_labels =
+      fuse::LabelSpec::Parse((dir / "seq/labels_noisy").string());
   options.checkpoint_every = 4;
   options.config_text = "labels: noisy\n";
   RunSequence(reader, nullptr, options, dir / "clean",

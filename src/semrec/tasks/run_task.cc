@@ -49,13 +49,10 @@ void ApplyModelChoice(const infer::ModelRegistry& registry,
 void RunTaskOptions::Check() const {
   CheckArgument(!sequence.empty(), "run: no recording given");
   CheckArgument(!out.empty(), "run: no output folder given");
-  CheckArgument(!labels.empty(),
-                "run: labels must be 'models' or a labels "
-                "spec ('gt', a folder)");
-  CheckArgument(labels == "models" || !run.pipeline.map_guidance,
+  CheckArgument(!labels.given() || !run.pipeline.map_guidance,
                 "run: map guidance guides the segmentation models: it needs "
                 "labels 'models'");
-  if (labels == "models") models.Check();
+  if (!labels.given()) models.Check();
   reader.Check();
   run.Check();
 }
@@ -65,7 +62,7 @@ RunTaskResult RunTask(const RunTaskOptions& options,
   options.Check();
   pipeline::RunOptions run = options.run;
   std::optional<infer::ModelRegistry> registry;
-  if (options.labels == "models") {
+  if (!options.labels.given()) {
     registry = infer::ModelRegistry::LoadDefaultWith(options.models.registry);
     ApplyModelChoice(*registry, options.models, &run.pipeline);
   } else {

@@ -58,9 +58,9 @@ struct RunTaskOptions {
   std::filesystem::path sequence;
   io::SequenceReaderOptions reader;
   std::filesystem::path out;
-  /// "models": the models label every frame; anything else is the given
-  /// labels' spec (pipeline::RunOptions::given_labels: "gt", a folder).
-  std::string labels = "models";
+  /// kModels: the models label every frame; else the given labels
+  /// (pipeline::RunOptions::given_labels).
+  fuse::LabelSpec labels = {fuse::LabelSpec::Kind::kModels, ""};
   ModelChoice models;
   /// The rest of the run: pipeline, people, outputs, resume.
   pipeline::RunOptions run;

@@ -22,14 +22,14 @@ TEST(RunTask, GivenLabelsRunAsRunSequenceWithItsReport) {
   RunTaskOptions task;
   task.sequence = dir / "seq";
   task.out = dir / "task";
-  task.labels = "gt";
+  task.labels = fuse::LabelSpec::Parse("gt");
   task.run.config_text = "labels: gt\n";
   task.report_pictures = false;
   const RunTaskResult result = RunTask(task, QuietProgress());
 
   pipeline::RunOptions direct = task.run;
   direct.pipeline.labels = pipeline::ScenePipelineOptions::Labels::kGiven;
-  direct.given_labels = "gt";
+  direct.given_labels = fuse::LabelSpec::Parse("gt");
   const pipeline::RunResult reference =
       pipeline::RunSequence(io::SequenceReader::Open(dir / "seq"), nullptr,
                             direct, dir / "direct", QuietProgress());
@@ -77,7 +77,7 @@ TEST(RunTask, BadOptionsAndInputsAreRefusedWithTheirReason) {
   RunTaskOptions task;
   task.sequence = dir / "missing";
   task.out = dir / "out";
-  task.labels = "gt";
+  task.labels = fuse::LabelSpec::Parse("gt");
   task.run.pipeline.map_guidance = true;
   try {
     RunTask(task);
