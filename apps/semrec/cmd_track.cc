@@ -2,23 +2,14 @@
 // detect (YOLOX) or read boxes, box-prompted masks, re-identification; on
 // MOTChallenge detections alone: geometry only.
 #include <cstdio>
-#include <map>
 #include <optional>
 
 #include <fmt/format.h>
-#include <nlohmann/json.hpp>
 
 #include "commands.h"
 #include "semrec/core/error.h"
-#include "semrec/core/file_util.h"
-#include "semrec/core/progress.h"
-#include "semrec/io/mot_io.h"
-#include "semrec/pipeline/track_images.h"
-#include "semrec/segment/segment_io.h"
-#include "semrec/track/sequence.h"
+#include "semrec/tasks/track_task.h"
 #include "semrec/track/tracker.h"
-
-namespace fs = std::filesystem;
 
 namespace semrec::cli {
 namespace {
@@ -108,114 +99,53 @@ track::OfflineOptions OfflineOptionsFrom(const TrackArgs& args) {
   return options;
 }
 
-// --detections only: geometry tracking of MOTChallenge boxes.
-void RunTrackDetections(const TrackArgs& args) {
-  const track::TrackerOptions options = TrackerOptionsFrom(args);
-  const track::OfflineOptions offline = OfflineOptionsFrom(args);
-  const auto by_frame =
-      track::DetectionsByFrame(io::ReadMotFile(args.detections));
-  size_t detections = 0;
-  for (const auto& [f, d] : by_frame) detections += d.size();
-  const int frames = by_frame.empty() ? 0 : by_frame.rbegin()->first;
-  track::Tracker tracker(options);
-  Progress progress("tracking", frames);
-  const auto points = track::TrackSequence(&tracker, by_frame, frames,
-                                           [&] { progress.Tick(); });
-  progress.Finish();
-  const std::vector<io::MotBox> result =
-      track::ToMotBoxes(track::FinishTracks(points, offline));
-  io::WriteMotFile(args.out, result);
-  std::printf("%s",
-              fmt::format("{} frames, {} detections -> {} boxes; wrote {}\n",
-                          frames, detections, result.size(), args.out)
-                  .c_str());
-}
-
-// Images: detect (or read boxes), mask, embed, track; write the result file,
-// person instance PNGs, overlays and a summary.
-void RunTrackImages(const TrackArgs& args) {
-  const infer::ModelRegistry registry = args.model.LoadRegistry();
-  pipeline::PeopleTrackerOptions options;
-  options.tracker = TrackerOptionsFrom(args);
-  options.detector.model = args.detector;
-  options.detector.score_threshold = args.detector_score;
-  options.detector.runtime = args.model.Runtime();
-  options.masks = args.masks != "none";
-  if (options.masks) {
-    options.mask_model = segment::PromptableOptions::FromRegistry(
-        registry, args.masks, options.detector.runtime);
-  } else if (!args.fit_pca.empty()) {
-    throw UsageError("--fit-pca needs masks (embeddings): drop --masks none");
-  }
-  CheckUsage(options);
-  CheckUsage(args.pca_dims >= 1, "--pca-dims must be >= 1");
-  const track::PcaProjection pca = args.pca.empty()
-                                       ? track::PcaProjection()
-                                       : track::PcaProjection::Load(args.pca);
-
-  const auto inputs =
-      segment::ListSegmentInputs(args.input, args.stride, args.max_frames);
-  std::map<int, std::vector<track::Detection>> given;
-  if (!args.detections.empty()) {
-    given = track::DetectionsByFrame(io::ReadMotFile(args.detections));
-  }
-  RequireEmptyOrOverwrite(args.out, args.overwrite);
-  pipeline::TrackImagesOptions track_options;
-  track_options.people = options;
-  track_options.offline = OfflineOptionsFrom(args);
-  track_options.frame_step = args.stride;
-  const pipeline::TrackImagesResult r = pipeline::TrackImages(
-      registry, track_options, pca, inputs,
-      args.detections.empty() ? nullptr : &given, args.out);
-  const double n = inputs.empty() ? 1.0 : static_cast<double>(inputs.size());
-  nlohmann::json summary = {
-      {"input", args.input},
-      {"frames", inputs.size()},
-      {"frame_step", args.stride},
-      {"detections", args.detections.empty() ? args.detector : args.detections},
-      {"masks", args.masks},
-      {"tracks", r.tracks},
-      {"boxes", r.boxes.size()},
-      {"reidentified", r.reidentified},
-      {"reid", args.reid},
-      {"tau", options.tracker.reid.tau},
-      {"pca", args.pca},
-      {"seconds_per_frame",
-       {{"detect", r.detect_seconds / n},
-        {"encode", r.encode_seconds / n},
-        {"masks", r.mask_seconds / n}}}};
-  if (!args.fit_pca.empty()) {
-    if (r.embeddings.size() < static_cast<size_t>(args.pca_dims) + 1) {
-      throw InvalidArgument(fmt::format(
-          "--fit-pca: only {} person embeddings in {}, need more than {}",
-          r.embeddings.size(), args.input, args.pca_dims));
-    }
-    const auto fitted =
-        track::PcaProjection::Fit(r.embeddings, args.pca_dims, /*whiten=*/true);
-    fitted.Save(args.fit_pca);
-    summary["fitted_pca"] = {
-        {"file", args.fit_pca},
-        {"embeddings", r.embeddings.size()},
-        {"explained_variance", fitted.explained_variance()}};
-  }
-  WriteTextFileAtomic(fs::path(args.out) / "summary.json",
-                      summary.dump(2) + "\n");
-  std::printf("%s", fmt::format("{} frames, {} tracks, {} boxes, {} "
-                                "re-identified; wrote {}\n",
-                                inputs.size(), r.tracks, r.boxes.size(),
-                                r.reidentified, args.out)
-                        .c_str());
-}
-
+// Detections alone: geometry tracking of MOTChallenge boxes. Images: detect
+// (or read boxes), mask, embed, track (tasks::RunTrackTask).
 void RunTrack(const TrackArgs& args) {
-  if (args.input.empty()) {
-    if (args.detections.empty()) {
-      throw UsageError(
-          "give an image folder or sequence, or --detections det.txt");
+  if (args.input.empty() && args.detections.empty()) {
+    throw UsageError(
+        "give an image folder or sequence, or --detections det.txt");
+  }
+  tasks::TrackTaskOptions task;
+  task.input = args.input;
+  task.detections = args.detections;
+  task.out = args.out;
+  task.people.tracker = TrackerOptionsFrom(args);
+  task.offline = OfflineOptionsFrom(args);
+  task.masks_name = args.masks;
+  task.pca = args.pca;
+  task.fit_pca = args.fit_pca;
+  task.pca_dims = args.pca_dims;
+  task.stride = args.stride;
+  task.max_frames = args.max_frames;
+  task.overwrite = args.overwrite;
+  std::optional<infer::ModelRegistry> registry;
+  if (!args.input.empty()) {
+    registry = args.model.LoadRegistry();
+    pipeline::PeopleTrackerOptions& people = task.people;
+    people.detector.model = args.detector;
+    people.detector.score_threshold = args.detector_score;
+    people.detector.runtime = args.model.Runtime();
+    people.masks = args.masks != "none";
+    if (people.masks) {
+      people.mask_model = segment::PromptableOptions::FromRegistry(
+          *registry, args.masks, people.detector.runtime);
     }
-    RunTrackDetections(args);
+  }
+  CheckUsage(task);
+  const tasks::TrackTaskResult r =
+      tasks::RunTrackTask(registry ? &*registry : nullptr, task);
+  if (args.input.empty()) {
+    std::printf("%s",
+                fmt::format("{} frames, {} detections -> {} boxes; wrote {}\n",
+                            r.frames, r.detections, r.boxes, args.out)
+                    .c_str());
   } else {
-    RunTrackImages(args);
+    std::printf(
+        "%s", fmt::format("{} frames, {} tracks, {} boxes, {} "
+                          "re-identified; wrote {}\n",
+                          r.frames, r.tracks, r.boxes, r.reidentified, args.out)
+                  .c_str());
   }
 }
 
