@@ -178,6 +178,71 @@ SceneResultEvaluation EvaluateSceneResult(const SceneResultOptions& options) {
   return out;
 }
 
+std::string SceneResultEvaluation::Text(const SceneResultOptions& options,
+                                        bool per_object) const {
+  const SceneMetrics& m = metrics;
+  const auto name = [&](int32_t id) { return ClassName(id); };
+  size_t split = 0;
+  for (const auto& [object, pieces] : m.pieces_per_gt_object) {
+    split += pieces > 1;
+  }
+  std::string text = fmt::format(
+      "{} vs {}: {} ground-truth points{} ({:.1f}% within {} m of a "
+      "predicted surface)\nmIoU {:.2f}  AP25 {:.2f}  AP50 {:.2f}  recall@0.5 "
+      "{:.2f}  "
+      "precision@0.5 {:.2f}  (percent)\n{} predicted objects for {} "
+      "ground-truth objects ({:.2f} per object; {} objects in more than one "
+      "piece)\n",
+      scene.string(), options.gt.string(), m.gt_points,
+      options.observed_in.empty()
+          ? std::string()
+          : fmt::format(" seen in {} (of {})", options.observed_in.string(),
+                        all_points),
+      m.gt_points ? 100.0 * static_cast<double>(m.covered_points) /
+                        static_cast<double>(m.gt_points)
+                  : 0.0,
+      options.metrics.radius_m, 100 * m.mean_iou, 100 * m.ap25, 100 * m.ap50,
+      100 * m.recall50, 100 * m.precision50, m.predicted_objects, m.gt_objects,
+      m.objects_per_gt_object, split);
+  for (const auto& [label, count] : unmapped) {
+    text += fmt::format(
+        "note: {} predicted '{}' object(s) map to no ground-truth class "
+        "(--class-map)\n",
+        count, label);
+  }
+  text += fmt::format("\n{:>5}  {:<16} {:>7} {:>8} {:>7} {:>7}\n", "id",
+                      "class", "IoU", "objects", "AP25", "AP50");
+  for (const auto& c : m.classes) {
+    text +=
+        c.has_instances
+            ? fmt::format("{:>5}  {:<16} {:>7.2f} {:>8} {:>7.2f} {:>7.2f}\n",
+                          c.id, name(c.id), 100 * c.iou, c.gt_objects,
+                          100 * c.ap25, 100 * c.ap50)
+            : fmt::format("{:>5}  {:<16} {:>7.2f}\n", c.id, name(c.id),
+                          100 * c.iou);
+  }
+  if (per_object) {
+    text += fmt::format(
+        "\nwhere each ground-truth object's points went (predicted objects "
+        "with >= 5%; views: the most frames that saw one of its points, with "
+        "--observed-in):\n{:>5}  {:<16} {:>7} {:>5} {:>7} {:>9}  {}\n",
+        "id", "class", "points", "views", "IoU", "uncovered",
+        "predicted id:class share");
+    for (const auto& o : m.objects) {
+      std::string shares;
+      for (const auto& s : o.shares) {
+        shares += fmt::format(" {}:{} {:.0f}%", s.predicted_id,
+                              name(s.class_id), 100 * s.share);
+      }
+      text += fmt::format("{:>5}  {:<16} {:>7} {:>5} {:>7.2f} {:>8.0f}% {}\n",
+                          o.id, name(o.class_id), o.points,
+                          o.views > 0 ? std::to_string(o.views) : "-",
+                          100 * o.best_iou, 100 * o.uncovered, shares);
+    }
+  }
+  return text;
+}
+
 nlohmann::json SceneResultEvaluation::ToJson() const {
   const SceneMetrics& m = metrics;
   const auto name = [&](int32_t id) { return ClassName(id); };

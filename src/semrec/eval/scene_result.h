@@ -53,6 +53,9 @@ struct SceneResultEvaluation {
   std::string ClassName(int32_t id) const;
   /// Everything above as `semrec eval scene --json` prints it.
   nlohmann::json ToJson() const;
+  /// The summary `semrec eval scene` prints: the scores, per class, and with
+  /// `per_object` where each ground-truth object's points went.
+  std::string Text(const SceneResultOptions& options, bool per_object) const;
 };
 
 /// Scores `options.result`. Throws IoError/FormatError naming the file for

@@ -1,9 +1,11 @@
 #include "semrec/tasks/run_task.h"
 
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include "semrec/core/error.h"
 #include "semrec/core/file_util.h"
+#include "semrec/eval/scene_result.h"
 #include "semrec/testing/small_scene.h"
 #include "semrec/testing/test_util.h"
 
@@ -47,6 +49,23 @@ TEST(RunTask, GivenLabelsRunAsRunSequenceWithItsReport) {
     ++rows;
   }
   EXPECT_EQ(rows, result.run.report.scene.size());
+
+  // `semrec eval scene` on the task's scene: the ground-truth labels' scene
+  // scores near perfect, and the printed summary says what the JSON says.
+  eval::SceneResultOptions scored;
+  scored.result = dir / "task";
+  scored.gt = dir / "seq" / "gt" / "surface_points.ply";
+  scored.observed_in = dir / "seq";
+  const eval::SceneResultEvaluation e = eval::EvaluateSceneResult(scored);
+  EXPECT_GT(e.metrics.ap50, 0.9);
+  const std::string text = e.Text(scored, /*per_object=*/true);
+  EXPECT_NE(text.find(fmt::format("AP50 {:.2f}", 100 * e.metrics.ap50)),
+            std::string::npos)
+      << text;
+  EXPECT_NE(text.find("where each ground-truth object's points went"),
+            std::string::npos);
+  EXPECT_EQ(e.Text(scored, false).find("where each ground-truth object"),
+            std::string::npos);
 }
 
 TEST(RunTask, ModelChoiceSetsTheSegmenterAndThePeopleTracker) {
