@@ -13,12 +13,10 @@ struct MeshArgs {
   SequenceArgs sequence;
   std::string labels = "gt";
   std::string out;
-  std::string people;
-  pipeline::SceneBuilderOptions scene;
+  /// Outputs, people (`given_people`) and the scene's options
+  /// (`pipeline.scene`) bind here directly.
+  pipeline::RunOptions run;
   bool no_ply = false;
-  bool usdz = false;
-  bool glb = false;
-  bool overwrite = false;
   std::string gravity = "auto";
   bool no_structure = false;
   std::string merge = "voxel";
@@ -34,18 +32,13 @@ void RunMesh(MeshArgs args, const CLI::App* cmd) {
   task.out = args.out;
   task.labels = fuse::LabelSpec::Parse(args.labels);
   task.report_html = false;
-  pipeline::RunOptions& run = task.run;
+  pipeline::RunOptions& run = args.run;
   run.config_text = EffectiveConfig(cmd, /*scene_only=*/false);
-  run.given_people = args.people;
   run.write_ply = !args.no_ply;
-  run.usdz = args.usdz;
-  run.glb = args.glb;
-  run.overwrite = args.overwrite;
   pipeline::ScenePipelineOptions& p = run.pipeline;
   // People only when given: a sequence's person layer alone does not add them.
-  p.track_people = !args.people.empty();
+  p.track_people = !run.given_people.empty();
   p.overlays = false;
-  p.scene = args.scene;
   p.scene.gravity = fuse::ParseGravity(args.gravity);
   p.scene.cover_owned_voxels = !args.no_surface_patches;
   p.scene.fusion.stuff_per_class = !args.no_structure;
@@ -53,6 +46,7 @@ void RunMesh(MeshArgs args, const CLI::App* cmd) {
   CheckUsage(task.labels.given(),
              "mesh takes labels as they are (gt, a folder, single:CLASS); "
              "semrec run --labels models runs the models");
+  task.run = run;
   CheckUsage(task);
   const tasks::RunTaskResult result = tasks::RunTask(task);
   std::printf("%s", pipeline::RunSummaryTable(result.run, args.out).c_str());
@@ -81,23 +75,27 @@ void RegisterMesh(CLI::App& app) {
                   "'single:<class>'")
       ->capture_default_str();
   cmd->add_option("--out,-o", args->out, "Output folder")->required();
-  cmd->add_option("--people", args->people,
+  cmd->add_option("--people", args->run.given_people,
                   "Tracked people for dynamic.usda (time-sampled prims): "
                   "'gt' (the sequence's person layer) or the persons/ folder "
                   "written by 'semrec track <sequence> --out DIR'");
-  cmd->add_option("--voxel-size-m", args->scene.meshing.tsdf.voxel_size_m,
+  cmd->add_option("--voxel-size-m",
+                  args->run.pipeline.scene.meshing.tsdf.voxel_size_m,
                   "Voxel size of each object's TSDF (m)")
       ->capture_default_str();
-  cmd->add_option("--sdf-trunc-m", args->scene.meshing.tsdf.sdf_trunc_m,
+  cmd->add_option("--sdf-trunc-m",
+                  args->run.pipeline.scene.meshing.tsdf.sdf_trunc_m,
                   "SDF truncation distance (m)")
       ->capture_default_str();
-  cmd->add_option("--max-depth-m", args->scene.meshing.tsdf.max_depth_m,
+  cmd->add_option("--max-depth-m",
+                  args->run.pipeline.scene.meshing.tsdf.max_depth_m,
                   "Ignore depth beyond this (m)")
       ->capture_default_str();
-  cmd->add_option("--min-observations", args->scene.meshing.min_observations,
+  cmd->add_option("--min-observations",
+                  args->run.pipeline.scene.meshing.min_observations,
                   "Mesh only objects seen in at least this many frames")
       ->capture_default_str();
-  cmd->add_option("--alpha", args->scene.fusion.alpha,
+  cmd->add_option("--alpha", args->run.pipeline.scene.fusion.alpha,
                   "Fusion: merge when sigma > alpha")
       ->capture_default_str();
   cmd->add_option(
@@ -110,7 +108,7 @@ void RegisterMesh(CLI::App& app) {
          "planes, fragments judged by visibility)")
       ->check(CLI::IsMember({"paper", "evidence", "voxel"}))
       ->capture_default_str();
-  cmd->add_option("--up-axis", args->scene.stage.up_axis,
+  cmd->add_option("--up-axis", args->run.pipeline.scene.stage.up_axis,
                   "USD up axis: Z or Y (the upright scene is turned so that "
                   "this axis points up; with --gravity none it is only "
                   "declared)")
@@ -128,18 +126,19 @@ void RegisterMesh(CLI::App& app) {
                 "instead of one /World/Structure prim per class");
   cmd->add_flag("--no-ply", args->no_ply, "Do not write PLY per object");
   AddSurfacePatchesFlag(cmd, &args->no_surface_patches);
-  cmd->add_flag("--usdz", args->usdz,
+  cmd->add_flag("--usdz", args->run.usdz,
                 "Also write scene.usdz: objects and people in one layer, "
                 "packaged per the USDZ spec (stored, 64-byte aligned)");
-  cmd->add_flag("--glb", args->glb,
+  cmd->add_flag("--glb", args->run.glb,
                 "Also write scene.glb (glTF 2.0 binary, Y-up: Blender, "
                 "three.js and most tools "
                 "open it): one node per object, vertex colours, class and id "
                 "in extras, people "
                 "as animated nodes");
-  cmd->add_flag("--overwrite", args->overwrite,
+  cmd->add_flag("--overwrite", args->run.overwrite,
                 "Write into a non-empty output folder");
-  AddResolverSkipArgs(cmd, &args->scene.fusion.map_objects.skip_passes);
+  AddResolverSkipArgs(cmd,
+                      &args->run.pipeline.scene.fusion.map_objects.skip_passes);
   cmd->callback([args, cmd] { RunMesh(*args, cmd); });
 }
 

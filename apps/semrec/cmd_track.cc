@@ -102,10 +102,6 @@ track::OfflineOptions OfflineOptionsFrom(const TrackArgs& args) {
 // Detections alone: geometry tracking of MOTChallenge boxes. Images: detect
 // (or read boxes), mask, embed, track (tasks::RunTrackTask).
 void RunTrack(const TrackArgs& args) {
-  if (args.input.empty() && args.detections.empty()) {
-    throw UsageError(
-        "give an image folder or sequence, or --detections det.txt");
-  }
   tasks::TrackTaskOptions task;
   task.input = args.input;
   task.detections = args.detections;

@@ -42,9 +42,9 @@ TrackTaskResult TrackDetections(const TrackTaskOptions& options) {
 // person instance PNGs, overlays and summary.json.
 TrackTaskResult TrackImages(const infer::ModelRegistry& registry,
                             const TrackTaskOptions& options) {
-  const track::PcaProjection pca = options.pca.empty()
-                                       ? track::PcaProjection()
-                                       : track::PcaProjection::Load(options.pca);
+  const track::PcaProjection pca =
+      options.pca.empty() ? track::PcaProjection()
+                          : track::PcaProjection::Load(options.pca);
   const auto inputs = segment::ListSegmentInputs(
       options.input.string(), options.stride, options.max_frames);
   std::map<int, std::vector<track::Detection>> given;
@@ -64,9 +64,8 @@ TrackTaskResult TrackImages(const infer::ModelRegistry& registry,
       {"input", options.input.string()},
       {"frames", inputs.size()},
       {"frame_step", options.stride},
-      {"detections", options.detections.empty()
-                         ? options.people.detector.model
-                         : options.detections.string()},
+      {"detections", options.detections.empty() ? options.people.detector.model
+                                                : options.detections.string()},
       {"masks", options.masks_name},
       {"tracks", r.tracks},
       {"boxes", r.boxes.size()},
@@ -104,8 +103,9 @@ TrackTaskResult TrackImages(const infer::ModelRegistry& registry,
 }  // namespace
 
 void TrackTaskOptions::Check() const {
-  CheckArgument(!input.empty() || !detections.empty(),
-                "track: give an image folder or sequence, or detections");
+  CheckArgument(
+      !input.empty() || !detections.empty(),
+      "track: give an image folder or sequence, or --detections det.txt");
   CheckArgument(!out.empty(), "track: no output given");
   CheckArgument(pca_dims >= 1, "track: pca_dims must be >= 1");
   CheckArgument(fit_pca.empty() || (!input.empty() && people.masks),
