@@ -105,6 +105,15 @@ grep -q '"mean_mm"' "$tmp/c2c.json" || fail "eval c2c: no mean"
 "$SEMREC" eval c2c "$tmp/missing.ply" "$tmp/syn/gt/surface_points.ply" 2>"$tmp/err"; rc=$?
 [ "$rc" -eq 1 ] && grep -q "missing.ply" "$tmp/err" || fail "eval c2c: missing file: exit $rc"
 
+# eval traj: a straight path and an estimate off sideways by 0.1 m at every pose (no rigid
+# motion removes it: ATE 0.1 m); against a sequence whose clock they do not share, a clear error.
+printf '0 0 0 0 0 0 0 1\n1 1 0 0 0 0 0 1\n2 2 0 0 0 0 0 1\n3 3 0 0 0 0 0 1\n' >"$tmp/gt.txt"
+printf '0 0 0.1 0 0 0 0 1\n1 1 -0.1 0 0 0 0 1\n2 2 -0.1 0 0 0 0 1\n3 3 0.1 0 0 0 0 1\n' >"$tmp/est.txt"
+"$SEMREC" eval traj "$tmp/est.txt" "$tmp/gt.txt" >"$tmp/traj.out" || fail "eval traj failed"
+grep -q "ATE (after rigid alignment): RMSE 0.1000 m" "$tmp/traj.out" || fail "eval traj: $(cat "$tmp/traj.out")"
+"$SEMREC" eval traj "$tmp/est.txt" "$tmp/syn" 2>"$tmp/err"; rc=$?
+[ "$rc" -eq 1 ] && grep -q "of 4 estimated poses have a ground-truth pose within" "$tmp/err" || fail "eval traj: clocks apart: exit $rc, $(cat "$tmp/err")"
+
 "$SEMREC" bogus >/dev/null 2>&1; rc=$?
 [ "$rc" -ne 0 ] || fail "unknown subcommand accepted"
 

@@ -1,5 +1,6 @@
-// `semrec eval c2c|mot|seg` (and `scene`, cmd_eval_scene.cc): cloud-to-cloud
-// distance, tracking and segmentation metrics.
+// `semrec eval c2c|mot|seg` (`scene`: cmd_eval_scene.cc, `traj`:
+// cmd_eval_traj.cc): cloud-to-cloud distance, tracking and segmentation
+// metrics.
 #include <cstdio>
 
 #include <fmt/format.h>
@@ -202,6 +203,7 @@ void RegisterEval(CLI::App& app) {
   seg->callback([seg_args] { RunSeg(*seg_args); });
 
   AddEvalScene(eval);
+  AddEvalTraj(eval);
 }
 
 }  // namespace semrec::cli

@@ -111,6 +111,7 @@ void RegisterFuse(CLI::App& app);
 void RegisterEval(CLI::App& app);
 /// `eval scene`, added to the eval command.
 void AddEvalScene(CLI::App* eval);
+void AddEvalTraj(CLI::App* eval);
 void RegisterTrack(CLI::App& app);
 void RegisterMesh(CLI::App& app);
 void RegisterQuery(CLI::App& app);

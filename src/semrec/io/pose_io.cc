@@ -191,6 +191,19 @@ void WriteRedwoodLog(const fs::path& path,
   WriteTextFileAtomic(path, text);
 }
 
+void WriteTumTrajectory(const fs::path& path,
+                        const std::vector<StampedPose>& poses) {
+  std::string text = "# timestamp tx ty tz qx qy qz qw\n";
+  for (const StampedPose& p : poses) {
+    const Eigen::Vector3d& t = p.T_world_camera.translation();
+    const Eigen::Quaterniond q = p.T_world_camera.Quaternion();
+    text += fmt::format(
+        "{:.6f} {:.9g} {:.9g} {:.9g} {:.9g} {:.9g} {:.9g} {:.9g}\n",
+        p.timestamp_s, t.x(), t.y(), t.z(), q.x(), q.y(), q.z(), q.w());
+  }
+  WriteTextFileAtomic(path, text);
+}
+
 namespace {
 
 Eigen::Matrix4d MatrixFromYaml(const YAML::Node& node,

@@ -29,6 +29,11 @@ struct StampedPose {
 /// TUM `groundtruth.txt` (comments with '#'), sorted by time.
 std::vector<StampedPose> ReadTumTrajectory(const std::filesystem::path& path);
 
+/// Writes a TUM trajectory (one "timestamp tx ty tz qx qy qz qw" line per
+/// pose, camera-to-world) atomically; ReadTumTrajectory reads it back.
+void WriteTumTrajectory(const std::filesystem::path& path,
+                        const std::vector<StampedPose>& poses);
+
 /// Open3D PinholeCameraIntrinsic JSON ({"width", "height", "intrinsic_matrix":
 /// 9 numbers, column-major}).
 CameraIntrinsics ReadOpen3dIntrinsics(const std::filesystem::path& path);

@@ -38,6 +38,23 @@ TEST(PoseIo, TumTrajectoryQuaternionOrderIsXyzw) {
       poses[0].T_world_camera.translation().isApprox(Eigen::Vector3d(1, 2, 3)));
 }
 
+TEST(PoseIo, TumTrajectoryRoundTrip) {
+  semrec::testing::TempDir dir;
+  const std::vector<StampedPose> poses = {
+      {1305031102.175304,
+       Transform(
+           Eigen::AngleAxisd(2.5, Eigen::Vector3d(1, -2, 0.5).normalized())
+               .toRotationMatrix(),
+           {1.25, -0.5, 3.0})},
+      {1305031102.211214, Transform()}};
+  WriteTumTrajectory(dir / "est.txt", poses);
+  const auto read = ReadTumTrajectory(dir / "est.txt");
+  ASSERT_EQ(read.size(), 2u);
+  EXPECT_NEAR(read[0].timestamp_s, poses[0].timestamp_s, 1e-6);
+  EXPECT_TRUE(read[0].T_world_camera.IsApprox(poses[0].T_world_camera, 1e-7));
+  EXPECT_TRUE(read[1].T_world_camera.IsApprox(Transform(), 1e-12));
+}
+
 TEST(PoseIo, IntrinsicsFiles) {
   semrec::testing::TempDir dir;
   semrec::testing::WriteText(

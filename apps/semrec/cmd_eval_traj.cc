@@ -1,0 +1,98 @@
+// `semrec eval traj EST GT`: trajectory accuracy (ATE after rigid alignment,
+// RPE) of estimated camera poses against ground truth.
+#include <cstdio>
+#include <filesystem>
+
+#include <nlohmann/json.hpp>
+
+#include "commands.h"
+#include "semrec/eval/trajectory.h"
+#include "semrec/io/pose_io.h"
+#include "semrec/io/sequence_reader.h"
+
+namespace semrec::cli {
+namespace {
+
+struct TrajArgs {
+  std::string estimate;
+  std::string ground_truth;
+  std::string pose_correction;
+  eval::TrajectoryOptions options;
+  bool json = false;
+};
+
+// A TUM file, or a sequence whose poses are the ground truth.
+std::vector<io::StampedPose> GroundTruth(const TrajArgs& args) {
+  if (std::filesystem::is_regular_file(args.ground_truth) &&
+      args.pose_correction.empty()) {
+    return io::ReadTumTrajectory(args.ground_truth);
+  }
+  io::SequenceReaderOptions options;
+  options.pose_correction_path = args.pose_correction;
+  const io::SequenceReader reader =
+      io::SequenceReader::Open(args.ground_truth, options);
+  std::vector<io::StampedPose> poses;
+  for (const io::FrameRecord& f : reader.index().frames) {
+    poses.push_back({f.timestamp_s, f.T_world_camera});
+  }
+  return poses;
+}
+
+void RunTraj(const TrajArgs& args) {
+  args.options.Check();
+  const eval::TrajectoryErrors e = eval::EvaluateTrajectory(
+      io::ReadTumTrajectory(args.estimate), GroundTruth(args), args.options);
+  if (!args.json) {
+    std::printf("%s", eval::TrajectoryErrorsText(e).c_str());
+    return;
+  }
+  const nlohmann::json j = {
+      {"associated", e.associated},
+      {"unmatched_estimate", e.unmatched_estimate},
+      {"unmatched_ground_truth", e.unmatched_ground_truth},
+      {"path_length_m", e.path_length_m},
+      {"ate_rmse_m", e.ate_rmse_m},
+      {"ate_mean_m", e.ate_mean_m},
+      {"ate_median_m", e.ate_median_m},
+      {"ate_max_m", e.ate_max_m},
+      {"rpe_pairs", e.rpe_pairs},
+      {"rpe_translation_rmse_m", e.rpe_translation_rmse_m},
+      {"rpe_rotation_rmse_deg", e.rpe_rotation_rmse_deg},
+      {"rpe_translation_per_m", e.rpe_translation_per_m},
+      {"rpe_rotation_deg_per_m", e.rpe_rotation_deg_per_m}};
+  std::printf("%s\n", j.dump(2).c_str());
+}
+
+}  // namespace
+
+void AddEvalTraj(CLI::App* eval) {
+  auto args = std::make_shared<TrajArgs>();
+  CLI::App* cmd = eval->add_subcommand(
+      "traj",
+      "Camera trajectory accuracy as the TUM RGB-D benchmark measures it: "
+      "poses associated by timestamp, the estimate rigidly aligned to the "
+      "ground truth (no scale), then ATE (RMSE, mean, median, max of the "
+      "position errors) and RPE (the error of the motion between poses "
+      "--delta apart, RMSE and per metre travelled).");
+  cmd->add_option("estimate", args->estimate,
+                  "Estimated poses (TUM: 'timestamp tx ty tz qx qy qz qw')")
+      ->required()
+      ->check(CLI::ExistingFile);
+  cmd->add_option("ground_truth", args->ground_truth,
+                  "Ground truth: a TUM file or a sequence (its poses)")
+      ->required()
+      ->check(CLI::ExistingPath);
+  cmd->add_option("--pose-correction", args->pose_correction,
+                  "The sequence's pose correction (YAML), as for run")
+      ->check(CLI::ExistingFile);
+  cmd->add_option("--max-dt", args->options.max_time_difference_s,
+                  "Pair poses at most this far apart in time (s)")
+      ->capture_default_str();
+  cmd->add_option("--delta", args->options.rpe_delta_frames,
+                  "RPE between poses this many pairs apart")
+      ->capture_default_str();
+  cmd->add_flag("--json", args->json, "Print JSON");
+  cmd->callback([args] { RunTraj(*args); });
+}
+
+}  // namespace semrec::cli
