@@ -15,10 +15,12 @@
 #include <vector>
 
 #include <fmt/format.h>
+#include <spdlog/spdlog.h>
 
 #include "bench_util.h"
 #include "semrec/eval/trajectory.h"
 #include "semrec/io/image_io.h"
+#include "semrec/io/pose_io.h"
 #include "semrec/io/sequence_reader.h"
 #include "semrec/odometry/pose_tracker.h"
 
@@ -34,20 +36,31 @@ struct Variant {
 
 int g_downsampling = 0;
 double g_max_depth_m = 6.0;
+int g_dilation_px = 0;
+double g_keyframe_m = 0.1, g_keyframe_deg = 10.0;
+std::string g_only;
+double g_depth_diff_m = 0.07, g_max_step_m = 0.3;
 
 std::vector<Variant> Variants() {
   using O = odometry::PoseTrackerOptions;
   std::vector<Variant> out;
-  for (const auto method : {O::Method::kFrameToFrame, O::Method::kFrameToKeyframe,
-                            O::Method::kFrameToModel}) {
+  for (const auto method :
+       {O::Method::kFrameToFrame, O::Method::kFrameToKeyframe,
+        O::Method::kFrameToModel}) {
     for (const auto loss : {O::Loss::kHybrid, O::Loss::kPhotometric}) {
       Variant v;
       v.options.method = method;
       v.options.loss = loss;
       v.options.image_downsampling = g_downsampling;
       v.options.max_depth_m = g_max_depth_m;
+      v.options.mask_dilation_px = g_dilation_px;
+      v.options.keyframe_step_m = g_keyframe_m;
+      v.options.keyframe_step_deg = g_keyframe_deg;
+      v.options.depth_diff_m = g_depth_diff_m;
+      v.options.max_step_m = g_max_step_m;
       v.name = fmt::format("{} {}", odometry::MethodName(method),
                            loss == O::Loss::kHybrid ? "hybrid" : "photometric");
+      if (!g_only.empty() && v.name.find(g_only) == std::string::npos) continue;
       out.push_back(v);
     }
   }
@@ -78,6 +91,10 @@ Outcome Run(const io::SequenceReader& reader, const std::vector<Frame>& frames,
     return out;
   }
   out.seconds_per_frame = watch.Elapsed() / static_cast<double>(frames.size());
+  if (const char* dir = std::getenv("SEMREC_BENCH_WRITE_POSES")) {
+    io::WriteTumTrajectory(fs::path(dir) / "estimate.txt", estimate);
+    io::WriteTumTrajectory(fs::path(dir) / "truth.txt", truth);
+  }
   const eval::TrajectoryErrors e = eval::EvaluateTrajectory(estimate, truth);
   out.ate_m = e.ate_rmse_m;
   out.rpe_m = e.rpe_translation_rmse_m;
@@ -86,12 +103,14 @@ Outcome Run(const io::SequenceReader& reader, const std::vector<Frame>& frames,
 }
 
 void Bench(const fs::path& sequence, const fs::path& masks_dir,
-           size_t max_frames, const io::SequenceReaderOptions& reader_options = {}) {
+           size_t max_frames,
+           const io::SequenceReaderOptions& reader_options = {}) {
   if (!fs::exists(sequence)) {
     std::printf("skipped %s: not found\n", sequence.string().c_str());
     return;
   }
-  const io::SequenceReader reader = io::SequenceReader::Open(sequence, reader_options);
+  const io::SequenceReader reader =
+      io::SequenceReader::Open(sequence, reader_options);
   std::vector<Frame> frames;
   std::vector<std::optional<LabelMap>> masks;
   size_t masked = 0;
@@ -138,12 +157,27 @@ void Bench(const fs::path& sequence, const fs::path& masks_dir,
 }  // namespace
 
 int main(int argc, char** argv) {
+  if (std::getenv("SEMREC_BENCH_DEBUG") != nullptr) {
+    spdlog::set_level(spdlog::level::debug);
+  }
   std::vector<std::string> positional;
   size_t max_frames = 1000000;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     if (a == "--frames" && i + 1 < argc) {
       max_frames = std::stoul(argv[++i]);
+    } else if (a == "--dilate" && i + 1 < argc) {
+      g_dilation_px = std::stoi(argv[++i]);
+    } else if (a == "--keyframe-m" && i + 1 < argc) {
+      g_keyframe_m = std::stod(argv[++i]);
+    } else if (a == "--keyframe-deg" && i + 1 < argc) {
+      g_keyframe_deg = std::stod(argv[++i]);
+    } else if (a == "--depth-diff" && i + 1 < argc) {
+      g_depth_diff_m = std::stod(argv[++i]);
+    } else if (a == "--max-step" && i + 1 < argc) {
+      g_max_step_m = std::stod(argv[++i]);
+    } else if (a == "--only" && i + 1 < argc) {
+      g_only = argv[++i];
     } else if (a == "--max-depth" && i + 1 < argc) {
       g_max_depth_m = std::stod(argv[++i]);
     } else if (a == "--downsampling" && i + 1 < argc) {

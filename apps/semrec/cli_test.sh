@@ -71,6 +71,19 @@ ls "$tmp/fused/segments" | grep -q "_chair.ply" || fail "fuse: no per-segment PL
 grep -q "run 3/3" "$tmp/mesh.err" || fail "mesh: no progress report"
 [ -s "$tmp/scene/scene.usda" ] && [ -s "$tmp/scene/static.usda" ] || fail "mesh: no USD written"
 grep -q 'semantics:labels:class = \["chair"\]' "$tmp/scene/static.usda" || fail "mesh: no chair prim"
+# Poses estimated from the frames: written to poses.txt, reported, close to the true ones.
+"$SEMREC" mesh "$tmp/syn" --poses estimate --out "$tmp/est" >"$tmp/est.out" 2>"$tmp/err" ||
+  fail "mesh --poses estimate: $(cat "$tmp/err")"
+[ "$(grep -vc '^#' "$tmp/est/poses.txt")" -eq 3 ] && grep -q '"source": "estimated"' "$tmp/est/report.json" &&
+  grep -q "camera poses estimated (frame-to-keyframe" "$tmp/est.out" || fail "mesh --poses estimate: $(cat "$tmp/est.out")"
+"$SEMREC" eval traj "$tmp/est/poses.txt" "$tmp/syn" --json >"$tmp/traj.json" || fail "eval traj of the estimate"
+python3 -c 'import json,sys; e=json.load(open(sys.argv[1]))["ate_rmse_m"]; sys.exit(0 if e < 0.02 else 1)' \
+  "$tmp/traj.json" || fail "estimated poses off: $(cat "$tmp/traj.json")"
+"$SEMREC" eval scene "$tmp/est" "$tmp/syn/gt/surface_points.ply" 2>"$tmp/err"; rc=$?
+[ "$rc" -eq 1 ] && grep -q "built from estimated camera poses.*--gt-trajectory" "$tmp/err" ||
+  fail "eval scene of an estimate without --gt-trajectory: exit $rc, $(cat "$tmp/err")"
+"$SEMREC" eval scene "$tmp/est" "$tmp/syn/gt/surface_points.ply" --gt-trajectory "$tmp/syn" >/dev/null 2>"$tmp/err" ||
+  fail "eval scene --gt-trajectory: $(cat "$tmp/err")"
 "$SEMREC" query "$tmp/scene/scene.usda" --class chair --json >"$tmp/q.json" || fail "query failed"
 grep -q '"class": "chair"' "$tmp/q.json" || fail "query: no chair: $(cat "$tmp/q.json")"
 [ "$(grep -c '"class"' "$tmp/q.json")" -eq 1 ] || fail "query --class returned other classes"

@@ -15,6 +15,8 @@ struct SceneArgs {
   std::string class_map;
   std::string observed_in;
   int observed_stride = 1;
+  std::string gt_trajectory;
+  std::string pose_correction;
   bool json = false;
   bool objects = false;
   eval::SceneEvalOptions options;
@@ -29,6 +31,8 @@ void RunScene(const SceneArgs& args) {
   options.class_map = args.class_map;
   options.observed_in = args.observed_in;
   options.observed_stride = args.observed_stride;
+  options.gt_trajectory = args.gt_trajectory;
+  options.gt_trajectory_options.pose_correction_path = args.pose_correction;
   options.metrics = args.options;
   CheckUsage(options);
   const eval::SceneResultEvaluation e = eval::EvaluateSceneResult(options);
@@ -78,6 +82,12 @@ void AddEvalScene(CLI::App* eval) {
                   "Use every n-th frame for --observed-in (the stride the "
                   "reconstruction used)")
       ->capture_default_str();
+  cmd->add_option("--gt-trajectory", args->gt_trajectory,
+                  "For a result built from estimated poses (poses.txt in its "
+                  "folder): the recording's true trajectory (the sequence or "
+                  "a TUM file), to which they are aligned");
+  cmd->add_option("--pose-correction", args->pose_correction,
+                  "The --gt-trajectory sequence's pose correction (YAML)");
   cmd->add_option("--radius-m", args->options.radius_m,
                   "Label transfer radius (m)")
       ->capture_default_str();

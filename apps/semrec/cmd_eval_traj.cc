@@ -1,7 +1,6 @@
 // `semrec eval traj EST GT`: trajectory accuracy (ATE after rigid alignment,
 // RPE) of estimated camera poses against ground truth.
 #include <cstdio>
-#include <filesystem>
 
 #include <nlohmann/json.hpp>
 
@@ -21,27 +20,18 @@ struct TrajArgs {
   bool json = false;
 };
 
-// A TUM file, or a sequence whose poses are the ground truth.
-std::vector<io::StampedPose> GroundTruth(const TrajArgs& args) {
-  if (std::filesystem::is_regular_file(args.ground_truth) &&
-      args.pose_correction.empty()) {
-    return io::ReadTumTrajectory(args.ground_truth);
-  }
+io::SequenceReaderOptions GroundTruthOptions(const TrajArgs& args) {
   io::SequenceReaderOptions options;
   options.pose_correction_path = args.pose_correction;
-  const io::SequenceReader reader =
-      io::SequenceReader::Open(args.ground_truth, options);
-  std::vector<io::StampedPose> poses;
-  for (const io::FrameRecord& f : reader.index().frames) {
-    poses.push_back({f.timestamp_s, f.T_world_camera});
-  }
-  return poses;
+  return options;
 }
 
 void RunTraj(const TrajArgs& args) {
   args.options.Check();
   const eval::TrajectoryErrors e = eval::EvaluateTrajectory(
-      io::ReadTumTrajectory(args.estimate), GroundTruth(args), args.options);
+      io::ReadTumTrajectory(args.estimate),
+      eval::ReadTrajectory(args.ground_truth, GroundTruthOptions(args)),
+      args.options);
   if (!args.json) {
     std::printf("%s", eval::TrajectoryErrorsText(e).c_str());
     return;

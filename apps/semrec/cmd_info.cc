@@ -20,8 +20,15 @@ struct InfoArgs {
 };
 
 void RunInfo(const InfoArgs& args) {
-  const io::SequenceReader reader = io::SequenceReader::Open(
-      args.sequence.path, args.sequence.ReaderOptions());
+  // A recording without poses is described too (run estimates them).
+  io::SequenceReaderOptions options = args.sequence.ReaderOptions();
+  options.require_poses = false;
+  const io::SequenceReader reader =
+      io::SequenceReader::Open(args.sequence.path, options);
+  const bool has_poses = reader.index().has_poses;
+  const std::string poses =
+      has_poses ? reader.index().pose_source
+                : "none (semrec run and mesh estimate them: --poses auto)";
   const CameraIntrinsics& k = reader.intrinsics();
 
   // Depth range over the frames (all, or an evenly spaced subset): reads every
@@ -64,6 +71,7 @@ void RunInfo(const InfoArgs& args) {
         {"depth_scale", reader.index().depth_scale},
         {"details", reader.index().details},
         {"pose_source", reader.index().pose_source},
+        {"has_poses", has_poses},
         {"depth_min_m", min_depth},
         {"depth_max_m", max_depth},
         {"valid_depth_fraction", scan > 0 ? valid_sum / scan : 0.0},
@@ -88,8 +96,8 @@ void RunInfo(const InfoArgs& args) {
           "trajectory length: {:.3f} m over {:.2f} s\n",
           reader.root().string(), reader.layout(), reader.size(), k.width,
           k.height, k.fx, k.fy, k.cx, k.cy, reader.index().intrinsics_source,
-          reader.index().depth_scale, reader.index().pose_source, min_depth,
-          max_depth, scan > 0 ? 100.0 * valid_sum / scan : 0.0, scan,
+          reader.index().depth_scale, poses, min_depth, max_depth,
+          scan > 0 ? 100.0 * valid_sum / scan : 0.0, scan,
           reader.TrajectoryLengthM(), duration)
           .c_str());
   for (const std::string& line : reader.index().details) {

@@ -75,6 +75,7 @@ void RegisterMesh(CLI::App& app) {
                   "'single:<class>'")
       ->capture_default_str();
   cmd->add_option("--out,-o", args->out, "Output folder")->required();
+  AddPoseArgs(cmd, &args->run);
   cmd->add_option("--people", args->run.given_people,
                   "Tracked people for dynamic.usda (time-sampled prims): "
                   "'gt' (the sequence's person layer) or the persons/ folder "

@@ -361,10 +361,12 @@ void RegisterRun(CLI::App& app) {
       "report.json (time per stage, frames/s, peak memory, objects per "
       "class, people, skipped frames, model checksums) and run.yaml (the "
       "effective options, usable as --config). Checkpoints let --resume "
-      "continue an interrupted run. Poses must come with the sequence "
-      "(semrec does not estimate them).");
+      "continue an interrupted run. Camera poses come with the recording or, "
+      "without (or with --poses estimate), are estimated in the same pass "
+      "(OUT/poses.txt).");
   AddSequenceArgs(cmd, &args->sequence);
   cmd->add_option("--out,-o", args->out, "Output folder")->required();
+  AddPoseArgs(cmd, &args->run);
   AddRunInputArgs(cmd, args.get());
   AddRunSegmentationArgs(cmd, args.get());
   AddRunGuidanceArgs(cmd, args.get());

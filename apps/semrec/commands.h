@@ -14,6 +14,7 @@
 #include "semrec/infer/model_registry.h"
 #include "semrec/infer/onnx_model.h"
 #include "semrec/io/sequence_reader.h"
+#include "semrec/pipeline/run_sequence.h"
 #include "semrec/segment/detector_votes.h"
 
 namespace semrec::cli {
@@ -61,6 +62,10 @@ struct SequenceArgs {
   io::SequenceReaderOptions ReaderOptions() const;
 };
 void AddSequenceArgs(CLI::App* cmd, SequenceArgs* args);
+
+/// --poses and --odometry (run, mesh): where the camera poses come from
+/// (pipeline::RunOptions::poses, odometry.method), bound to `run`.
+void AddPoseArgs(CLI::App* cmd, pipeline::RunOptions* run);
 
 /// --no-surface-patches (mesh, run): SceneBuilderOptions::cover_owned_voxels
 /// off.

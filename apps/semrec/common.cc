@@ -20,6 +20,31 @@ io::SequenceReaderOptions SequenceArgs::ReaderOptions() const {
   return options;
 }
 
+void AddPoseArgs(CLI::App* cmd, pipeline::RunOptions* run) {
+  cmd->add_option_function<std::string>(
+         "--poses",
+         [run](const std::string& text) {
+           run->poses = pipeline::ParsePoses(text);
+         },
+         "file: the recording's poses (refused without); estimate: from the "
+         "frames, in the same pass (RGB-D odometry, tracked people left "
+         "out), written to OUT/poses.txt; auto: the recording's when it has "
+         "them, else estimated")
+      ->default_str(pipeline::PosesName(run->poses))
+      ->check(CLI::IsMember({"file", "estimate", "auto"}));
+  cmd->add_option_function<std::string>(
+         "--odometry",
+         [run](const std::string& text) {
+           run->odometry.method = odometry::ParseMethod(text);
+         },
+         "Estimated poses: frame-to-keyframe (odometry to the last keyframe, "
+         "the previous frame when that fails), frame-to-frame, or "
+         "frame-to-model (then ICP against the latest keyframes' clouds)")
+      ->default_str(odometry::MethodName(run->odometry.method))
+      ->check(CLI::IsMember(
+          {"frame-to-keyframe", "frame-to-frame", "frame-to-model"}));
+}
+
 void AddSurfacePatchesFlag(CLI::App* cmd, bool* no_surface_patches) {
   cmd->add_flag("--no-surface-patches", *no_surface_patches,
                 "Do not cover the map voxels of things that no volume meshed "

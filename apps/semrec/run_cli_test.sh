@@ -20,10 +20,10 @@ done
 # Missing poses / bad files are clear errors.
 "$SEMREC" run /nonexistent/seq --out "$tmp/x" 2>"$tmp/err"; rc=$?
 [ "$rc" -eq 1 ] && grep -q "sequence path does not exist" "$tmp/err" || fail "missing sequence: $rc $(cat "$tmp/err")"
-# A TUM sequence without poses: refused, saying that semrec does not estimate them.
+# A TUM sequence without poses, with --poses file: refused, naming the way out.
 mkdir -p "$tmp/nopose" && cp "$bonn/rgb.txt" "$bonn/depth.txt" "$tmp/nopose/"
-"$SEMREC" run "$tmp/nopose" --out "$tmp/x" 2>"$tmp/err"; rc=$?
-[ "$rc" -eq 1 ] && grep -q "groundtruth.txt: no camera poses.*does not estimate them" "$tmp/err" ||
+"$SEMREC" run "$tmp/nopose" --poses file --out "$tmp/x" 2>"$tmp/err"; rc=$?
+[ "$rc" -eq 1 ] && grep -q "groundtruth.txt: no camera poses.*--poses estimate" "$tmp/err" ||
   fail "sequence without poses: $rc $(cat "$tmp/err")"
 printf 'stride: [1, 2]\n' >"$tmp/bad.yaml"
 "$SEMREC" run "$bonn" --config "$tmp/bad.yaml" --out "$tmp/x" 2>"$tmp/err"; rc=$?

@@ -4,8 +4,10 @@
 #include <sstream>
 
 #include <fmt/format.h>
+#include <spdlog/spdlog.h>
 
 #include "semrec/core/error.h"
+#include "semrec/eval/trajectory.h"
 #include "semrec/io/image_io.h"
 #include "semrec/io/json_file.h"
 #include "semrec/io/label_set_io.h"
@@ -118,6 +120,34 @@ std::string SceneResultEvaluation::ClassName(int32_t id) const {
              : fmt::format("({})", id);
 }
 
+namespace {
+
+// The result's world frame from the ground truth's: the identity for a
+// result built from the recording's poses, the trajectory alignment's
+// inverse for one built from estimated poses.
+Transform ResultFromGroundTruth(const SceneResultOptions& options) {
+  const fs::path poses = options.result / "poses.txt";
+  if (!fs::is_directory(options.result) || !fs::exists(poses)) {
+    return Transform();
+  }
+  if (options.gt_trajectory.empty()) {
+    throw InvalidArgument(
+        options.result.string() +
+        " was built from estimated camera poses (poses.txt): give the "
+        "recording's true trajectory (--gt-trajectory SEQUENCE|TUM file) to "
+        "bring the ground truth into its frame");
+  }
+  const auto estimate = io::ReadTumTrajectory(poses);
+  const auto truth =
+      ReadTrajectory(options.gt_trajectory, options.gt_trajectory_options);
+  spdlog::info("estimated poses aligned to {}: ATE RMSE {:.4f} m",
+               options.gt_trajectory.string(),
+               EvaluateTrajectory(estimate, truth).ate_rmse_m);
+  return AlignPoses(estimate, truth).Inverse();
+}
+
+}  // namespace
+
 SceneResultEvaluation EvaluateSceneResult(const SceneResultOptions& options) {
   options.Check();
   SceneResultEvaluation out;
@@ -151,8 +181,10 @@ SceneResultEvaluation EvaluateSceneResult(const SceneResultOptions& options) {
     for (size_t i = 0; i < seen.size(); ++i) seen[i] = gt.views[i] > 0;
     gt = Subset(gt, seen);
   }
+  const Transform T_result_gt =
+      T_upright_world * ResultFromGroundTruth(options);
   for (auto& p : gt.points) {
-    p = (T_upright_world * p.cast<double>()).cast<float>();
+    p = (T_result_gt * p.cast<double>()).cast<float>();
   }
 
   std::vector<PredictedObject> predicted;

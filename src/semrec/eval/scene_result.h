@@ -34,6 +34,12 @@ struct SceneResultOptions {
   /// all), every `observed_stride`-th frame.
   std::filesystem::path observed_in;
   int observed_stride = 1;
+  /// A result built from estimated poses (its folder holds poses.txt) lies
+  /// in the first camera's frame: its poses are aligned to this trajectory
+  /// (eval::ReadTrajectory: the recording, or a TUM file) and the ground
+  /// truth is moved into the result's frame. Required for such a result.
+  std::filesystem::path gt_trajectory;
+  io::SequenceReaderOptions gt_trajectory_options;
   SceneEvalOptions metrics;
   /// Throws InvalidArgument for a missing result/ground truth path or a bad
   /// stride.

@@ -5,8 +5,8 @@
 #include <numeric>
 #include <tuple>
 
-#include <Eigen/SVD>
 #include <fmt/format.h>
+#include <Eigen/SVD>
 
 #include "semrec/core/error.h"
 
@@ -25,9 +25,9 @@ double Rms(const std::vector<double>& values) {
 }  // namespace
 
 void TrajectoryOptions::Check() const {
-  CheckArgument(std::isfinite(max_time_difference_s) &&
-                    max_time_difference_s >= 0.0,
-                "trajectory: the maximum time difference must be >= 0 s");
+  CheckArgument(
+      std::isfinite(max_time_difference_s) && max_time_difference_s >= 0.0,
+      "trajectory: the maximum time difference must be >= 0 s");
   CheckArgument(rpe_delta_frames >= 1,
                 "trajectory: the RPE delta must be at least 1 frame");
 }
@@ -91,14 +91,34 @@ Transform AlignRigid(const std::vector<Eigen::Vector3d>& from,
   return Transform(R, mean_to - R * mean_from);
 }
 
+Transform AlignPoses(const std::vector<io::StampedPose>& estimate,
+                     const std::vector<io::StampedPose>& ground_truth,
+                     const TrajectoryOptions& options) {
+  options.Check();
+  std::vector<Eigen::Vector3d> from, to;
+  for (const auto& [i, j] :
+       AssociateByTime(estimate, ground_truth, options.max_time_difference_s)) {
+    for (int axis = -1; axis < 3; ++axis) {
+      const Eigen::Vector3d tip = axis < 0 ? Eigen::Vector3d::Zero().eval()
+                                           : Eigen::Vector3d::Unit(axis).eval();
+      from.push_back(estimate[i].T_world_camera * tip);
+      to.push_back(ground_truth[j].T_world_camera * tip);
+    }
+  }
+  CheckArgument(!from.empty(),
+                "trajectory: no estimated pose has a ground-truth pose at its "
+                "time: do the timestamps share a clock?");
+  return AlignRigid(from, to);
+}
+
 TrajectoryErrors EvaluateTrajectory(
     const std::vector<io::StampedPose>& estimate,
     const std::vector<io::StampedPose>& ground_truth,
     const TrajectoryOptions& options) {
   options.Check();
   TrajectoryErrors out;
-  out.pairs = AssociateByTime(estimate, ground_truth,
-                              options.max_time_difference_s);
+  out.pairs =
+      AssociateByTime(estimate, ground_truth, options.max_time_difference_s);
   out.associated = out.pairs.size();
   out.unmatched_estimate = estimate.size() - out.associated;
   out.unmatched_ground_truth = ground_truth.size() - out.associated;
@@ -159,6 +179,23 @@ TrajectoryErrors EvaluateTrajectory(
         moved_m;
   }
   return out;
+}
+
+std::vector<io::StampedPose> ReadTrajectory(
+    const std::filesystem::path& path,
+    const io::SequenceReaderOptions& options) {
+  if (std::filesystem::is_regular_file(path) &&
+      options.pose_correction_path.empty()) {
+    return io::ReadTumTrajectory(path);
+  }
+  const io::SequenceReader reader = io::SequenceReader::Open(path, options);
+  CheckArgument(reader.index().has_poses,
+                path.string() + ": the sequence has no poses to compare with");
+  std::vector<io::StampedPose> poses;
+  for (const io::FrameRecord& f : reader.index().frames) {
+    poses.push_back({f.timestamp_s, f.T_world_camera});
+  }
+  return poses;
 }
 
 std::string TrajectoryErrorsText(const TrajectoryErrors& e) {

@@ -7,12 +7,14 @@
 #pragma once
 
 #include <cstddef>
+#include <filesystem>
 #include <string>
 #include <utility>
 #include <vector>
 
 #include "semrec/core/transform.h"
 #include "semrec/io/pose_io.h"
+#include "semrec/io/sequence_reader.h"
 
 namespace semrec::eval {
 
@@ -68,12 +70,28 @@ std::vector<std::pair<size_t, size_t>> AssociateByTime(
 Transform AlignRigid(const std::vector<Eigen::Vector3d>& from,
                      const std::vector<Eigen::Vector3d>& to);
 
+/// The rigid transform T_gt_est that best maps the estimated poses onto the
+/// ground truth as whole poses (positions and orientations: each camera's
+/// centre and the tips of its axes 1 m out, associated by time), for
+/// bringing a map built from the estimate into the ground truth's frame.
+/// (ATE's alignment uses the positions alone, which leaves a straight path
+/// free to turn about itself.)
+Transform AlignPoses(const std::vector<io::StampedPose>& estimate,
+                     const std::vector<io::StampedPose>& ground_truth,
+                     const TrajectoryOptions& options = {});
+
 /// Errors of `estimate` against `ground_truth`. Throws InvalidArgument
 /// (naming the counts) when fewer than 3 poses associate.
 TrajectoryErrors EvaluateTrajectory(
     const std::vector<io::StampedPose>& estimate,
     const std::vector<io::StampedPose>& ground_truth,
     const TrajectoryOptions& options = {});
+
+/// A trajectory: a TUM file ("timestamp tx ty tz qx qy qz qw"), or a
+/// sequence's poses (opened with `options`, e.g. a pose correction).
+std::vector<io::StampedPose> ReadTrajectory(
+    const std::filesystem::path& path,
+    const io::SequenceReaderOptions& options = {});
 
 /// The summary `semrec eval traj` prints.
 std::string TrajectoryErrorsText(const TrajectoryErrors& errors);

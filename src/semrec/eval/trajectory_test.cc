@@ -3,16 +3,15 @@
 #include <cmath>
 #include <random>
 
-#include <Eigen/Geometry>
 #include <gtest/gtest.h>
+#include <Eigen/Geometry>
 
 #include "semrec/core/error.h"
 
 namespace semrec::eval {
 namespace {
 
-io::StampedPose At(double t, const Eigen::Vector3d& p,
-                   double yaw_deg = 0.0) {
+io::StampedPose At(double t, const Eigen::Vector3d& p, double yaw_deg = 0.0) {
   const Eigen::Matrix3d R =
       Eigen::AngleAxisd(yaw_deg * M_PI / 180.0, Eigen::Vector3d::UnitZ())
           .toRotationMatrix();
@@ -37,9 +36,10 @@ TEST(Trajectory, AssociatesClosestFirstEachPoseOnce) {
 
 TEST(Trajectory, RigidlyMovedCopyHasNoError) {
   std::vector<io::StampedPose> gt, est;
-  const Transform T(Eigen::AngleAxisd(0.7, Eigen::Vector3d(1, 2, 3).normalized())
-                        .toRotationMatrix(),
-                    Eigen::Vector3d(5, -2, 1));
+  const Transform T(
+      Eigen::AngleAxisd(0.7, Eigen::Vector3d(1, 2, 3).normalized())
+          .toRotationMatrix(),
+      Eigen::Vector3d(5, -2, 1));
   for (int i = 0; i < 20; ++i) {
     const io::StampedPose p =
         At(0.1 * i, {std::sin(0.3 * i), 0.1 * i, std::cos(0.2 * i)}, 3.0 * i);
@@ -52,6 +52,21 @@ TEST(Trajectory, RigidlyMovedCopyHasNoError) {
   EXPECT_NEAR(e.rpe_translation_rmse_m, 0.0, 1e-9);
   EXPECT_NEAR(e.rpe_rotation_rmse_deg, 0.0, 1e-5);
   EXPECT_TRUE(e.T_ground_truth_estimate.IsApprox(T.Inverse(), 1e-9));
+}
+
+TEST(Trajectory, PosesAlignAStraightPathWithItsTurnAboutItself) {
+  // A straight path gives the positions no hold on a turn about it; the
+  // cameras' orientations do.
+  std::vector<io::StampedPose> gt, est;
+  const Transform T(
+      Eigen::AngleAxisd(0.9, Eigen::Vector3d::UnitX()).toRotationMatrix(),
+      Eigen::Vector3d(0.5, -1, 2));
+  for (int i = 0; i < 10; ++i) {
+    const io::StampedPose p = At(0.1 * i, {0.2 * i, 0, 0}, 5.0 * i);
+    gt.push_back(p);
+    est.push_back({p.timestamp_s, T * p.T_world_camera});
+  }
+  EXPECT_TRUE(AlignPoses(est, gt).IsApprox(T.Inverse(), 1e-9));
 }
 
 TEST(Trajectory, HandComputedOffsets) {

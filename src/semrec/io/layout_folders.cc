@@ -91,16 +91,19 @@ std::optional<SequenceIndex> IndexRedwood(
     }
     if (pose_path.empty()) {
       const auto logs = ListFiles(folder, {".log"});
-      if (logs.empty()) {
+      if (logs.empty() && options.require_poses) {
         throw IoError(folder / "odometry.log",
                       std::string("no trajectory file (odometry.log, "
                                   "trajectory.log or *.log) in the folder: ") +
                           kNoPoses);
       }
-      pose_path = logs.front();
+      if (!logs.empty()) pose_path = logs.front();
     }
   }
-  const std::vector<Transform> poses = ReadRedwoodLog(pose_path);
+  index.has_poses = !pose_path.empty();
+  const std::vector<Transform> poses =
+      index.has_poses ? ReadRedwoodLog(pose_path)
+                      : std::vector<Transform>(depths.size());
   if (poses.size() != depths.size()) {
     throw FormatError(
         pose_path,
@@ -108,7 +111,7 @@ std::optional<SequenceIndex> IndexRedwood(
                     "must match",
                     poses.size(), depths.size()));
   }
-  index.pose_source = pose_path.filename().string();
+  index.pose_source = index.has_poses ? pose_path.filename().string() : "none";
 
   const ImageInfo first = ReadImageInfo(depths.front());
   if (!options.intrinsics_path.empty()) {
@@ -216,6 +219,19 @@ std::optional<SequenceIndex> IndexSevenScenes(
                         " (expected .color.png or .color.jpg)");
     }
     const fs::path pose = dir / (stem + ".pose.txt");
+    if (i == 0 && !fs::is_regular_file(pose)) {
+      if (options.require_poses) {
+        throw IoError(pose, std::string("no camera poses: ") + kNoPoses);
+      }
+      // No poses at all: for estimation.
+      index.has_poses = false;
+      index.pose_source = "none";
+    }
+    if (!index.has_poses) {
+      record.timestamp_s = static_cast<double>(i) / kNominalRateHz;
+      index.frames.push_back(std::move(record));
+      continue;
+    }
     if (!fs::is_regular_file(pose)) {
       throw FormatError(
           pose,

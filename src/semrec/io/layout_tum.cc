@@ -83,18 +83,21 @@ std::optional<SequenceIndex> IndexTum(const fs::path& folder,
     return std::nullopt;
   }
   const fs::path gt_path = folder / "groundtruth.txt";
-  if (!fs::is_regular_file(gt_path)) {
+  const bool has_poses = fs::is_regular_file(gt_path);
+  if (!has_poses && options.require_poses) {
     throw IoError(gt_path, std::string("no camera poses: ") + kNoPoses);
   }
   const auto colors = ReadFileList(folder / "rgb.txt");
   const auto depths = ReadFileList(folder / "depth.txt");
-  const auto poses = ReadTumTrajectory(gt_path);
+  const auto poses =
+      has_poses ? ReadTumTrajectory(gt_path) : std::vector<StampedPose>{};
 
   SequenceIndex index;
   index.layout = "tum";
   index.root = folder;
   index.depth_scale = 5000.0;
-  index.pose_source = "groundtruth.txt";
+  index.pose_source = has_poses ? "groundtruth.txt" : "none";
+  index.has_poses = has_poses;
   const ImageInfo first = ReadImageInfo(depths.front().path);
   if (!options.intrinsics_path.empty()) {
     index.intrinsics =
@@ -133,8 +136,10 @@ std::optional<SequenceIndex> IndexTum(const fs::path& folder,
         poses.begin(), poses.end(), depth.timestamp_s,
         [](const StampedPose& a, double t) { return a.timestamp_s < t; });
     std::optional<Transform> pose;
-    if (p1 != poses.end() &&
-        std::abs(p1->timestamp_s - depth.timestamp_s) <= 1e-9) {
+    if (!has_poses) {
+      pose = Transform();
+    } else if (p1 != poses.end() &&
+               std::abs(p1->timestamp_s - depth.timestamp_s) <= 1e-9) {
       pose = p1->T_world_camera;
     } else if (p1 != poses.end() && p1 != poses.begin()) {
       const auto p0 = std::prev(p1);

@@ -10,11 +10,11 @@
 
 namespace semrec::io::internal {
 
-/// What a sequence without poses is told: semrec fuses frames at given poses.
+/// What a sequence without poses is told when poses are required.
 inline constexpr const char* kNoPoses =
-    "semrec needs a camera pose for every frame and does not estimate them "
-    "(pose estimation is out of scope): run a SLAM or odometry tool first and "
-    "store its trajectory in the layout's pose file";
+    "this recording has no camera poses: let semrec estimate them "
+    "(--poses estimate, or --poses auto: the recording's poses where it has "
+    "them), or store a trajectory in the layout's pose file";
 
 /// ROS 2 bags: a *.mcap file, or a folder with metadata.yaml or *.mcap.
 std::optional<SequenceIndex> IndexBag(const std::filesystem::path& path,

@@ -57,6 +57,10 @@ struct SequenceReaderOptions {
   /// are not the camera's (e.g. data/poses/bonn_rgbd_dynamic.yaml).
   std::filesystem::path pose_correction_path;
   BagOptions bag;
+  /// A recording without poses is refused (false: its frames are read with
+  /// identity poses and SequenceIndex::has_poses false, for pose
+  /// estimation; TUM, Redwood and 7-Scenes / 3DMatch folders).
+  bool require_poses = true;
 
   /// Throws InvalidArgument for out-of-range values.
   void Check() const;
@@ -97,8 +101,11 @@ struct SequenceIndex {
   /// A raw depth value that means "no measurement" besides 0 (7-Scenes uses
   /// 65535); 0 = none.
   uint16_t depth_invalid = 0;
-  /// Where the poses came from (file name), for reports.
+  /// Where the poses came from (file name), for reports ("none" without).
   std::string pose_source;
+  /// False when the recording has no poses (read with require_poses off):
+  /// every T_world_camera is the identity.
+  bool has_poses = true;
   /// Where the intrinsics came from (file name or "default ..."), for reports.
   std::string intrinsics_source;
   std::vector<FrameRecord> frames;

@@ -1,6 +1,7 @@
 #include "semrec/io/sequence_reader.h"
 
 #include <functional>
+#include <regex>
 
 #include <gtest/gtest.h>
 
@@ -53,6 +54,51 @@ INSTANTIATE_TEST_SUITE_P(
                       LayoutCase{"tum", testing::WriteTum},
                       LayoutCase{"semrec", testing::WriteManifestSequence}),
     [](const auto& info) { return info.param.layout; });
+
+// Without its pose files a recording is refused, naming the way out, unless
+// poses are not required: then it reads with identity poses, for estimation.
+TEST(SequenceReader, RecordingsWithoutPosesOpenForEstimation) {
+  struct Case {
+    const char* layout;
+    void (*write)(const std::filesystem::path&, int);
+    const char* pose_files;  // removed: a regex of file names
+  };
+  for (const Case& c :
+       {Case{"redwood", testing::WriteRedwood, "[.]log$"},
+        Case{"7scenes", testing::WriteSevenScenes, "pose[.]txt$"},
+        Case{"tum", testing::WriteTum, "^groundtruth[.]txt$"}}) {
+    SCOPED_TRACE(c.layout);
+    semrec::testing::TempDir dir;
+    c.write(dir.path(), 3);
+    const std::regex pose_file(c.pose_files);
+    for (const auto& e :
+         std::filesystem::recursive_directory_iterator(dir.path())) {
+      if (std::regex_search(e.path().filename().string(), pose_file)) {
+        std::filesystem::remove(e.path());
+      }
+    }
+    try {
+      SequenceReader::Open(dir.path());
+      ADD_FAILURE() << "opened without poses";
+    } catch (const FileError& e) {
+      EXPECT_NE(std::string(e.what()).find("--poses estimate"),
+                std::string::npos)
+          << e.what();
+    }
+    SequenceReaderOptions options;
+    options.require_poses = false;
+    const SequenceReader reader = SequenceReader::Open(dir.path(), options);
+    EXPECT_FALSE(reader.index().has_poses);
+    EXPECT_EQ(reader.index().pose_source, "none");
+    ASSERT_EQ(reader.size(), 3u);
+    EXPECT_TRUE(reader.Read(2).T_world_camera.IsApprox(Transform(), 1e-12));
+    EXPECT_NEAR(reader.Read(2).depth(3, 2), 1.2, 1e-6);
+    // With its poses the same options read them.
+    semrec::testing::TempDir full;
+    c.write(full.path(), 3);
+    EXPECT_TRUE(SequenceReader::Open(full.path(), options).index().has_poses);
+  }
+}
 
 TEST(SequenceReader, StrideAndMaxFrames) {
   semrec::testing::TempDir dir;

@@ -1,6 +1,8 @@
 #include "semrec/odometry/pose_tracker.h"
 
+#include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <deque>
 #include <memory>
 #include <optional>
@@ -16,6 +18,7 @@
 #include <open3d/pipelines/odometry/Odometry.h>
 #include <open3d/pipelines/registration/Registration.h>
 #include <open3d/pipelines/registration/TransformationEstimation.h>
+#include <spdlog/spdlog.h>
 
 #include "semrec/core/enum_names.h"
 
@@ -47,6 +50,33 @@ std::shared_ptr<o3g::PointCloud> CameraCloud(const o3g::Image& depth,
   return cloud->VoxelDownSample(voxel_m);
 }
 
+// `mask` (width x height, 1 = masked) grown by `radius` pixels each way
+// (a square: two passes of a running maximum).
+std::vector<uint8_t> Dilate(const std::vector<uint8_t>& mask, int width,
+                            int height, int radius) {
+  if (radius <= 0) return mask;
+  std::vector<uint8_t> rows(mask.size(), 0), out(mask.size(), 0);
+  for (int y = 0; y < height; ++y) {
+    for (int x = 0; x < width; ++x) {
+      if (mask[static_cast<size_t>(y) * width + x] == 0) continue;
+      for (int dx = std::max(0, x - radius);
+           dx <= std::min(width - 1, x + radius); ++dx) {
+        rows[static_cast<size_t>(y) * width + dx] = 1;
+      }
+    }
+  }
+  for (int y = 0; y < height; ++y) {
+    for (int x = 0; x < width; ++x) {
+      if (rows[static_cast<size_t>(y) * width + x] == 0) continue;
+      for (int dy = std::max(0, y - radius);
+           dy <= std::min(height - 1, y + radius); ++dy) {
+        out[static_cast<size_t>(dy) * width + x] = 1;
+      }
+    }
+  }
+  return out;
+}
+
 }  // namespace
 
 const char* MethodName(PoseTrackerOptions::Method method) {
@@ -72,6 +102,8 @@ PoseTrackerOptions::Method ParseMethod(const std::string& text) {
 void PoseTrackerOptions::Check() const {
   CheckArgument(image_downsampling >= 0 && image_downsampling <= 8,
                 "odometry: image_downsampling must be 0 (auto) to 8");
+  CheckArgument(mask_dilation_px >= 0,
+                "odometry: mask_dilation_px must be >= 0");
   CheckArgument(max_depth_m > 0.0, "odometry: max_depth_m must be > 0");
   CheckArgument(depth_diff_m > 0.0, "odometry: depth_diff_m must be > 0");
   CheckArgument(!iterations.empty(),
@@ -143,12 +175,26 @@ PoseTracker::Prepared PoseTracker::Prepare(const Frame& frame,
   auto* d = depth.PointerAs<float>();
   auto* gray = intensity.PointerAs<float>();
   const float max_depth = static_cast<float>(options_.max_depth_m);
+  // The mask on the downsampled grid: a cell any of whose pixels is masked.
+  std::vector<uint8_t> cell_masked;
+  if (masked != nullptr) {
+    cell_masked.assign(static_cast<size_t>(k.width) * k.height, 0);
+    for (int y = 0; y < k.height * f; ++y) {
+      for (int x = 0; x < k.width * f; ++x) {
+        if ((*masked)(x, y) != 0) {
+          cell_masked[static_cast<size_t>(y / f) * k.width + x / f] = 1;
+        }
+      }
+    }
+    cell_masked = Dilate(cell_masked, k.width, k.height,
+                         (options_.mask_dilation_px + f - 1) / f);
+  }
   for (int v = 0; v < k.height; ++v) {
     for (int u = 0; u < k.width; ++u) {
       const size_t out = static_cast<size_t>(v) * k.width + u;
       const int x = u * f, y = v * f;
       float z = frame.depth(x, y);
-      if (masked != nullptr && (*masked)(x, y) != 0) z = 0.0f;
+      if (!cell_masked.empty() && cell_masked[out] != 0) z = 0.0f;
       d[out] = std::isfinite(z) && z > 0.0f && z < max_depth ? z : 0.0f;
       float sum = 0.0f;
       for (int dy = 0; dy < f; ++dy) {
@@ -222,7 +268,8 @@ PoseTracker::Alignment PoseTracker::Refine(const Prepared& current,
       *current.cloud, *state_->model, options_.icp_max_distance_m,
       T_world_camera->Matrix(), o3r::TransformationEstimationPointToPlane(),
       o3r::ICPConvergenceCriteria(1e-6, 1e-6, 30));
-  *T_world_camera = Transform::FromMatrix(icp.transformation_, "ICP pose", 1e-2);
+  *T_world_camera =
+      Transform::FromMatrix(icp.transformation_, "ICP pose", 1e-2);
   Alignment out;
   out.fitness = icp.fitness_;
   out.inlier_rmse_m = icp.inlier_rmse_;
@@ -251,9 +298,9 @@ PoseTrackResult PoseTracker::Track(const Frame& frame, const LabelMap* masked) {
   CheckArgument(
       frame.depth.SameSize(intrinsics_.width, intrinsics_.height) &&
           frame.color.SameSize(frame.depth),
-      fmt::format("odometry: frame {} is {}x{}, the camera {}x{}",
-                  frame.index, frame.depth.width(), frame.depth.height(),
-                  intrinsics_.width, intrinsics_.height));
+      fmt::format("odometry: frame {} is {}x{}, the camera {}x{}", frame.index,
+                  frame.depth.width(), frame.depth.height(), intrinsics_.width,
+                  intrinsics_.height));
   CheckArgument(masked == nullptr || masked->SameSize(frame.depth),
                 "odometry: the mask differs in size from the frame");
   State& s = *state_;
@@ -270,7 +317,8 @@ PoseTrackResult PoseTracker::Track(const Frame& frame, const LabelMap* masked) {
     Transform T_world_camera;
     std::string lost;
     if (options_.method == Method::kFrameToKeyframe) {
-      a = Align(current, s.keyframe, s.T_world_keyframe.Inverse() * guess_world);
+      a = Align(current, s.keyframe,
+                s.T_world_keyframe.Inverse() * guess_world);
       if (a) {
         T_world_camera = s.T_world_keyframe * a->T_reference_current;
         lost = Implausible(*a, T_world_camera);
@@ -299,6 +347,13 @@ PoseTrackResult PoseTracker::Track(const Frame& frame, const LabelMap* masked) {
       result.fitness = a->fitness;
       result.inlier_rmse_m = a->inlier_rmse_m;
     }
+    spdlog::debug(
+        "odometry frame {}: fitness {:.3f}, inlier RMSE {:.4f} m, moved {:.4f} "
+        "m{}{}",
+        frame.index, result.fitness, result.inlier_rmse_m,
+        (s.T_world_last.Inverse() * T_world_camera).translation().norm(),
+        force_keyframe && index > 0 ? ", against the previous frame" : "",
+        lost.empty() ? "" : ", lost: " + lost);
     if (!lost.empty()) return Lose(frame, lost, result);
     s.T_last_step = s.T_world_last.Inverse() * T_world_camera;
     s.T_world_last = T_world_camera;

@@ -198,6 +198,53 @@ ModelRecord ParseModel(const nlohmann::json& j, const fs::path& file,
           f.Get<std::string>("sha256"), f.Get<bool>("sha256_registered")};
 }
 
+nlohmann::json ToJson(const PoseReport& p) {
+  nlohmann::json frames = nlohmann::json::array();
+  for (const PoseFrameRecord& f : p.frames) {
+    frames.push_back({{"frame", f.frame},
+                      {"tracked", f.tracked},
+                      {"keyframe", f.keyframe},
+                      {"fitness", f.fitness},
+                      {"inlier_rmse_m", f.inlier_rmse_m},
+                      {"masked_pixels", f.masked_pixels},
+                      {"lost_reason", f.lost_reason}});
+  }
+  return {{"source", p.source},
+          {"file", p.file},
+          {"method", p.method},
+          {"keyframes", p.keyframes},
+          {"lost_frames", p.lost_frames},
+          {"seconds", p.seconds},
+          {"frames", frames}};
+}
+
+PoseFrameRecord ParsePoseFrame(const nlohmann::json& j, const fs::path& file,
+                               size_t index) {
+  const Fields f(j, file, fmt::format("poses.frames[{}]", index));
+  PoseFrameRecord r;
+  r.frame = f.Get<size_t>("frame");
+  r.tracked = f.Get<bool>("tracked");
+  r.keyframe = f.Get<bool>("keyframe");
+  r.fitness = f.Get<double>("fitness");
+  r.inlier_rmse_m = f.Get<double>("inlier_rmse_m");
+  r.masked_pixels = f.Get<size_t>("masked_pixels");
+  r.lost_reason = f.Get<std::string>("lost_reason");
+  return r;
+}
+
+PoseReport ParsePoses(const nlohmann::json& j, const fs::path& file) {
+  const Fields f(j, file, "poses");
+  PoseReport p;
+  p.source = f.Get<std::string>("source");
+  p.file = f.Get<std::string>("file");
+  p.method = f.Get<std::string>("method");
+  p.keyframes = f.Get<size_t>("keyframes");
+  p.lost_frames = f.Get<size_t>("lost_frames");
+  p.seconds = f.Get<double>("seconds");
+  p.frames = ParseArray(f.At("frames"), "poses.frames", file, ParsePoseFrame);
+  return p;
+}
+
 }  // namespace
 
 std::vector<std::pair<std::string, double>> StageRates::Named() const {
@@ -248,6 +295,7 @@ nlohmann::json ToJson(const RunReport& r) {
                         {"version", r.version},
                         {"models", models},
                         {"scene", scene},
+                        {"poses", ToJson(r.poses)},
                         {"fusion_events", r.fusion_events},
                         {"map_objects", r.map_objects}};
   if (r.map_guidance) out["map_guidance"] = ToJson(*r.map_guidance);
@@ -288,6 +336,8 @@ RunReport ParseRunReport(const nlohmann::json& j, const fs::path& file) {
   r.version = f.Get<std::string>("version");
   r.models = ParseArray(f.At("models"), "models", file, ParseModel);
   r.scene = ParseObjectRecords(f.At("scene"), file);
+  // Reports written before pose estimation have no "poses".
+  if (f.Has("poses")) r.poses = ParsePoses(f.At("poses"), file);
   if (f.Has("map_guidance")) {
     r.map_guidance = ParseMapGuidance(f.At("map_guidance"), file);
   }

@@ -63,6 +63,28 @@ struct ObjectDetectorReport {
          parts_joined = 0, frames_sharing_the_people_pass = 0;
 };
 
+/// One frame's estimated pose: how tracking went.
+struct PoseFrameRecord {
+  size_t frame = 0;
+  bool tracked = true, keyframe = false;
+  double fitness = 0.0, inlier_rmse_m = 0.0;
+  size_t masked_pixels = 0;
+  std::string lost_reason;  // "" when tracked
+};
+
+/// Where the camera poses came from.
+struct PoseReport {
+  std::string source = "file";  // "file" or "estimated"
+  /// The recording's pose file, or the estimate written (poses.txt).
+  std::string file;
+  /// Estimated: the tracker's method and loss.
+  std::string method;
+  size_t keyframes = 0, lost_frames = 0;
+  /// Time spent estimating them (s).
+  double seconds = 0.0;
+  std::vector<PoseFrameRecord> frames;  // estimated only
+};
+
 struct RunReport {
   std::string input;   // the recording, as the scene's metadata names it
   std::string labels;  // "models" or the given labels' spec
@@ -83,6 +105,7 @@ struct RunReport {
   std::string version;
   std::vector<ModelRecord> models;
   std::vector<ObjectRecord> scene;
+  PoseReport poses;
   /// With the models only.
   std::optional<MapGuidanceReport> map_guidance;
   std::optional<ObjectDetectorReport> object_detector;

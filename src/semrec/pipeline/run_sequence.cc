@@ -15,6 +15,7 @@
 #include <spdlog/spdlog.h>
 #include <tbb/task_group.h>
 
+#include "semrec/core/enum_names.h"
 #include "semrec/core/error.h"
 #include "semrec/core/file_util.h"
 #include "semrec/core/sha256.h"
@@ -23,6 +24,7 @@
 #include "semrec/infer/onnx_model.h"
 #include "semrec/io/image_io.h"
 #include "semrec/io/mot_io.h"
+#include "semrec/io/pose_io.h"
 #include "semrec/pipeline/checkpoint.h"
 #include "semrec/pipeline/people_3d.h"
 #include "semrec/pipeline/run_report.h"
@@ -100,8 +102,28 @@ std::vector<ModelRecord> ModelRecords(const infer::ModelRegistry* registry,
 
 }  // namespace
 
+const char* PosesName(RunOptions::Poses poses) {
+  switch (poses) {
+    case RunOptions::Poses::kFile:
+      return "file";
+    case RunOptions::Poses::kEstimate:
+      return "estimate";
+    case RunOptions::Poses::kAuto:
+      return "auto";
+  }
+  return "?";
+}
+
+RunOptions::Poses ParsePoses(const std::string& text) {
+  return ParseEnumName(text,
+                       {RunOptions::Poses::kFile, RunOptions::Poses::kEstimate,
+                        RunOptions::Poses::kAuto},
+                       PosesName, "--poses");
+}
+
 void RunOptions::Check() const {
   pipeline.Check();
+  odometry.Check();
   CheckArgument(snapshot_every >= 0, "run: snapshot_every must be >= 0");
   CheckArgument(checkpoint_every >= 0, "run: checkpoint_every must be >= 0");
   CheckArgument(!(resume && overwrite),
@@ -202,6 +224,7 @@ class SequenceRun {
                 ScenePipelineOptions::Labels::kModels) {
     PrepareOutput();
     OpenGivenLabels();
+    StartPoseTracking();
     pipeline_.emplace(registry, source_ ? &source_->classes() : nullptr,
                       options.pipeline);
     begin_ = StartOrResume();
@@ -265,6 +288,58 @@ class SequenceRun {
         "the models",
         begin, reader_.size());
     return begin;
+  }
+
+  // Poses from the frames: asked for, or (auto) the recording has none.
+  void StartPoseTracking() {
+    using Poses = RunOptions::Poses;
+    const bool has_poses = reader_.index().has_poses;
+    if (options_.poses == Poses::kFile && !has_poses) {
+      throw InvalidArgument(
+          reader_.root().string() +
+          ": the recording has no camera poses and --poses file was given: "
+          "use --poses estimate (or auto)");
+    }
+    poses_.file = reader_.index().pose_source;
+    if (options_.poses == Poses::kFile ||
+        (options_.poses == Poses::kAuto && has_poses)) {
+      return;
+    }
+    if (options_.pipeline.map_guidance) {
+      throw InvalidArgument(
+          "map guidance projects the map at each frame's pose before it is "
+          "segmented, and estimated poses come after: leave out "
+          "--map-guidance, or give the recording's poses (--poses file)");
+    }
+    tracker_.emplace(options_.odometry, reader_.intrinsics());
+    poses_.source = "estimated";
+    poses_.file = "poses.txt";
+    poses_.method = fmt::format(
+        "{}, {} loss", odometry::MethodName(options_.odometry.method),
+        options_.odometry.loss == odometry::PoseTrackerOptions::Loss::kHybrid
+            ? "hybrid"
+            : "photometric");
+    spdlog::info("{}: camera poses estimated from the frames ({})",
+                 reader_.root().string(), poses_.method);
+  }
+
+  // The frame's pose from the tracker, with its tracked people left out.
+  void EstimatePose(PreparedFrame* prepared) {
+    const Stopwatch watch;
+    const LabelMap* people =
+        prepared->person_ids ? &*prepared->person_ids : nullptr;
+    const odometry::PoseTrackResult r =
+        tracker_->Track(prepared->frame, people);
+    prepared->frame.T_world_camera = r.T_world_camera;
+    estimated_.push_back({prepared->frame.timestamp_s, r.T_world_camera});
+    poses_.frames.push_back({prepared->frame.index, r.tracked, r.keyframe,
+                             r.fitness, r.inlier_rmse_m, r.masked_pixels,
+                             r.lost_reason});
+    if (!r.tracked) {
+      spdlog::warn("frame {}: camera not tracked ({}); it keeps the last pose",
+                   prepared->frame.index, r.lost_reason);
+    }
+    poses_.seconds += watch.Elapsed();
   }
 
   Loaded Load(size_t i) {
@@ -346,6 +421,7 @@ class SequenceRun {
     std::string name = input.name;
     const Stopwatch prepare;
     PreparedFrame prepared = pipeline_->Prepare(std::move(input));
+    if (tracker_) EstimatePose(&prepared);
     timing_.prepare += prepare.Elapsed();
     WaitIntegrating();
     integrating_ = std::async(
@@ -399,6 +475,11 @@ class SequenceRun {
     result.scene = pipeline_->Write(out_dir_, write_);
     const std::vector<io::MotBox> tracks = pipeline_->Tracks();
     io::WriteMotFile(out_dir_ / "tracks.txt", tracks);
+    if (tracker_) {
+      io::WriteTumTrajectory(out_dir_ / "poses.txt", estimated_);
+      poses_.keyframes = tracker_->keyframes();
+      poses_.lost_frames = tracker_->lost_frames();
+    }
     std::set<int> track_ids;
     for (const io::MotBox& b : tracks) track_ids.insert(b.id);
     result.tracks = track_ids.size();
@@ -453,6 +534,7 @@ class SequenceRun {
     r.options = result.scene.options_text;
     r.version = SEMREC_VERSION;
     r.models = ModelRecords(registry_, options_.pipeline);
+    r.poses = poses_;
     r.fusion_events = fuse::FusionEventsJson(pipeline_->scene().fusion(),
                                              pipeline_->classes());
     r.map_objects = fuse::MapResolutionJson(pipeline_->scene().fusion(),
@@ -511,6 +593,9 @@ class SequenceRun {
   std::unique_ptr<fuse::SegmentationSource> source_;
   std::optional<PersonMapSource> person_maps_;
   std::optional<ScenePipeline> pipeline_;
+  std::optional<odometry::PoseTracker> tracker_;
+  std::vector<io::StampedPose> estimated_;
+  PoseReport poses_;
   CheckpointStore store_{out_dir_ / "checkpoint"};
   size_t begin_ = 0;
   SceneWriteOptions write_, snapshot_;
@@ -563,10 +648,19 @@ std::string RunSummaryTable(const RunResult& result, const fs::path& out_dir) {
         g.full_frames, g.partial_frames, g.projection_frames, g.encoder_calls,
         g.prompts_decoded);
   }
+  if (r.poses.source == "estimated") {
+    out += fmt::format(
+        "  camera poses estimated ({}): {} keyframes, {} frames not "
+        "tracked, {:.0f} ms per frame\n",
+        r.poses.method, r.poses.keyframes, r.poses.lost_frames,
+        r.processed_frames > 0
+            ? 1000 * r.poses.seconds / static_cast<double>(r.processed_frames)
+            : 0.0);
+  }
   out += fmt::format("  {} people prims, {} tracks in tracks.txt\n",
                      result.scene.people, result.tracks);
   std::string written;
-  for (const char* name : {"objects/", "overlay/", "tracks.txt"}) {
+  for (const char* name : {"objects/", "overlay/", "tracks.txt", "poses.txt"}) {
     if (fs::exists(out_dir / name)) written += fmt::format("{}, ", name);
   }
   out += fmt::format(

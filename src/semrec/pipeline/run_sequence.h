@@ -15,6 +15,7 @@
 #include "semrec/fuse/segments.h"
 #include "semrec/infer/model_registry.h"
 #include "semrec/io/sequence_reader.h"
+#include "semrec/odometry/pose_tracker.h"
 #include "semrec/pipeline/run_report.h"
 #include "semrec/pipeline/scene_pipeline.h"
 
@@ -22,6 +23,13 @@ namespace semrec::pipeline {
 
 struct RunOptions {
   ScenePipelineOptions pipeline;
+  /// Where the camera poses come from: the recording's pose file (kFile),
+  /// estimated from the frames in the same pass (kEstimate: odometry/,
+  /// tracked people left out), or the recording's when it has them, else
+  /// estimated (kAuto). Estimated poses are written to poses.txt (TUM).
+  enum class Poses { kFile, kEstimate, kAuto };
+  Poses poses = Poses::kAuto;
+  odometry::PoseTrackerOptions odometry;
   /// Labels::kGiven: where the labels come from (fuse::LabelSpec; default
   /// "gt", the sequence's own layers) and the people spec of
   /// PersonMapSource ("gt"; "" = the person layer when the sequence has one).
@@ -56,6 +64,9 @@ struct RunOptions {
   std::string resume_key;
   void Check() const;
 };
+
+const char* PosesName(RunOptions::Poses poses);
+RunOptions::Poses ParsePoses(const std::string& text);
 
 struct RunResult {
   size_t frames = 0;

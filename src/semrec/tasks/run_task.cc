@@ -72,6 +72,9 @@ RunTaskResult RunTask(const RunTaskOptions& options,
   run.Check();
   io::SequenceReaderOptions reader_options = options.reader;
   reader_options.max_depth_m = run.pipeline.scene.meshing.tsdf.max_depth_m;
+  // A recording without poses opens when they may be estimated.
+  reader_options.require_poses =
+      run.poses == pipeline::RunOptions::Poses::kFile;
   const io::SequenceReader reader =
       io::SequenceReader::Open(options.sequence, reader_options);
   RunTaskResult result;

@@ -6,6 +6,8 @@
 #include "semrec/core/error.h"
 #include "semrec/core/file_util.h"
 #include "semrec/eval/scene_result.h"
+#include "semrec/eval/trajectory.h"
+#include "semrec/io/pose_io.h"
 #include "semrec/testing/small_scene.h"
 #include "semrec/testing/test_util.h"
 
@@ -66,6 +68,59 @@ TEST(RunTask, GivenLabelsRunAsRunSequenceWithItsReport) {
             std::string::npos);
   EXPECT_EQ(e.Text(scored, false).find("where each ground-truth object"),
             std::string::npos);
+}
+
+// Poses estimated in the run: the scene, brought into the ground truth's
+// frame by the estimate's alignment, scores as the run with the true poses
+// does; the report and poses.txt say what was estimated.
+TEST(RunTask, EstimatedPosesGiveTheSceneOfTheTrueOnes) {
+  testing::TempDir dir;
+  synth::WriteSyntheticSequence(testing::SmallScene("office", 20), dir / "seq",
+                                QuietProgress());
+  RunTaskOptions task;
+  task.sequence = dir / "seq";
+  task.labels = fuse::LabelSpec::Parse("gt");
+  task.report_html = false;
+  const auto score = [&](const std::filesystem::path& out) {
+    eval::SceneResultOptions scored;
+    scored.result = out;
+    scored.gt = dir / "seq" / "gt" / "surface_points.ply";
+    scored.observed_in = dir / "seq";
+    scored.gt_trajectory = dir / "seq";
+    return eval::EvaluateSceneResult(scored).metrics;
+  };
+  task.out = dir / "true";
+  task.run.poses = pipeline::RunOptions::Poses::kAuto;  // the recording's
+  const RunTaskResult truth = RunTask(task, QuietProgress());
+  EXPECT_EQ(truth.run.report.poses.source, "file");
+  EXPECT_FALSE(std::filesystem::exists(dir / "true" / "poses.txt"));
+  task.out = dir / "estimated";
+  task.run.poses = pipeline::RunOptions::Poses::kEstimate;
+  const RunTaskResult estimated = RunTask(task, QuietProgress());
+  const pipeline::PoseReport& poses = estimated.run.report.poses;
+  EXPECT_EQ(poses.source, "estimated");
+  EXPECT_EQ(poses.frames.size(), 20u);
+  EXPECT_EQ(poses.lost_frames, 0u);
+  EXPECT_GE(poses.keyframes, 1u);
+  const pipeline::RunReport read =
+      pipeline::ReadRunReport(dir / "estimated" / "report.json");
+  EXPECT_EQ(read.poses.frames.size(), 20u);
+  EXPECT_EQ(read.poses.method, poses.method);
+  const eval::TrajectoryErrors errors = eval::EvaluateTrajectory(
+      io::ReadTumTrajectory(dir / "estimated" / "poses.txt"),
+      eval::ReadTrajectory(dir / "seq"));
+  EXPECT_LT(errors.ate_rmse_m, 0.01);
+  const eval::SceneMetrics a = score(dir / "true"),
+                           b = score(dir / "estimated");
+  EXPECT_GT(a.ap50, 0.7);
+  EXPECT_NEAR(b.ap50, a.ap50, 0.05);
+  EXPECT_NEAR(b.mean_iou, a.mean_iou, 0.03);
+  EXPECT_EQ(estimated.run.report.objects, truth.run.report.objects);
+  // The estimate's scene is not scored without its alignment.
+  eval::SceneResultOptions unaligned;
+  unaligned.result = dir / "estimated";
+  unaligned.gt = dir / "seq" / "gt" / "surface_points.ply";
+  EXPECT_THROW(eval::EvaluateSceneResult(unaligned), InvalidArgument);
 }
 
 TEST(RunTask, ModelChoiceSetsTheSegmenterAndThePeopleTracker) {
