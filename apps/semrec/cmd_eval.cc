@@ -2,6 +2,7 @@
 // cmd_eval_traj.cc): cloud-to-cloud distance, tracking and segmentation
 // metrics.
 #include <cstdio>
+#include <filesystem>
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
@@ -25,11 +26,20 @@ struct C2cArgs {
   std::string reference;
   bool json = false;
   std::string per_point;
+  std::string gt_trajectory;
 };
 
+// A PLY's points, or a result folder's surface in the recording's world.
+io::PlyData Cloud(const std::string& path, const C2cArgs& args) {
+  if (!std::filesystem::is_directory(path)) return io::ReadPly(path);
+  io::PlyData out;
+  out.points = eval::ResultSurfaceInWorld(path, args.gt_trajectory);
+  return out;
+}
+
 void RunC2c(const C2cArgs& args) {
-  const io::PlyData estimate = io::ReadPly(args.estimate);
-  const io::PlyData reference = io::ReadPly(args.reference);
+  const io::PlyData estimate = Cloud(args.estimate, args);
+  const io::PlyData reference = Cloud(args.reference, args);
   const std::vector<double> distances =
       eval::CloudToCloudDistances(estimate.points, reference.points);
   if (!args.per_point.empty()) {
@@ -145,10 +155,16 @@ void RegisterEval(CLI::App& app) {
                            "for each estimate point, the distance "
                            "to the nearest reference point; prints mean, std, "
                            "median, rms and max in mm.");
-  c2c->add_option("estimate", args->estimate, "Estimated cloud (PLY)")
+  c2c->add_option("estimate", args->estimate,
+                  "Estimated cloud (PLY), or a run's output folder (its "
+                  "scene's mesh vertices, in the recording's world frame)")
       ->required();
-  c2c->add_option("reference", args->reference, "Reference cloud (PLY)")
+  c2c->add_option("reference", args->reference,
+                  "Reference cloud (PLY) or output folder")
       ->required();
+  c2c->add_option("--gt-trajectory", args->gt_trajectory,
+                  "For an output folder built from estimated poses: the "
+                  "recording (or a TUM file) whose poses they are aligned to");
   c2c->add_flag("--json", args->json, "Print JSON");
   c2c->add_option(
       "--per-point", args->per_point,

@@ -59,6 +59,8 @@ class PySequence {
     o.stride = stride;
     o.max_frames = max_frames;
     o.max_depth_m = max_depth_m;
+    // A recording without poses opens (has_poses False): run estimates them.
+    o.require_poses = false;
     o.Check();
     reader_ =
         std::make_unique<io::SequenceReader>(io::SequenceReader::Open(path, o));
@@ -104,6 +106,7 @@ class PySequence {
   }
 
   std::string layout() const { return reader_->layout(); }
+  bool has_poses() const { return reader_->index().has_poses; }
   std::string root() const { return reader_->root().string(); }
   nb::dict intrinsics() const { return IntrinsicsDict(reader_->intrinsics()); }
   // The label set of the given labels (None without labels).
@@ -361,7 +364,7 @@ nb::object Run(const std::string& sequence, const std::string& out,
                const std::optional<std::string>& models, int segment_every,
                bool map_guidance, bool overwrite, int stride, size_t max_frames,
                const std::optional<nb::callable>& on_progress, bool report,
-               bool report_pictures) {
+               bool report_pictures, const std::string& poses) {
   // What `semrec run` does with the same arguments (tasks::RunTask).
   tasks::RunTaskOptions task;
   task.sequence = sequence;
@@ -373,6 +376,7 @@ nb::object Run(const std::string& sequence, const std::string& out,
   task.run.pipeline.segment_every = segment_every;
   task.run.pipeline.map_guidance = map_guidance;
   task.run.overwrite = overwrite;
+  task.run.poses = pipeline::ParsePoses(poses);
   task.run.config_text = "python: semrec.run(" + sequence + ")";
   task.report_html = report;
   task.report_pictures = report_pictures;
@@ -468,6 +472,9 @@ void BindSequence(nb::module_& m) {
           },
           "The frames in order, each read when reached.")
       .def_prop_ro("layout", &PySequence::layout)
+      .def_prop_ro("has_poses", &PySequence::has_poses,
+                   "False for a recording without poses (every pose is the "
+                   "identity; semrec.run(poses='auto') estimates them)")
       .def_prop_ro("root", &PySequence::root)
       .def_prop_ro("intrinsics", &PySequence::intrinsics)
       .def_prop_ro("classes", &PySequence::classes,
@@ -552,14 +559,15 @@ NB_MODULE(_semrec, m) {
         nb::arg("map_guidance") = false, nb::arg("overwrite") = false,
         nb::arg("stride") = 1, nb::arg("max_frames") = 0,
         nb::arg("progress").none() = nb::none(), nb::arg("report") = true,
-        nb::arg("report_pictures") = false,
+        nb::arg("report_pictures") = false, nb::arg("poses") = "auto",
         "As `semrec run`: the whole sequence into out/; returns report.json "
         "as a dict. labels='gt' (or a label folder) skips the models. "
         "progress: called with (frames done, frames) after each frame (e.g. "
         "to update a tqdm bar); an exception it raises stops the run. "
         "report: write out/report.html as `semrec run` does; "
         "report_pictures: with pictures of the scene (the browser viewer in "
-        "headless Chromium, a few seconds).");
+        "headless Chromium, a few seconds). poses: 'auto' (the recording's, "
+        "estimated when it has none), 'estimate' or 'file', as --poses.");
 }
 
 }  // namespace semrec::python

@@ -288,6 +288,19 @@ def test_run_reports_progress_and_stops_when_told(synthetic, tmp_path):
         semrec.run(str(synthetic), str(tmp_path / "a"), labels="gt")
 
 
+def test_run_estimates_poses_when_asked(synthetic, tmp_path):
+    report = semrec.run(str(synthetic), str(tmp_path / "e"), labels="gt", poses="estimate",
+                        report=False)
+    assert report["poses"]["source"] == "estimated"
+    assert len(report["poses"]["frames"]) == 8 and report["poses"]["lost_frames"] == 0
+    lines = [l for l in (tmp_path / "e" / "poses.txt").read_text().splitlines()
+             if not l.startswith("#")]
+    assert len(lines) == 8
+    assert semrec.open_sequence(str(synthetic)).has_poses
+    with pytest.raises(ValueError, match="--poses must be one of file, estimate, auto"):
+        semrec.run(str(synthetic), str(tmp_path / "f"), labels="gt", poses="guess")
+
+
 def test_examples_run(synthetic, tmp_path):
     env = dict(os.environ)
     examples = SOURCE / "examples" / "python"

@@ -148,6 +148,27 @@ Transform ResultFromGroundTruth(const SceneResultOptions& options) {
 
 }  // namespace
 
+std::vector<Eigen::Vector3f> ResultSurfaceInWorld(
+    const fs::path& result, const fs::path& gt_trajectory,
+    const io::SequenceReaderOptions& gt_trajectory_options) {
+  SceneResultOptions options;
+  options.result = result;
+  options.gt_trajectory = gt_trajectory;
+  options.gt_trajectory_options = gt_trajectory_options;
+  const fs::path scene =
+      fs::is_directory(result) ? result / "scene.usda" : result;
+  const Transform T_world_result =
+      (ResultUprightTransform(scene) * ResultFromGroundTruth(options))
+          .Inverse();
+  std::vector<Eigen::Vector3f> points;
+  for (const usd::MeshPrim& m : usd::ReadScene(scene)) {
+    for (const Eigen::Vector3f& p : m.points) {
+      points.push_back((T_world_result * p.cast<double>()).cast<float>());
+    }
+  }
+  return points;
+}
+
 SceneResultEvaluation EvaluateSceneResult(const SceneResultOptions& options) {
   options.Check();
   SceneResultEvaluation out;

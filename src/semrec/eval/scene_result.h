@@ -67,6 +67,15 @@ struct SceneResultEvaluation {
 /// Scores `options.result`. Throws IoError/FormatError naming the file for
 /// unreadable inputs, and FormatError when the result was turned upright but
 /// says nowhere by which transform.
+/// A written result's surface (every prim's mesh vertices) in the world
+/// frame of the recording's poses: its upright transform undone and, for a
+/// result built from estimated poses (poses.txt), the alignment to
+/// `gt_trajectory` applied (required then, as for EvaluateSceneResult).
+std::vector<Eigen::Vector3f> ResultSurfaceInWorld(
+    const std::filesystem::path& result,
+    const std::filesystem::path& gt_trajectory = {},
+    const io::SequenceReaderOptions& gt_trajectory_options = {});
+
 SceneResultEvaluation EvaluateSceneResult(const SceneResultOptions& options);
 
 /// The transform that turned a result upright (T_upright_world): from its
