@@ -413,6 +413,47 @@ TEST(RunSequence, ResumeGivesTheSameScene) {
                IoError);
 }
 
+// With estimated poses the replayed frames are tracked again: the resumed
+// run writes the uninterrupted run's poses and scene.
+TEST(RunSequence, ResumeWithEstimatedPoses) {
+  testing::TempDir dir;
+  synth::WriteSyntheticSequence(SmallScene("six-objects", 8), dir / "seq",
+                                testing::QuietProgress());
+  const io::SequenceReader reader = io::SequenceReader::Open(dir / "seq");
+  RunOptions options;
+  options.pipeline.labels = ScenePipelineOptions::Labels::kGiven;
+  options.poses = RunOptions::Poses::kEstimate;
+  options.checkpoint_every = 4;
+  options.config_text = "labels: gt\nposes: estimate\n";
+  const RunResult clean = RunSequence(reader, nullptr, options, dir / "clean",
+                                      testing::QuietProgress());
+  EXPECT_EQ(clean.report.poses.source, "estimated");
+  RunSequence(reader, nullptr, options, dir / "cut", testing::QuietProgress());
+  CheckpointStore(dir / "cut/checkpoint").Commit(4);
+  fs::remove(dir / "cut/poses.txt");
+  fs::remove(dir / "cut/scene.usda");
+  options.resume = true;
+  const RunResult resumed = RunSequence(reader, nullptr, options, dir / "cut",
+                                        testing::QuietProgress());
+  EXPECT_EQ(resumed.resumed_frames, 4u);
+  EXPECT_EQ(ReadTextFile(dir / "cut/poses.txt"),
+            ReadTextFile(dir / "clean/poses.txt"));
+  EXPECT_EQ(ReadTextFile(dir / "cut/static.usda"),
+            ReadTextFile(dir / "clean/static.usda"));
+  // Map guidance needs poses before the frame is segmented.
+  options.resume = false;
+  options.pipeline.map_guidance = true;
+  try {
+    RunSequence(reader, nullptr, options, dir / "guided",
+                testing::QuietProgress());
+    FAIL() << "map guidance ran with estimated poses";
+  } catch (const InvalidArgument& e) {
+    EXPECT_NE(std::string(e.what()).find("estimated poses come after"),
+              std::string::npos)
+        << e.what();
+  }
+}
+
 }  // namespace
 }  // namespace semrec::pipeline
 
