@@ -8,6 +8,12 @@
 // Without arguments: 7-Scenes chess and Bonn crowd from the sample data.
 // PERSON_MAPS_DIR: 16-bit track-id PNGs (`semrec track ... --out DIR`
 // writes DIR/persons/<frame>.png); their pixels are left out of tracking.
+// Options for sweeps: --only TEXT (methods whose name holds it),
+// --downsampling, --max-depth, --dilate, --keyframe-m, --keyframe-deg,
+// --depth-diff, --max-step (PoseTrackerOptions). Environment:
+// SEMREC_BONN_PERSON_MAPS (Bonn's person maps in the default run),
+// SEMREC_BENCH_SKIP_CHESS, SEMREC_BENCH_WRITE_POSES=DIR (the last run's
+// estimate.txt and truth.txt), SEMREC_BENCH_DEBUG (per-frame log).
 #include <cstdio>
 #include <cstdlib>
 #include <optional>
