@@ -43,6 +43,11 @@ void AddPoseArgs(CLI::App* cmd, pipeline::RunOptions* run) {
       ->default_str(odometry::MethodName(run->odometry.method))
       ->check(CLI::IsMember(
           {"frame-to-keyframe", "frame-to-frame", "frame-to-model"}));
+  cmd->add_option("--dynamic-classes", run->dynamic_classes,
+                  "Estimated poses: classes whose pixels are left out of "
+                  "tracking where a frame is segmented (e.g. "
+                  "'car,animal'; the tracked people always are)")
+      ->delimiter(',');
 }
 
 void AddSurfacePatchesFlag(CLI::App* cmd, bool* no_surface_patches) {

@@ -224,9 +224,9 @@ class SequenceRun {
                 ScenePipelineOptions::Labels::kModels) {
     PrepareOutput();
     OpenGivenLabels();
-    StartPoseTracking();
     pipeline_.emplace(registry, source_ ? &source_->classes() : nullptr,
                       options.pipeline);
+    StartPoseTracking();
     begin_ = StartOrResume();
     WriteTextFileAtomic(out_dir_ / "run.yaml", options_.config_text);
     write_ = SceneWriteOptions::For(reader, options.write_ply, options.usdz);
@@ -311,6 +311,14 @@ class SequenceRun {
           "segmented, and estimated poses come after: leave out "
           "--map-guidance, or give the recording's poses (--poses file)");
     }
+    for (const std::string& name : options_.dynamic_classes) {
+      const auto id = pipeline_->classes().FindByName(name);
+      if (!id) {
+        throw InvalidArgument(
+            "--dynamic-classes: the label set has no class '" + name + "'");
+      }
+      dynamic_ids_.insert(*id);
+    }
     tracker_.emplace(options_.odometry, reader_.intrinsics());
     poses_.source = "estimated";
     poses_.file = "poses.txt";
@@ -326,10 +334,24 @@ class SequenceRun {
   // The frame's pose from the tracker, with its tracked people left out.
   void EstimatePose(PreparedFrame* prepared) {
     const Stopwatch watch;
-    const LabelMap* people =
+    const LabelMap* masked =
         prepared->person_ids ? &*prepared->person_ids : nullptr;
+    // Dynamic classes where the frame was segmented, beside the people.
+    std::optional<LabelMap> with_dynamic;
+    if (!dynamic_ids_.empty() && prepared->labels) {
+      const LabelMap& semantic = prepared->labels->semantic;
+      with_dynamic = masked != nullptr
+                         ? *masked
+                         : LabelMap(semantic.width(), semantic.height());
+      for (size_t p = 0; p < semantic.NumPixels(); ++p) {
+        if (dynamic_ids_.contains(semantic.data()[p])) {
+          with_dynamic->data()[p] = 1;
+        }
+      }
+      masked = &*with_dynamic;
+    }
     const odometry::PoseTrackResult r =
-        tracker_->Track(prepared->frame, people);
+        tracker_->Track(prepared->frame, masked);
     prepared->frame.T_world_camera = r.T_world_camera;
     estimated_.push_back({prepared->frame.timestamp_s, r.T_world_camera});
     poses_.frames.push_back({prepared->frame.index, r.tracked, r.keyframe,
@@ -594,6 +616,7 @@ class SequenceRun {
   std::optional<PersonMapSource> person_maps_;
   std::optional<ScenePipeline> pipeline_;
   std::optional<odometry::PoseTracker> tracker_;
+  std::set<uint16_t> dynamic_ids_;
   std::vector<io::StampedPose> estimated_;
   PoseReport poses_;
   CheckpointStore store_{out_dir_ / "checkpoint"};

@@ -8,6 +8,7 @@
 
 #include <filesystem>
 #include <string>
+#include <vector>
 
 #include <nlohmann/json.hpp>
 
@@ -30,6 +31,10 @@ struct RunOptions {
   enum class Poses { kFile, kEstimate, kAuto };
   Poses poses = Poses::kAuto;
   odometry::PoseTrackerOptions odometry;
+  /// Estimated poses: pixels of these classes (names of the run's label
+  /// set) are left out of tracking on the frames that are segmented, as the
+  /// tracked people's are on every frame.
+  std::vector<std::string> dynamic_classes;
   /// Labels::kGiven: where the labels come from (fuse::LabelSpec; default
   /// "gt", the sequence's own layers) and the people spec of
   /// PersonMapSource ("gt"; "" = the person layer when the sequence has one).

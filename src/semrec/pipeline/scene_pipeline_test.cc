@@ -414,8 +414,9 @@ TEST(RunSequence, ResumeGivesTheSameScene) {
 }
 
 // With estimated poses the replayed frames are tracked again: the resumed
-// run writes the uninterrupted run's poses and scene.
-TEST(RunSequence, ResumeWithEstimatedPoses) {
+// run writes the uninterrupted run's poses and scene. Dynamic classes are
+// masked like people.
+TEST(RunSequence, EstimatedPosesResumeAndLeaveDynamicClassesOut) {
   testing::TempDir dir;
   synth::WriteSyntheticSequence(SmallScene("six-objects", 8), dir / "seq",
                                 testing::QuietProgress());
@@ -440,8 +441,23 @@ TEST(RunSequence, ResumeWithEstimatedPoses) {
             ReadTextFile(dir / "clean/poses.txt"));
   EXPECT_EQ(ReadTextFile(dir / "cut/static.usda"),
             ReadTextFile(dir / "clean/static.usda"));
-  // Map guidance needs poses before the frame is segmented.
+  // Dynamic classes are left out of tracking: the chair's pixels are masked
+  // in every (segmented) frame; a class the label set lacks is refused.
   options.resume = false;
+  options.dynamic_classes = {"chair"};
+  const RunResult dynamic = RunSequence(
+      reader, nullptr, options, dir / "dynamic", testing::QuietProgress());
+  ASSERT_EQ(dynamic.report.poses.frames.size(), 8u);
+  for (const PoseFrameRecord& f : dynamic.report.poses.frames) {
+    EXPECT_GT(f.masked_pixels, 0u) << "frame " << f.frame;
+  }
+  EXPECT_EQ(clean.report.poses.frames[0].masked_pixels, 0u);
+  options.dynamic_classes = {"unicorn"};
+  EXPECT_THROW(RunSequence(reader, nullptr, options, dir / "unicorn",
+                           testing::QuietProgress()),
+               InvalidArgument);
+  options.dynamic_classes.clear();
+  // Map guidance needs poses before the frame is segmented.
   options.pipeline.map_guidance = true;
   try {
     RunSequence(reader, nullptr, options, dir / "guided",
