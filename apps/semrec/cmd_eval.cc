@@ -54,26 +54,12 @@ void RunC2c(const C2cArgs& args) {
   }
   const eval::DistanceStats s = eval::Summarize(distances);
   if (args.json) {
-    std::printf("%s\n", nlohmann::json({{"points", s.count},
-                                        {"mean_mm", s.mean_m * 1e3},
-                                        {"std_mm", s.std_m * 1e3},
-                                        {"median_mm", s.median_m * 1e3},
-                                        {"rms_mm", s.rms_m * 1e3},
-                                        {"max_mm", s.max_m * 1e3}})
-                            .dump(2)
-                            .c_str());
+    std::printf("%s\n", eval::DistanceStatsJson(s).dump(2).c_str());
     return;
   }
-  std::printf(
-      "%s",
-      fmt::format(
-          "C2C {} -> {} ({} points, reference {}):\n"
-          "  mean {:.3f} mm  std {:.3f} mm  median {:.3f} mm  rms {:.3f} mm  "
-          "max {:.3f} mm\n",
-          args.estimate, args.reference, s.count, reference.points.size(),
-          s.mean_m * 1e3, s.std_m * 1e3, s.median_m * 1e3, s.rms_m * 1e3,
-          s.max_m * 1e3)
-          .c_str());
+  std::printf("%s", eval::DistanceStatsText(s, args.estimate, args.reference,
+                                            reference.points.size())
+                        .c_str());
 }
 
 struct MotArgs {
@@ -84,25 +70,11 @@ struct MotArgs {
 
 void RunMot(const MotArgs& args) {
   const eval::MotMetrics m = eval::EvaluateMotFiles(args.gt, args.result);
-  const nlohmann::json j = eval::MotMetricsJson(m);
   if (args.json) {
-    std::printf("%s\n", j.dump(2).c_str());
+    std::printf("%s\n", eval::MotMetricsJson(m).dump(2).c_str());
     return;
   }
-  std::printf(
-      "%s",
-      fmt::format(
-          "{} vs {}: {} frames, {} gt boxes ({} ids), {} predicted ({} ids)\n"
-          "  MOTA {:.4f}  MOTP {:.4f}  IDF1 {:.4f}  IDP {:.4f}  IDR {:.4f}\n"
-          "  precision {:.4f}  recall {:.4f}  FP {}  FN {}  IDsw {}  Frag {}"
-          "  MT/PT/ML {}/{}/{}\n"
-          "  HOTA {:.4f}  DetA {:.4f}  AssA {:.4f}\n",
-          args.result, args.gt, m.frames, m.gt_boxes, m.gt_ids,
-          m.predicted_boxes, m.predicted_ids, m.mota, m.motp, m.idf1, m.idp,
-          m.idr, m.precision, m.recall, m.false_positives, m.false_negatives,
-          m.id_switches, m.fragmentations, m.mostly_tracked,
-          m.partially_tracked, m.mostly_lost, m.hota, m.deta, m.assa)
-          .c_str());
+  std::printf("%s", eval::MotMetricsText(m, args.result, args.gt).c_str());
 }
 
 struct SegArgs {
@@ -118,28 +90,13 @@ void RunSeg(const SegArgs& args) {
   const LabelSet labels = io::LoadLabelSet(args.labels);
   const eval::SegMetrics m =
       eval::EvaluateSegFolders(args.pred, args.gt, labels, args.options);
-  const auto name = [&](uint16_t id) {
-    return labels.Contains(id) ? labels.Get(id).name
-                               : "(not in " + labels.name() + ")";
-  };
   if (args.json) {
     std::printf("%s\n", eval::SegMetricsJson(m, labels).dump(2).c_str());
     return;
   }
-  std::string text = fmt::format(
-      "{} images, {} labelled pixels\npAcc {:.2f}  mIoU {:.2f}  mAcc {:.2f}  "
-      "boundary IoU {:.2f}  boundary F@{}px {:.2f}  (percent)\n\n"
-      "{:>5}  {:<24} {:>7} {:>7} {:>8} {:>7}\n",
-      m.images, m.valid_pixels, 100 * m.pixel_accuracy, 100 * m.mean_iou,
-      100 * m.mean_accuracy, 100 * m.mean_boundary_iou,
-      args.options.boundary_tolerance_px, 100 * m.mean_boundary_f, "id",
-      "class", "IoU", "Acc", "bIoU", "bF");
-  for (const auto& c : m.classes) {
-    text += fmt::format("{:>5}  {:<24} {:>7.2f} {:>7.2f} {:>8.2f} {:>7.2f}\n",
-                        c.id, name(c.id), 100 * c.iou, 100 * c.accuracy,
-                        100 * c.boundary_iou, 100 * c.boundary_f);
-  }
-  std::printf("%s", text.c_str());
+  std::printf(
+      "%s", eval::SegMetricsText(m, labels, args.options.boundary_tolerance_px)
+                .c_str());
 }
 
 }  // namespace

@@ -423,4 +423,57 @@ nlohmann::json SegMetricsJson(const SegMetrics& m, const LabelSet& labels) {
           {"classes", classes}};
 }
 
+std::string MotMetricsText(const MotMetrics& m, const std::string& result,
+                           const std::string& gt) {
+  return fmt::format(
+      "{} vs {}: {} frames, {} gt boxes ({} ids), {} predicted ({} ids)\n"
+      "  MOTA {:.4f}  MOTP {:.4f}  IDF1 {:.4f}  IDP {:.4f}  IDR {:.4f}\n"
+      "  precision {:.4f}  recall {:.4f}  FP {}  FN {}  IDsw {}  Frag {}"
+      "  MT/PT/ML {}/{}/{}\n"
+      "  HOTA {:.4f}  DetA {:.4f}  AssA {:.4f}\n",
+      result, gt, m.frames, m.gt_boxes, m.gt_ids, m.predicted_boxes,
+      m.predicted_ids, m.mota, m.motp, m.idf1, m.idp, m.idr, m.precision,
+      m.recall, m.false_positives, m.false_negatives, m.id_switches,
+      m.fragmentations, m.mostly_tracked, m.partially_tracked, m.mostly_lost,
+      m.hota, m.deta, m.assa);
+}
+
+nlohmann::json DistanceStatsJson(const DistanceStats& s) {
+  return {{"points", s.count},       {"mean_mm", s.mean_m * 1e3},
+          {"std_mm", s.std_m * 1e3}, {"median_mm", s.median_m * 1e3},
+          {"rms_mm", s.rms_m * 1e3}, {"max_mm", s.max_m * 1e3}};
+}
+
+std::string DistanceStatsText(const DistanceStats& s,
+                              const std::string& estimate,
+                              const std::string& reference,
+                              size_t reference_points) {
+  return fmt::format(
+      "C2C {} -> {} ({} points, reference {}):\n"
+      "  mean {:.3f} mm  std {:.3f} mm  median {:.3f} mm  rms {:.3f} mm  "
+      "max {:.3f} mm\n",
+      estimate, reference, s.count, reference_points, s.mean_m * 1e3,
+      s.std_m * 1e3, s.median_m * 1e3, s.rms_m * 1e3, s.max_m * 1e3);
+}
+
+std::string SegMetricsText(const SegMetrics& m, const LabelSet& labels,
+                           int boundary_tolerance_px) {
+  std::string text = fmt::format(
+      "{} images, {} labelled pixels\npAcc {:.2f}  mIoU {:.2f}  mAcc {:.2f}  "
+      "boundary IoU {:.2f}  boundary F@{}px {:.2f}  (percent)\n\n"
+      "{:>5}  {:<24} {:>7} {:>7} {:>8} {:>7}\n",
+      m.images, m.valid_pixels, 100 * m.pixel_accuracy, 100 * m.mean_iou,
+      100 * m.mean_accuracy, 100 * m.mean_boundary_iou, boundary_tolerance_px,
+      100 * m.mean_boundary_f, "id", "class", "IoU", "Acc", "bIoU", "bF");
+  for (const auto& c : m.classes) {
+    const std::string name = labels.Contains(c.id)
+                                 ? labels.Get(c.id).name
+                                 : "(not in " + labels.name() + ")";
+    text += fmt::format("{:>5}  {:<24} {:>7.2f} {:>7.2f} {:>8.2f} {:>7.2f}\n",
+                        c.id, name, 100 * c.iou, 100 * c.accuracy,
+                        100 * c.boundary_iou, 100 * c.boundary_f);
+  }
+  return text;
+}
+
 }  // namespace semrec::eval

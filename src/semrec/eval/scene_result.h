@@ -15,6 +15,7 @@
 
 #include "semrec/core/label_map.h"
 #include "semrec/core/transform.h"
+#include "semrec/eval/c2c.h"
 #include "semrec/eval/mot.h"
 #include "semrec/eval/scene_metrics.h"
 #include "semrec/eval/seg_metrics.h"
@@ -89,6 +90,17 @@ std::map<std::string, int32_t> LoadClassMap(const std::filesystem::path& path,
 
 /// MOT metrics as `semrec eval mot --json` prints them.
 nlohmann::json MotMetricsJson(const MotMetrics& m);
+/// ... and as its summary (`result` against `gt`, the files' names).
+std::string MotMetricsText(const MotMetrics& m, const std::string& result,
+                           const std::string& gt);
+
+/// C2C distances as `semrec eval c2c --json` prints them (mm), and as its
+/// summary (`estimate` against `reference` of `reference_points`).
+nlohmann::json DistanceStatsJson(const DistanceStats& s);
+std::string DistanceStatsText(const DistanceStats& s,
+                              const std::string& estimate,
+                              const std::string& reference,
+                              size_t reference_points);
 
 /// MOTChallenge ground truth vs a tracker's output (files).
 MotMetrics EvaluateMotFiles(const std::filesystem::path& gt,
@@ -102,7 +114,10 @@ SegMetrics EvaluateSegFolders(const std::filesystem::path& pred,
                               const LabelSet& labels,
                               const SegEvalOptions& options);
 
-/// Segmentation metrics as `semrec eval seg --json` prints them.
+/// Segmentation metrics as `semrec eval seg --json` prints them, and as its
+/// summary with a per-class table.
 nlohmann::json SegMetricsJson(const SegMetrics& m, const LabelSet& labels);
+std::string SegMetricsText(const SegMetrics& m, const LabelSet& labels,
+                           int boundary_tolerance_px);
 
 }  // namespace semrec::eval
