@@ -10,6 +10,10 @@ grep -q "info" "$tmp/help" && grep -q "tsdf" "$tmp/help" && grep -q "synth" "$tm
   fail "--help does not list subcommands"
 "$SEMREC" tsdf --help | grep -q -- "--voxel-size-m" || fail "tsdf --help lacks --voxel-size-m"
 
+# Without OMP_WAIT_POLICY semrec starts itself again with it set: same output and exit codes.
+env -u OMP_WAIT_POLICY "$SEMREC" --version | grep -q "^semrec " || fail "--version after the restart"
+env -u OMP_WAIT_POLICY "$SEMREC" tsdf --no-such-flag 2>/dev/null; rc=$?
+[ "$rc" -eq 2 ] || fail "usage error after the restart: exit $rc"
 "$SEMREC" tsdf --no-such-flag 2>"$tmp/err"; rc=$?
 [ "$rc" -eq 2 ] || fail "unknown flag: exit $rc, expected 2 (usage error)"
 "$SEMREC" >/dev/null 2>&1; rc=$?
