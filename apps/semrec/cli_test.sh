@@ -148,6 +148,27 @@ grep -q '"frames": 100' "$tmp/info.json" || fail "info --json: frames"
 "$SEMREC" tsdf "$data/redwood_livingroom1_5" --out "$tmp/mesh.ply" --voxel-size-m 0.02 \
   --sdf-trunc-m 0.08 >"$tmp/tsdf" 2>"$tmp/tsdf.err" || fail "tsdf failed: $(cat "$tmp/tsdf.err")"
 [ -s "$tmp/mesh.ply" ] || fail "tsdf wrote no mesh"
+# The Redwood frames without their trajectories: info says so, tsdf estimates the poses (auto),
+# within millimetres of the dataset's. The 3DMatch frames lie far apart: frames that cannot be
+# tracked are reported. --poses file refuses such a recording.
+mkdir -p "$tmp/noposerw" "$tmp/nopose3dm/seq-01"
+cp -r "$data/redwood_livingroom1_5/color" "$data/redwood_livingroom1_5/depth" \
+  "$data/redwood_livingroom1_5/camera_primesense.json" "$tmp/noposerw/"
+"$SEMREC" info "$tmp/noposerw" 2>/dev/null | grep -q "poses: *none" || fail "info: no poses not said"
+"$SEMREC" tsdf "$tmp/noposerw" --out "$tmp/est_mesh.ply" >"$tmp/tsdf_est" 2>"$tmp/err" ||
+  fail "tsdf with estimated poses: $(cat "$tmp/err")"
+grep -q "estimated poses .*est_mesh.poses.txt" "$tmp/tsdf_est" && [ -s "$tmp/est_mesh.ply" ] ||
+  fail "tsdf with estimated poses: $(cat "$tmp/tsdf_est")"
+"$SEMREC" eval traj "$tmp/est_mesh.poses.txt" "$data/redwood_livingroom1_5" --max-dt 0.001 --json \
+  >"$tmp/traj.json" || fail "eval traj of the Redwood estimate"
+python3 -c 'import json,sys; e=json.load(open(sys.argv[1]))["ate_rmse_m"]; sys.exit(0 if e < 0.01 else 1)' \
+  "$tmp/traj.json" || fail "Redwood estimated poses off: $(cat "$tmp/traj.json")"
+cp "$data/3dmatch_5/camera-intrinsics.txt" "$tmp/nopose3dm/"
+cp "$data"/3dmatch_5/seq-01/*.color.png "$data"/3dmatch_5/seq-01/*.depth.png "$tmp/nopose3dm/seq-01/"
+"$SEMREC" tsdf "$tmp/nopose3dm" --out "$tmp/far.ply" >"$tmp/tsdf_far" 2>/dev/null || fail "tsdf on far frames"
+grep -q "[1-9] frames not tracked" "$tmp/tsdf_far" || fail "untracked frames not reported: $(cat "$tmp/tsdf_far")"
+"$SEMREC" tsdf "$tmp/nopose3dm" --poses file --out "$tmp/x.ply" 2>"$tmp/err"; rc=$?
+[ "$rc" -eq 1 ] && grep -q "no camera poses.*--poses estimate" "$tmp/err" || fail "tsdf --poses file: exit $rc, $(cat "$tmp/err")"
 head -c 200 "$tmp/mesh.ply" | grep -q "element vertex" || fail "mesh is not a PLY"
 grep -q "integrating 5/5" "$tmp/tsdf.err" || fail "no progress report: $(cat "$tmp/tsdf.err")"
 ls "$tmp" | grep -q "tmp" && fail "temporary files left behind"

@@ -63,8 +63,11 @@ struct SequenceArgs {
 };
 void AddSequenceArgs(CLI::App* cmd, SequenceArgs* args);
 
-/// --poses and --odometry (run, mesh): where the camera poses come from
-/// (pipeline::RunOptions::poses, odometry.method), bound to `run`.
+/// --poses and --odometry (run, mesh, tsdf): where the camera poses come
+/// from (pipeline::RunOptions::poses) and how they are estimated.
+void AddPoseArgs(CLI::App* cmd, pipeline::RunOptions::Poses* poses,
+                 odometry::PoseTrackerOptions* odometry);
+/// The above and --dynamic-classes (run, mesh), bound to `run`.
 void AddPoseArgs(CLI::App* cmd, pipeline::RunOptions* run);
 
 /// --no-surface-patches (mesh, run): SceneBuilderOptions::cover_owned_voxels

@@ -20,29 +20,33 @@ io::SequenceReaderOptions SequenceArgs::ReaderOptions() const {
   return options;
 }
 
-void AddPoseArgs(CLI::App* cmd, pipeline::RunOptions* run) {
+void AddPoseArgs(CLI::App* cmd, pipeline::RunOptions::Poses* poses,
+                 odometry::PoseTrackerOptions* odometry) {
   cmd->add_option_function<std::string>(
          "--poses",
-         [run](const std::string& text) {
-           run->poses = pipeline::ParsePoses(text);
+         [poses](const std::string& text) {
+           *poses = pipeline::ParsePoses(text);
          },
          "file: the recording's poses (refused without); estimate: from the "
          "frames, in the same pass (RGB-D odometry, tracked people left "
-         "out), written to OUT/poses.txt; auto: the recording's when it has "
-         "them, else estimated")
-      ->default_str(pipeline::PosesName(run->poses))
+         "out); auto: the recording's when it has them, else estimated")
+      ->default_str(pipeline::PosesName(*poses))
       ->check(CLI::IsMember({"file", "estimate", "auto"}));
   cmd->add_option_function<std::string>(
          "--odometry",
-         [run](const std::string& text) {
-           run->odometry.method = odometry::ParseMethod(text);
+         [odometry](const std::string& text) {
+           odometry->method = odometry::ParseMethod(text);
          },
          "Estimated poses: frame-to-keyframe (odometry to the last keyframe, "
          "the previous frame when that fails), frame-to-frame, or "
          "frame-to-model (then ICP against the latest keyframes' clouds)")
-      ->default_str(odometry::MethodName(run->odometry.method))
+      ->default_str(odometry::MethodName(odometry->method))
       ->check(CLI::IsMember(
           {"frame-to-keyframe", "frame-to-frame", "frame-to-model"}));
+}
+
+void AddPoseArgs(CLI::App* cmd, pipeline::RunOptions* run) {
+  AddPoseArgs(cmd, &run->poses, &run->odometry);
   cmd->add_option("--dynamic-classes", run->dynamic_classes,
                   "Estimated poses: classes whose pixels are left out of "
                   "tracking where a frame is segmented (e.g. "
