@@ -369,6 +369,21 @@ TEST(RunSequence, CorruptFramesAreSkippedAndCounted) {
                FileError);
 }
 
+// Runs `options` into `out` as a run interrupted after `frames` frames (a run
+// on a shorter sequence is refused as another sequence, so the checkpoint is
+// cut back instead, and the final outputs removed), then resumes it;
+// options->resume is set.
+RunResult InterruptAndResume(const io::SequenceReader& reader,
+                             RunOptions* options, const fs::path& out,
+                             size_t frames) {
+  RunSequence(reader, nullptr, *options, out, testing::QuietProgress());
+  CheckpointStore(out / "checkpoint").Commit(frames);
+  fs::remove(out / "scene.usda");
+  fs::remove(out / "poses.txt");
+  options->resume = true;
+  return RunSequence(reader, nullptr, *options, out, testing::QuietProgress());
+}
+
 // A resumed run ends with the same scene as one that was not interrupted; a
 // checkpoint of other options is refused.
 TEST(RunSequence, ResumeGivesTheSameScene) {
@@ -385,14 +400,9 @@ TEST(RunSequence, ResumeGivesTheSameScene) {
   options.config_text = "labels: noisy\n";
   RunSequence(reader, nullptr, options, dir / "clean",
               testing::QuietProgress());
-  // Interrupted: the first 8 frames only (a run on a shorter sequence is
-  // refused as another sequence, so the checkpoint is cut back instead).
-  RunSequence(reader, nullptr, options, dir / "cut", testing::QuietProgress());
-  CheckpointStore(dir / "cut/checkpoint").Commit(8);
-  fs::remove(dir / "cut/scene.usda");
-  options.resume = true;
-  const RunResult resumed = RunSequence(reader, nullptr, options, dir / "cut",
-                                        testing::QuietProgress());
+  // Interrupted: the first 8 frames only.
+  const RunResult resumed =
+      InterruptAndResume(reader, &options, dir / "cut", 8);
   EXPECT_EQ(resumed.resumed_frames, 8u);
   EXPECT_EQ(ReadTextFile(dir / "cut/static.usda"),
             ReadTextFile(dir / "clean/static.usda"));
@@ -429,13 +439,8 @@ TEST(RunSequence, EstimatedPosesResumeAndLeaveDynamicClassesOut) {
   const RunResult clean = RunSequence(reader, nullptr, options, dir / "clean",
                                       testing::QuietProgress());
   EXPECT_EQ(clean.report.poses.source, "estimated");
-  RunSequence(reader, nullptr, options, dir / "cut", testing::QuietProgress());
-  CheckpointStore(dir / "cut/checkpoint").Commit(4);
-  fs::remove(dir / "cut/poses.txt");
-  fs::remove(dir / "cut/scene.usda");
-  options.resume = true;
-  const RunResult resumed = RunSequence(reader, nullptr, options, dir / "cut",
-                                        testing::QuietProgress());
+  const RunResult resumed =
+      InterruptAndResume(reader, &options, dir / "cut", 4);
   EXPECT_EQ(resumed.resumed_frames, 4u);
   EXPECT_EQ(ReadTextFile(dir / "cut/poses.txt"),
             ReadTextFile(dir / "clean/poses.txt"));
