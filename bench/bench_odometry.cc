@@ -9,7 +9,7 @@
 // PERSON_MAPS_DIR: 16-bit track-id PNGs (`semrec track ... --out DIR`
 // writes DIR/persons/<frame>.png); their pixels are left out of tracking.
 // Options for sweeps: --only TEXT (methods whose name holds it),
-// --downsampling, --max-depth, --dilate, --keyframe-m, --keyframe-deg,
+// --downsampling, --max-depth, --keyframe-m, --keyframe-deg,
 // --depth-diff, --max-step (PoseTrackerOptions). Environment:
 // SEMREC_BONN_PERSON_MAPS (Bonn's person maps in the default run),
 // SEMREC_BENCH_SKIP_CHESS, SEMREC_BENCH_WRITE_POSES=DIR (the last run's
@@ -42,7 +42,6 @@ struct Variant {
 
 int g_downsampling = 0;
 double g_max_depth_m = 6.0;
-int g_dilation_px = 0;
 double g_keyframe_m = 0.1, g_keyframe_deg = 10.0;
 std::string g_only;
 double g_depth_diff_m = 0.07, g_max_step_m = 0.3;
@@ -59,13 +58,12 @@ std::vector<Variant> Variants() {
       v.options.loss = loss;
       v.options.image_downsampling = g_downsampling;
       v.options.max_depth_m = g_max_depth_m;
-      v.options.mask_dilation_px = g_dilation_px;
       v.options.keyframe_step_m = g_keyframe_m;
       v.options.keyframe_step_deg = g_keyframe_deg;
       v.options.depth_diff_m = g_depth_diff_m;
       v.options.max_step_m = g_max_step_m;
       v.name = fmt::format("{} {}", odometry::MethodName(method),
-                           loss == O::Loss::kHybrid ? "hybrid" : "photometric");
+                           odometry::LossName(loss));
       if (!g_only.empty() && v.name.find(g_only) == std::string::npos) continue;
       out.push_back(v);
     }
@@ -172,8 +170,6 @@ int main(int argc, char** argv) {
     const std::string a = argv[i];
     if (a == "--frames" && i + 1 < argc) {
       max_frames = std::stoul(argv[++i]);
-    } else if (a == "--dilate" && i + 1 < argc) {
-      g_dilation_px = std::stoi(argv[++i]);
     } else if (a == "--keyframe-m" && i + 1 < argc) {
       g_keyframe_m = std::stod(argv[++i]);
     } else if (a == "--keyframe-deg" && i + 1 < argc) {

@@ -2,8 +2,6 @@
 // RPE) of estimated camera poses against ground truth.
 #include <cstdio>
 
-#include <nlohmann/json.hpp>
-
 #include "commands.h"
 #include "semrec/eval/trajectory.h"
 #include "semrec/io/pose_io.h"
@@ -36,21 +34,7 @@ void RunTraj(const TrajArgs& args) {
     std::printf("%s", eval::TrajectoryErrorsText(e).c_str());
     return;
   }
-  const nlohmann::json j = {
-      {"associated", e.associated},
-      {"unmatched_estimate", e.unmatched_estimate},
-      {"unmatched_ground_truth", e.unmatched_ground_truth},
-      {"path_length_m", e.path_length_m},
-      {"ate_rmse_m", e.ate_rmse_m},
-      {"ate_mean_m", e.ate_mean_m},
-      {"ate_median_m", e.ate_median_m},
-      {"ate_max_m", e.ate_max_m},
-      {"rpe_pairs", e.rpe_pairs},
-      {"rpe_translation_rmse_m", e.rpe_translation_rmse_m},
-      {"rpe_rotation_rmse_deg", e.rpe_rotation_rmse_deg},
-      {"rpe_translation_per_m", e.rpe_translation_per_m},
-      {"rpe_rotation_deg_per_m", e.rpe_rotation_deg_per_m}};
-  std::printf("%s\n", j.dump(2).c_str());
+  std::printf("%s\n", eval::TrajectoryErrorsJson(e).dump(2).c_str());
 }
 
 }  // namespace

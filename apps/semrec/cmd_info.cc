@@ -27,8 +27,9 @@ void RunInfo(const InfoArgs& args) {
       io::SequenceReader::Open(args.sequence.path, options);
   const bool has_poses = reader.index().has_poses;
   const std::string poses =
-      has_poses ? reader.index().pose_source
-                : "none (semrec run and mesh estimate them: --poses auto)";
+      has_poses
+          ? reader.index().pose_source
+          : "none (semrec run, mesh and tsdf estimate them: --poses auto)";
   const CameraIntrinsics& k = reader.intrinsics();
 
   // Depth range over the frames (all, or an evenly spaced subset): reads every

@@ -37,8 +37,7 @@ void RunTsdf(const TsdfArgs& args) {
   // Estimated poses (asked for, or none in the recording) go beside the mesh.
   std::optional<odometry::PoseTracker> tracker;
   std::vector<io::StampedPose> estimated;
-  if (args.poses == pipeline::RunOptions::Poses::kEstimate ||
-      !reader.index().has_poses) {
+  if (pipeline::EstimatesPoses(args.poses, reader.index().has_poses)) {
     tracker.emplace(args.odometry, reader.intrinsics());
   }
   mesh::TsdfIntegrator tsdf(args.tsdf);

@@ -81,6 +81,8 @@ double Transform::AngleRad() const {
   return std::acos(c);
 }
 
+double Transform::AngleDeg() const { return AngleRad() * 180.0 / M_PI; }
+
 Transform Transform::Interpolate(const Transform& a, const Transform& b,
                                  double t) {
   const Eigen::Quaterniond q = a.Quaternion().slerp(t, b.Quaternion());

@@ -47,6 +47,8 @@ class Transform {
 
   /// Rotation angle (radians) of this transform.
   double AngleRad() const;
+  /// ... in degrees.
+  double AngleDeg() const;
 
   /// Linear interpolation of translation and slerp of rotation; t in [0, 1].
   static Transform Interpolate(const Transform& a, const Transform& b,

@@ -146,6 +146,12 @@ Transform ResultFromGroundTruth(const SceneResultOptions& options) {
   return AlignPoses(estimate, truth).Inverse();
 }
 
+// `scene`'s frame (upright) from the ground truth's world frame.
+Transform ResultFromGroundTruthWorld(const SceneResultOptions& options,
+                                     const fs::path& scene) {
+  return ResultUprightTransform(scene) * ResultFromGroundTruth(options);
+}
+
 }  // namespace
 
 std::vector<Eigen::Vector3f> ResultSurfaceInWorld(
@@ -158,8 +164,7 @@ std::vector<Eigen::Vector3f> ResultSurfaceInWorld(
   const fs::path scene =
       fs::is_directory(result) ? result / "scene.usda" : result;
   const Transform T_world_result =
-      (ResultUprightTransform(scene) * ResultFromGroundTruth(options))
-          .Inverse();
+      ResultFromGroundTruthWorld(options, scene).Inverse();
   std::vector<Eigen::Vector3f> points;
   for (const usd::MeshPrim& m : usd::ReadScene(scene)) {
     for (const Eigen::Vector3f& p : m.points) {
@@ -175,9 +180,10 @@ SceneResultEvaluation EvaluateSceneResult(const SceneResultOptions& options) {
   const fs::path& result = options.result;
   out.scene = fs::is_directory(result) ? result / "scene.usda" : result;
   const fs::path& scene = out.scene;
-  // The result is written upright: the ground truth goes into its frame
-  // (read first: a result without its transform fails before the slow work).
-  const Transform T_upright_world = ResultUprightTransform(scene);
+  // The result is written upright (and, from estimated poses, in its own
+  // world): the ground truth goes into its frame (found first: a result
+  // without its transform fails before the slow work).
+  const Transform T_result_gt = ResultFromGroundTruthWorld(options, scene);
   SceneGroundTruth gt = ReadSceneGroundTruth(options.gt);
   fs::path classes_file = options.gt_classes;
   if (classes_file.empty()) {
@@ -202,8 +208,6 @@ SceneResultEvaluation EvaluateSceneResult(const SceneResultOptions& options) {
     for (size_t i = 0; i < seen.size(); ++i) seen[i] = gt.views[i] > 0;
     gt = Subset(gt, seen);
   }
-  const Transform T_result_gt =
-      T_upright_world * ResultFromGroundTruth(options);
   for (auto& p : gt.points) {
     p = (T_result_gt * p.cast<double>()).cast<float>();
   }

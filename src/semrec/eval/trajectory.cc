@@ -13,8 +13,6 @@
 namespace semrec::eval {
 namespace {
 
-constexpr double kDegPerRad = 180.0 / 3.14159265358979323846;
-
 double Rms(const std::vector<double>& values) {
   if (values.empty()) return 0.0;
   double sum = 0.0;
@@ -165,7 +163,7 @@ TrajectoryErrors EvaluateTrajectory(
         estimate[ea].T_world_camera.Inverse() * estimate[eb].T_world_camera;
     const Transform error = gt_motion.Inverse() * est_motion;
     translation.push_back(error.translation().norm());
-    rotation_deg.push_back(error.AngleRad() * kDegPerRad);
+    rotation_deg.push_back(error.AngleDeg());
     moved_m += gt_motion.translation().norm();
   }
   out.rpe_pairs = translation.size();
@@ -214,6 +212,22 @@ std::string TrajectoryErrorsText(const TrajectoryErrors& e) {
       e.rpe_pairs, e.rpe_translation_rmse_m, e.rpe_rotation_rmse_deg,
       e.rpe_translation_per_m, e.rpe_rotation_deg_per_m);
   return text;
+}
+
+nlohmann::json TrajectoryErrorsJson(const TrajectoryErrors& e) {
+  return {{"associated", e.associated},
+          {"unmatched_estimate", e.unmatched_estimate},
+          {"unmatched_ground_truth", e.unmatched_ground_truth},
+          {"path_length_m", e.path_length_m},
+          {"ate_rmse_m", e.ate_rmse_m},
+          {"ate_mean_m", e.ate_mean_m},
+          {"ate_median_m", e.ate_median_m},
+          {"ate_max_m", e.ate_max_m},
+          {"rpe_pairs", e.rpe_pairs},
+          {"rpe_translation_rmse_m", e.rpe_translation_rmse_m},
+          {"rpe_rotation_rmse_deg", e.rpe_rotation_rmse_deg},
+          {"rpe_translation_per_m", e.rpe_translation_per_m},
+          {"rpe_rotation_deg_per_m", e.rpe_rotation_deg_per_m}};
 }
 
 }  // namespace semrec::eval

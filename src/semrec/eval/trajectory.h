@@ -12,6 +12,8 @@
 #include <utility>
 #include <vector>
 
+#include <nlohmann/json.hpp>
+
 #include "semrec/core/transform.h"
 #include "semrec/io/pose_io.h"
 #include "semrec/io/sequence_reader.h"
@@ -93,7 +95,8 @@ std::vector<io::StampedPose> ReadTrajectory(
     const std::filesystem::path& path,
     const io::SequenceReaderOptions& options = {});
 
-/// The summary `semrec eval traj` prints.
+/// The summary `semrec eval traj` prints, and its --json.
 std::string TrajectoryErrorsText(const TrajectoryErrors& errors);
+nlohmann::json TrajectoryErrorsJson(const TrajectoryErrors& errors);
 
 }  // namespace semrec::eval

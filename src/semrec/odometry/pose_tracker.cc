@@ -1,6 +1,5 @@
 #include "semrec/odometry/pose_tracker.h"
 
-#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <deque>
@@ -29,7 +28,6 @@ namespace o3g = open3d::geometry;
 namespace o3o = open3d::pipelines::odometry;
 namespace o3r = open3d::pipelines::registration;
 
-constexpr double kDegPerRad = 180.0 / M_PI;
 // Every n-th pixel (both ways) goes into the ICP cloud before downsampling.
 constexpr int kCloudPixelStride = 2;
 
@@ -43,38 +41,10 @@ std::shared_ptr<o3g::PointCloud> CameraCloud(const o3g::Image& depth,
     for (int u = 0; u < depth.width_; u += kCloudPixelStride) {
       const double z = d[static_cast<size_t>(v) * depth.width_ + u];
       if (z <= 0.0) continue;
-      cloud->points_.emplace_back((u - k.cx) * z / k.fx, (v - k.cy) * z / k.fy,
-                                  z);
+      cloud->points_.push_back(k.BackProject(u, v, z));
     }
   }
   return cloud->VoxelDownSample(voxel_m);
-}
-
-// `mask` (width x height, 1 = masked) grown by `radius` pixels each way
-// (a square: two passes of a running maximum).
-std::vector<uint8_t> Dilate(const std::vector<uint8_t>& mask, int width,
-                            int height, int radius) {
-  if (radius <= 0) return mask;
-  std::vector<uint8_t> rows(mask.size(), 0), out(mask.size(), 0);
-  for (int y = 0; y < height; ++y) {
-    for (int x = 0; x < width; ++x) {
-      if (mask[static_cast<size_t>(y) * width + x] == 0) continue;
-      for (int dx = std::max(0, x - radius);
-           dx <= std::min(width - 1, x + radius); ++dx) {
-        rows[static_cast<size_t>(y) * width + dx] = 1;
-      }
-    }
-  }
-  for (int y = 0; y < height; ++y) {
-    for (int x = 0; x < width; ++x) {
-      if (rows[static_cast<size_t>(y) * width + x] == 0) continue;
-      for (int dy = std::max(0, y - radius);
-           dy <= std::min(height - 1, y + radius); ++dy) {
-        out[static_cast<size_t>(dy) * width + x] = 1;
-      }
-    }
-  }
-  return out;
 }
 
 }  // namespace
@@ -91,6 +61,10 @@ const char* MethodName(PoseTrackerOptions::Method method) {
   return "?";
 }
 
+const char* LossName(PoseTrackerOptions::Loss loss) {
+  return loss == PoseTrackerOptions::Loss::kHybrid ? "hybrid" : "photometric";
+}
+
 PoseTrackerOptions::Method ParseMethod(const std::string& text) {
   return ParseEnumName(text,
                        {PoseTrackerOptions::Method::kFrameToModel,
@@ -102,8 +76,6 @@ PoseTrackerOptions::Method ParseMethod(const std::string& text) {
 void PoseTrackerOptions::Check() const {
   CheckArgument(image_downsampling >= 0 && image_downsampling <= 8,
                 "odometry: image_downsampling must be 0 (auto) to 8");
-  CheckArgument(mask_dilation_px >= 0,
-                "odometry: mask_dilation_px must be >= 0");
   CheckArgument(max_depth_m > 0.0, "odometry: max_depth_m must be > 0");
   CheckArgument(depth_diff_m > 0.0, "odometry: depth_diff_m must be > 0");
   CheckArgument(!iterations.empty(),
@@ -179,15 +151,15 @@ PoseTracker::Prepared PoseTracker::Prepare(const Frame& frame,
   std::vector<uint8_t> cell_masked;
   if (masked != nullptr) {
     cell_masked.assign(static_cast<size_t>(k.width) * k.height, 0);
-    for (int y = 0; y < k.height * f; ++y) {
-      for (int x = 0; x < k.width * f; ++x) {
-        if ((*masked)(x, y) != 0) {
+    for (int y = 0; y < masked->height(); ++y) {
+      for (int x = 0; x < masked->width(); ++x) {
+        if ((*masked)(x, y) == 0) continue;
+        ++*masked_pixels;
+        if (x / f < k.width && y / f < k.height) {
           cell_masked[static_cast<size_t>(y / f) * k.width + x / f] = 1;
         }
       }
     }
-    cell_masked = Dilate(cell_masked, k.width, k.height,
-                         (options_.mask_dilation_px + f - 1) / f);
   }
   for (int v = 0; v < k.height; ++v) {
     for (int u = 0; u < k.width; ++u) {
@@ -206,11 +178,6 @@ PoseTracker::Prepared PoseTracker::Prepare(const Frame& frame,
         }
       }
       gray[out] = sum / (255.0f * static_cast<float>(f * f));
-    }
-  }
-  if (masked != nullptr) {
-    for (size_t p = 0; p < masked->NumPixels(); ++p) {
-      if (masked->data()[p] != 0) ++*masked_pixels;
     }
   }
   Prepared out;
@@ -252,10 +219,10 @@ std::string PoseTracker::Implausible(const Alignment& a,
                        options_.min_fitness);
   }
   if (moved.translation().norm() > options_.max_step_m ||
-      moved.AngleRad() * kDegPerRad > options_.max_step_deg) {
+      moved.AngleDeg() > options_.max_step_deg) {
     return fmt::format(
         "a jump of {:.2f} m / {:.1f} degrees from the last tracked frame",
-        moved.translation().norm(), moved.AngleRad() * kDegPerRad);
+        moved.translation().norm(), moved.AngleDeg());
   }
   return "";
 }
@@ -315,22 +282,19 @@ PoseTrackResult PoseTracker::Track(const Frame& frame, const LabelMap* masked) {
     const Transform guess_world = s.T_world_last * s.T_last_step;
     std::optional<Alignment> a;
     Transform T_world_camera;
-    std::string lost;
     if (options_.method == Method::kFrameToKeyframe) {
       a = Align(current, s.keyframe,
                 s.T_world_keyframe.Inverse() * guess_world);
-      if (a) {
-        T_world_camera = s.T_world_keyframe * a->T_reference_current;
-        lost = Implausible(*a, T_world_camera);
-      }
-      if (!a || !lost.empty()) force_keyframe = true;
+      if (a) T_world_camera = s.T_world_keyframe * a->T_reference_current;
+      force_keyframe = !a || !Implausible(*a, T_world_camera).empty();
     }
     if (options_.method != Method::kFrameToKeyframe || force_keyframe) {
       a = Align(current, s.previous, s.T_last_step);
-      lost.clear();
       if (a) T_world_camera = s.T_world_last * a->T_reference_current;
-      // A wrong last motion is a bad first guess: try again from rest.
-      if (!a || !Implausible(*a, T_world_camera).empty()) {
+      // A wrong last motion is a bad first guess: try again from rest
+      // (unless that was the guess).
+      if ((!a || !Implausible(*a, T_world_camera).empty()) &&
+          !s.T_last_step.IsApprox(Transform())) {
         a = Align(current, s.previous, Transform());
         if (a) T_world_camera = s.T_world_last * a->T_reference_current;
       }
@@ -340,6 +304,7 @@ PoseTrackResult PoseTracker::Track(const Frame& frame, const LabelMap* masked) {
       if (!a) T_world_camera = guess_world;
       a = Refine(current, &T_world_camera);
     }
+    std::string lost;
     if (!a) {
       lost = "the odometry found too few correspondences";
     } else {
@@ -365,7 +330,7 @@ PoseTrackResult PoseTracker::Track(const Frame& frame, const LabelMap* masked) {
   result.keyframe =
       force_keyframe ||
       from_keyframe.translation().norm() > options_.keyframe_step_m ||
-      from_keyframe.AngleRad() * kDegPerRad > options_.keyframe_step_deg;
+      from_keyframe.AngleDeg() > options_.keyframe_step_deg;
   if (result.keyframe) {
     ++keyframes_;
     s.T_world_keyframe = s.T_world_last;

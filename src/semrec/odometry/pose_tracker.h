@@ -64,9 +64,6 @@ struct PoseTrackerOptions {
   /// keeps at least 320 pixels across (2 for VGA: 2.3x faster on 7-Scenes
   /// chess at the same accuracy, docs/results.md).
   int image_downsampling = 0;
-  /// Masked regions grow by this many pixels (of the full image) each way:
-  /// a mask drawn on the colour image misses the depth edge of its person.
-  int mask_dilation_px = 0;
   /// Depth beyond this is left out of tracking and the model (m). Far
   /// enough for the room behind the people (Bonn crowd's walls are 3.3 m
   /// and more away).
@@ -100,6 +97,7 @@ struct PoseTrackerOptions {
 
 const char* MethodName(PoseTrackerOptions::Method method);
 PoseTrackerOptions::Method ParseMethod(const std::string& text);
+const char* LossName(PoseTrackerOptions::Loss loss);
 
 struct PoseTrackResult {
   /// The frame's estimated camera-to-world pose.

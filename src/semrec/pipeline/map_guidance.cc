@@ -122,7 +122,7 @@ GuidanceDecision DecideFrame(const fuse::ProjectedMap& projected,
     return full(GuidanceReason::kRefresh);
   }
   const Transform motion = T_world_last_full->Inverse() * T_world_camera;
-  if (motion.AngleRad() * 180.0 / M_PI > options.refresh_angle_deg ||
+  if (motion.AngleDeg() > options.refresh_angle_deg ||
       motion.translation().norm() > options.refresh_distance_m) {
     return full(GuidanceReason::kCameraMoved);
   }

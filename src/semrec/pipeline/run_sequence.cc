@@ -114,6 +114,11 @@ const char* PosesName(RunOptions::Poses poses) {
   return "?";
 }
 
+bool EstimatesPoses(RunOptions::Poses poses, bool recording_has_poses) {
+  return poses == RunOptions::Poses::kEstimate ||
+         (poses == RunOptions::Poses::kAuto && !recording_has_poses);
+}
+
 RunOptions::Poses ParsePoses(const std::string& text) {
   return ParseEnumName(text,
                        {RunOptions::Poses::kFile, RunOptions::Poses::kEstimate,
@@ -301,10 +306,7 @@ class SequenceRun {
           "use --poses estimate (or auto)");
     }
     poses_.file = reader_.index().pose_source;
-    if (options_.poses == Poses::kFile ||
-        (options_.poses == Poses::kAuto && has_poses)) {
-      return;
-    }
+    if (!EstimatesPoses(options_.poses, has_poses)) return;
     if (options_.pipeline.map_guidance) {
       throw InvalidArgument(
           "map guidance projects the map at each frame's pose before it is "
@@ -322,11 +324,9 @@ class SequenceRun {
     tracker_.emplace(options_.odometry, reader_.intrinsics());
     poses_.source = "estimated";
     poses_.file = "poses.txt";
-    poses_.method = fmt::format(
-        "{}, {} loss", odometry::MethodName(options_.odometry.method),
-        options_.odometry.loss == odometry::PoseTrackerOptions::Loss::kHybrid
-            ? "hybrid"
-            : "photometric");
+    poses_.method = fmt::format("{}, {} loss",
+                                odometry::MethodName(options_.odometry.method),
+                                odometry::LossName(options_.odometry.loss));
     spdlog::info("{}: camera poses estimated from the frames ({})",
                  reader_.root().string(), poses_.method);
   }

@@ -72,6 +72,10 @@ struct RunOptions {
 
 const char* PosesName(RunOptions::Poses poses);
 RunOptions::Poses ParsePoses(const std::string& text);
+/// Whether a run with `poses` estimates them for a recording that has
+/// (or lacks) its own; a recording without them opens only when
+/// `poses` is not kFile (io::SequenceReaderOptions::require_poses).
+bool EstimatesPoses(RunOptions::Poses poses, bool recording_has_poses);
 
 struct RunResult {
   size_t frames = 0;
